@@ -1,0 +1,273 @@
+//! Count expressions of resources and start passes, e.g. `WIDTH * HEIGHT` or
+//! `LIGHT_PATHS * AVG_LIGHT_LENGTH * 1.1`.
+//!
+//! Expressions are evaluated in `f64` over named constants and rounded up to a whole count.
+
+use std::collections::BTreeMap;
+
+/// A parsed count expression.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Expr {
+    /// A number literal.
+    Number(f64),
+    /// A named constant.
+    Name(String),
+    /// A binary operation: one of `+ - * /`.
+    Binary(Box<Expr>, char, Box<Expr>),
+    /// A call of `min`, `max`, `ceil` or `floor`.
+    Call(String, Vec<Expr>),
+}
+
+impl Expr {
+    /// Parses `text`; the error names the column and what was expected.
+    pub fn parse(text: &str) -> Result<Expr, String> {
+        let tokens = tokenize(text)?;
+        let mut parser = Parser { tokens, pos: 0 };
+        let expr = parser.sum()?;
+        if parser.pos != parser.tokens.len() {
+            return Err(format!(
+                "unexpected '{}' in count expression '{text}'",
+                parser.tokens[parser.pos].text()
+            ));
+        }
+        Ok(expr)
+    }
+
+    /// The names the expression uses.
+    pub fn names(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        self.collect_names(&mut out);
+        out
+    }
+
+    fn collect_names(&self, out: &mut Vec<String>) {
+        match self {
+            Expr::Number(_) => {}
+            Expr::Name(n) => out.push(n.clone()),
+            Expr::Binary(a, _, b) => {
+                a.collect_names(out);
+                b.collect_names(out);
+            }
+            Expr::Call(_, args) => args.iter().for_each(|a| a.collect_names(out)),
+        }
+    }
+
+    /// Evaluates with `vars`; the error names an unknown constant.
+    pub fn eval(&self, vars: &BTreeMap<String, f64>) -> Result<f64, String> {
+        Ok(match self {
+            Expr::Number(v) => *v,
+            Expr::Name(n) => *vars.get(n).ok_or_else(|| {
+                let known: Vec<&str> = vars.keys().map(|k| k.as_str()).collect();
+                format!(
+                    "unknown constant '{n}' in count expression (known: {})",
+                    known.join(", ")
+                )
+            })?,
+            Expr::Binary(a, op, b) => {
+                let (a, b) = (a.eval(vars)?, b.eval(vars)?);
+                match op {
+                    '+' => a + b,
+                    '-' => a - b,
+                    '*' => a * b,
+                    _ => a / b,
+                }
+            }
+            Expr::Call(f, args) => {
+                let v: Vec<f64> = args
+                    .iter()
+                    .map(|a| a.eval(vars))
+                    .collect::<Result<_, _>>()?;
+                match (f.as_str(), v.as_slice()) {
+                    ("min", [a, b]) => a.min(*b),
+                    ("max", [a, b]) => a.max(*b),
+                    ("ceil", [a]) => a.ceil(),
+                    ("floor", [a]) => a.floor(),
+                    _ => {
+                        return Err(format!(
+                            "unknown function {f}/{} (min/2, max/2, ceil/1, floor/1)",
+                            v.len()
+                        ));
+                    }
+                }
+            }
+        })
+    }
+
+    /// Evaluates and rounds up to a count; negative, infinite or NaN results are errors.
+    pub fn count(&self, vars: &BTreeMap<String, f64>) -> Result<u64, String> {
+        let v = self.eval(vars)?;
+        if !v.is_finite() || v < 0.0 || v > 1e18 {
+            return Err(format!("count expression evaluates to {v}, not a count"));
+        }
+        Ok(v.ceil() as u64)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Token {
+    Num(f64),
+    Ident(String),
+    Sym(char),
+}
+
+impl Token {
+    fn text(&self) -> String {
+        match self {
+            Token::Num(v) => v.to_string(),
+            Token::Ident(s) => s.clone(),
+            Token::Sym(c) => c.to_string(),
+        }
+    }
+}
+
+fn tokenize(text: &str) -> Result<Vec<Token>, String> {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        if c.is_whitespace() {
+            i += 1;
+        } else if c.is_ascii_digit() || c == '.' {
+            let start = i;
+            while i < chars.len()
+                && (chars[i].is_ascii_digit() || chars[i] == '.' || chars[i] == 'e')
+            {
+                i += 1;
+            }
+            let s: String = chars[start..i].iter().collect();
+            out.push(Token::Num(s.parse().map_err(|_| {
+                format!("bad number '{s}' in count expression '{text}'")
+            })?));
+        } else if c.is_alphabetic() || c == '_' {
+            let start = i;
+            while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
+                i += 1;
+            }
+            out.push(Token::Ident(chars[start..i].iter().collect()));
+        } else if "+-*/(),".contains(c) {
+            out.push(Token::Sym(c));
+            i += 1;
+        } else {
+            return Err(format!(
+                "unexpected character '{c}' in count expression '{text}'"
+            ));
+        }
+    }
+    Ok(out)
+}
+
+struct Parser {
+    tokens: Vec<Token>,
+    pos: usize,
+}
+
+impl Parser {
+    fn peek_sym(&self) -> Option<char> {
+        match self.tokens.get(self.pos) {
+            Some(Token::Sym(c)) => Some(*c),
+            _ => None,
+        }
+    }
+
+    fn expect(&mut self, c: char) -> Result<(), String> {
+        if self.peek_sym() == Some(c) {
+            self.pos += 1;
+            Ok(())
+        } else {
+            Err(format!("expected '{c}' in count expression"))
+        }
+    }
+
+    fn sum(&mut self) -> Result<Expr, String> {
+        let mut lhs = self.product()?;
+        while let Some(op @ ('+' | '-')) = self.peek_sym() {
+            self.pos += 1;
+            lhs = Expr::Binary(Box::new(lhs), op, Box::new(self.product()?));
+        }
+        Ok(lhs)
+    }
+
+    fn product(&mut self) -> Result<Expr, String> {
+        let mut lhs = self.atom()?;
+        while let Some(op @ ('*' | '/')) = self.peek_sym() {
+            self.pos += 1;
+            lhs = Expr::Binary(Box::new(lhs), op, Box::new(self.atom()?));
+        }
+        Ok(lhs)
+    }
+
+    fn atom(&mut self) -> Result<Expr, String> {
+        let token = self
+            .tokens
+            .get(self.pos)
+            .cloned()
+            .ok_or("count expression ends too early")?;
+        self.pos += 1;
+        match token {
+            Token::Num(v) => Ok(Expr::Number(v)),
+            Token::Ident(name) if self.peek_sym() == Some('(') => {
+                self.pos += 1;
+                let mut args = vec![self.sum()?];
+                while self.peek_sym() == Some(',') {
+                    self.pos += 1;
+                    args.push(self.sum()?);
+                }
+                self.expect(')')?;
+                Ok(Expr::Call(name, args))
+            }
+            Token::Ident(name) => Ok(Expr::Name(name)),
+            Token::Sym('(') => {
+                let e = self.sum()?;
+                self.expect(')')?;
+                Ok(e)
+            }
+            Token::Sym(c) => Err(format!("unexpected '{c}' in count expression")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vars() -> BTreeMap<String, f64> {
+        [("WIDTH".to_string(), 640.0), ("HEIGHT".to_string(), 480.0)]
+            .into_iter()
+            .collect()
+    }
+
+    #[test]
+    fn evaluates_with_precedence_and_rounds_up() {
+        let e = Expr::parse("WIDTH * HEIGHT + 2 * 3").unwrap();
+        assert_eq!(e.count(&vars()).unwrap(), 640 * 480 + 6);
+        assert_eq!(
+            Expr::parse("(WIDTH + 1) / 2")
+                .unwrap()
+                .count(&vars())
+                .unwrap(),
+            321
+        );
+        assert_eq!(
+            Expr::parse("max(WIDTH, HEIGHT) * 1.25 + 0.5")
+                .unwrap()
+                .count(&vars())
+                .unwrap(),
+            801
+        );
+        assert_eq!(
+            Expr::parse("WIDTH*HEIGHT").unwrap().names(),
+            vec!["WIDTH", "HEIGHT"]
+        );
+    }
+
+    #[test]
+    fn reports_errors() {
+        assert!(Expr::parse("WIDTH *").is_err());
+        assert!(Expr::parse("WIDTH $ 2").is_err());
+        assert!(Expr::parse("(WIDTH").is_err());
+        let err = Expr::parse("DEPTH").unwrap().count(&vars()).unwrap_err();
+        assert!(err.contains("DEPTH"), "{err}");
+        assert!(Expr::parse("0 - WIDTH").unwrap().count(&vars()).is_err());
+    }
+}

@@ -1,0 +1,248 @@
+//! The RON schema of frame graphs and pass catalogs, as written by people.
+//!
+//! A graph file (`graphs/*.ron`) names the WGSL library it needs, its passes (taken from
+//! the catalog with `Use("name")` or declared inline with `Pass(...)`), its resources,
+//! streams, counters, constants and layouts. See `docs/graphs.md` for the full reference.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// A frame graph: one estimator, with the layouts it can be run in.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GraphFile {
+    /// Short name, e.g. `pt`.
+    pub name: String,
+    /// One line on what the estimator computes.
+    #[serde(default)]
+    pub description: String,
+    /// WGSL library files (virtual paths), included in every kernel.
+    #[serde(default)]
+    pub library: Vec<String>,
+    /// Pass catalog files (virtual paths) that `Use` entries are looked up in.
+    #[serde(default)]
+    pub catalogs: Vec<String>,
+    /// The passes in order: item chains follow this order, and phases run in the order of
+    /// their start passes.
+    pub passes: Vec<PassEntry>,
+    /// Buffers the passes read and write.
+    #[serde(default)]
+    pub resources: BTreeMap<String, ResourceDecl>,
+    /// Typed edges from a producing pass to a consuming pass.
+    #[serde(default)]
+    pub streams: BTreeMap<String, StreamDecl>,
+    /// Statistics the passes count with `count(COUNTER_NAME, n)`, summed on the GPU.
+    #[serde(default)]
+    pub counters: Vec<String>,
+    /// WGSL constants with their default values; the host may override them.
+    #[serde(default)]
+    pub constants: BTreeMap<String, ConstValue>,
+    /// Resources the host reads after frames (passes that contribute to none are culled).
+    #[serde(default)]
+    pub outputs: Vec<String>,
+    /// Named kernel layouts.
+    pub layouts: BTreeMap<String, LayoutDecl>,
+    /// The layout used when none is asked for.
+    pub default_layout: String,
+}
+
+/// A graph's reference to a catalog pass, or a pass declared inline.
+#[derive(Debug, Clone, Deserialize)]
+pub enum PassEntry {
+    /// A pass from one of the graph's catalogs.
+    Use(String),
+    /// A pass declared in the graph itself.
+    Pass(PassDecl),
+}
+
+/// A pass catalog file (`passes/*.ron`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CatalogFile {
+    /// The passes this catalog offers.
+    pub passes: Vec<PassDecl>,
+}
+
+/// A pass: one WGSL function over one item.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PassDecl {
+    /// The pass name; also the WGSL function name unless `function` is given.
+    pub name: String,
+    /// The WGSL struct the pass runs over.
+    pub item: String,
+    /// The WGSL file (virtual path) that defines the function.
+    pub source: String,
+    /// The WGSL function, if its name differs from the pass name.
+    #[serde(default)]
+    pub function: Option<String>,
+    /// How the pass takes part in its item's chain.
+    pub role: Role,
+    /// Resources the pass (or what it calls) reads.
+    #[serde(default)]
+    pub reads: Vec<String>,
+    /// Resources the pass (or what it calls) writes.
+    #[serde(default)]
+    pub writes: Vec<String>,
+    /// Streams the pass emits items into.
+    #[serde(default)]
+    pub emits: Vec<String>,
+}
+
+/// The part a pass plays in its item's chain.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub enum Role {
+    /// Creates items: `fn f(item: ptr<function, T>, index: u32) -> bool`, called for every
+    /// index below the count expression `over`; `false` means no item for that index.
+    Start {
+        /// Count expression of the items, e.g. `PATHS`.
+        over: String,
+    },
+    /// Runs once: `fn f(item: ptr<function, T>) -> bool`; `false` finishes the item.
+    Step,
+    /// Runs repeatedly while it returns `true`: `fn f(item: ptr<function, T>) -> bool`.
+    Loop,
+}
+
+/// A typed GPU buffer.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ResourceDecl {
+    /// WGSL element type (a struct, `vec4<f32>`, `atomic<u32>` or an alias).
+    pub ty: String,
+    /// Count expression of elements; without it the resource is a single value.
+    #[serde(default)]
+    pub count: Option<String>,
+    /// Lifetime and ownership.
+    #[serde(default)]
+    pub scope: Scope,
+}
+
+/// Who owns a resource and how long it lives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+pub enum Scope {
+    /// Allocated by the engine, kept across frames (film, accumulation).
+    #[default]
+    Persistent,
+    /// Allocated by the engine, valid within one frame only.
+    Transient,
+    /// Supplied by the host at instantiation (scene data); its bytes decide its size.
+    External,
+}
+
+/// A stream: items of one type emitted by passes and consumed by one pass.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StreamDecl {
+    /// The WGSL struct carried.
+    pub item: String,
+    /// The consuming pass (its chain's entry).
+    pub to: String,
+    /// The most items one call of a producing pass emits (sizes split-layout queues).
+    #[serde(default = "one")]
+    pub per_call: u32,
+}
+
+fn one() -> u32 {
+    1
+}
+
+/// A constant's value, emitted as a WGSL `const`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+pub enum ConstValue {
+    /// `u32`
+    U32(u32),
+    /// `i32`
+    I32(i32),
+    /// `f32`
+    F32(f32),
+    /// `bool`
+    Bool(bool),
+}
+
+impl ConstValue {
+    /// The WGSL type name.
+    pub fn wgsl_type(&self) -> &'static str {
+        match self {
+            ConstValue::U32(_) => "u32",
+            ConstValue::I32(_) => "i32",
+            ConstValue::F32(_) => "f32",
+            ConstValue::Bool(_) => "bool",
+        }
+    }
+
+    /// The WGSL literal.
+    pub fn wgsl_literal(&self) -> String {
+        match self {
+            ConstValue::U32(v) => format!("{v}u"),
+            ConstValue::I32(v) => format!("{v}i"),
+            ConstValue::F32(v) => {
+                let s = format!("{v:?}");
+                if s.contains('.') || s.contains('e') {
+                    format!("{s}f")
+                } else {
+                    format!("{s}.0f")
+                }
+            }
+            ConstValue::Bool(v) => v.to_string(),
+        }
+    }
+
+    /// The value as a number, for count expressions.
+    pub fn as_f64(&self) -> f64 {
+        match self {
+            ConstValue::U32(v) => *v as f64,
+            ConstValue::I32(v) => *v as f64,
+            ConstValue::F32(v) => *v as f64,
+            ConstValue::Bool(v) => *v as u8 as f64,
+        }
+    }
+}
+
+/// How item state is laid out in buffers between split kernels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+pub enum StateStorage {
+    /// Structure of arrays: word `w` of item `i` at `w * capacity + i` (coalesced).
+    #[default]
+    SoA,
+    /// Array of structures: word `w` of item `i` at `i * words + w`.
+    AoS,
+}
+
+/// A layout: how the passes become kernels.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayoutDecl {
+    /// What the layout is (e.g. the paper's name for it).
+    #[serde(default)]
+    pub description: String,
+    /// Fusion groups: each inner list of passes becomes one kernel.
+    pub kernels: Vec<Vec<String>>,
+    /// Item state layout between split kernels.
+    #[serde(default)]
+    pub state: StateStorage,
+    /// Threads per workgroup.
+    #[serde(default = "default_workgroup")]
+    pub workgroup_size: u32,
+    /// Most items a split chain keeps in flight (larger frames run in chunks).
+    #[serde(default)]
+    pub max_items_in_flight: Option<u64>,
+    /// Where loop passes repeat.
+    #[serde(default)]
+    pub loops: LoopMode,
+}
+
+/// Where a chain's loop passes repeat.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+pub enum LoopMode {
+    /// Inside the kernel, with the item in registers.
+    #[default]
+    InKernel,
+    /// One iteration per dispatch, driven by the host while items are alive, with the item
+    /// stored between dispatches.
+    Host,
+}
+
+fn default_workgroup() -> u32 {
+    64
+}

@@ -1,0 +1,32 @@
+//! lightgraph-engine: a generic frame-graph compiler and runtime for GPU compute.
+//!
+//! A graph (RON) names WGSL pass functions over items, the resources they read and write,
+//! and the streams they emit into. The engine checks it, plans a layout (which passes are
+//! fused into which kernel), generates one WGSL module per kernel, validates it with naga,
+//! and runs frames through wgpu. It knows nothing about light transport.
+//!
+//! The stages, in order: [`Graph::load`] → [`Plan::new`] → [`Program::compile`] →
+//! [`Instance::new`] → [`Instance::run_frame`].
+
+pub mod codegen;
+pub mod error;
+pub mod explain;
+pub mod expr;
+pub mod gpu;
+pub mod graph;
+pub mod ir;
+pub mod plan;
+pub mod program;
+pub mod reflect;
+pub mod runtime;
+pub mod vfs;
+pub mod wgsl;
+
+pub use error::{Error, Location, Result};
+pub use gpu::Gpu;
+pub use graph::Graph;
+pub use ir::ConstValue;
+pub use plan::Plan;
+pub use program::{Program, Specialization, Target};
+pub use runtime::{FrameStats, Instance};
+pub use vfs::{Layer, Vfs};

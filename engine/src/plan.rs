@@ -1,0 +1,445 @@
+//! Layout planning: turning a graph's fusion groups into kernels, checking that the fusion
+//! is legal, and deriving the order kernels run in within each phase.
+
+use crate::error::Result;
+use crate::graph::{ChainEntry, Graph};
+use crate::ir::{LayoutDecl, LoopMode};
+use std::collections::BTreeSet;
+use std::ops::Range;
+
+/// What feeds a kernel its items.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Root {
+    /// A start pass: one invocation per index of the current chunk.
+    Start,
+    /// A stream's queue: one invocation per queued item, dispatched indirectly.
+    Queue(String),
+    /// The chain's state buffer: one invocation per slot, items stored by an earlier kernel.
+    State,
+}
+
+/// One kernel of a layout.
+#[derive(Debug, Clone)]
+pub struct KernelPlan {
+    /// Entry point name.
+    pub name: String,
+    /// The phase it belongs to.
+    pub phase: usize,
+    /// The chain whose segment the kernel runs.
+    pub chain: usize,
+    /// The segment: positions in the chain's pass list.
+    pub segment: Range<usize>,
+    /// What feeds it.
+    pub root: Root,
+    /// Stream-fed chains called directly from this kernel (fused consumers).
+    pub fused_chains: Vec<usize>,
+    /// Whether the segment's loop passes repeat inside the kernel.
+    pub loop_in_kernel: bool,
+    /// Whether this kernel ends one host-driven loop iteration (it counts surviving items).
+    pub ends_iteration: bool,
+}
+
+/// A step of a phase's schedule.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// Run a kernel over the chunk's items or slots.
+    Run(usize),
+    /// Run the consumer kernel of a queued stream over its queue, then empty the queue.
+    Drain(String),
+    /// Repeat the body while items of the chain are alive.
+    Loop {
+        /// The chain whose items are counted.
+        chain: usize,
+        /// The body of one iteration.
+        body: Vec<Step>,
+    },
+}
+
+/// A graph resolved for one layout.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// The graph.
+    pub graph: Graph,
+    /// The layout's name.
+    pub layout_name: String,
+    /// The layout.
+    pub layout: LayoutDecl,
+    /// Kernels in declaration order.
+    pub kernels: Vec<KernelPlan>,
+    /// Per phase, the steps to run for each chunk.
+    pub schedule: Vec<Vec<Step>>,
+    /// Chains whose items are stored in state buffers between kernels.
+    pub stored_chains: BTreeSet<usize>,
+    /// Streams carried by queues (their consumers run in kernels of their own).
+    pub queued_streams: BTreeSet<String>,
+}
+
+impl Plan {
+    /// Resolves `layout` (a name from the graph, listed in the error when unknown).
+    pub fn new(graph: &Graph, layout: &str) -> Result<Plan> {
+        let decl = graph.layouts.get(layout).ok_or_else(|| {
+            let known: Vec<&str> = graph.layouts.keys().map(|s| s.as_str()).collect();
+            graph.error_at(
+                &graph.name,
+                format!(
+                    "unknown layout '{layout}' for graph '{}'; available layouts: {}",
+                    graph.name,
+                    known.join(", ")
+                ),
+            )
+        })?;
+        Self::with_decl(graph, layout, decl.clone())
+    }
+
+    /// Resolves an explicit layout declaration.
+    pub fn with_decl(graph: &Graph, layout_name: &str, layout: LayoutDecl) -> Result<Plan> {
+        if layout.workgroup_size == 0 || layout.workgroup_size > 1024 {
+            return Err(graph.error_at(
+                layout_name,
+                format!(
+                    "layout '{layout_name}': workgroup_size {} is not in 1..=1024",
+                    layout.workgroup_size
+                ),
+            ));
+        }
+        let groups = resolve_groups(graph, layout_name, &layout)?;
+        let mut kernels = Vec::new();
+        for (k, group) in groups.iter().enumerate() {
+            kernels.push(plan_kernel(graph, layout_name, &layout, k, group)?);
+        }
+        // Queue-fed chains need a kernel of their own.
+        let queued_streams: BTreeSet<String> = kernels
+            .iter()
+            .filter_map(|k| {
+                if let Root::Queue(s) = &k.root {
+                    Some(s.clone())
+                } else {
+                    None
+                }
+            })
+            .collect();
+        let stored_chains: BTreeSet<usize> = kernels
+            .iter()
+            .filter(|k| k.root == Root::State)
+            .map(|k| k.chain)
+            .collect();
+        let mut plan = Plan {
+            graph: graph.clone(),
+            layout_name: layout_name.to_string(),
+            layout,
+            kernels,
+            schedule: Vec::new(),
+            stored_chains,
+            queued_streams,
+        };
+        plan.check_streams(layout_name)?;
+        plan.schedule = (0..graph.phases.len())
+            .map(|ph| plan.phase_schedule(ph))
+            .collect();
+        Ok(plan)
+    }
+
+    /// The passes of kernel `k`, including fused consumer chains, as pass indices.
+    pub fn kernel_passes(&self, k: usize) -> Vec<usize> {
+        let kp = &self.kernels[k];
+        let chains = &self.graph.chains;
+        let mut out: Vec<usize> = chains[kp.chain].passes[kp.segment.clone()].to_vec();
+        for &c in &kp.fused_chains {
+            out.extend(chains[c].passes.iter().copied());
+        }
+        out
+    }
+
+    /// Streams emitted by the passes of kernel `k` that travel through queues.
+    pub fn queued_emits(&self, k: usize) -> Vec<String> {
+        let mut out: Vec<String> = Vec::new();
+        for p in self.kernel_passes(k) {
+            for s in &self.graph.passes[p].decl.emits {
+                if self.queued_streams.contains(s) && !out.contains(s) {
+                    out.push(s.clone());
+                }
+            }
+        }
+        out
+    }
+
+    /// The kernel consuming the queue of `stream`.
+    pub fn consumer_kernel(&self, stream: &str) -> usize {
+        self.kernels
+            .iter()
+            .position(|k| k.root == Root::Queue(stream.to_string()))
+            .expect("queued streams have a consumer kernel")
+    }
+
+    fn check_streams(&self, layout_name: &str) -> Result<()> {
+        for (k, kp) in self.kernels.iter().enumerate() {
+            if !kp.loop_in_kernel {
+                continue;
+            }
+            let chain = &self.graph.chains[kp.chain];
+            let Some(ls) = chain.loop_start else { continue };
+            for &p in &chain.passes[ls.max(kp.segment.start)..kp.segment.end] {
+                for s in &self.graph.passes[p].decl.emits {
+                    if self.queued_streams.contains(s) {
+                        let pass = &self.graph.passes[p].decl.name;
+                        return Err(self.graph.error_at(
+                            s,
+                            format!(
+                                "layout '{layout_name}': loop pass '{pass}' emits '{s}' inside the loop of kernel {}, so the queue of '{s}' \
+                                 would have no bound; fuse its consumer '{}' into that kernel or use loops: Host",
+                                self.kernels[k].name, self.graph.streams[s].to
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn phase_schedule(&self, ph: usize) -> Vec<Step> {
+        let root_chain = self.graph.phases[ph].chains[0];
+        let mut ks: Vec<usize> = (0..self.kernels.len())
+            .filter(|&k| {
+                self.kernels[k].chain == root_chain
+                    && !matches!(self.kernels[k].root, Root::Queue(_))
+            })
+            .collect();
+        ks.sort_by_key(|&k| self.kernels[k].segment.start);
+        let mut steps = Vec::new();
+        let mut body = Vec::new();
+        for k in ks {
+            let mut run = vec![Step::Run(k)];
+            run.extend(self.drains_after(k));
+            let kp = &self.kernels[k];
+            let in_host_loop = self.layout.loops == LoopMode::Host
+                && self.graph.chains[kp.chain]
+                    .loop_start
+                    .is_some_and(|ls| kp.segment.end > ls);
+            if in_host_loop {
+                body.extend(run);
+            } else {
+                steps.extend(run);
+            }
+        }
+        if !body.is_empty() {
+            steps.push(Step::Loop {
+                chain: root_chain,
+                body,
+            });
+        }
+        steps
+    }
+
+    fn drains_after(&self, k: usize) -> Vec<Step> {
+        let mut out = Vec::new();
+        for s in self.queued_emits(k) {
+            out.push(Step::Drain(s.clone()));
+            out.extend(self.drains_after(self.consumer_kernel(&s)));
+        }
+        out
+    }
+}
+
+fn resolve_groups(
+    graph: &Graph,
+    layout_name: &str,
+    layout: &LayoutDecl,
+) -> Result<Vec<Vec<usize>>> {
+    let mut seen: BTreeSet<usize> = BTreeSet::new();
+    let mut groups = Vec::new();
+    for names in &layout.kernels {
+        let mut group = Vec::new();
+        for name in names {
+            if graph.culled.contains(name) {
+                continue;
+            }
+            let p = graph.pass_index(name).ok_or_else(|| {
+                let known: Vec<&str> = graph.passes.iter().map(|p| p.decl.name.as_str()).collect();
+                graph.error_at(
+                    name,
+                    format!(
+                        "layout '{layout_name}' names unknown pass '{name}' (passes: {})",
+                        known.join(", ")
+                    ),
+                )
+            })?;
+            if !seen.insert(p) {
+                return Err(graph.error_at(
+                    name,
+                    format!("layout '{layout_name}' puts pass '{name}' in two kernels"),
+                ));
+            }
+            group.push(p);
+        }
+        if !group.is_empty() {
+            groups.push(group);
+        }
+    }
+    if let Some(missing) = (0..graph.passes.len()).find(|p| !seen.contains(p)) {
+        let name = &graph.passes[missing].decl.name;
+        return Err(graph.error_at(
+            layout_name,
+            format!("layout '{layout_name}' puts pass '{name}' in no kernel"),
+        ));
+    }
+    Ok(groups)
+}
+
+fn plan_kernel(
+    graph: &Graph,
+    layout_name: &str,
+    layout: &LayoutDecl,
+    k: usize,
+    group: &[usize],
+) -> Result<KernelPlan> {
+    let names: Vec<&str> = group
+        .iter()
+        .map(|&p| graph.passes[p].decl.name.as_str())
+        .collect();
+    let describe = format!("layout '{layout_name}': kernel [{}]", names.join(", "));
+    // One phase per kernel.
+    let phase_of = |p: usize| graph.phase_of_chain(graph.chain_of(p).0);
+    let first_phase = phase_of(group[0]);
+    if let Some(&other) = group.iter().find(|&&p| phase_of(p) != first_phase) {
+        let (a, b) = (
+            &graph.passes[group[0]].decl.name,
+            &graph.passes[other].decl.name,
+        );
+        let (pa, pb) = (first_phase, phase_of(other));
+        let reason = match graph.barrier_resource(pa.min(pb), pa.max(pb)) {
+            Some(r) => format!(
+                "the later phase needs all of '{r}' from the earlier one (a global barrier)"
+            ),
+            None => "they belong to independent phases".to_string(),
+        };
+        return Err(graph.error_at(b, format!("{describe} fuses '{a}' (phase {pa}) with '{b}' (phase {pb}) across a phase boundary: {reason}")));
+    }
+    // Segments per chain.
+    let mut segments: Vec<(usize, Range<usize>)> = Vec::new();
+    let mut chains_in: Vec<usize> = group.iter().map(|&p| graph.chain_of(p).0).collect();
+    chains_in.sort();
+    chains_in.dedup();
+    for &c in &chains_in {
+        let mut pos: Vec<usize> = group
+            .iter()
+            .map(|&p| graph.chain_of(p))
+            .filter(|(cc, _)| *cc == c)
+            .map(|(_, i)| i)
+            .collect();
+        pos.sort();
+        let range = pos[0]..pos[pos.len() - 1] + 1;
+        if range.len() != pos.len() {
+            let chain = &graph.chains[c];
+            let gap = range
+                .clone()
+                .find(|i| !pos.contains(i))
+                .expect("a gap exists");
+            let gap_name = &graph.passes[chain.passes[gap]].decl.name;
+            return Err(graph.error_at(gap_name, format!("{describe} takes passes of the chain of '{}' around '{gap_name}' but not '{gap_name}' itself", chain.item)));
+        }
+        segments.push((c, range));
+    }
+    // Stream-fed chains whose producer is in the kernel are fused (called directly).
+    let in_group = |p: usize| group.contains(&p);
+    let mut fused = Vec::new();
+    let mut roots = Vec::new();
+    for (c, range) in &segments {
+        let chain = &graph.chains[*c];
+        let fused_here = match &chain.entry {
+            ChainEntry::Stream(s) => {
+                let producers: Vec<usize> = (0..graph.passes.len())
+                    .filter(|&p| graph.passes[p].decl.emits.contains(s))
+                    .collect();
+                let inside = producers.iter().filter(|&&p| in_group(p)).count();
+                if inside > 0 && inside < producers.len() {
+                    return Err(graph.error_at(s, format!("{describe}: stream '{s}' has producers inside and outside this kernel; its consumer must run in a kernel of its own")));
+                }
+                if inside > 0 && range.len() != chain.passes.len() {
+                    return Err(graph.error_at(s, format!("{describe}: the chain of '{}' fed by '{s}' is fused with its producer, so it must be fused whole", chain.item)));
+                }
+                inside > 0
+            }
+            ChainEntry::Start(_) => false,
+        };
+        if fused_here {
+            fused.push(*c);
+        } else {
+            roots.push((*c, range.clone()));
+        }
+    }
+    if roots.len() != 1 {
+        let firsts: Vec<String> = roots
+            .iter()
+            .map(|(c, r)| {
+                format!(
+                    "'{}'",
+                    graph.passes[graph.chains[*c].passes[r.start]].decl.name
+                )
+            })
+            .collect();
+        return Err(graph.error_at(
+            &graph.passes[group[0]].decl.name,
+            format!("{describe} has {} entry points ({}); a kernel runs one chain segment plus the consumers it feeds", roots.len(), firsts.join(", ")),
+        ));
+    }
+    let (chain_index, segment) = roots.remove(0);
+    let chain = &graph.chains[chain_index];
+    let root = if segment.start > 0 {
+        Root::State
+    } else {
+        match &chain.entry {
+            ChainEntry::Start(_) => Root::Start,
+            ChainEntry::Stream(s) => Root::Queue(s.clone()),
+        }
+    };
+    if let Root::Queue(s) = &root {
+        if segment.len() != chain.passes.len() {
+            return Err(graph.error_at(
+                s,
+                format!("{describe}: the chain fed by queue '{s}' must run whole in one kernel"),
+            ));
+        }
+    }
+    let has_loop = chain.loop_start.is_some_and(|ls| segment.end > ls);
+    let whole_loop = chain
+        .loop_start
+        .is_some_and(|ls| segment.start <= ls && segment.end == chain.passes.len());
+    let loop_in_kernel = match (&root, layout.loops) {
+        (Root::Queue(_), _) => true,
+        (_, LoopMode::InKernel) => {
+            if has_loop && !whole_loop {
+                let ls = chain.loop_start.unwrap_or(0);
+                let first = &graph.passes[chain.passes[ls]].decl.name;
+                return Err(graph.error_at(first, format!("{describe} splits the loop group of the chain of '{}' (from '{first}'); with loops: InKernel the loop group must be in one kernel", chain.item)));
+            }
+            has_loop
+        }
+        (Root::Start, LoopMode::Host) => {
+            if has_loop {
+                let first = &graph.passes[chain.passes[segment.start]].decl.name;
+                return Err(graph.error_at(first, format!("{describe} puts the start pass '{first}' and a host-driven loop in one kernel; split the start pass into its own kernel")));
+            }
+            false
+        }
+        (Root::State, LoopMode::Host) => {
+            if has_loop && chain.loop_start.is_some_and(|ls| segment.start < ls) {
+                let first = &graph.passes[chain.passes[segment.start]].decl.name;
+                return Err(graph.error_at(first, format!("{describe} mixes the step '{first}' with loop passes; with loops: Host a kernel holds steps or loop passes, not both")));
+            }
+            false
+        }
+    };
+    let ends_iteration = !loop_in_kernel && has_loop && segment.end == chain.passes.len();
+    let short: Vec<&str> = names.iter().take(3).copied().collect();
+    Ok(KernelPlan {
+        name: format!("k{k}_{}", short.join("_")),
+        phase: first_phase,
+        chain: chain_index,
+        segment,
+        root,
+        fused_chains: fused,
+        loop_in_kernel,
+        ends_iteration,
+    })
+}
