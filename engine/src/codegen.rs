@@ -3,7 +3,7 @@
 //! wrapper that calls the pass functions, the entry point).
 
 use crate::graph::Graph;
-use crate::ir::{ConstValue, Scope, StateStorage};
+use crate::ir::{ConstValue, StateStorage};
 use crate::plan::{Plan, Root};
 use crate::reflect::Word;
 use std::collections::BTreeMap;
@@ -117,12 +117,8 @@ impl CodegenContext<'_> {
         }
         s.push_str("        default: {}\n    }\n}\n");
         for (name, r) in &g.resources {
-            let access = if (self.writable)(name) {
-                "read_write"
-            } else {
-                "read"
-            };
-            let ty = if r.count.is_some() || r.scope == Scope::External {
+            let access = if (self.writable)(name) { "read_write" } else { "read" };
+            let ty = if r.count.is_some() {
                 format!("array<{}>", r.ty)
             } else {
                 r.ty.clone()
@@ -145,14 +141,7 @@ impl CodegenContext<'_> {
         s
     }
 
-    fn index_expr(
-        &self,
-        storage: StateStorage,
-        word: usize,
-        words: usize,
-        slot: &str,
-        cap: &str,
-    ) -> String {
+    fn index_expr(&self, storage: StateStorage, word: usize, words: usize, slot: &str, cap: &str) -> String {
         match storage {
             StateStorage::SoA => format!("{word}u * {cap} + {slot}"),
             StateStorage::AoS => format!("{slot} * {words}u + {word}u"),
@@ -163,17 +152,10 @@ impl CodegenContext<'_> {
         let words = &self.words[item];
         let storage = self.plan.layout.state;
         let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "fn lg_load_{suffix}(slot: u32) -> {item} {{\n    var v: {item};"
-        );
+        let _ = writeln!(s, "fn lg_load_{suffix}(slot: u32) -> {item} {{\n    var v: {item};");
         for (w, word) in words.iter().enumerate() {
             let idx = self.index_expr(storage, w, words.len(), "slot", cap);
-            let _ = writeln!(
-                s,
-                "    v{} = bitcast<{}>({buffer}[{idx}]);",
-                word.path, word.scalar
-            );
+            let _ = writeln!(s, "    v{} = bitcast<{}>({buffer}[{idx}]);", word.path, word.scalar);
         }
         s.push_str("    return v;\n}\n");
         let _ = writeln!(s, "fn lg_store_{suffix}(slot: u32, v: {item}) {{");
@@ -187,13 +169,7 @@ impl CodegenContext<'_> {
 
     /// WGSL statements that run passes `passes` of a chain on `it` (a function variable):
     /// steps return from the enclosing function on `false`, loop passes repeat (capped).
-    fn run_passes(
-        &self,
-        chain: usize,
-        range: std::ops::Range<usize>,
-        in_kernel_loop: bool,
-        on_finish: &str,
-    ) -> String {
+    fn run_passes(&self, chain: usize, range: std::ops::Range<usize>, in_kernel_loop: bool, on_finish: &str) -> String {
         let g = self.graph();
         let c = &g.chains[chain];
         let mut s = String::new();
@@ -260,12 +236,7 @@ impl CodegenContext<'_> {
                 "@group(0) @binding({}) var<storage, read_write> lg_queue_{q}: array<u32>;",
                 self.binding(&BufferRef::Queue(q.clone()))
             );
-            s.push_str(&self.load_store(
-                &format!("queue_{q}"),
-                &format!("lg_queue_{q}"),
-                item,
-                &cap,
-            ));
+            s.push_str(&self.load_store(&format!("queue_{q}"), &format!("lg_queue_{q}"), item, &cap));
         }
         // Emit functions: direct calls for fused consumers, appends for queues, no-ops otherwise.
         for (name, st) in &g.streams {
@@ -274,18 +245,10 @@ impl CodegenContext<'_> {
                 .iter()
                 .find(|&&c| g.chains[c].entry == crate::graph::ChainEntry::Stream(name.clone()));
             if let Some(&c) = fused {
-                let _ = writeln!(
-                    s,
-                    "fn lg_chain_{c}(item: {}) {{\n    var it = item;",
-                    st.item
-                );
+                let _ = writeln!(s, "fn lg_chain_{c}(item: {}) {{\n    var it = item;", st.item);
                 s.push_str(&self.run_passes(c, 0..g.chains[c].passes.len(), true, ""));
                 s.push_str("}\n");
-                let _ = writeln!(
-                    s,
-                    "fn emit_{name}(item: {}) {{ lg_chain_{c}(item); }}",
-                    st.item
-                );
+                let _ = writeln!(s, "fn emit_{name}(item: {}) {{ lg_chain_{c}(item); }}", st.item);
             } else if queues.contains(name) && !matches!(&kp.root, Root::Queue(q) if q == name) {
                 let _ = writeln!(
                     s,
@@ -315,12 +278,7 @@ impl CodegenContext<'_> {
                 "@group(0) @binding({}) var<storage, read_write> lg_alive_{c}: array<u32>;",
                 self.binding(&BufferRef::Alive(c))
             );
-            s.push_str(&self.load_store(
-                &format!("state_{c}"),
-                &format!("lg_state_{c}"),
-                &chain.item,
-                &cap,
-            ));
+            s.push_str(&self.load_store(&format!("state_{c}"), &format!("lg_state_{c}"), &chain.item, &cap));
         }
         // The per-invocation wrapper.
         let c = kp.chain;
@@ -355,16 +313,9 @@ impl CodegenContext<'_> {
             }
         }
         if stored && keeps_item {
-            let _ = writeln!(
-                s,
-                "    lg_store_state_{c}(lg_i, it);\n    lg_alive_{c}[lg_i] = 1u;"
-            );
+            let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);\n    lg_alive_{c}[lg_i] = 1u;");
             if kp.ends_iteration {
-                let _ = writeln!(
-                    s,
-                    "    atomicAdd(&lg_control[{}], 1u);",
-                    self.control.alive[&c]
-                );
+                let _ = writeln!(s, "    atomicAdd(&lg_control[{}], 1u);", self.control.alive[&c]);
             }
         }
         s.push_str("}\n");

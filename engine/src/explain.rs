@@ -57,8 +57,7 @@ pub fn report(program: &Program, externals: &dyn Fn(&str) -> Option<u64>) -> Str
         l.state,
         l.workgroup_size,
         l.loops,
-        l.max_items_in_flight
-            .map_or("auto".to_string(), |v| v.to_string())
+        l.max_items_in_flight.map_or("auto".to_string(), |v| v.to_string())
     );
     if !g.culled.is_empty() {
         let _ = writeln!(
@@ -116,7 +115,7 @@ pub fn report(program: &Program, externals: &dyn Fn(&str) -> Option<u64>) -> Str
             "  {}: passes [{}], fed by {root}{}, {} WGSL lines ({} bytes)\n    binds: {}",
             kp.name,
             passes.join(", "),
-            if kp.loop_in_kernel {
+            if kp.loop_in_kernel && g.chains[kp.chain].loop_start.is_some() {
                 ", loop in kernel"
             } else {
                 ""

@@ -73,10 +73,7 @@ impl Expr {
                 }
             }
             Expr::Call(f, args) => {
-                let v: Vec<f64> = args
-                    .iter()
-                    .map(|a| a.eval(vars))
-                    .collect::<Result<_, _>>()?;
+                let v: Vec<f64> = args.iter().map(|a| a.eval(vars)).collect::<Result<_, _>>()?;
                 match (f.as_str(), v.as_slice()) {
                     ("min", [a, b]) => a.min(*b),
                     ("max", [a, b]) => a.max(*b),
@@ -130,15 +127,14 @@ fn tokenize(text: &str) -> Result<Vec<Token>, String> {
             i += 1;
         } else if c.is_ascii_digit() || c == '.' {
             let start = i;
-            while i < chars.len()
-                && (chars[i].is_ascii_digit() || chars[i] == '.' || chars[i] == 'e')
-            {
+            while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.' || chars[i] == 'e') {
                 i += 1;
             }
             let s: String = chars[start..i].iter().collect();
-            out.push(Token::Num(s.parse().map_err(|_| {
-                format!("bad number '{s}' in count expression '{text}'")
-            })?));
+            out.push(Token::Num(
+                s.parse()
+                    .map_err(|_| format!("bad number '{s}' in count expression '{text}'"))?,
+            ));
         } else if c.is_alphabetic() || c == '_' {
             let start = i;
             while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
@@ -149,9 +145,7 @@ fn tokenize(text: &str) -> Result<Vec<Token>, String> {
             out.push(Token::Sym(c));
             i += 1;
         } else {
-            return Err(format!(
-                "unexpected character '{c}' in count expression '{text}'"
-            ));
+            return Err(format!("unexpected character '{c}' in count expression '{text}'"));
         }
     }
     Ok(out)
@@ -241,13 +235,7 @@ mod tests {
     fn evaluates_with_precedence_and_rounds_up() {
         let e = Expr::parse("WIDTH * HEIGHT + 2 * 3").unwrap();
         assert_eq!(e.count(&vars()).unwrap(), 640 * 480 + 6);
-        assert_eq!(
-            Expr::parse("(WIDTH + 1) / 2")
-                .unwrap()
-                .count(&vars())
-                .unwrap(),
-            321
-        );
+        assert_eq!(Expr::parse("(WIDTH + 1) / 2").unwrap().count(&vars()).unwrap(), 321);
         assert_eq!(
             Expr::parse("max(WIDTH, HEIGHT) * 1.25 + 0.5")
                 .unwrap()
@@ -255,10 +243,7 @@ mod tests {
                 .unwrap(),
             801
         );
-        assert_eq!(
-            Expr::parse("WIDTH*HEIGHT").unwrap().names(),
-            vec!["WIDTH", "HEIGHT"]
-        );
+        assert_eq!(Expr::parse("WIDTH*HEIGHT").unwrap().names(), vec!["WIDTH", "HEIGHT"]);
     }
 
     #[test]

@@ -31,38 +31,30 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
         wgpu::DeviceType::Cpu => 3,
         wgpu::DeviceType::Other => 4,
     };
-    let backend = if info.backend == wgpu::Backend::Vulkan {
-        0
-    } else {
-        1
-    };
+    let backend = if info.backend == wgpu::Backend::Vulkan { 0 } else { 1 };
     (backend, ty)
 }
 
 fn instance() -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends =
-        wgpu::Backends::VULKAN | wgpu::Backends::GL | wgpu::Backends::METAL | wgpu::Backends::DX12;
+    desc.backends = wgpu::Backends::VULKAN | wgpu::Backends::GL | wgpu::Backends::METAL | wgpu::Backends::DX12;
     wgpu::Instance::new(desc)
 }
 
 /// All adapters wgpu can see, best first.
 pub fn adapters() -> Vec<wgpu::AdapterInfo> {
     let inst = instance();
-    let mut infos: Vec<wgpu::AdapterInfo> =
-        pollster::block_on(inst.enumerate_adapters(wgpu::Backends::all()))
-            .iter()
-            .map(|a| a.get_info())
-            .collect();
+    let mut infos: Vec<wgpu::AdapterInfo> = pollster::block_on(inst.enumerate_adapters(wgpu::Backends::all()))
+        .iter()
+        .map(|a| a.get_info())
+        .collect();
     infos.sort_by_key(rank);
     infos
 }
 
 /// Features lightgraph uses when the adapter has them.
 pub fn wanted_features() -> wgpu::Features {
-    wgpu::Features::TIMESTAMP_QUERY
-        | wgpu::Features::SHADER_FLOAT32_ATOMIC
-        | wgpu::Features::SUBGROUP
+    wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SHADER_FLOAT32_ATOMIC | wgpu::Features::SUBGROUP
 }
 
 impl Gpu {
@@ -81,12 +73,7 @@ impl Gpu {
                 let pos = candidates
                     .iter()
                     .position(|a| a.get_info().name.to_lowercase().contains(&lower))
-                    .ok_or_else(|| {
-                        Error::Gpu(format!(
-                            "no adapter matches '{n}'; available: {}",
-                            names.join(", ")
-                        ))
-                    })?;
+                    .ok_or_else(|| Error::Gpu(format!("no adapter matches '{n}'; available: {}", names.join(", "))))?;
                 candidates.swap_remove(pos)
             }
             None => candidates.remove(0),
@@ -117,10 +104,7 @@ impl Gpu {
     pub fn capabilities(&self) -> naga::valid::Capabilities {
         use naga::valid::Capabilities as C;
         let mut caps = C::empty();
-        if self
-            .features
-            .contains(wgpu::Features::SHADER_FLOAT32_ATOMIC)
-        {
+        if self.features.contains(wgpu::Features::SHADER_FLOAT32_ATOMIC) {
             caps |= C::SHADER_FLOAT32_ATOMIC;
         }
         if self.features.contains(wgpu::Features::SUBGROUP) {
@@ -133,11 +117,7 @@ impl Gpu {
     pub fn describe(&self) -> String {
         format!(
             "{} ({:?}, {:?}, driver {} {})",
-            self.info.name,
-            self.info.backend,
-            self.info.device_type,
-            self.info.driver,
-            self.info.driver_info
+            self.info.name, self.info.backend, self.info.device_type, self.info.driver, self.info.driver_info
         )
     }
 

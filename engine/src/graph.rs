@@ -3,10 +3,7 @@
 
 use crate::error::{Error, Location, Result};
 use crate::expr::Expr;
-use crate::ir::{
-    CatalogFile, ConstValue, GraphFile, LayoutDecl, PassDecl, PassEntry, ResourceDecl, Role,
-    StreamDecl,
-};
+use crate::ir::{CatalogFile, ConstValue, GraphFile, LayoutDecl, PassDecl, PassEntry, ResourceDecl, Role, StreamDecl};
 use crate::vfs::Vfs;
 use petgraph::graph::{DiGraph, NodeIndex};
 use petgraph::visit::{Bfs, Reversed};
@@ -102,6 +99,7 @@ pub struct Graph {
 /// Parses RON text of `file` into `T`, with the parser's position on error.
 pub fn parse_ron<T: serde::de::DeserializeOwned>(file: &str, text: &str) -> Result<T> {
     ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
         .from_str(text)
         .map_err(|e| Error::Parse {
             at: Location {
@@ -168,10 +166,7 @@ impl Graph {
                 },
             };
             if passes.iter().any(|p| p.decl.name == pass.decl.name) {
-                return Err(err(
-                    &pass.decl.name,
-                    format!("pass '{}' appears twice", pass.decl.name),
-                ));
+                return Err(err(&pass.decl.name, format!("pass '{}' appears twice", pass.decl.name)));
             }
             passes.push(pass);
         }
@@ -187,9 +182,7 @@ impl Graph {
             if !is_identifier(name) || name.starts_with("lg_") {
                 return Err(err(
                     name,
-                    format!(
-                        "'{name}' is not a valid name (a WGSL identifier not starting with 'lg_')"
-                    ),
+                    format!("'{name}' is not a valid name (a WGSL identifier not starting with 'lg_')"),
                 ));
             }
         }
@@ -203,10 +196,7 @@ impl Graph {
         for p in &passes {
             let d = &p.decl;
             if !is_identifier(p.function()) {
-                return Err(err(
-                    &d.name,
-                    format!("pass name '{}' is not a WGSL identifier", d.name),
-                ));
+                return Err(err(&d.name, format!("pass name '{}' is not a WGSL identifier", d.name)));
             }
             for r in d.reads.iter().chain(d.writes.iter()) {
                 if !g.resources.contains_key(r) {
@@ -235,11 +225,19 @@ impl Graph {
                 }
             }
             if let Role::Start { over } = &d.role {
-                Expr::parse(over)
-                    .map_err(|e| Error::invalid_at_name(&p.origin, &pass_text(p), over, e))?;
+                Expr::parse(over).map_err(|e| Error::invalid_at_name(&p.origin, &pass_text(p), over, e))?;
             }
         }
         for (name, r) in &g.resources {
+            if r.scope == crate::ir::Scope::External && r.count.is_some() {
+                return Err(err(
+                    name,
+                    format!(
+                        "external resource '{name}' has a count; its data sizes it, so write its WGSL type (e.g. array<{}>)",
+                        r.ty
+                    ),
+                ));
+            }
             if let Some(count) = &r.count {
                 Expr::parse(count).map_err(|e| err(count, format!("resource '{name}': {e}")))?;
             }
@@ -250,12 +248,10 @@ impl Graph {
             }
         }
         for (name, s) in &g.streams {
-            let consumer = passes.iter().find(|p| p.decl.name == s.to).ok_or_else(|| {
-                err(
-                    &s.to,
-                    format!("stream '{name}' feeds unknown pass '{}'", s.to),
-                )
-            })?;
+            let consumer = passes
+                .iter()
+                .find(|p| p.decl.name == s.to)
+                .ok_or_else(|| err(&s.to, format!("stream '{name}' feeds unknown pass '{}'", s.to)))?;
             if consumer.decl.item != s.item {
                 return Err(err(
                     name,
@@ -281,10 +277,7 @@ impl Graph {
         if !g.layouts.contains_key(&g.default_layout) {
             return Err(err(
                 &g.default_layout,
-                format!(
-                    "default layout '{}' is not one of the layouts",
-                    g.default_layout
-                ),
+                format!("default layout '{}' is not one of the layouts", g.default_layout),
             ));
         }
 
@@ -329,13 +322,7 @@ impl Graph {
         self.chains
             .iter()
             .enumerate()
-            .find_map(|(c, chain)| {
-                chain
-                    .passes
-                    .iter()
-                    .position(|&q| q == p)
-                    .map(|pos| (c, pos))
-            })
+            .find_map(|(c, chain)| chain.passes.iter().position(|&q| q == p).map(|pos| (c, pos)))
             .expect("every live pass is in a chain")
     }
 
@@ -381,11 +368,7 @@ impl Graph {
     }
 
     fn build_chains(&mut self) -> Result<()> {
-        let stream_into: BTreeMap<&str, &str> = self
-            .streams
-            .iter()
-            .map(|(n, s)| (s.to.as_str(), n.as_str()))
-            .collect();
+        let stream_into: BTreeMap<&str, &str> = self.streams.iter().map(|(n, s)| (s.to.as_str(), n.as_str())).collect();
         let mut chains: Vec<Chain> = Vec::new();
         for (i, p) in self.passes.iter().enumerate() {
             let d = &p.decl;
@@ -393,10 +376,7 @@ impl Graph {
             if fed_by > 1 {
                 return Err(self.error_at(
                     &d.name,
-                    format!(
-                        "pass '{}' is fed by {fed_by} streams; a chain has one entry",
-                        d.name
-                    ),
+                    format!("pass '{}' is fed by {fed_by} streams; a chain has one entry", d.name),
                 ));
             }
             let new_entry = match &d.role {
@@ -420,7 +400,10 @@ impl Graph {
             let chain = chains.iter_mut().rev().find(|c| c.item == d.item).ok_or_else(|| {
                 self.error_at(
                     &d.name,
-                    format!("pass '{}' over '{}' follows no start pass or stream consumer over '{}'", d.name, d.item, d.item),
+                    format!(
+                        "pass '{}' over '{}' follows no start pass or stream consumer over '{}'",
+                        d.name, d.item, d.item
+                    ),
                 )
             })?;
             if let Some(ls) = chain.loop_start {
@@ -465,14 +448,15 @@ impl Graph {
                         if path.contains(&next) {
                             return Err(self.error_at(
                                 s,
-                                format!(
-                                    "stream '{s}' closes a cycle of streams; emits cannot recurse"
-                                ),
+                                format!("stream '{s}' closes a cycle of streams; emits cannot recurse"),
                             ));
                         }
                         if let Some(&other) = owner.get(&next) {
                             if other != phase {
-                                return Err(self.error_at(s, format!("stream '{s}' is emitted in two phases; a stream belongs to one phase")));
+                                return Err(self.error_at(
+                                    s,
+                                    format!("stream '{s}' is emitted in two phases; a stream belongs to one phase"),
+                                ));
                             }
                         }
                         owner.insert(next, phase);
@@ -542,10 +526,7 @@ fn dependency_graph(
     let mut dg: DiGraph<String, String> = DiGraph::new();
     let mut nodes = BTreeMap::new();
     for r in resources.keys() {
-        nodes.insert(
-            format!("resource:{r}"),
-            dg.add_node(format!("resource:{r}")),
-        );
+        nodes.insert(format!("resource:{r}"), dg.add_node(format!("resource:{r}")));
     }
     for p in passes {
         nodes.insert(
@@ -568,8 +549,7 @@ fn dependency_graph(
                 dg.add_edge(n, *to, format!("emits {s}"));
             }
         }
-        let starts_chain =
-            matches!(d.role, Role::Start { .. }) || streams.values().any(|s| s.to == d.name);
+        let starts_chain = matches!(d.role, Role::Start { .. }) || streams.values().any(|s| s.to == d.name);
         if !starts_chain {
             if let Some(prev) = last_of_item.get(d.item.as_str()) {
                 dg.add_edge(*prev, n, d.item.clone());

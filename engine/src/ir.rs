@@ -108,9 +108,11 @@ pub enum Role {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ResourceDecl {
-    /// WGSL element type (a struct, `vec4<f32>`, `atomic<u32>` or an alias).
+    /// WGSL type: the element type of an engine-allocated array (with `count`), or the whole
+    /// type of a single value or of an external resource (e.g. `array<Primitive>`).
     pub ty: String,
-    /// Count expression of elements; without it the resource is a single value.
+    /// Count expression of elements; without it the resource is a single value. External
+    /// resources have none: the host's data sizes them.
     #[serde(default)]
     pub count: Option<String>,
     /// Lifetime and ownership.

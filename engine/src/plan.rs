@@ -133,9 +133,7 @@ impl Plan {
             queued_streams,
         };
         plan.check_streams(layout_name)?;
-        plan.schedule = (0..graph.phases.len())
-            .map(|ph| plan.phase_schedule(ph))
-            .collect();
+        plan.schedule = (0..graph.phases.len()).map(|ph| plan.phase_schedule(ph)).collect();
         Ok(plan)
     }
 
@@ -200,10 +198,7 @@ impl Plan {
     fn phase_schedule(&self, ph: usize) -> Vec<Step> {
         let root_chain = self.graph.phases[ph].chains[0];
         let mut ks: Vec<usize> = (0..self.kernels.len())
-            .filter(|&k| {
-                self.kernels[k].chain == root_chain
-                    && !matches!(self.kernels[k].root, Root::Queue(_))
-            })
+            .filter(|&k| self.kernels[k].chain == root_chain && !matches!(self.kernels[k].root, Root::Queue(_)))
             .collect();
         ks.sort_by_key(|&k| self.kernels[k].segment.start);
         let mut steps = Vec::new();
@@ -241,11 +236,7 @@ impl Plan {
     }
 }
 
-fn resolve_groups(
-    graph: &Graph,
-    layout_name: &str,
-    layout: &LayoutDecl,
-) -> Result<Vec<Vec<usize>>> {
+fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Result<Vec<Vec<usize>>> {
     let mut seen: BTreeSet<usize> = BTreeSet::new();
     let mut groups = Vec::new();
     for names in &layout.kernels {
@@ -286,34 +277,23 @@ fn resolve_groups(
     Ok(groups)
 }
 
-fn plan_kernel(
-    graph: &Graph,
-    layout_name: &str,
-    layout: &LayoutDecl,
-    k: usize,
-    group: &[usize],
-) -> Result<KernelPlan> {
-    let names: Vec<&str> = group
-        .iter()
-        .map(|&p| graph.passes[p].decl.name.as_str())
-        .collect();
+fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, group: &[usize]) -> Result<KernelPlan> {
+    let names: Vec<&str> = group.iter().map(|&p| graph.passes[p].decl.name.as_str()).collect();
     let describe = format!("layout '{layout_name}': kernel [{}]", names.join(", "));
     // One phase per kernel.
     let phase_of = |p: usize| graph.phase_of_chain(graph.chain_of(p).0);
     let first_phase = phase_of(group[0]);
     if let Some(&other) = group.iter().find(|&&p| phase_of(p) != first_phase) {
-        let (a, b) = (
-            &graph.passes[group[0]].decl.name,
-            &graph.passes[other].decl.name,
-        );
+        let (a, b) = (&graph.passes[group[0]].decl.name, &graph.passes[other].decl.name);
         let (pa, pb) = (first_phase, phase_of(other));
         let reason = match graph.barrier_resource(pa.min(pb), pa.max(pb)) {
-            Some(r) => format!(
-                "the later phase needs all of '{r}' from the earlier one (a global barrier)"
-            ),
+            Some(r) => format!("the later phase needs all of '{r}' from the earlier one (a global barrier)"),
             None => "they belong to independent phases".to_string(),
         };
-        return Err(graph.error_at(b, format!("{describe} fuses '{a}' (phase {pa}) with '{b}' (phase {pb}) across a phase boundary: {reason}")));
+        return Err(graph.error_at(
+            b,
+            format!("{describe} fuses '{a}' (phase {pa}) with '{b}' (phase {pb}) across a phase boundary: {reason}"),
+        ));
     }
     // Segments per chain.
     let mut segments: Vec<(usize, Range<usize>)> = Vec::new();
@@ -331,12 +311,15 @@ fn plan_kernel(
         let range = pos[0]..pos[pos.len() - 1] + 1;
         if range.len() != pos.len() {
             let chain = &graph.chains[c];
-            let gap = range
-                .clone()
-                .find(|i| !pos.contains(i))
-                .expect("a gap exists");
+            let gap = range.clone().find(|i| !pos.contains(i)).expect("a gap exists");
             let gap_name = &graph.passes[chain.passes[gap]].decl.name;
-            return Err(graph.error_at(gap_name, format!("{describe} takes passes of the chain of '{}' around '{gap_name}' but not '{gap_name}' itself", chain.item)));
+            return Err(graph.error_at(
+                gap_name,
+                format!(
+                    "{describe} takes passes of the chain of '{}' around '{gap_name}' but not '{gap_name}' itself",
+                    chain.item
+                ),
+            ));
         }
         segments.push((c, range));
     }
@@ -371,16 +354,15 @@ fn plan_kernel(
     if roots.len() != 1 {
         let firsts: Vec<String> = roots
             .iter()
-            .map(|(c, r)| {
-                format!(
-                    "'{}'",
-                    graph.passes[graph.chains[*c].passes[r.start]].decl.name
-                )
-            })
+            .map(|(c, r)| format!("'{}'", graph.passes[graph.chains[*c].passes[r.start]].decl.name))
             .collect();
         return Err(graph.error_at(
             &graph.passes[group[0]].decl.name,
-            format!("{describe} has {} entry points ({}); a kernel runs one chain segment plus the consumers it feeds", roots.len(), firsts.join(", ")),
+            format!(
+                "{describe} has {} entry points ({}); a kernel runs one chain segment plus the consumers it feeds",
+                roots.len(),
+                firsts.join(", ")
+            ),
         ));
     }
     let (chain_index, segment) = roots.remove(0);

@@ -135,10 +135,7 @@ impl Program {
             }
             constants.insert(name.clone(), *v);
         }
-        let vars: BTreeMap<String, f64> = constants
-            .iter()
-            .map(|(k, v)| (k.clone(), v.as_f64()))
-            .collect();
+        let vars: BTreeMap<String, f64> = constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
 
         // Sources shared by every kernel.
         let mut shared: Vec<(String, String)> = Vec::new();
@@ -177,17 +174,9 @@ impl Program {
             let n = bindings.len() as u32;
             bindings.insert(BufferRef::Queue(q.clone()), n);
         }
-        let written: BTreeSet<String> = g
-            .passes
-            .iter()
-            .flat_map(|p| p.decl.writes.iter().cloned())
-            .collect();
-        let writable = |name: &str| {
-            written.contains(name)
-                || g.resources
-                    .get(name)
-                    .is_some_and(|r| r.ty.contains("atomic"))
-        };
+        let written: BTreeSet<String> = g.passes.iter().flat_map(|p| p.decl.writes.iter().cloned()).collect();
+        let writable =
+            |name: &str| written.contains(name) || g.resources.get(name).is_some_and(|r| r.ty.contains("atomic"));
 
         // Control words.
         let mut control = ControlMap::default();
@@ -229,12 +218,8 @@ impl Program {
         // Sizes.
         let mut sizes = BTreeMap::new();
         for (name, r) in &g.resources {
-            let element_bytes = reflect::element_size(&rmod, name).ok_or_else(|| {
-                g.error_at(
-                    name,
-                    format!("resource '{name}': cannot lay out type '{}'", r.ty),
-                )
-            })?;
+            let element_bytes = reflect::element_size(&rmod, name)
+                .ok_or_else(|| g.error_at(name, format!("resource '{name}': cannot lay out type '{}'", r.ty)))?;
             let count = match (&r.count, r.scope) {
                 (_, Scope::External) => None,
                 (Some(expr), _) => Some(
@@ -244,13 +229,7 @@ impl Program {
                 ),
                 (None, _) => Some(1),
             };
-            sizes.insert(
-                name.clone(),
-                ResourceSize {
-                    element_bytes,
-                    count,
-                },
-            );
+            sizes.insert(name.clone(), ResourceSize { element_bytes, count });
         }
         let mut words = BTreeMap::new();
         for &c in &plan.stored_chains {
@@ -303,17 +282,12 @@ impl Program {
             for (q, f) in &fanout {
                 let producer_phase = g.phase_of_chain(plan.kernels[plan.consumer_kernel(q)].chain);
                 if producer_phase == ph {
-                    per_item_bytes =
-                        per_item_bytes.max(4 * words[&g.streams[q].item].len() as u64 * f);
+                    per_item_bytes = per_item_bytes.max(4 * words[&g.streams[q].item].len() as u64 * f);
                 }
             }
             let mut chunk = domain.max(1);
             if per_item_bytes > 0 {
-                chunk = chunk.min(
-                    plan.layout
-                        .max_items_in_flight
-                        .unwrap_or(MAX_DEFAULT_IN_FLIGHT),
-                );
+                chunk = chunk.min(plan.layout.max_items_in_flight.unwrap_or(MAX_DEFAULT_IN_FLIGHT));
                 chunk = chunk.min((target.max_binding_bytes / per_item_bytes).max(1));
             }
             domains.push(domain);
@@ -348,10 +322,7 @@ impl Program {
             }
             src.push(&format!("<generated kernel {}>", kp.name), &ctx.kernel(k));
             let (module, info) = src.compile(target.capabilities).map_err(|e| match e {
-                Error::Shader(m) => Error::Shader(format!(
-                    "kernel {} of layout '{}': {m}",
-                    kp.name, plan.layout_name
-                )),
+                Error::Shader(m) => Error::Shader(format!("kernel {} of layout '{}': {m}", kp.name, plan.layout_name)),
                 other => other,
             })?;
             let uses = entry_uses(&module, &info, &bindings);
@@ -488,9 +459,7 @@ pub fn entry_uses(
         };
         let (read_only, uniform) = match var.space {
             naga::AddressSpace::Uniform => (true, true),
-            naga::AddressSpace::Storage { access } => {
-                (!access.contains(naga::StorageAccess::STORE), false)
-            }
+            naga::AddressSpace::Storage { access } => (!access.contains(naga::StorageAccess::STORE), false),
             _ => continue,
         };
         out.push(BindingUse {
@@ -504,10 +473,7 @@ pub fn entry_uses(
 }
 
 /// Functions called (transitively) by `f`, including itself.
-fn callees(
-    module: &naga::Module,
-    f: naga::Handle<naga::Function>,
-) -> BTreeSet<naga::Handle<naga::Function>> {
+fn callees(module: &naga::Module, f: naga::Handle<naga::Function>) -> BTreeSet<naga::Handle<naga::Function>> {
     fn walk(block: &naga::Block, out: &mut Vec<naga::Handle<naga::Function>>) {
         for st in block.iter() {
             match st {
@@ -517,12 +483,8 @@ fn callees(
                     walk(accept, out);
                     walk(reject, out);
                 }
-                naga::Statement::Switch { cases, .. } => {
-                    cases.iter().for_each(|c| walk(&c.body, out))
-                }
-                naga::Statement::Loop {
-                    body, continuing, ..
-                } => {
+                naga::Statement::Switch { cases, .. } => cases.iter().for_each(|c| walk(&c.body, out)),
+                naga::Statement::Loop { body, continuing, .. } => {
                     walk(body, out);
                     walk(continuing, out);
                 }
@@ -562,26 +524,13 @@ fn check_passes(plan: &Plan, module: &naga::Module, info: &naga::valid::ModuleIn
         let d = &p.decl;
         let fname = p.function();
         let expected = match d.role {
-            Role::Start { .. } => format!(
-                "fn {fname}(item: ptr<function, {}>, index: u32) -> bool",
-                d.item
-            ),
+            Role::Start { .. } => format!("fn {fname}(item: ptr<function, {}>, index: u32) -> bool", d.item),
             _ => format!("fn {fname}(item: ptr<function, {}>) -> bool", d.item),
         };
-        let bad = |why: String| {
-            Error::Shader(format!(
-                "{}: pass '{}': {why}; expected `{expected}`",
-                d.source, d.name
-            ))
-        };
-        let h =
-            find_fn(fname).ok_or_else(|| bad(format!("no function '{fname}' in {}", d.source)))?;
+        let bad = |why: String| Error::Shader(format!("{}: pass '{}': {why}; expected `{expected}`", d.source, d.name));
+        let h = find_fn(fname).ok_or_else(|| bad(format!("no function '{fname}' in {}", d.source)))?;
         let f = &module.functions[h];
-        let want_args = if matches!(d.role, Role::Start { .. }) {
-            2
-        } else {
-            1
-        };
+        let want_args = if matches!(d.role, Role::Start { .. }) { 2 } else { 1 };
         if f.arguments.len() != want_args {
             return Err(bad(format!("it takes {} arguments", f.arguments.len())));
         }
@@ -591,10 +540,7 @@ fn check_passes(plan: &Plan, module: &naga::Module, info: &naga::valid::ModuleIn
                 space: naga::AddressSpace::Function,
             } if type_name(*base) == d.item => {}
             _ => {
-                return Err(bad(format!(
-                    "its first argument is {}",
-                    type_name(f.arguments[0].ty)
-                )));
+                return Err(bad(format!("its first argument is {}", type_name(f.arguments[0].ty))));
             }
         }
         if want_args == 2
@@ -606,11 +552,7 @@ fn check_passes(plan: &Plan, module: &naga::Module, info: &naga::valid::ModuleIn
             return Err(bad("its second argument is not u32".into()));
         }
         match &f.result {
-            Some(r)
-                if matches!(
-                    module.types[r.ty].inner,
-                    naga::TypeInner::Scalar(naga::Scalar::BOOL)
-                ) => {}
+            Some(r) if matches!(module.types[r.ty].inner, naga::TypeInner::Scalar(naga::Scalar::BOOL)) => {}
             _ => return Err(bad("it does not return bool".into())),
         }
         let fi = &info[h];

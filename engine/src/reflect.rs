@@ -24,8 +24,7 @@ pub fn find_type(module: &Module, name: &str) -> Option<naga::Handle<naga::Type>
 /// Flattens the struct `name` into words, in declaration order; bools, atomics, pointers
 /// and runtime-sized arrays cannot be stored and give an error naming the field.
 pub fn flatten(module: &Module, name: &str) -> Result<Vec<Word>, String> {
-    let ty = find_type(module, name)
-        .ok_or_else(|| format!("item type '{name}' is not defined in the WGSL sources"))?;
+    let ty = find_type(module, name).ok_or_else(|| format!("item type '{name}' is not defined in the WGSL sources"))?;
     if !matches!(module.types[ty].inner, TypeInner::Struct { .. }) {
         return Err(format!("item type '{name}' is not a struct"));
     }
@@ -34,12 +33,7 @@ pub fn flatten(module: &Module, name: &str) -> Result<Vec<Word>, String> {
     Ok(out)
 }
 
-fn scalar_name(
-    kind: ScalarKind,
-    width: u8,
-    field: &str,
-    item: &str,
-) -> Result<&'static str, String> {
+fn scalar_name(kind: ScalarKind, width: u8, field: &str, item: &str) -> Result<&'static str, String> {
     match (kind, width) {
         (ScalarKind::Float, 4) => Ok("f32"),
         (ScalarKind::Uint, 4) => Ok("u32"),
@@ -75,11 +69,7 @@ fn flatten_into(
                 });
             }
         }
-        TypeInner::Matrix {
-            columns,
-            rows,
-            scalar,
-        } => {
+        TypeInner::Matrix { columns, rows, scalar } => {
             let name = scalar_name(scalar.kind, scalar.width, &path, item)?;
             for col in 0..*columns as usize {
                 for c in COMPONENTS.iter().take(*rows as usize) {

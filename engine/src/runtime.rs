@@ -42,6 +42,8 @@ struct Kernel {
     name: String,
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
+    /// Whether it reads the frame record (bound with a dynamic offset).
+    uses_frame: bool,
 }
 
 /// A program instantiated on a GPU, ready to run frames.
@@ -67,11 +69,7 @@ struct Recorder {
     host_iterations: u32,
 }
 
-fn compile_internal(
-    source: &str,
-    name: &str,
-    program: &Program,
-) -> Result<(naga::Module, Vec<BindingUse>)> {
+fn compile_internal(source: &str, name: &str, program: &Program) -> Result<(naga::Module, Vec<BindingUse>)> {
     let mut src = ModuleSource::default();
     src.push(&format!("<generated {name}>"), source);
     let (module, info) = src.compile(program.target.capabilities)?;
@@ -82,17 +80,11 @@ fn compile_internal(
 impl<'g> Instance<'g> {
     /// Creates buffers and pipelines. `externals` supplies the bytes of every external
     /// resource.
-    pub fn new(
-        gpu: &'g Gpu,
-        program: Program,
-        externals: &BTreeMap<String, Vec<u8>>,
-    ) -> Result<Instance<'g>> {
+    pub fn new(gpu: &'g Gpu, program: Program, externals: &BTreeMap<String, Vec<u8>>) -> Result<Instance<'g>> {
         let g = &program.plan.graph;
         let device = &gpu.device;
         let max_binding = gpu.limits.max_storage_buffer_binding_size;
-        let storage = wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_SRC
-            | wgpu::BufferUsages::COPY_DST;
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let mut buffers = BTreeMap::new();
         let mut external_counts = BTreeMap::new();
         let make = |label: &str, size: u64, usage: wgpu::BufferUsages| -> Result<wgpu::Buffer> {
@@ -112,10 +104,7 @@ impl<'g> Instance<'g> {
             }))
         };
         for name in externals.keys() {
-            if g.resources
-                .get(name)
-                .is_none_or(|r| r.scope != Scope::External)
-            {
+            if g.resources.get(name).is_none_or(|r| r.scope != Scope::External) {
                 return Err(Error::Runtime(format!(
                     "data given for '{name}', which graph '{}' has no external resource of that name",
                     g.name
@@ -139,11 +128,7 @@ impl<'g> Instance<'g> {
                     )));
                 }
                 external_counts.insert(name.clone(), bytes.len() as u64 / elem);
-                let b = make(
-                    &format!("resource '{name}'"),
-                    (bytes.len() as u64).max(elem),
-                    storage,
-                )?;
+                let b = make(&format!("resource '{name}'"), (bytes.len() as u64).max(elem), storage)?;
                 gpu.queue.write_buffer(&b, 0, bytes);
                 b
             } else {
@@ -174,14 +159,8 @@ impl<'g> Instance<'g> {
             );
         }
         let ncounters = g.counters.len() as u64;
-        buffers.insert(
-            BufferRef::Counters,
-            make("counters", 4 * ncounters, storage)?,
-        );
-        buffers.insert(
-            BufferRef::Totals,
-            make("counter totals", 8 * ncounters, storage)?,
-        );
+        buffers.insert(BufferRef::Counters, make("counters", 4 * ncounters, storage)?);
+        buffers.insert(BufferRef::Totals, make("counter totals", 8 * ncounters, storage)?);
         buffers.insert(
             BufferRef::Control,
             make("control words", 4 * program.control.len as u64, storage)?,
@@ -221,9 +200,7 @@ impl<'g> Instance<'g> {
                         ty: if u.uniform {
                             wgpu::BufferBindingType::Uniform
                         } else {
-                            wgpu::BufferBindingType::Storage {
-                                read_only: u.read_only,
-                            }
+                            wgpu::BufferBindingType::Storage { read_only: u.read_only }
                         },
                         has_dynamic_offset: u.uniform,
                         min_binding_size: None,
@@ -276,6 +253,7 @@ impl<'g> Instance<'g> {
                 name: name.to_string(),
                 pipeline,
                 bind_group,
+                uses_frame: uses.iter().any(|u| u.uniform),
             }
         };
 
@@ -288,10 +266,7 @@ impl<'g> Instance<'g> {
         for (i, (q, wgsl)) in program.args_kernels.iter().enumerate() {
             let name = format!("lg_args_{q}");
             let (module, uses) = compile_internal(wgsl, &name, &program)?;
-            args.insert(
-                q.clone(),
-                (build(&name, module, &uses, &buffers), 12 * i as u64),
-            );
+            args.insert(q.clone(), (build(&name, module, &uses, &buffers), 12 * i as u64));
         }
         let (fold_module, fold_uses) = compile_internal(&program.fold_kernel, "lg_fold", &program)?;
         let fold = build("lg_fold", fold_module, &fold_uses, &buffers);
@@ -302,27 +277,23 @@ impl<'g> Instance<'g> {
             )));
         }
 
-        let queries = gpu
-            .features
-            .contains(wgpu::Features::TIMESTAMP_QUERY)
-            .then(|| {
-                let set = device.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("kernel timestamps"),
-                    ty: wgpu::QueryType::Timestamp,
-                    count: MAX_QUERIES,
-                });
-                let resolve = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("timestamp resolve"),
-                    size: 8 * MAX_QUERIES as u64,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                (set, resolve)
+        let queries = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
+            let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("kernel timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: MAX_QUERIES,
             });
+            let resolve = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamp resolve"),
+                size: 8 * MAX_QUERIES as u64,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (set, resolve)
+        });
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: (4 * program.control.len as u64 + 8 * ncounters + 8 * MAX_QUERIES as u64)
-                .next_multiple_of(8),
+            size: (4 * program.control.len as u64 + 8 * ncounters + 8 * MAX_QUERIES as u64).next_multiple_of(8),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -352,14 +323,7 @@ impl<'g> Instance<'g> {
         self.external_counts.get(name).copied()
     }
 
-    fn dispatch(
-        &self,
-        rec: &mut Recorder,
-        k: &Kernel,
-        timed: Option<usize>,
-        record: usize,
-        groups: Dispatch,
-    ) {
+    fn dispatch(&self, rec: &mut Recorder, k: &Kernel, timed: Option<usize>, record: usize, groups: Dispatch) {
         let ts = match (&self.queries, timed) {
             (Some((set, _)), Some(ki)) if (rec.timed.len() as u32 + 1) * 2 <= MAX_QUERIES => {
                 let i = rec.timed.len() as u32 * 2;
@@ -372,14 +336,13 @@ impl<'g> Instance<'g> {
             }
             _ => None,
         };
-        let mut pass = rec
-            .encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(&k.name),
-                timestamp_writes: ts,
-            });
+        let mut pass = rec.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(&k.name),
+            timestamp_writes: ts,
+        });
         pass.set_pipeline(&k.pipeline);
-        pass.set_bind_group(0, &k.bind_group, &[(record as u64 * RECORD_STRIDE) as u32]);
+        let offset = [(record as u64 * RECORD_STRIDE) as u32];
+        pass.set_bind_group(0, &k.bind_group, if k.uses_frame { &offset[..] } else { &[] });
         match groups {
             Dispatch::Items(n) => {
                 let wg = self.program.plan.layout.workgroup_size as u64;
@@ -390,9 +353,7 @@ impl<'g> Instance<'g> {
                     pass.dispatch_workgroups(x as u32, groups.div_ceil(x) as u32, 1);
                 }
             }
-            Dispatch::Indirect(offset) => {
-                pass.dispatch_workgroups_indirect(&self.buffers[&BufferRef::Args], offset)
-            }
+            Dispatch::Indirect(offset) => pass.dispatch_workgroups_indirect(&self.buffers[&BufferRef::Args], offset),
             Dispatch::Single => pass.dispatch_workgroups(1, 1, 1),
         }
     }
@@ -401,24 +362,12 @@ impl<'g> Instance<'g> {
         let count = self.records[record][3] as u64;
         for step in steps {
             match step {
-                Step::Run(k) => self.dispatch(
-                    rec,
-                    &self.kernels[*k],
-                    Some(*k),
-                    record,
-                    Dispatch::Items(count),
-                ),
+                Step::Run(k) => self.dispatch(rec, &self.kernels[*k], Some(*k), record, Dispatch::Items(count)),
                 Step::Drain(q) => {
                     let (args, offset) = &self.args[q];
                     self.dispatch(rec, args, None, record, Dispatch::Single);
                     let k = self.program.plan.consumer_kernel(q);
-                    self.dispatch(
-                        rec,
-                        &self.kernels[k],
-                        Some(k),
-                        record,
-                        Dispatch::Indirect(*offset),
-                    );
+                    self.dispatch(rec, &self.kernels[k], Some(k), record, Dispatch::Indirect(*offset));
                     let word = self.program.control.queue_count[q] as u64;
                     rec.encoder
                         .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word, Some(4));
@@ -429,11 +378,8 @@ impl<'g> Instance<'g> {
                     let mut done = 0u32;
                     loop {
                         for _ in 0..batch {
-                            rec.encoder.clear_buffer(
-                                &self.buffers[&BufferRef::Control],
-                                4 * word,
-                                Some(4),
-                            );
+                            rec.encoder
+                                .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word, Some(4));
                             self.run_steps(rec, body, record)?;
                         }
                         done += batch;
@@ -458,13 +404,8 @@ impl<'g> Instance<'g> {
 
     /// Submits what is recorded, then reads one control word.
     fn read_control_word(&self, rec: &mut Recorder, word: u64) -> Result<u32> {
-        rec.encoder.copy_buffer_to_buffer(
-            &self.buffers[&BufferRef::Control],
-            4 * word,
-            &self.readback,
-            0,
-            4,
-        );
+        rec.encoder
+            .copy_buffer_to_buffer(&self.buffers[&BufferRef::Control], 4 * word, &self.readback, 0, 4);
         let encoder = std::mem::replace(
             &mut rec.encoder,
             self.gpu.device.create_command_encoder(&Default::default()),
@@ -508,17 +449,13 @@ impl<'g> Instance<'g> {
             bytes[i * RECORD_STRIDE as usize..][..16].copy_from_slice(bytemuck::cast_slice(r));
         }
         self.gpu.queue.write_buffer(&self.frame_records, 0, &bytes);
-        let scope = self
-            .gpu
-            .device
-            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = self.gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut rec = Recorder {
             encoder: self.gpu.device.create_command_encoder(&Default::default()),
             timed: Vec::new(),
             host_iterations: 0,
         };
-        rec.encoder
-            .clear_buffer(&self.buffers[&BufferRef::Control], 0, None);
+        rec.encoder.clear_buffer(&self.buffers[&BufferRef::Control], 0, None);
         for (ph, record) in plan_records {
             self.run_steps(&mut rec, &self.program.plan.schedule[ph], record)?;
             self.dispatch(&mut rec, &self.fold, None, record, Dispatch::Single);
@@ -528,13 +465,8 @@ impl<'g> Instance<'g> {
         let ncounters = self.totals.len() as u64;
         let totals_at = control_bytes.next_multiple_of(8);
         let ts_at = totals_at + 8 * ncounters;
-        rec.encoder.copy_buffer_to_buffer(
-            &self.buffers[&BufferRef::Control],
-            0,
-            &self.readback,
-            0,
-            control_bytes,
-        );
+        rec.encoder
+            .copy_buffer_to_buffer(&self.buffers[&BufferRef::Control], 0, &self.readback, 0, control_bytes);
         if ncounters > 0 {
             rec.encoder.copy_buffer_to_buffer(
                 &self.buffers[&BufferRef::Totals],
@@ -580,14 +512,10 @@ impl<'g> Instance<'g> {
         }
         if nq > 0 {
             let period = self.gpu.queue.get_timestamp_period() as f64 * 1e-9;
-            let ticks: &[u64] =
-                bytemuck::cast_slice(&data[ts_at as usize..(ts_at + 8 * nq as u64) as usize]);
+            let ticks: &[u64] = bytemuck::cast_slice(&data[ts_at as usize..(ts_at + 8 * nq as u64) as usize]);
             for (i, &k) in rec.timed.iter().enumerate() {
                 let dt = ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f64 * period;
-                *stats
-                    .kernel_seconds
-                    .entry(self.kernels[k].name.clone())
-                    .or_insert(0.0) += dt;
+                *stats.kernel_seconds.entry(self.kernels[k].name.clone()).or_insert(0.0) += dt;
             }
         }
         Ok(stats)
@@ -606,14 +534,12 @@ impl<'g> Instance<'g> {
     }
 
     fn resource(&self, name: &str) -> Result<&wgpu::Buffer> {
-        self.buffers
-            .get(&BufferRef::Resource(name.to_string()))
-            .ok_or_else(|| {
-                Error::Runtime(format!(
-                    "graph '{}' has no resource '{name}'",
-                    self.program.plan.graph.name
-                ))
-            })
+        self.buffers.get(&BufferRef::Resource(name.to_string())).ok_or_else(|| {
+            Error::Runtime(format!(
+                "graph '{}' has no resource '{name}'",
+                self.program.plan.graph.name
+            ))
+        })
     }
 
     /// Reads a resource's bytes back to the host.

@@ -11,8 +11,7 @@ pub fn preprocess(file: &str, text: &str, flags: &BTreeSet<String>) -> Result<St
     // Each open block: (is this branch active, was the enclosing region active).
     let mut stack: Vec<(bool, bool)> = Vec::new();
     let mut out = String::with_capacity(text.len());
-    let directive_error =
-        |line: usize, message: String| Error::Shader(format!("{file}:{}:1: {message}", line + 1));
+    let directive_error = |line: usize, message: String| Error::Shader(format!("{file}:{}:1: {message}", line + 1));
     for (n, line) in text.lines().enumerate() {
         let trimmed = line.trim_start();
         let active = stack.last().is_none_or(|(on, outer)| *on && *outer);
@@ -23,10 +22,7 @@ pub fn preprocess(file: &str, text: &str, flags: &BTreeSet<String>) -> Result<St
                 None => (false, cond),
             };
             if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-                return Err(directive_error(
-                    n,
-                    format!("'#if' needs one flag name, found '{cond}'"),
-                ));
+                return Err(directive_error(n, format!("'#if' needs one flag name, found '{cond}'")));
             }
             stack.push((flags.contains(name) != negate, active));
             out.push('\n');
@@ -113,10 +109,7 @@ impl ModuleSource {
     }
 
     /// Parses and validates the module with naga.
-    pub fn compile(
-        &self,
-        capabilities: naga::valid::Capabilities,
-    ) -> Result<(naga::Module, naga::valid::ModuleInfo)> {
+    pub fn compile(&self, capabilities: naga::valid::Capabilities) -> Result<(naga::Module, naga::valid::ModuleInfo)> {
         let module = naga::front::wgsl::parse_str(&self.text).map_err(|e| {
             let mut msg = String::new();
             let labels: Vec<_> = e.labels().collect();
@@ -137,8 +130,7 @@ impl ModuleSource {
             }
             Error::Shader(msg)
         })?;
-        let mut validator =
-            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities);
+        let mut validator = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities);
         let info = validator.validate(&module).map_err(|e| {
             let mut spans = e.spans();
             let at = spans.next().and_then(|(span, _)| self.locate_span(*span));
@@ -151,8 +143,7 @@ impl ModuleSource {
                     msg.push_str(&format!("\n  {at}: {label}"));
                 }
             }
-            let mut source: Option<&dyn std::error::Error> =
-                std::error::Error::source(e.as_inner());
+            let mut source: Option<&dyn std::error::Error> = std::error::Error::source(e.as_inner());
             while let Some(s) = source {
                 msg.push_str(&format!("\n  caused by: {s}"));
                 source = s.source();
@@ -174,14 +165,8 @@ mod tests {
     #[test]
     fn preprocessor_keeps_line_numbers() {
         let src = "a\n#if X\nb\n#else\nc\n#endif\n#if !X\nd\n#endif\ne\n";
-        assert_eq!(
-            preprocess("f", src, &flags(&["X"])).unwrap(),
-            "a\n\nb\n\n\n\n\n\n\ne\n"
-        );
-        assert_eq!(
-            preprocess("f", src, &flags(&[])).unwrap(),
-            "a\n\n\n\nc\n\n\nd\n\ne\n"
-        );
+        assert_eq!(preprocess("f", src, &flags(&["X"])).unwrap(), "a\n\nb\n\n\n\n\n\n\ne\n");
+        assert_eq!(preprocess("f", src, &flags(&[])).unwrap(), "a\n\n\n\nc\n\n\nd\n\ne\n");
     }
 
     #[test]
@@ -205,14 +190,8 @@ mod tests {
     fn naga_errors_point_into_the_original_file() {
         let mut m = ModuleSource::default();
         m.push("gen", "const A: u32 = 1u;\n");
-        m.push(
-            "shaders/x.wgsl",
-            "fn f() -> u32 {\n  return A + undefined_name;\n}\n",
-        );
-        let err = m
-            .compile(naga::valid::Capabilities::default())
-            .unwrap_err()
-            .to_string();
+        m.push("shaders/x.wgsl", "fn f() -> u32 {\n  return A + undefined_name;\n}\n");
+        let err = m.compile(naga::valid::Capabilities::default()).unwrap_err().to_string();
         assert!(err.contains("shaders/x.wgsl:2:"), "{err}");
     }
 }

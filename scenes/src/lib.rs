@@ -1,1 +1,341 @@
+//! lightgraph-scenes: the scene model, RON scene files, validation, BVH building and the
+//! GPU data the light-transport shaders read.
 
+pub mod bvh;
+pub mod gpu;
+pub mod model;
+
+use glam::{Vec3, Vec3A};
+use gpu::{GpuBvhNode, GpuCamera, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, light_kind, primitive_kind};
+use model::{FovAxis, Light, Look, Scene, Shape};
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+/// A scene error: the file, a position where one is known, and the problem.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}{}: {message}", at.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default())]
+pub struct SceneError {
+    /// The scene file.
+    pub file: String,
+    /// 1-based line and column.
+    pub at: Option<(usize, usize)>,
+    /// What is wrong.
+    pub message: String,
+}
+
+fn locate(text: &str, needle: &str) -> Option<(usize, usize)> {
+    let offset = text.find(needle)?;
+    let before = &text[..offset];
+    Some((
+        before.matches('\n').count() + 1,
+        before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1,
+    ))
+}
+
+/// Parses and validates the RON scene `text` of `file`.
+pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
+    let scene: Scene = ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .from_str(text)
+        .map_err(|e| SceneError {
+            file: file.to_string(),
+            at: Some((e.span.start.line, e.span.start.col)),
+            message: e.code.to_string(),
+        })?;
+    let err = |needle: &str, message: String| SceneError {
+        file: file.to_string(),
+        at: locate(text, needle),
+        message,
+    };
+    if scene.shapes.is_empty() {
+        return Err(err("shapes", "the scene is empty: it has no shapes".into()));
+    }
+    for shape in &scene.shapes {
+        let material = match shape {
+            Shape::Triangle { material, .. } | Shape::Quad { material, .. } | Shape::Sphere { material, .. } => {
+                material
+            }
+        };
+        if !scene.materials.contains_key(material) {
+            let known: Vec<&str> = scene.materials.keys().map(|s| s.as_str()).collect();
+            return Err(err(
+                &format!("\"{material}\""),
+                format!("unknown material '{material}' (materials: {})", known.join(", ")),
+            ));
+        }
+        if let Shape::Sphere { radius, .. } = shape {
+            if !(*radius > 0.0) || !radius.is_finite() {
+                return Err(err("Sphere", format!("sphere radius {radius} is not positive")));
+            }
+        }
+    }
+    let emissive = scene.shapes.iter().any(|s| match s {
+        Shape::Triangle { emission, .. } | Shape::Quad { emission, .. } => {
+            emission.is_some_and(|e| e.iter().any(|&v| v > 0.0))
+        }
+        Shape::Sphere { .. } => false,
+    });
+    if !emissive && scene.lights.is_empty() {
+        return Err(err(
+            "lights",
+            "the scene has no light: add an emissive shape or a light (Point, Directional, Background)".into(),
+        ));
+    }
+    if scene
+        .lights
+        .iter()
+        .filter(|l| matches!(l, Light::Background { .. }))
+        .count()
+        > 1
+    {
+        return Err(err("Background", "a scene has at most one Background light".into()));
+    }
+    let (w, h) = scene.resolution;
+    if w == 0 || h == 0 {
+        return Err(err("resolution", "resolution must be at least 1x1".into()));
+    }
+    if !(scene.camera.fov_degrees > 0.0 && scene.camera.fov_degrees < 180.0) {
+        return Err(err(
+            "fov_degrees",
+            format!("field of view {} is not in (0, 180) degrees", scene.camera.fov_degrees),
+        ));
+    }
+    if scene.integrator.max_path_length == 0 {
+        return Err(err("max_path_length", "max_path_length must be at least 1".into()));
+    }
+    Ok(scene)
+}
+
+/// The scene flattened for the GPU, with its BVH.
+#[derive(Debug, Clone)]
+pub struct CompiledScene {
+    /// Scene-wide values.
+    pub info: GpuSceneInfo,
+    /// Primitives in BVH order.
+    pub primitives: Vec<GpuPrimitive>,
+    /// BVH nodes.
+    pub bvh: Vec<GpuBvhNode>,
+    /// `order[i]`: index (in shape order, quads counting as two triangles) of primitive `i`.
+    pub order: Vec<u32>,
+    /// Materials, in name order.
+    pub materials: Vec<GpuMaterial>,
+    /// Lights: emissive triangles first, then the scene's other lights.
+    pub lights: Vec<GpuLight>,
+    /// Depth of the BVH.
+    pub bvh_depth: usize,
+    /// Time spent building the BVH.
+    pub bvh_time: Duration,
+}
+
+fn v3(a: [f32; 3]) -> Vec3 {
+    Vec3::from_array(a)
+}
+
+impl CompiledScene {
+    /// Flattens shapes into primitives, collects lights and builds the BVH.
+    pub fn new(scene: &Scene) -> Result<CompiledScene, String> {
+        let material_index: BTreeMap<&str, u32> = scene
+            .materials
+            .keys()
+            .enumerate()
+            .map(|(i, k)| (k.as_str(), i as u32))
+            .collect();
+        let materials = scene
+            .materials
+            .values()
+            .map(|m| GpuMaterial {
+                diffuse: m.diffuse,
+                phong_exponent: m.phong_exponent,
+                phong: m.phong,
+                ior: m.ior,
+                mirror: m.mirror,
+                pad: 0.0,
+            })
+            .collect();
+        let mut prims: Vec<GpuPrimitive> = Vec::new();
+        let mut lights: Vec<GpuLight> = Vec::new();
+        let push_triangle = |v: [Vec3; 3],
+                             material: u32,
+                             emission: Option<[f32; 3]>,
+                             prims: &mut Vec<GpuPrimitive>,
+                             lights: &mut Vec<GpuLight>| {
+            let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+            let light = match emission {
+                Some(radiance) if radiance.iter().any(|&c| c > 0.0) => {
+                    let cross = e1.cross(e2);
+                    let area = 0.5 * cross.length();
+                    lights.push(GpuLight {
+                        position: v[0].into(),
+                        kind: light_kind::AREA,
+                        e1: e1.into(),
+                        inv_area: if area > 0.0 { 1.0 / area } else { 0.0 },
+                        e2: e2.into(),
+                        pad0: 0.0,
+                        normal: cross.normalize_or_zero().into(),
+                        pad1: 0.0,
+                        radiance,
+                        pad2: 0.0,
+                    });
+                    lights.len() as i32 - 1
+                }
+                _ => -1,
+            };
+            prims.push(GpuPrimitive {
+                a: v[0].into(),
+                material,
+                b: e1.into(),
+                light,
+                c: e2.into(),
+                kind: primitive_kind::TRIANGLE,
+            });
+        };
+        for shape in &scene.shapes {
+            match shape {
+                Shape::Triangle {
+                    vertices,
+                    material,
+                    emission,
+                } => {
+                    push_triangle(
+                        vertices.map(v3),
+                        material_index[material.as_str()],
+                        *emission,
+                        &mut prims,
+                        &mut lights,
+                    );
+                }
+                Shape::Quad {
+                    corners,
+                    material,
+                    emission,
+                } => {
+                    let c = corners.map(v3);
+                    let m = material_index[material.as_str()];
+                    push_triangle([c[0], c[1], c[2]], m, *emission, &mut prims, &mut lights);
+                    push_triangle([c[0], c[2], c[3]], m, *emission, &mut prims, &mut lights);
+                }
+                Shape::Sphere {
+                    center,
+                    radius,
+                    material,
+                } => prims.push(GpuPrimitive {
+                    a: *center,
+                    material: material_index[material.as_str()],
+                    b: [*radius, 0.0, 0.0],
+                    light: -1,
+                    c: [0.0; 3],
+                    kind: primitive_kind::SPHERE,
+                }),
+            }
+        }
+        let mut background = -1;
+        for light in &scene.lights {
+            let mut l: GpuLight = bytemuck::Zeroable::zeroed();
+            match light {
+                Light::Point { position, intensity } => {
+                    l.kind = light_kind::POINT;
+                    l.position = *position;
+                    l.radiance = *intensity;
+                }
+                Light::Directional { direction, irradiance } => {
+                    l.kind = light_kind::DIRECTIONAL;
+                    l.position = v3(*direction).normalize_or_zero().into();
+                    l.radiance = *irradiance;
+                }
+                Light::Background { radiance, scale } => {
+                    l.kind = light_kind::BACKGROUND;
+                    l.radiance = radiance.map(|c| c * scale);
+                    background = lights.len() as i32;
+                }
+            }
+            lights.push(l);
+        }
+        let boxes: Vec<(Vec3A, Vec3A)> = prims.iter().map(primitive_bounds).collect();
+        let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
+        for (a, b) in &boxes {
+            lo = lo.min(*a);
+            hi = hi.max(*b);
+        }
+        let start = Instant::now();
+        let bvh = bvh::build(&boxes)?;
+        let bvh_time = start.elapsed();
+        let primitives: Vec<GpuPrimitive> = bvh.order.iter().map(|&i| prims[i as usize]).collect();
+        let center = (lo + hi) * 0.5;
+        let info = GpuSceneInfo {
+            center: center.into(),
+            radius: ((hi - lo) * 0.5).length(),
+            num_lights: lights.len() as u32,
+            background,
+            num_primitives: primitives.len() as u32,
+            num_materials: scene.materials.len() as u32,
+        };
+        Ok(CompiledScene {
+            info,
+            primitives,
+            bvh: bvh.nodes,
+            order: bvh.order,
+            materials,
+            lights,
+            bvh_depth: bvh.depth,
+            bvh_time,
+        })
+    }
+
+    /// The camera for an image of `width` x `height` pixels.
+    pub fn camera(scene: &Scene, width: u32, height: u32) -> GpuCamera {
+        let c = &scene.camera;
+        let position = v3(c.position);
+        let forward = match c.look {
+            Look::Forward(d) => v3(d),
+            Look::Target(t) => v3(t) - position,
+        }
+        .normalize();
+        let right = forward.cross(v3(c.up)).normalize();
+        let up = right.cross(forward);
+        let t = (c.fov_degrees.to_radians() * 0.5).tan();
+        let aspect = width as f32 / height as f32;
+        let horizontal = match c.fov_axis {
+            FovAxis::Horizontal => true,
+            FovAxis::Vertical => false,
+            FovAxis::Smaller => width <= height,
+        };
+        let (tx, ty) = if horizontal { (t, t / aspect) } else { (t * aspect, t) };
+        GpuCamera {
+            position: position.into(),
+            width: width as f32,
+            forward: forward.into(),
+            height: height as f32,
+            right: (right * tx).into(),
+            pad0: 0.0,
+            up: (up * ty).into(),
+            pad1: 0.0,
+        }
+    }
+
+    /// The external resources of the light-transport graphs, by resource name.
+    pub fn resources(&self, camera: &GpuCamera) -> BTreeMap<String, Vec<u8>> {
+        let mut out = BTreeMap::new();
+        out.insert("scene".to_string(), bytemuck::bytes_of(&self.info).to_vec());
+        out.insert("camera".to_string(), bytemuck::bytes_of(camera).to_vec());
+        out.insert(
+            "primitives".to_string(),
+            bytemuck::cast_slice(&self.primitives).to_vec(),
+        );
+        out.insert("bvh".to_string(), bytemuck::cast_slice(&self.bvh).to_vec());
+        out.insert("materials".to_string(), bytemuck::cast_slice(&self.materials).to_vec());
+        out.insert("lights".to_string(), bytemuck::cast_slice(&self.lights).to_vec());
+        out
+    }
+}
+
+/// The axis-aligned bounds of a primitive.
+pub fn primitive_bounds(p: &GpuPrimitive) -> (Vec3A, Vec3A) {
+    let a = Vec3A::from_array(p.a);
+    if p.kind == primitive_kind::SPHERE {
+        let r = Vec3A::splat(p.b[0]);
+        (a - r, a + r)
+    } else {
+        let (b, c) = (a + Vec3A::from_array(p.b), a + Vec3A::from_array(p.c));
+        (a.min(b).min(c), a.max(b).max(c))
+    }
+}

@@ -1,0 +1,223 @@
+//! The scene model and its RON file format, written by hand: camera, materials, shapes,
+//! lights and integrator settings.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// An RGB triple (linear).
+pub type Rgb = [f32; 3];
+/// A point or direction.
+pub type Vec3 = [f32; 3];
+
+/// A scene as written in a `.ron` scene file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// What the scene shows.
+    #[serde(default)]
+    pub description: String,
+    /// The pinhole camera.
+    pub camera: Camera,
+    /// Default image size (width, height) when none is asked for.
+    #[serde(default = "default_resolution")]
+    pub resolution: (u32, u32),
+    /// Materials by name.
+    pub materials: BTreeMap<String, Material>,
+    /// Geometry.
+    pub shapes: Vec<Shape>,
+    /// Lights that are not emissive shapes.
+    #[serde(default)]
+    pub lights: Vec<Light>,
+    /// Path-sampling settings the scene was specified with.
+    #[serde(default)]
+    pub integrator: Integrator,
+}
+
+fn default_resolution() -> (u32, u32) {
+    (512, 512)
+}
+
+/// A pinhole camera.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// Eye position.
+    pub position: Vec3,
+    /// Where it looks.
+    pub look: Look,
+    /// Up direction (made orthogonal to the view direction).
+    pub up: Vec3,
+    /// Field of view in degrees, across `fov_axis`.
+    pub fov_degrees: f32,
+    /// The image axis the field of view spans.
+    #[serde(default)]
+    pub fov_axis: FovAxis,
+}
+
+/// The camera's view direction.
+#[derive(Debug, Clone, Deserialize)]
+pub enum Look {
+    /// Along a direction.
+    Forward(Vec3),
+    /// Towards a point.
+    Target(Vec3),
+}
+
+/// The image axis a field of view spans (pixels are square).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+pub enum FovAxis {
+    /// The image width.
+    #[default]
+    Horizontal,
+    /// The image height.
+    Vertical,
+    /// The shorter of the two.
+    Smaller,
+}
+
+/// The SmallVCM material: a diffuse lobe, a Phong lobe, and a mirror or dielectric lobe.
+/// Lobes with zero reflectance are absent; a material with none is black.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Lambertian reflectance.
+    #[serde(default)]
+    pub diffuse: Rgb,
+    /// Phong reflectance.
+    #[serde(default)]
+    pub phong: Rgb,
+    /// Phong exponent.
+    #[serde(default)]
+    pub phong_exponent: f32,
+    /// Specular reflectance of the mirror/dielectric lobe.
+    #[serde(default)]
+    pub mirror: Rgb,
+    /// Index of refraction; negative means a perfect mirror (Fresnel = 1).
+    #[serde(default = "mirror_ior")]
+    pub ior: f32,
+}
+
+fn mirror_ior() -> f32 {
+    -1.0
+}
+
+/// A piece of geometry. Triangles face the side their winding gives by the right-hand
+/// rule ((v1 - v0) x (v2 - v0)); diffuse and glossy surfaces are black from behind.
+#[derive(Debug, Clone, Deserialize)]
+pub enum Shape {
+    /// One triangle.
+    Triangle {
+        /// The corners.
+        vertices: [Vec3; 3],
+        /// Material name.
+        material: String,
+        /// Emitted radiance (one-sided, along the normal): makes it an area light.
+        #[serde(default)]
+        emission: Option<Rgb>,
+    },
+    /// A planar quad, split into (c0, c1, c2) and (c0, c2, c3).
+    Quad {
+        /// The corners, in order around the quad.
+        corners: [Vec3; 4],
+        /// Material name.
+        material: String,
+        /// Emitted radiance: makes both triangles area lights.
+        #[serde(default)]
+        emission: Option<Rgb>,
+    },
+    /// An analytic sphere (normals face outward).
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius.
+        radius: f32,
+        /// Material name.
+        material: String,
+    },
+}
+
+/// Lights that are not emissive shapes.
+#[derive(Debug, Clone, Deserialize)]
+pub enum Light {
+    /// An isotropic point light.
+    Point {
+        /// Position.
+        position: Vec3,
+        /// Radiant intensity (W/sr).
+        intensity: Rgb,
+    },
+    /// A distant light.
+    Directional {
+        /// Direction the light travels in (normalised on load).
+        direction: Vec3,
+        /// Irradiance on a surface perpendicular to the direction.
+        irradiance: Rgb,
+    },
+    /// A constant environment seen in every direction nothing else is.
+    Background {
+        /// Radiance.
+        radiance: Rgb,
+        /// Scale applied to the radiance.
+        #[serde(default = "unit")]
+        scale: f32,
+    },
+}
+
+fn unit() -> f32 {
+    1.0
+}
+
+/// How paths are sampled, as the scene was specified.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Integrator {
+    /// Most path segments from the camera to a light (1 = directly visible lights only).
+    #[serde(default = "default_max_path_length")]
+    pub max_path_length: u32,
+    /// Russian roulette rule.
+    #[serde(default)]
+    pub russian_roulette: RussianRoulette,
+    /// Multiple importance sampling heuristic.
+    #[serde(default)]
+    pub mis: MisHeuristic,
+}
+
+fn default_max_path_length() -> u32 {
+    10
+}
+
+impl Default for Integrator {
+    fn default() -> Self {
+        Integrator {
+            max_path_length: default_max_path_length(),
+            russian_roulette: RussianRoulette::default(),
+            mis: MisHeuristic::default(),
+        }
+    }
+}
+
+/// When paths are terminated at random.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Default)]
+pub enum RussianRoulette {
+    /// At every vertex, continue with the material's albedo bound (SmallVCM's rule).
+    #[default]
+    Albedo,
+    /// From vertex `start` on, continue with min(max throughput component, `max`)
+    /// (Mitsuba 3's rule).
+    Throughput {
+        /// First vertex (1 = the first surface hit) at which roulette applies.
+        start: u32,
+        /// Highest continuation probability.
+        max: f32,
+    },
+}
+
+/// The heuristic that weights strategies in MIS.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+pub enum MisHeuristic {
+    /// Balance heuristic.
+    #[default]
+    Balance,
+    /// Power heuristic (exponent 2).
+    Power,
+}

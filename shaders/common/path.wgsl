@@ -1,0 +1,23 @@
+// Items of path tracing.
+
+// A camera path between bounces: the ray to trace next and what the path carries.
+struct CameraPath {
+    origin: vec3<f32>,
+    pixel: u32,
+    direction: vec3<f32>,
+    length: u32,            // segments traced so far
+    throughput: vec3<f32>,
+    rng: u32,
+    last_pdf: f32,          // density of the last sampled direction, for MIS on hitting a light
+    last_specular: u32,     // 1 after the camera or a delta lobe: no MIS on the next light hit
+}
+
+// A next-event-estimation connection: if nothing blocks the segment, the contribution
+// reaches the pixel.
+struct ShadowRay {
+    origin: vec3<f32>,
+    pixel: u32,
+    direction: vec3<f32>,
+    distance: f32,
+    contribution: vec3<f32>,
+}

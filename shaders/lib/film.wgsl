@@ -1,0 +1,62 @@
+// The frame film: three 32-bit words per pixel, summed with atomics from any thread (native
+// f32 atomics where the device has them, a compare-exchange loop otherwise). A sample that is
+// NaN, infinite or negative is rejected and counted. Needs the resource `film` and the
+// counter `samples_rejected`.
+
+#if FLOAT32_ATOMIC
+alias FilmWord = atomic<f32>;
+
+fn film_add_word(i: u32, v: f32) {
+    atomicAdd(&film[i], v);
+}
+
+fn film_take_word(i: u32) -> f32 {
+    return atomicExchange(&film[i], 0.0);
+}
+#else
+alias FilmWord = atomic<u32>;
+
+fn film_add_word(i: u32, v: f32) {
+    var old = atomicLoad(&film[i]);
+    loop {
+        let r = atomicCompareExchangeWeak(&film[i], old, bitcast<u32>(bitcast<f32>(old) + v));
+        if (r.exchanged) {
+            break;
+        }
+        old = r.old_value;
+    }
+}
+
+fn film_take_word(i: u32) -> f32 {
+    return bitcast<f32>(atomicExchange(&film[i], 0u));
+}
+#endif
+
+// True for a finite, non-negative value (checked on the bits: NaN compares are unreliable).
+fn is_valid_sample(c: vec3<f32>) -> bool {
+    let bits = bitcast<vec3<u32>>(c);
+    let finite = (bits & vec3<u32>(0x7f800000u)) != vec3<u32>(0x7f800000u);
+    let negative = ((bits >> vec3<u32>(31u)) != vec3<u32>(0u)) & ((bits & vec3<u32>(0x7fffffffu)) != vec3<u32>(0u));
+    return all(finite) && !any(negative);
+}
+
+fn film_add(pixel: u32, c: vec3<f32>) {
+    if (!is_valid_sample(c)) {
+        count(COUNTER_SAMPLES_REJECTED, 1u);
+        return;
+    }
+    if (c.x > 0.0) {
+        film_add_word(3u * pixel, c.x);
+    }
+    if (c.y > 0.0) {
+        film_add_word(3u * pixel + 1u, c.y);
+    }
+    if (c.z > 0.0) {
+        film_add_word(3u * pixel + 2u, c.z);
+    }
+}
+
+// Reads a pixel's sum and sets it back to zero.
+fn film_take(pixel: u32) -> vec3<f32> {
+    return vec3<f32>(film_take_word(3u * pixel), film_take_word(3u * pixel + 1u), film_take_word(3u * pixel + 2u));
+}

@@ -1,0 +1,86 @@
+// Scene data as the host uploads it (mirrored in scenes/src/gpu.rs; a test compares the
+// layouts), and robust ray origins.
+
+struct SceneInfo {
+    center: vec3<f32>,      // bounding sphere
+    radius: f32,
+    num_lights: u32,
+    background: i32,        // index of the background light, or -1
+    num_primitives: u32,
+    num_materials: u32,
+}
+
+struct Camera {
+    position: vec3<f32>,
+    width: f32,
+    forward: vec3<f32>,
+    height: f32,
+    right: vec3<f32>,       // scaled by tan(horizontal fov / 2)
+    pad0: f32,
+    up: vec3<f32>,          // scaled by tan(vertical fov / 2)
+    pad1: f32,
+}
+
+const PRIMITIVE_TRIANGLE: u32 = 0u;
+const PRIMITIVE_SPHERE: u32 = 1u;
+
+struct Primitive {
+    a: vec3<f32>,           // triangle v0, or sphere centre
+    material: u32,
+    b: vec3<f32>,           // triangle v1 - v0, or (radius, 0, 0)
+    light: i32,             // area light index, or -1
+    c: vec3<f32>,           // triangle v2 - v0
+    kind: u32,
+}
+
+// A BVH2 node with both children's boxes; a child with count 0 is the inner node `first`,
+// otherwise the leaf of primitives first .. first + count.
+struct BvhNode {
+    left_min: vec3<f32>,
+    left_first: u32,
+    left_max: vec3<f32>,
+    left_count: u32,
+    right_min: vec3<f32>,
+    right_first: u32,
+    right_max: vec3<f32>,
+    right_count: u32,
+}
+
+struct Material {
+    diffuse: vec3<f32>,
+    phong_exponent: f32,
+    phong: vec3<f32>,
+    ior: f32,               // negative: perfect mirror
+    mirror: vec3<f32>,
+    pad: f32,
+}
+
+const LIGHT_AREA: u32 = 0u;
+const LIGHT_POINT: u32 = 1u;
+const LIGHT_DIRECTIONAL: u32 = 2u;
+const LIGHT_BACKGROUND: u32 = 3u;
+
+struct Light {
+    position: vec3<f32>,    // area v0, point position, or directional direction of travel
+    kind: u32,
+    e1: vec3<f32>,
+    inv_area: f32,
+    e2: vec3<f32>,
+    pad0: f32,
+    normal: vec3<f32>,      // area: the emitting side
+    pad1: f32,
+    radiance: vec3<f32>,    // radiance, intensity (point) or irradiance (directional)
+    pad2: f32,
+}
+
+// Moves `p` off its surface along `n` (which points to the side the new ray leaves on), by
+// a few units in the last place of p's coordinates (Waechter and Binder, "A fast and robust
+// method for avoiding self-intersection", Ray Tracing Gems, 2019). Near the origin, where
+// float spacing is finer than the error of computed hit points, the offset is a fixed
+// fraction of the scene radius, so a scaled scene is offset in proportion.
+fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>, scene_radius: f32) -> vec3<f32> {
+    let of_i = vec3<i32>(256.0 * n);
+    let p_i = bitcast<vec3<f32>>(bitcast<vec3<i32>>(p) + select(of_i, -of_i, p < vec3<f32>(0.0)));
+    let origin = scene_radius * (1.0 / 32.0);
+    return select(p_i, p + (scene_radius * (1.0 / 65536.0)) * n, abs(p) < vec3<f32>(origin));
+}

@@ -1,0 +1,8 @@
+//! lightgraph: a GPU progressive light-transport lab. Light-transport algorithms are frame
+//! graphs of WGSL compute passes (`graphs/`, `passes/`, `shaders/`), compiled by the generic
+//! engine (`lightgraph-engine`) into fused or split kernels, over scenes from
+//! `lightgraph-scenes`.
+
+pub mod assets;
+pub mod output;
+pub mod render;

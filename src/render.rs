@@ -1,0 +1,227 @@
+//! A rendering session: a scene, a graph in one layout, specialised and instantiated on a
+//! GPU, run frame after frame into a progressive accumulation.
+
+use anyhow::{Context, Result, anyhow, bail};
+use lightgraph_engine::{ConstValue, FrameStats, Gpu, Graph, Instance, Plan, Program, Specialization};
+use lightgraph_scenes::model::{MisHeuristic, RussianRoulette, Scene};
+use lightgraph_scenes::{CompiledScene, parse_scene};
+use std::collections::{BTreeMap, BTreeSet};
+use std::time::Instant;
+
+/// A scene loaded, validated and prepared for the GPU.
+pub struct LoadedScene {
+    /// The name it was asked for by.
+    pub name: String,
+    /// The scene as written.
+    pub scene: Scene,
+    /// Flattened primitives, lights and BVH.
+    pub compiled: CompiledScene,
+    /// Seconds spent loading, BVH included.
+    pub load_seconds: f64,
+}
+
+/// Loads a built-in scene by name, or a scene file by path.
+pub fn load_scene(name: &str) -> Result<LoadedScene> {
+    let start = Instant::now();
+    let (file, text) = crate::assets::scene_text(name).map_err(|e| anyhow!(e))?;
+    let scene = parse_scene(&file, &text)?;
+    let compiled = CompiledScene::new(&scene).map_err(|e| anyhow!("{file}: {e}"))?;
+    Ok(LoadedScene {
+        name: name.to_string(),
+        scene,
+        compiled,
+        load_seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Loads a graph by built-in name or `.ron` path.
+pub fn load_graph(name: &str) -> Result<Graph> {
+    let (vfs, path) = crate::assets::graph_source(name).map_err(|e| anyhow!(e))?;
+    Ok(Graph::load(&vfs, &path)?)
+}
+
+/// Image size, sampling and seed of a session.
+#[derive(Debug, Clone)]
+pub struct SessionOptions {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Samples (camera paths) per pixel in each frame.
+    pub samples_per_frame: u32,
+    /// Seed of the random streams.
+    pub seed: u32,
+    /// Constant overrides (`--set NAME=VALUE`, `--max-path-length`).
+    pub constants: BTreeMap<String, ConstValue>,
+}
+
+/// The constants a scene's integrator settings imply.
+pub fn scene_constants(scene: &Scene) -> BTreeMap<String, ConstValue> {
+    let i = &scene.integrator;
+    let mut c = BTreeMap::new();
+    c.insert("MAX_PATH_LENGTH".to_string(), ConstValue::U32(i.max_path_length));
+    let (albedo, start, max) = match i.russian_roulette {
+        RussianRoulette::Albedo => (true, 1, 1.0),
+        RussianRoulette::Throughput { start, max } => (false, start, max),
+    };
+    c.insert("RR_ALBEDO".to_string(), ConstValue::Bool(albedo));
+    c.insert("RR_START".to_string(), ConstValue::U32(start));
+    c.insert("RR_MAX".to_string(), ConstValue::F32(max));
+    c.insert("MIS_POWER".to_string(), ConstValue::Bool(i.mis == MisHeuristic::Power));
+    c
+}
+
+/// Preprocessor flags for the device's optional features.
+pub fn device_flags(gpu: &Gpu) -> BTreeSet<String> {
+    let mut flags = BTreeSet::new();
+    if gpu.features.contains(wgpu::Features::SHADER_FLOAT32_ATOMIC) {
+        flags.insert("FLOAT32_ATOMIC".to_string());
+    }
+    flags
+}
+
+/// The specialisation of a graph for a scene and options: host constants (image size,
+/// paths per frame), the scene's integrator constants, then the overrides. Only constants
+/// the graph declares are taken from the scene.
+pub fn specialization(graph: &Graph, scene: &Scene, opts: &SessionOptions, flags: BTreeSet<String>) -> Specialization {
+    let pixels = opts.width * opts.height;
+    let mut constants = BTreeMap::new();
+    constants.insert("WIDTH".to_string(), ConstValue::U32(opts.width));
+    constants.insert("HEIGHT".to_string(), ConstValue::U32(opts.height));
+    constants.insert("PIXELS".to_string(), ConstValue::U32(pixels));
+    constants.insert("SAMPLES_PER_PIXEL".to_string(), ConstValue::U32(opts.samples_per_frame));
+    constants.insert("PATHS".to_string(), ConstValue::U32(pixels * opts.samples_per_frame));
+    for (k, v) in scene_constants(scene) {
+        if graph.constants.contains_key(&k) {
+            constants.insert(k, v);
+        }
+    }
+    constants.extend(opts.constants.clone());
+    Specialization { constants, flags }
+}
+
+/// A per-pixel image: the mean of the frames' estimates and their variance.
+#[derive(Debug, Clone)]
+pub struct Image {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// Frames accumulated.
+    pub frames: u32,
+    /// Mean radiance per pixel (row-major, top row first).
+    pub mean: Vec<[f32; 3]>,
+    /// Sample variance of the per-frame estimates (the squared standard error of the mean is
+    /// this over `frames`).
+    pub variance: Vec<[f32; 3]>,
+}
+
+/// A scene rendered by a graph in one layout.
+pub struct Session<'g> {
+    instance: Instance<'g>,
+    /// Options of the session.
+    pub options: SessionOptions,
+    /// Frames rendered.
+    pub frames: u32,
+    /// Counter totals.
+    pub counters: BTreeMap<String, u64>,
+    /// GPU time per kernel, summed over frames.
+    pub kernel_seconds: BTreeMap<String, f64>,
+    /// Loops stopped by the iteration cap (must stay 0).
+    pub loops_capped: u64,
+}
+
+impl<'g> Session<'g> {
+    /// Plans, compiles and instantiates `graph` in `layout` for `scene`.
+    pub fn new(
+        gpu: &'g Gpu,
+        graph: &Graph,
+        layout: &str,
+        scene: &LoadedScene,
+        options: SessionOptions,
+    ) -> Result<Session<'g>> {
+        if options.width == 0 || options.height == 0 || options.samples_per_frame == 0 {
+            bail!("resolution and samples per frame must be at least 1");
+        }
+        let paths = options.width as u64 * options.height as u64 * options.samples_per_frame as u64;
+        if paths > u32::MAX as u64 {
+            bail!("{paths} paths per frame is more than 2^32; use fewer samples per frame");
+        }
+        let plan = Plan::new(graph, layout)?;
+        let spec = specialization(graph, &scene.scene, &options, device_flags(gpu));
+        let program = Program::compile(&plan, &spec, &gpu.target())?;
+        let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
+        let externals = scene.compiled.resources(&camera);
+        let instance = Instance::new(gpu, program, &externals)
+            .with_context(|| format!("instantiating graph '{}' in layout '{layout}'", graph.name))?;
+        Ok(Session {
+            instance,
+            options,
+            frames: 0,
+            counters: BTreeMap::new(),
+            kernel_seconds: BTreeMap::new(),
+            loops_capped: 0,
+        })
+    }
+
+    /// The compiled program.
+    pub fn program(&self) -> &Program {
+        self.instance.program()
+    }
+
+    /// Renders one more frame.
+    pub fn render_frame(&mut self) -> Result<FrameStats> {
+        let stats = self.instance.run_frame(self.frames, self.options.seed)?;
+        self.frames += 1;
+        for (k, v) in &stats.counters {
+            *self.counters.entry(k.clone()).or_insert(0) += v;
+        }
+        for (k, v) in &stats.kernel_seconds {
+            *self.kernel_seconds.entry(k.clone()).or_insert(0.0) += v;
+        }
+        self.loops_capped += stats.loops_capped as u64;
+        Ok(stats)
+    }
+
+    /// Rays traced so far (primary, extension and shadow counters of the graph).
+    pub fn rays(&self) -> u64 {
+        self.counters
+            .iter()
+            .filter(|(k, _)| k.starts_with("rays_"))
+            .map(|(_, v)| v)
+            .sum()
+    }
+
+    /// Samples per pixel accumulated so far.
+    pub fn samples_per_pixel(&self) -> u64 {
+        self.frames as u64 * self.options.samples_per_frame as u64
+    }
+
+    /// The accumulated image (reads the GPU accumulation).
+    pub fn image(&self) -> Result<Image> {
+        let (w, h) = (self.options.width, self.options.height);
+        let sum: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&self.instance.read("accum")?);
+        let sq: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&self.instance.read("accum_sq")?);
+        let n = self.frames.max(1) as f64;
+        let mut mean = Vec::with_capacity(sum.len());
+        let mut variance = Vec::with_capacity(sum.len());
+        for (s, q) in sum.iter().zip(&sq) {
+            let m = [0, 1, 2].map(|c| s[c] as f64 / n);
+            mean.push(m.map(|v| v as f32));
+            variance.push([0, 1, 2].map(|c| {
+                if n > 1.0 {
+                    (((q[c] as f64) / n - m[c] * m[c]) * n / (n - 1.0)).max(0.0) as f32
+                } else {
+                    0.0
+                }
+            }));
+        }
+        Ok(Image {
+            width: w,
+            height: h,
+            frames: self.frames,
+            mean,
+            variance,
+        })
+    }
+}
