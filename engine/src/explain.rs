@@ -63,7 +63,11 @@ pub fn report(program: &Program, externals: &dyn Fn(&str) -> Option<u64>) -> Str
         let _ = writeln!(
             out,
             "culled passes (nothing reads their output): {}",
-            g.culled.join(", ")
+            g.culled
+                .iter()
+                .map(|p| p.decl.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
     let _ = writeln!(out, "\nphases:");

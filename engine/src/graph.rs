@@ -89,7 +89,7 @@ pub struct Graph {
     /// Phases in execution order.
     pub phases: Vec<Phase>,
     /// Passes removed because nothing reads what they produce.
-    pub culled: Vec<String>,
+    pub culled: Vec<Pass>,
     /// Streams whose consumer was culled (emits into them do nothing).
     pub dead_streams: Vec<String>,
     /// The file system the graph's sources come from.
@@ -99,7 +99,9 @@ pub struct Graph {
 /// Parses RON text of `file` into `T`, with the parser's position on error.
 pub fn parse_ron<T: serde::de::DeserializeOwned>(file: &str, text: &str) -> Result<T> {
     ron::Options::default()
-        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .with_default_extension(
+            ron::extensions::Extensions::IMPLICIT_SOME | ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES,
+        )
         .from_str(text)
         .map_err(|e| Error::Parse {
             at: Location {
@@ -312,6 +314,21 @@ impl Graph {
         Error::invalid_at_name(&self.file, &self.text, name, message)
     }
 
+    /// Whether the pass called `name` was culled.
+    pub fn is_culled(&self, name: &str) -> bool {
+        self.culled.iter().any(|p| p.decl.name == name)
+    }
+
+    /// Resources some pass declares it writes, culled passes included (their WGSL is still
+    /// part of every module).
+    pub fn written_resources(&self) -> BTreeSet<String> {
+        self.passes
+            .iter()
+            .chain(&self.culled)
+            .flat_map(|p| p.decl.writes.iter().cloned())
+            .collect()
+    }
+
     /// Index of the pass called `name`.
     pub fn pass_index(&self, name: &str) -> Option<usize> {
         self.passes.iter().position(|p| p.decl.name == name)
@@ -358,11 +375,11 @@ impl Graph {
             .drain(..)
             .partition(|p| live.contains(&nodes[&format!("pass:{}", p.decl.name)]));
         self.passes = keep;
-        self.culled = dropped.iter().map(|p| p.decl.name.clone()).collect();
+        self.culled = dropped;
         self.dead_streams = self
             .streams
             .iter()
-            .filter(|(_, s)| self.culled.contains(&s.to))
+            .filter(|(_, s)| self.is_culled(&s.to))
             .map(|(n, _)| n.clone())
             .collect();
     }

@@ -242,7 +242,7 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
     for names in &layout.kernels {
         let mut group = Vec::new();
         for name in names {
-            if graph.culled.contains(name) {
+            if graph.is_culled(name) {
                 continue;
             }
             let p = graph.pass_index(name).ok_or_else(|| {

@@ -140,7 +140,7 @@ impl Program {
         // Sources shared by every kernel.
         let mut shared: Vec<(String, String)> = Vec::new();
         let mut files: Vec<String> = g.library.clone();
-        for p in &g.passes {
+        for p in g.passes.iter().chain(&g.culled) {
             if !files.contains(&p.decl.source) {
                 files.push(p.decl.source.clone());
             }
@@ -174,7 +174,7 @@ impl Program {
             let n = bindings.len() as u32;
             bindings.insert(BufferRef::Queue(q.clone()), n);
         }
-        let written: BTreeSet<String> = g.passes.iter().flat_map(|p| p.decl.writes.iter().cloned()).collect();
+        let written = g.written_resources();
         let writable =
             |name: &str| written.contains(name) || g.resources.get(name).is_some_and(|r| r.ty.contains("atomic"));
 

@@ -1,0 +1,127 @@
+//! The engine on a graph with no light transport: every legal layout of the Collatz graph
+//! must produce exactly the numbers the CPU computes, and illegal layouts must be refused
+//! with messages that name the passes and resources involved.
+
+use lightgraph_engine::{ConstValue, Gpu, Graph, Instance, Layer, Plan, Program, Specialization, Vfs};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+fn gpu() -> &'static Gpu {
+    static GPU: OnceLock<Gpu> = OnceLock::new();
+    GPU.get_or_init(|| Gpu::new(None).expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)"))
+}
+
+fn graph() -> Graph {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    Graph::load(&Vfs::new(vec![Layer::Dir(dir)]), "collatz.ron").expect("the test graph loads")
+}
+
+fn cpu_steps(n: u32) -> Vec<u32> {
+    (1..=n as u64)
+        .map(|mut v| {
+            let mut s = 0;
+            while v != 1 {
+                v = if v % 2 == 0 { v / 2 } else { 3 * v + 1 };
+                s += 1;
+            }
+            s
+        })
+        .collect()
+}
+
+type Outputs = (Vec<u32>, Vec<u32>, BTreeMap<String, u64>);
+
+fn run(layout: &str, n: u32) -> Outputs {
+    let g = graph();
+    let plan = Plan::new(&g, layout).unwrap();
+    let spec = Specialization {
+        constants: [("N".to_string(), ConstValue::U32(n))].into_iter().collect(),
+        ..Default::default()
+    };
+    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
+    let stats = instance.run_frame(0, 0).unwrap();
+    let steps = bytemuck::pod_collect_to_vec(&instance.read("steps").unwrap());
+    let summary = bytemuck::pod_collect_to_vec(&instance.read("summary").unwrap());
+    (steps, summary, stats.counters)
+}
+
+#[test]
+fn every_legal_layout_computes_the_same_walks() {
+    let n = 1000;
+    let expected = cpu_steps(n);
+    let mut histogram = vec![0u32; 64];
+    for &s in &expected {
+        histogram[(s as usize).min(63)] += 1;
+    }
+    let iterations: u64 = expected.iter().map(|&s| s as u64 + 1).sum();
+    for layout in [
+        "fused",
+        "split",
+        "split_aos",
+        "split_chunked",
+        "loop_with_consumer",
+        "loop_in_kernel_after_start",
+    ] {
+        let (steps, summary, counters) = run(layout, n);
+        assert_eq!(steps, expected, "layout {layout}: steps");
+        assert_eq!(summary, histogram, "layout {layout}: histogram");
+        assert_eq!(counters["iterations"], iterations, "layout {layout}: iteration counter");
+        assert_eq!(counters["walks"], n as u64, "layout {layout}: walk counter");
+    }
+}
+
+#[test]
+fn passes_nobody_reads_are_culled() {
+    let g = graph();
+    assert_eq!(
+        g.culled.iter().map(|p| p.decl.name.as_str()).collect::<Vec<_>>(),
+        vec!["unused"]
+    );
+    assert_eq!(g.phases.len(), 2, "the culled pass's phase is gone");
+}
+
+#[test]
+fn chunked_layouts_run_in_several_chunks() {
+    let g = graph();
+    let plan = Plan::new(&g, "split_chunked").unwrap();
+    let program = Program::compile(&plan, &Specialization::default(), &gpu().target()).unwrap();
+    assert_eq!(program.chunks[0], 100);
+    assert_eq!(program.domains[0], 1000);
+    assert_eq!(program.state_capacity.values().copied().collect::<Vec<_>>(), vec![100]);
+}
+
+fn plan_error(layout: &str) -> String {
+    Plan::new(&graph(), layout)
+        .err()
+        .expect("the layout is refused")
+        .to_string()
+}
+
+#[test]
+fn illegal_layouts_are_refused_with_names() {
+    let e = plan_error("queue_in_kernel_loop");
+    assert!(
+        e.contains("'step'") && e.contains("'done'") && e.contains("'record'"),
+        "{e}"
+    );
+    let e = plan_error("across_barrier");
+    assert!(
+        e.contains("'summarize'") && e.contains("'histogram'") && e.contains("barrier"),
+        "{e}"
+    );
+    assert!(
+        e.starts_with("collatz.ron:"),
+        "the error is located in the graph file: {e}"
+    );
+    let e = plan_error("two_entries");
+    assert!(e.contains("two kernels") && e.contains("'record'"), "{e}");
+    let e = plan_error("missing_pass");
+    assert!(e.contains("'summarize'") && e.contains("no kernel"), "{e}");
+    let e = plan_error("NoSuchLayout");
+    assert!(
+        e.contains("unknown layout 'NoSuchLayout'") && e.contains("split_aos"),
+        "{e}"
+    );
+}
