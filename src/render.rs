@@ -151,7 +151,14 @@ impl<'g> Session<'g> {
         let spec = specialization(graph, &scene.scene, &options, device_flags(gpu));
         let program = Program::compile(&plan, &spec, &gpu.target())?;
         let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
-        let externals = scene.compiled.resources(&camera);
+        // The scene offers every scene resource; a graph takes those it declares.
+        let mut externals = scene.compiled.resources(&camera);
+        externals.retain(|name, _| {
+            graph
+                .resources
+                .get(name)
+                .is_some_and(|r| r.scope == lightgraph_engine::ir::Scope::External)
+        });
         let instance = Instance::new(gpu, program, &externals)
             .with_context(|| format!("instantiating graph '{}' in layout '{layout}'", graph.name))?;
         Ok(Session {

@@ -35,6 +35,24 @@ impl Location {
     }
 }
 
+impl Location {
+    /// The location of the first map key `"name":` in `text`, or else of the first quoted
+    /// occurrence of `name`.
+    pub fn of_key(file: &str, text: &str, name: &str) -> Self {
+        let quoted = format!("\"{name}\"");
+        let mut from = 0;
+        while let Some(i) = text[from..].find(&quoted) {
+            let at = from + i;
+            let rest = text[at + quoted.len()..].trim_start();
+            if rest.starts_with(':') {
+                return Self::at_offset(file, text, at + 1);
+            }
+            from = at + quoted.len();
+        }
+        Self::of_name(file, text, name)
+    }
+}
+
 impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}:{}:{}", self.file, self.line, self.column)
@@ -83,6 +101,14 @@ pub enum Error {
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 impl Error {
+    /// An [`Error::Invalid`] located at the declaration `"name":` in `file`.
+    pub fn invalid_at_key(file: &str, text: &str, name: &str, message: impl Into<String>) -> Self {
+        Error::Invalid {
+            at: Location::of_key(file, text, name),
+            message: message.into(),
+        }
+    }
+
     /// An [`Error::Invalid`] located at the first occurrence of `name` in `file`.
     pub fn invalid_at_name(file: &str, text: &str, name: &str, message: impl Into<String>) -> Self {
         Error::Invalid {
@@ -102,5 +128,7 @@ mod tests {
         let at = Location::of_name("f.ron", text, "x");
         assert_eq!((at.line, at.column), (2, 5));
         assert_eq!(Location::at_offset("f", text, 0).to_string(), "f:1:1");
+        let text = "[\"s\"]\n{ \"s\" : 1 }";
+        assert_eq!(Location::of_key("f", text, "s").line, 2);
     }
 }

@@ -130,6 +130,7 @@ impl Graph {
     pub fn from_text(vfs: &Vfs, file: &str, text: &str) -> Result<Graph> {
         let g: GraphFile = parse_ron(file, text)?;
         let err = |name: &str, message: String| Error::invalid_at_name(file, text, name, message);
+        let err_key = |name: &str, message: String| Error::invalid_at_key(file, text, name, message);
 
         // Catalog passes.
         let mut catalog: BTreeMap<String, Pass> = BTreeMap::new();
@@ -182,7 +183,7 @@ impl Graph {
             .chain(g.constants.keys())
         {
             if !is_identifier(name) || name.starts_with("lg_") {
-                return Err(err(
+                return Err(err_key(
                     name,
                     format!("'{name}' is not a valid name (a WGSL identifier not starting with 'lg_')"),
                 ));
@@ -232,7 +233,7 @@ impl Graph {
         }
         for (name, r) in &g.resources {
             if r.scope == crate::ir::Scope::External && r.count.is_some() {
-                return Err(err(
+                return Err(err_key(
                     name,
                     format!(
                         "external resource '{name}' has a count; its data sizes it, so write its WGSL type (e.g. array<{}>)",
@@ -255,7 +256,7 @@ impl Graph {
                 .find(|p| p.decl.name == s.to)
                 .ok_or_else(|| err(&s.to, format!("stream '{name}' feeds unknown pass '{}'", s.to)))?;
             if consumer.decl.item != s.item {
-                return Err(err(
+                return Err(err_key(
                     name,
                     format!(
                         "stream type mismatch: stream '{name}' carries '{}' but its consumer '{}' runs over '{}'",
@@ -273,7 +274,7 @@ impl Graph {
                 ));
             }
             if s.per_call == 0 {
-                return Err(err(name, format!("stream '{name}' has per_call 0")));
+                return Err(err_key(name, format!("stream '{name}' has per_call 0")));
             }
         }
         if !g.layouts.contains_key(&g.default_layout) {

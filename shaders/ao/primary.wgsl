@@ -1,0 +1,20 @@
+// Pass `ao_primary` (Start over PATHS): the camera ray of sample `index`; at its hit, one
+// occlusion ray in a cosine-distributed direction about the normal facing the camera.
+
+fn ao_primary(s: ptr<function, AoSample>, index: u32) -> bool {
+    let pixel = index % PIXELS;
+    (*s).pixel = pixel;
+    var rng = rng_seed(frame.seed, frame.index, index);
+    let jitter = rng_vec2(&rng);
+    let d = camera_direction(f32(pixel % WIDTH) + jitter.x, f32(pixel / WIDTH) + jitter.y);
+    count(COUNTER_RAYS_PRIMARY, 1u);
+    let hit = trace_closest(camera.position, d, INFINITE_DISTANCE);
+    if (!hit.found) {
+        return false;
+    }
+    let surface = surface_at(hit, camera.position, d);
+    let n = select(-surface.normal, surface.normal, dot(surface.normal, d) < 0.0);
+    let direction = to_world(frame_from_z(n), sample_cos_hemisphere(rng_vec2(&rng)));
+    emit_occlusion(OcclusionRay(offset_ray_origin(surface.position, n, scene.radius), pixel, direction));
+    return false;
+}

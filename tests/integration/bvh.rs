@@ -1,0 +1,239 @@
+//! BVH traversal on the GPU agrees with brute force on the CPU (in f64) for thousands of
+//! random rays against random triangles and spheres: hit or miss, primitive, distance to
+//! 1e-5 relative, and any-hit queries with a random distance limit.
+
+use crate::common::{data, gpu};
+use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization};
+use lightgraph_scenes::CompiledScene;
+use lightgraph_scenes::gpu::primitive_kind;
+use lightgraph_scenes::model::{Camera, FovAxis, Integrator, Light, Look, Material, Scene, Shape};
+use std::collections::BTreeMap;
+
+/// A small deterministic generator (xorshift64*), so failures reproduce.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545F4914F6CDD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+    fn point(&mut self, r: f64) -> [f64; 3] {
+        [self.range(-r, r), self.range(-r, r), self.range(-r, r)]
+    }
+    fn direction(&mut self) -> [f64; 3] {
+        let z = 1.0 - 2.0 * self.next();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let phi = 2.0 * std::f64::consts::PI * self.next();
+        [r * phi.cos(), r * phi.sin(), z]
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn f64s(a: [f32; 3]) -> [f64; 3] {
+    a.map(|v| v as f64)
+}
+
+/// The CPU hit of one primitive: (t, edge margin, estimated relative error of t in f32).
+/// The edge margin is how far inside the primitive the hit lies (barycentric distance to an
+/// edge; squared sine of the angle to a sphere's silhouette): near 0, hit or miss is decided
+/// by rounding. The error estimate follows from rounding the origin offset (|o - p| eps) and
+/// the conditioning of the hit: 1/|cos| to a triangle's plane, |f| r / sqrt(disc) at a sphere.
+fn cpu_intersect(o: [f64; 3], d: [f64; 3], p: &lightgraph_scenes::gpu::GpuPrimitive) -> Option<(f64, f64, f64)> {
+    const EPS: f64 = f32::EPSILON as f64;
+    let a = f64s(p.a);
+    if p.kind == primitive_kind::SPHERE {
+        let r = p.b[0] as f64;
+        let f = sub(o, a);
+        let b = dot(f, d);
+        let c = dot(f, f) - r * r;
+        let disc = b * b - c;
+        if disc < 0.0 {
+            return None;
+        }
+        let s = disc.sqrt();
+        let fl = dot(f, f).sqrt();
+        [-b - s, -b + s]
+            .into_iter()
+            .find(|&t| t > 0.0)
+            .map(|t| (t, disc / (r * r), 2.0 * EPS * (fl * r / s.max(1e-30) + fl) / t))
+    } else {
+        let (e1, e2) = (f64s(p.b), f64s(p.c));
+        let pv = cross(d, e2);
+        let det = dot(e1, pv);
+        if det == 0.0 {
+            return None;
+        }
+        let tv = sub(o, a);
+        let u = dot(tv, pv) / det;
+        let qv = cross(tv, e1);
+        let v = dot(d, qv) / det;
+        let t = dot(e2, qv) / det;
+        let n = cross(e1, e2);
+        let cos = (dot(n, d) / dot(n, n).sqrt()).abs();
+        let err = 2.0 * EPS * dot(tv, tv).sqrt() / (cos.max(1e-30) * t);
+        (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0).then_some((t, u.min(v).min(1.0 - u - v), err))
+    }
+}
+
+fn random_scene(rng: &mut Rng) -> Scene {
+    let mut shapes = Vec::new();
+    for _ in 0..3000 {
+        let c = rng.point(10.0);
+        let size = rng.range(0.2, 4.0);
+        let v = [0, 1, 2].map(|_| {
+            let d = rng.direction();
+            [0, 1, 2].map(|k| (c[k] + size * d[k]) as f32)
+        });
+        shapes.push(Shape::Triangle {
+            vertices: v,
+            material: "m".into(),
+            emission: None,
+        });
+    }
+    for _ in 0..150 {
+        let c = rng.point(10.0).map(|v| v as f32);
+        shapes.push(Shape::Sphere {
+            center: c,
+            radius: rng.range(0.05, 1.5) as f32,
+            material: "m".into(),
+        });
+    }
+    Scene {
+        description: "random triangles and spheres".into(),
+        camera: Camera {
+            position: [0.0; 3],
+            look: Look::Forward([0.0, 0.0, 1.0]),
+            up: [0.0, 1.0, 0.0],
+            fov_degrees: 45.0,
+            fov_axis: FovAxis::Horizontal,
+        },
+        resolution: (1, 1),
+        materials: [("m".to_string(), Material::default())].into_iter().collect(),
+        shapes,
+        lights: vec![Light::Background {
+            radiance: [1.0; 3],
+            scale: 1.0,
+        }],
+        integrator: Integrator::default(),
+    }
+}
+
+#[test]
+fn gpu_traversal_matches_brute_force() {
+    let mut rng = Rng(0x9E3779B97F4A7C15);
+    let scene = random_scene(&mut rng);
+    let compiled = CompiledScene::new(&scene).unwrap();
+    let n = 4096usize;
+    let mut rays: Vec<[f32; 4]> = Vec::new();
+    let mut queries = Vec::new();
+    for _ in 0..n {
+        let o = rng.point(15.0).map(|v| v as f32);
+        let d = rng.direction();
+        let d32 = d.map(|v| v as f32);
+        let t_any = rng.range(0.0, 30.0) as f32;
+        rays.push([o[0], o[1], o[2], t_any]);
+        rays.push([d32[0], d32[1], d32[2], 0.0]);
+        queries.push((f64s(o), f64s(d32), t_any as f64));
+    }
+    let vfs = lightgraph::assets::builtin().with_front(Layer::Dir(data("")));
+    let graph = Graph::load(&vfs, "graphs/bvh_query.ron").unwrap();
+    let plan = Plan::new(&graph, "fused").unwrap();
+    let spec = Specialization {
+        constants: [("QUERIES".to_string(), ConstValue::U32(n as u32))]
+            .into_iter()
+            .collect(),
+        ..Default::default()
+    };
+    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let mut externals: BTreeMap<String, Vec<u8>> = compiled
+        .resources(&CompiledScene::camera(&scene, 1, 1))
+        .into_iter()
+        .filter(|(k, _)| k == "primitives" || k == "bvh")
+        .collect();
+    externals.insert("rays".into(), bytemuck::cast_slice(&rays).to_vec());
+    let mut instance = Instance::new(gpu(), program, &externals).unwrap();
+    instance.run_frame(0, 0).unwrap();
+    let results: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&instance.read("results").unwrap());
+
+    let (mut hits, mut ambiguous, mut any_hits) = (0, 0, 0);
+    let mut reasons = [0usize; 4];
+    for (i, (o, d, t_any)) in queries.iter().enumerate() {
+        // All CPU hits along the ray, nearest first.
+        let mut cpu: Vec<(f64, f64, f64, usize)> = compiled
+            .primitives
+            .iter()
+            .enumerate()
+            .filter_map(|(j, p)| {
+                cpu_intersect(*o, *d, p).map(|(t, margin, err)| (t, margin, err, compiled.order[j] as usize))
+            })
+            .collect();
+        cpu.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Rays grazing an edge or silhouette, with two nearly equal nearest hits, or whose
+        // distance f32 cannot resolve to 1e-5, may legitimately differ.
+        let near_tie = cpu.len() > 1 && (cpu[1].0 - cpu[0].0) < 1e-4 * cpu[0].0;
+        let grazing = cpu.first().is_some_and(|h| h.1 < 1e-4 || h.2 > 1e-5);
+        let limit_tie = cpu.first().is_some_and(|h| (h.0 - t_any).abs() < 1e-4 * t_any.max(1.0));
+        if near_tie || grazing || limit_tie {
+            ambiguous += 1;
+            reasons[0] += near_tie as usize;
+            reasons[1] += cpu.first().is_some_and(|h| h.1 < 1e-4) as usize;
+            reasons[2] += cpu.first().is_some_and(|h| h.2 > 1e-5) as usize;
+            reasons[3] += limit_tie as usize;
+            continue;
+        }
+        let r = results[i];
+        match cpu.first() {
+            None => assert_eq!(
+                r[0], -1.0,
+                "ray {i}: the GPU found a hit at t = {} where the CPU finds none",
+                r[0]
+            ),
+            Some(&(t, _, _, prim)) => {
+                hits += 1;
+                assert!(r[0] > 0.0, "ray {i}: the GPU missed a hit at t = {t}");
+                let gpu_prim = compiled.order[r[1].to_bits() as usize] as usize;
+                assert_eq!(gpu_prim, prim, "ray {i}: closest primitive");
+                assert!(
+                    ((r[0] as f64) - t).abs() <= 1e-5 * t,
+                    "ray {i}: t = {} on the GPU, {t} on the CPU",
+                    r[0]
+                );
+            }
+        }
+        let cpu_any = cpu.first().is_some_and(|h| h.0 < *t_any);
+        any_hits += cpu_any as usize;
+        assert_eq!(r[2] == 1.0, cpu_any, "ray {i}: any-hit below {t_any}");
+    }
+    eprintln!(
+        "{n} rays: {hits} closest hits, {any_hits} any-hits, {ambiguous} skipped as ambiguous (ties {}, edges {}, f32-ill-conditioned {}, at the any-hit limit {})",
+        reasons[0], reasons[1], reasons[2], reasons[3]
+    );
+    // About 2.5% of random rays meet a surface at so grazing an angle that f32 cannot give
+    // their distance to 1e-5 (the estimate above bounds the measured error; its largest
+    // measured ratio was 0.83). The rest must all agree; the check needs most rays.
+    assert!(
+        ambiguous < n / 20,
+        "{ambiguous} ambiguous rays: the test would check too little"
+    );
+    assert!(
+        hits > n / 4 && any_hits > n / 8,
+        "the rays must exercise hits ({hits}) and any-hits ({any_hits})"
+    );
+}

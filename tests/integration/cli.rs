@@ -1,0 +1,252 @@
+//! The command line: a small render writes an EXR (with metadata) and a PNG; `explain`
+//! prints kernels and resources; bad input exits non-zero with an error naming the file,
+//! line and column or the missing name, and never panics.
+
+use crate::common::data;
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn lightgraph(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lightgraph"))
+        .args(args)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .expect("the binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lightgraph-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs with bad input: exit code 1, an `error:` line, no panic; returns stderr.
+fn fails(args: &[&str]) -> String {
+    let out = lightgraph(args);
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert_eq!(out.status.code(), Some(1), "{args:?} should fail cleanly: {stderr}");
+    assert!(stderr.contains("error:"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    stderr
+}
+
+/// A copy of graphs/pt.ron with one replacement, written to a temporary file.
+fn pt_variant(name: &str, from: &str, to: &str) -> (String, PathBuf) {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/graphs/pt.ron")).unwrap();
+    assert!(text.contains(from), "graphs/pt.ron contains {from}");
+    let changed = text.replacen(from, to, 1);
+    let path = temp_dir(name).join(format!("{name}.ron"));
+    std::fs::write(&path, &changed).unwrap();
+    (changed, path)
+}
+
+fn line_of(text: &str, needle: &str) -> usize {
+    text[..text.find(needle).expect("needle")].matches('\n').count() + 1
+}
+
+#[test]
+fn render_writes_exr_with_metadata_and_png() {
+    let dir = temp_dir("render");
+    let exr = dir.join("cornell.exr");
+    let out = lightgraph(&[
+        "render",
+        "--scene",
+        "cornell-diffuse",
+        "--res",
+        "24x16",
+        "--frames",
+        "2",
+        "--seed",
+        "9",
+        "--out",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(dir.join("cornell.png").is_file());
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        &exr,
+        |size, _| vec![[0f32; 3]; size.width() * size.height()],
+        |pixels: &mut Vec<[f32; 3]>, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            pixels[pos.y() * 24 + pos.x()] = [r, g, b]
+        },
+    )
+    .unwrap();
+    let layer = &image.layer_data;
+    assert_eq!((layer.size.width(), layer.size.height()), (24, 16));
+    assert!(
+        layer.channel_data.pixels.iter().any(|p| p[0] > 0.0),
+        "the image is not black"
+    );
+    let attrs = &layer.attributes.other;
+    let get = |k: &str| {
+        attrs
+            .get(&exr::meta::attribute::Text::from(format!("lightgraph.{k}").as_str()))
+            .map(|v| format!("{v:?}"))
+    };
+    for (k, v) in [
+        ("graph", "pt"),
+        ("layout", "NaivePTsk"),
+        ("scene", "cornell-diffuse"),
+        ("samples_per_pixel", "2"),
+    ] {
+        assert!(get(k).is_some_and(|s| s.contains(v)), "metadata {k} = {:?}", get(k));
+    }
+    assert!(get("seconds").is_some());
+}
+
+#[test]
+fn explain_prints_kernels_and_resources_of_each_layout() {
+    let out = lightgraph(&["explain", "--graph", "pt", "--res", "32x32"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for needle in [
+        "layout 'NaivePTsk'",
+        "layout 'NaivePTmk'",
+        "k0_generate_extend_shadow",
+        "k1_extend",
+        "queue 'shadow'",
+        "resources:",
+        "film:",
+        "GPU memory",
+    ] {
+        assert!(text.contains(needle), "explain output lacks {needle:?}:\n{text}");
+    }
+}
+
+#[test]
+fn malformed_ron_graph() {
+    let path = temp_dir("malformed").join("malformed.ron");
+    std::fs::write(&path, "(\n    name: \"broken\",\n    passes: [Use(\"generate\"\n)").unwrap();
+    let err = fails(&[
+        "render",
+        "--graph",
+        path.to_str().unwrap(),
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ]);
+    assert!(err.contains("malformed.ron:4:"), "{err}");
+}
+
+#[test]
+fn unknown_pass() {
+    let (text, path) = pt_variant("unknown-pass", "Use(\"shadow\")", "Use(\"shadowz\")");
+    let err = fails(&[
+        "render",
+        "--graph",
+        path.to_str().unwrap(),
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ]);
+    assert!(err.contains("unknown pass 'shadowz'"), "{err}");
+    assert!(
+        err.contains(&format!("unknown-pass.ron:{}:", line_of(&text, "\"shadowz\""))),
+        "{err}"
+    );
+}
+
+#[test]
+fn unknown_resource() {
+    let (_, path) = pt_variant(
+        "unknown-resource",
+        "\"film\": (ty: \"FilmWord\"",
+        "\"flim\": (ty: \"FilmWord\"",
+    );
+    let err = fails(&[
+        "render",
+        "--graph",
+        path.to_str().unwrap(),
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ]);
+    assert!(err.contains("unknown resource 'film'"), "{err}");
+    assert!(
+        err.contains("passes/pt.ron:"),
+        "the error points into the catalog that names it: {err}"
+    );
+}
+
+#[test]
+fn stream_type_mismatch() {
+    let (text, path) = pt_variant(
+        "stream-mismatch",
+        "\"shadow\": (item: \"ShadowRay\"",
+        "\"shadow\": (item: \"CameraPath\"",
+    );
+    let err = fails(&[
+        "render",
+        "--graph",
+        path.to_str().unwrap(),
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ]);
+    assert!(
+        err.contains("stream type mismatch") && err.contains("'CameraPath'") && err.contains("'ShadowRay'"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("stream-mismatch.ron:{}:", line_of(&text, "\"shadow\": (item"))),
+        "{err}"
+    );
+}
+
+#[test]
+fn unknown_layout_lists_the_available_ones() {
+    let err = fails(&["render", "--layout", "FastestPT", "--res", "8x8", "--frames", "1"]);
+    assert!(
+        err.contains("unknown layout 'FastestPT'") && err.contains("NaivePTsk") && err.contains("NaivePTmk"),
+        "{err}"
+    );
+}
+
+#[test]
+fn missing_scene_file() {
+    let err = fails(&["render", "--scene", "/no/such/scene.ron", "--frames", "1"]);
+    assert!(
+        err.contains("/no/such/scene.ron") && err.contains("not found") && err.contains("cornell-diffuse"),
+        "{err}"
+    );
+}
+
+#[test]
+fn scene_without_light() {
+    let path = data("scenes/no-light.ron");
+    let err = fails(&["render", "--scene", path.to_str().unwrap(), "--frames", "1"]);
+    assert!(err.contains("no-light.ron") && err.contains("no light"), "{err}");
+}
+
+#[test]
+fn malformed_scene_names_line_and_column() {
+    let path = temp_dir("bad-scene").join("bad.ron");
+    std::fs::write(&path, "Scene(\n    camera: (position: (0.0, 0.0), look: Target((0.0, 0.0, 1.0)), up: (0.0, 1.0, 0.0), fov_degrees: 40.0),\n)").unwrap();
+    let err = fails(&["render", "--scene", path.to_str().unwrap(), "--frames", "1"]);
+    assert!(err.contains("bad.ron:2:"), "{err}");
+}
+
+#[test]
+fn ambient_occlusion_renders_through_the_cli() {
+    let dir = temp_dir("ao");
+    let exr = dir.join("ao.exr");
+    let out = lightgraph(&[
+        "render",
+        "--graph",
+        "ao",
+        "--scene",
+        "cornell-diffuse",
+        "--res",
+        "16x16",
+        "--frames",
+        "2",
+        "--out",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(exr.is_file());
+}

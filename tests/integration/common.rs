@@ -1,0 +1,87 @@
+//! Shared helpers: one GPU per test binary, rendering a scene to an image, region statistics.
+
+use lightgraph::render::{Image, LoadedScene, Session, SessionOptions, load_graph};
+use lightgraph_engine::{ConstValue, Gpu};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::OnceLock;
+
+pub fn gpu() -> &'static Gpu {
+    static GPU: OnceLock<Gpu> = OnceLock::new();
+    GPU.get_or_init(|| Gpu::new(None).expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)"))
+}
+
+pub fn data(path: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(path)
+}
+
+/// What a test render produced.
+pub struct Rendered {
+    pub image: Image,
+    pub counters: BTreeMap<String, u64>,
+    pub loops_capped: u64,
+}
+
+/// Renders `scene` with `graph` in `layout`.
+pub fn render(
+    scene: &LoadedScene,
+    graph: &str,
+    layout: &str,
+    size: (u32, u32),
+    spp: u32,
+    frames: u32,
+    seed: u32,
+    constants: &[(&str, ConstValue)],
+) -> Rendered {
+    let graph = load_graph(graph).unwrap();
+    let options = SessionOptions {
+        width: size.0,
+        height: size.1,
+        samples_per_frame: spp,
+        seed,
+        constants: constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+    };
+    let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
+    for _ in 0..frames {
+        session.render_frame().unwrap();
+    }
+    Rendered {
+        image: session.image().unwrap(),
+        counters: session.counters.clone(),
+        loops_capped: session.loops_capped,
+    }
+}
+
+/// Mean and standard error of the mean radiance over the pixels `select` keeps, per channel.
+/// Pixels are independent (each pixel's paths are its own), so the variance of the region
+/// mean is the sum of the pixels' variances of the mean over the pixel count squared.
+pub fn region(image: &Image, select: impl Fn(u32, u32) -> bool) -> ([f64; 3], [f64; 3], usize) {
+    let mut sum = [0f64; 3];
+    let mut var = [0f64; 3];
+    let mut n = 0usize;
+    for y in 0..image.height {
+        for x in 0..image.width {
+            if !select(x, y) {
+                continue;
+            }
+            let i = (y * image.width + x) as usize;
+            for c in 0..3 {
+                sum[c] += image.mean[i][c] as f64;
+                var[c] += image.variance[i][c] as f64 / image.frames as f64;
+            }
+            n += 1;
+        }
+    }
+    let nf = n as f64;
+    (sum.map(|s| s / nf), var.map(|v| v.sqrt() / nf), n)
+}
+
+/// Asserts no pixel is NaN, infinite or negative.
+pub fn assert_finite(image: &Image, what: &str) {
+    for (i, p) in image.mean.iter().enumerate() {
+        assert!(
+            p.iter().all(|v| v.is_finite() && *v >= 0.0),
+            "{what}: pixel {i} is {p:?}"
+        );
+    }
+}

@@ -1,0 +1,92 @@
+//! The built-in scenes: they load, render without NaN, infinite or negative samples, and
+//! the Rust mirrors of the scene structs match the WGSL layouts naga computes.
+
+use crate::common::{assert_finite, gpu, render};
+use lightgraph::assets::scene_names;
+use lightgraph::render::load_scene;
+use lightgraph_engine::reflect::struct_layout;
+use lightgraph_scenes::gpu::{GpuBvhNode, GpuCamera, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo};
+use std::mem::{offset_of, size_of};
+
+#[test]
+fn every_builtin_scene_renders_without_invalid_samples() {
+    let _ = gpu();
+    let names = scene_names();
+    assert!(names.len() >= 6, "the six Cornell scenes are built in: {names:?}");
+    for (name, _) in names {
+        let scene = load_scene(&name).unwrap();
+        for layout in ["NaivePTsk", "NaivePTmk"] {
+            let r = render(&scene, "pt", layout, (32, 32), 2, 2, 7, &[]);
+            let rejected = r.counters["samples_rejected"];
+            eprintln!(
+                "{name} {layout}: {} rays, {rejected} rejected samples",
+                r.counters["rays_primary"] + r.counters["rays_extension"] + r.counters["rays_shadow"]
+            );
+            assert_eq!(
+                rejected, 0,
+                "{name} ({layout}): NaN, infinite or negative samples reached the film"
+            );
+            assert_eq!(r.loops_capped, 0, "{name}: a path loop hit the iteration cap");
+            assert_eq!(
+                r.counters["rays_primary"],
+                32 * 32 * 2 * 2,
+                "{name}: one primary ray per path"
+            );
+            assert_finite(&r.image, &name);
+            assert!(
+                r.image.mean.iter().any(|p| p.iter().any(|&v| v > 0.0)),
+                "{name}: the image is black"
+            );
+        }
+    }
+}
+
+#[test]
+fn rust_scene_structs_match_the_wgsl_layout() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/lib/scene.wgsl")).unwrap();
+    let module = naga::front::wgsl::parse_str(&text).unwrap();
+    macro_rules! check {
+        ($wgsl:literal, $rust:ty, [$($field:ident),*]) => {{
+            let (size, members) = struct_layout(&module, $wgsl).expect($wgsl);
+            assert_eq!(size as usize, size_of::<$rust>(), "size of {}", $wgsl);
+            let rust: Vec<(String, usize)> = vec![$((stringify!($field).to_string(), offset_of!($rust, $field))),*];
+            let wgsl: Vec<(String, usize)> = members.into_iter().map(|(n, o)| (n, o as usize)).collect();
+            assert_eq!(rust, wgsl, "fields of {}", $wgsl);
+        }};
+    }
+    check!(
+        "SceneInfo",
+        GpuSceneInfo,
+        [center, radius, num_lights, background, num_primitives, num_materials]
+    );
+    check!(
+        "Camera",
+        GpuCamera,
+        [position, width, forward, height, right, pad0, up, pad1]
+    );
+    check!("Primitive", GpuPrimitive, [a, material, b, light, c, kind]);
+    check!(
+        "BvhNode",
+        GpuBvhNode,
+        [
+            left_min,
+            left_first,
+            left_max,
+            left_count,
+            right_min,
+            right_first,
+            right_max,
+            right_count
+        ]
+    );
+    check!(
+        "Material",
+        GpuMaterial,
+        [diffuse, phong_exponent, phong, ior, mirror, pad]
+    );
+    check!(
+        "Light",
+        GpuLight,
+        [position, kind, e1, inv_area, e2, pad0, normal, pad1, radiance, pad2]
+    );
+}
