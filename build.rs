@@ -5,7 +5,7 @@
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-fn collect(root: &Path, dir: &Path, suffixes: &[&str], out: &mut Vec<PathBuf>) {
+fn collect(dir: &Path, suffixes: &[&str], out: &mut Vec<PathBuf>) {
     let Ok(entries) = std::fs::read_dir(dir) else { return };
     let mut paths: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
     paths.sort();
@@ -14,7 +14,7 @@ fn collect(root: &Path, dir: &Path, suffixes: &[&str], out: &mut Vec<PathBuf>) {
             if p.file_name().is_some_and(|n| n == "src" || n == "target") {
                 continue;
             }
-            collect(root, &p, suffixes, out);
+            collect(&p, suffixes, out);
         } else if suffixes.iter().any(|s| p.to_string_lossy().ends_with(s)) {
             out.push(p);
         }
@@ -31,7 +31,7 @@ fn main() {
         ("scenes", &[".ron"]),
     ] {
         println!("cargo:rerun-if-changed={dir}");
-        collect(&root, &root.join(dir), suffixes, &mut files);
+        collect(&root.join(dir), suffixes, &mut files);
     }
     let mut code = String::from(
         "/// Files built into the binary: (virtual path, contents).\npub static FILES: &[(&str, &str)] = &[\n",

@@ -357,18 +357,40 @@ impl CodegenContext<'_> {
 }
 
 /// The kernel that turns a queue's count into indirect dispatch arguments.
-pub fn args_kernel(
-    name: &str,
-    control_binding: u32,
-    args_binding: u32,
-    count_word: u32,
-    capacity: u64,
-    args_offset: u32,
-    workgroup: u32,
-    max_groups: u32,
-) -> String {
-    format!(
-        "@group(0) @binding({control_binding}) var<storage, read> lg_control: array<u32>;
+pub struct ArgsKernel<'a> {
+    /// Entry point name.
+    pub name: &'a str,
+    /// Binding of the control words.
+    pub control_binding: u32,
+    /// Binding of the indirect arguments.
+    pub args_binding: u32,
+    /// Control word holding the queue's count.
+    pub count_word: u32,
+    /// Queue capacity (the count is clamped to it).
+    pub capacity: u64,
+    /// First of the three argument words.
+    pub args_offset: u32,
+    /// Workgroup size of the consumer kernel.
+    pub workgroup: u32,
+    /// Most workgroups per dispatch dimension.
+    pub max_groups: u32,
+}
+
+impl ArgsKernel<'_> {
+    /// The WGSL module.
+    pub fn wgsl(&self) -> String {
+        let ArgsKernel {
+            name,
+            control_binding,
+            args_binding,
+            count_word,
+            capacity,
+            args_offset,
+            workgroup,
+            max_groups,
+        } = self;
+        format!(
+            "@group(0) @binding({control_binding}) var<storage, read> lg_control: array<u32>;
 @group(0) @binding({args_binding}) var<storage, read_write> lg_args: array<u32>;
 @compute @workgroup_size(1)
 fn {name}() {{
@@ -380,7 +402,8 @@ fn {name}() {{
     lg_args[{args_offset} + 2u] = 1u;
 }}
 "
-    )
+        )
+    }
 }
 
 /// The kernel that adds the per-chunk counters into 64-bit totals and clears them.

@@ -93,7 +93,7 @@ impl Expr {
     /// Evaluates and rounds up to a count; negative, infinite or NaN results are errors.
     pub fn count(&self, vars: &BTreeMap<String, f64>) -> Result<u64, String> {
         let v = self.eval(vars)?;
-        if !v.is_finite() || v < 0.0 || v > 1e18 {
+        if !v.is_finite() || !(0.0..=1e18).contains(&v) {
             return Err(format!("count expression evaluates to {v}, not a count"));
         }
         Ok(v.ceil() as u64)

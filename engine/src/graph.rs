@@ -469,13 +469,13 @@ impl Graph {
                                 format!("stream '{s}' closes a cycle of streams; emits cannot recurse"),
                             ));
                         }
-                        if let Some(&other) = owner.get(&next) {
-                            if other != phase {
-                                return Err(self.error_at(
-                                    s,
-                                    format!("stream '{s}' is emitted in two phases; a stream belongs to one phase"),
-                                ));
-                            }
+                        if let Some(&other) = owner.get(&next)
+                            && other != phase
+                        {
+                            return Err(self.error_at(
+                                s,
+                                format!("stream '{s}' is emitted in two phases; a stream belongs to one phase"),
+                            ));
                         }
                         owner.insert(next, phase);
                         if !members.contains(&next) {
@@ -490,10 +490,10 @@ impl Graph {
             phases.push(Phase { chains: members });
         }
         for (c, chain) in self.chains.iter().enumerate() {
-            if let ChainEntry::Stream(s) = &chain.entry {
-                if !phases.iter().any(|ph| ph.chains.contains(&c)) {
-                    return Err(self.error_at(s, format!("stream '{s}' is emitted by no pass")));
-                }
+            if let ChainEntry::Stream(s) = &chain.entry
+                && !phases.iter().any(|ph| ph.chains.contains(&c))
+            {
+                return Err(self.error_at(s, format!("stream '{s}' is emitted by no pass")));
             }
         }
         self.phases = phases;
@@ -568,10 +568,8 @@ fn dependency_graph(
             }
         }
         let starts_chain = matches!(d.role, Role::Start { .. }) || streams.values().any(|s| s.to == d.name);
-        if !starts_chain {
-            if let Some(prev) = last_of_item.get(d.item.as_str()) {
-                dg.add_edge(*prev, n, d.item.clone());
-            }
+        if !starts_chain && let Some(prev) = last_of_item.get(d.item.as_str()) {
+            dg.add_edge(*prev, n, d.item.clone());
         }
         last_of_item.insert(&d.item, n);
     }

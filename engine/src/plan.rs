@@ -375,13 +375,13 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
             ChainEntry::Stream(s) => Root::Queue(s.clone()),
         }
     };
-    if let Root::Queue(s) = &root {
-        if segment.len() != chain.passes.len() {
-            return Err(graph.error_at(
-                s,
-                format!("{describe}: the chain fed by queue '{s}' must run whole in one kernel"),
-            ));
-        }
+    if let Root::Queue(s) = &root
+        && segment.len() != chain.passes.len()
+    {
+        return Err(graph.error_at(
+            s,
+            format!("{describe}: the chain fed by queue '{s}' must run whole in one kernel"),
+        ));
     }
     let has_loop = chain.loop_start.is_some_and(|ls| segment.end > ls);
     let whole_loop = chain

@@ -121,17 +121,17 @@ impl Program {
         let g = &plan.graph;
         let mut constants = g.constants.clone();
         for (name, v) in &spec.constants {
-            if let Some(default) = g.constants.get(name) {
-                if default.wgsl_type() != v.wgsl_type() {
-                    return Err(g.error_at(
-                        name,
-                        format!(
-                            "constant '{name}' is {} in the graph but was given as {}",
-                            default.wgsl_type(),
-                            v.wgsl_type()
-                        ),
-                    ));
-                }
+            if let Some(default) = g.constants.get(name)
+                && default.wgsl_type() != v.wgsl_type()
+            {
+                return Err(g.error_at(
+                    name,
+                    format!(
+                        "constant '{name}' is {} in the graph but was given as {}",
+                        default.wgsl_type(),
+                        v.wgsl_type()
+                    ),
+                ));
             }
             constants.insert(name.clone(), *v);
         }
@@ -286,9 +286,9 @@ impl Program {
                 }
             }
             let mut chunk = domain.max(1);
-            if per_item_bytes > 0 {
+            if let Some(fit) = target.max_binding_bytes.checked_div(per_item_bytes) {
                 chunk = chunk.min(plan.layout.max_items_in_flight.unwrap_or(MAX_DEFAULT_IN_FLIGHT));
-                chunk = chunk.min((target.max_binding_bytes / per_item_bytes).max(1));
+                chunk = chunk.min(fit.max(1));
             }
             domains.push(domain);
             chunks.push(chunk);
@@ -340,16 +340,17 @@ impl Program {
             .enumerate()
             .map(|(i, q)| {
                 let name = format!("lg_args_{q}");
-                let wgsl = crate::codegen::args_kernel(
-                    &name,
-                    bindings[&BufferRef::Control],
-                    bindings[&BufferRef::Args],
-                    control.queue_count[q],
-                    queue_capacity[q],
-                    3 * i as u32,
-                    plan.layout.workgroup_size,
+                let wgsl = crate::codegen::ArgsKernel {
+                    name: &name,
+                    control_binding: bindings[&BufferRef::Control],
+                    args_binding: bindings[&BufferRef::Args],
+                    count_word: control.queue_count[q],
+                    capacity: queue_capacity[q],
+                    args_offset: 3 * i as u32,
+                    workgroup: plan.layout.workgroup_size,
                     max_groups,
-                );
+                }
+                .wgsl();
                 (q.clone(), wgsl)
             })
             .collect();

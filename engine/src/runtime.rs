@@ -120,7 +120,7 @@ impl<'g> Instance<'g> {
                         g.name, r.ty
                     ))
                 })?;
-                if bytes.len() as u64 % elem != 0 {
+                if !(bytes.len() as u64).is_multiple_of(elem) {
                     return Err(Error::Runtime(format!(
                         "external resource '{name}': {} bytes is not a whole number of {elem}-byte '{}' elements",
                         bytes.len(),

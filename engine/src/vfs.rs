@@ -89,10 +89,11 @@ impl Vfs {
                 }
                 Layer::Embedded(files) => {
                     for (p, _) in files.iter() {
-                        if let Some(rest) = p.strip_prefix(&prefix) {
-                            if !rest.contains('/') && rest.ends_with(suffix) {
-                                out.push((*p).to_string());
-                            }
+                        if let Some(rest) = p.strip_prefix(&prefix)
+                            && !rest.contains('/')
+                            && rest.ends_with(suffix)
+                        {
+                            out.push((*p).to_string());
                         }
                     }
                 }

@@ -119,10 +119,10 @@ impl ModuleSource {
                 None => msg.push_str(&format!("error: {}", e.message())),
             }
             for (span, label) in labels.iter() {
-                if let Some(at) = self.locate_span(*span) {
-                    if !label.is_empty() {
-                        msg.push_str(&format!("\n  {at}: {label}"));
-                    }
+                if let Some(at) = self.locate_span(*span)
+                    && !label.is_empty()
+                {
+                    msg.push_str(&format!("\n  {at}: {label}"));
                 }
             }
             for note in e.notes() {

@@ -94,8 +94,7 @@ fn chunked_layouts_run_in_several_chunks() {
 
 fn plan_error(layout: &str) -> String {
     Plan::new(&graph(), layout)
-        .err()
-        .expect("the layout is refused")
+        .expect_err("the layout is refused")
         .to_string()
 }
 

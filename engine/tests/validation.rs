@@ -15,8 +15,7 @@ fn base() -> String {
 
 fn error_of(text: &str) -> String {
     Graph::from_text(&vfs(), "bad.ron", text)
-        .err()
-        .expect("the graph is refused")
+        .expect_err("the graph is refused")
         .to_string()
 }
 

@@ -63,10 +63,10 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
                 format!("unknown material '{material}' (materials: {})", known.join(", ")),
             ));
         }
-        if let Shape::Sphere { radius, .. } = shape {
-            if !(*radius > 0.0) || !radius.is_finite() {
-                return Err(err("Sphere", format!("sphere radius {radius} is not positive")));
-            }
+        if let Shape::Sphere { radius, .. } = shape
+            && (*radius <= 0.0 || !radius.is_finite())
+        {
+            return Err(err("Sphere", format!("sphere radius {radius} is not positive")));
         }
     }
     let emissive = scene.shapes.iter().any(|s| match s {

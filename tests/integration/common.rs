@@ -22,7 +22,9 @@ pub struct Rendered {
     pub loops_capped: u64,
 }
 
-/// Renders `scene` with `graph` in `layout`.
+/// Renders `scene` with `graph` in `layout`: `size` pixels, `spp` samples per pixel per frame,
+/// `frames` frames, seed `seed`, constant overrides `constants`.
+#[allow(clippy::too_many_arguments)]
 pub fn render(
     scene: &LoadedScene,
     graph: &str,

@@ -1,1 +1,117 @@
-fn main() {}
+//! `cargo xtask render | test`: the two commands of the README, on a fresh machine.
+//!
+//! Both first make sure a Vulkan driver exists: when none is installed, Mesa's software
+//! driver (lavapipe, Debian package `mesa-vulkan-drivers`) is installed with apt-get if this
+//! process may (root, apt present); otherwise the command to run is printed.
+
+use std::path::Path;
+use std::process::{Command, ExitCode};
+
+const INSTALL: &str = "apt-get install -y --no-install-recommends mesa-vulkan-drivers libvulkan1";
+
+fn usage() -> ExitCode {
+    eprintln!(
+        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [cargo test args]           run the whole test suite\n  vulkan                           only make sure a Vulkan driver is installed"
+    );
+    ExitCode::from(2)
+}
+
+/// Whether the Vulkan loader and at least one driver manifest are present.
+fn vulkan_present() -> bool {
+    let loader = [
+        "/usr/lib/x86_64-linux-gnu",
+        "/usr/lib/aarch64-linux-gnu",
+        "/usr/lib64",
+        "/usr/lib",
+        "/usr/local/lib",
+    ]
+    .iter()
+    .any(|d| Path::new(d).join("libvulkan.so.1").exists());
+    let env_driver = ["VK_DRIVER_FILES", "VK_ICD_FILENAMES"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some());
+    let manifests = [
+        "/usr/share/vulkan/icd.d",
+        "/etc/vulkan/icd.d",
+        "/usr/local/share/vulkan/icd.d",
+    ]
+    .iter()
+    .any(|d| {
+        std::fs::read_dir(d)
+            .map(|mut e| e.any(|f| f.is_ok_and(|f| f.path().extension().is_some_and(|x| x == "json"))))
+            .unwrap_or(false)
+    });
+    loader && (manifests || env_driver)
+}
+
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+}
+
+fn ensure_vulkan() -> Result<(), String> {
+    if vulkan_present() {
+        return Ok(());
+    }
+    let has_apt = Command::new("apt-get")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !(has_apt && is_root()) {
+        return Err(format!(
+            "no Vulkan driver found. Install Mesa's software Vulkan driver (lavapipe) or a GPU driver, e.g.:\n    sudo apt-get update && sudo {INSTALL}"
+        ));
+    }
+    eprintln!("xtask: no Vulkan driver found; installing Mesa's lavapipe: apt-get update && {INSTALL}");
+    let ok = Command::new("apt-get")
+        .arg("update")
+        .status()
+        .is_ok_and(|s| s.success())
+        && Command::new("sh")
+            .args(["-c", INSTALL])
+            .env("DEBIAN_FRONTEND", "noninteractive")
+            .status()
+            .is_ok_and(|s| s.success());
+    if ok && vulkan_present() {
+        Ok(())
+    } else {
+        Err(format!("installing the Vulkan driver failed; run: {INSTALL}"))
+    }
+}
+
+fn cargo(args: &[&str], extra: &[String]) -> ExitCode {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut cmd = Command::new(cargo);
+    cmd.args(args).args(extra);
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
+    }
+    match cmd.status() {
+        Ok(s) if s.success() => ExitCode::SUCCESS,
+        Ok(s) => ExitCode::from(s.code().unwrap_or(1).clamp(1, 255) as u8),
+        Err(e) => {
+            eprintln!("xtask: cannot run cargo: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(command) = args.first() else { return usage() };
+    let rest = &args[1..];
+    if !matches!(command.as_str(), "render" | "test" | "vulkan") {
+        return usage();
+    }
+    if let Err(e) = ensure_vulkan() {
+        eprintln!("xtask: {e}");
+        return ExitCode::FAILURE;
+    }
+    match command.as_str() {
+        "render" => cargo(&["run", "--release", "--package", "lightgraph", "--", "render"], rest),
+        "test" => cargo(&["test", "--workspace", "--release"], rest),
+        _ => ExitCode::SUCCESS,
+    }
+}
