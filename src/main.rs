@@ -225,13 +225,30 @@ fn render(args: RenderArgs) -> Result<()> {
     let png = args.out.with_extension("png");
     output::write_png(&png, &image, args.exposure)?;
     let gpu_time: f64 = session.kernel_seconds.values().sum();
+    let frames = session.frames.max(1) as f64;
+    let samples = session.samples_per_pixel() as f64 * (w * h) as f64;
     eprintln!(
-        "{} frames, {} spp in {seconds:.2} s: {}samples/s, {}rays/s (GPU kernel time {gpu_time:.3} s); {rejected} rejected samples",
+        "{} frames, {} spp in {seconds:.2} s: {}samples/s, {}rays/s wall-clock; GPU kernel time {gpu_time:.3} s ({}rays/s); {rejected} rejected samples",
         session.frames,
         session.samples_per_pixel(),
-        si(session.samples_per_pixel() as f64 * (w * h) as f64 / seconds),
+        si(samples / seconds),
         si(session.rays() as f64 / seconds),
+        si(session.rays() as f64 / gpu_time.max(1e-12)),
     );
+    let counters: Vec<String> = session
+        .counters
+        .iter()
+        .map(|(k, v)| format!("{k} {}", si(*v as f64 / frames)))
+        .collect();
+    eprintln!("per frame: {}", counters.join(", "));
+    let kernels: Vec<String> = session
+        .kernel_seconds
+        .iter()
+        .map(|(k, v)| format!("{k} {:.3} ms", 1e3 * v / frames))
+        .collect();
+    if !kernels.is_empty() {
+        eprintln!("GPU time per frame: {}", kernels.join(", "));
+    }
     if session.loops_capped > 0 {
         eprintln!(
             "warning: {} loops hit the iteration cap (a pass that never finished its item)",
