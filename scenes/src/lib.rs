@@ -47,6 +47,14 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
         at: locate(text, needle),
         message,
     };
+    if let Some(asset) = &scene.gltf {
+        return Err(err(
+            "gltf",
+            format!(
+                "this version of lightgraph cannot load glTF assets yet ('{asset}'); describe the geometry with shapes"
+            ),
+        ));
+    }
     if scene.shapes.is_empty() {
         return Err(err("shapes", "the scene is empty: it has no shapes".into()));
     }
@@ -337,5 +345,79 @@ pub fn primitive_bounds(p: &GpuPrimitive) -> (Vec3A, Vec3A) {
     } else {
         let (b, c) = (a + Vec3A::from_array(p.b), a + Vec3A::from_array(p.c));
         (a.min(b).min(c), a.max(b).max(c))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = r#"Scene(
+    camera: (position: (0.0, -4.0, 0.0), look: Target((0.0, 0.0, 0.0)), up: (0.0, 0.0, 1.0), fov_degrees: 40.0),
+    materials: { "m": (diffuse: (0.5, 0.5, 0.5)) },
+    shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, material: "m")],
+    lights: [Point(position: (0.0, -2.0, 2.0), intensity: (1.0, 1.0, 1.0))],
+)"#;
+
+    fn error(text: &str) -> String {
+        parse_scene("s.ron", text)
+            .err()
+            .expect("the scene is refused")
+            .to_string()
+    }
+
+    #[test]
+    fn a_valid_scene_compiles() {
+        let scene = parse_scene("s.ron", BASE).unwrap();
+        let c = CompiledScene::new(&scene).unwrap();
+        assert_eq!((c.primitives.len(), c.lights.len(), c.info.background), (1, 1, -1));
+        assert!(
+            (c.info.radius - 3f32.sqrt()).abs() < 1e-6,
+            "bounding sphere of the unit sphere's box"
+        );
+    }
+
+    #[test]
+    fn invalid_scenes_are_refused_with_a_location() {
+        let e = error(&BASE.replace("material: \"m\")", "material: \"n\")"));
+        assert!(e.starts_with("s.ron:4:") && e.contains("unknown material 'n'"), "{e}");
+        let e = error(&BASE.replace(
+            "lights: [Point(position: (0.0, -2.0, 2.0), intensity: (1.0, 1.0, 1.0))],",
+            "",
+        ));
+        assert!(e.contains("no light"), "{e}");
+        let e = error(&BASE.replace(
+            "shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, material: \"m\")]",
+            "shapes: []",
+        ));
+        assert!(e.contains("empty"), "{e}");
+        let e = error(&BASE.replace("radius: 1.0", "radius: -1.0"));
+        assert!(e.contains("radius"), "{e}");
+        let e = error(&BASE.replace("shapes:", "gltf: \"Sponza/Sponza.gltf\", shapes:"));
+        assert!(e.contains("glTF") && e.contains("Sponza.gltf"), "{e}");
+        let e = error(&BASE.replace("fov_degrees: 40.0", "fov_degrees: 40.0,,"));
+        assert!(e.starts_with("s.ron:2:"), "{e}");
+    }
+
+    #[test]
+    fn quads_split_into_two_triangles_with_the_quads_normal() {
+        let text = BASE.replace(
+            "shapes: [",
+            "shapes: [Quad(corners: ((-1.0, -1.0, 0.0), (1.0, -1.0, 0.0), (1.0, 1.0, 0.0), (-1.0, 1.0, 0.0)), material: \"m\", emission: (1.0, 2.0, 3.0)), ",
+        );
+        let c = CompiledScene::new(&parse_scene("s.ron", &text).unwrap()).unwrap();
+        let areas: Vec<f32> = c
+            .lights
+            .iter()
+            .filter(|l| l.kind == gpu::light_kind::AREA)
+            .map(|l| 1.0 / l.inv_area)
+            .collect();
+        assert_eq!(areas, vec![2.0, 2.0]);
+        assert!(
+            c.lights
+                .iter()
+                .filter(|l| l.kind == gpu::light_kind::AREA)
+                .all(|l| l.normal == [0.0, 0.0, 1.0])
+        );
     }
 }

@@ -31,6 +31,10 @@ pub struct Scene {
     /// Path-sampling settings the scene was specified with.
     #[serde(default)]
     pub integrator: Integrator,
+    /// A glTF 2.0 asset (path below the asset root) whose geometry joins the shapes. This
+    /// version cannot load glTF yet and refuses scenes that name one.
+    #[serde(default)]
+    pub gltf: Option<String>,
 }
 
 fn default_resolution() -> (u32, u32) {

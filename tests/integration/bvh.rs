@@ -132,6 +132,7 @@ fn random_scene(rng: &mut Rng) -> Scene {
             scale: 1.0,
         }],
         integrator: Integrator::default(),
+        gltf: None,
     }
 }
 
