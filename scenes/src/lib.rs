@@ -361,8 +361,7 @@ mod tests {
 
     fn error(text: &str) -> String {
         parse_scene("s.ron", text)
-            .err()
-            .expect("the scene is refused")
+            .expect_err("the scene is refused")
             .to_string()
     }
 
