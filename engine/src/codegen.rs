@@ -30,6 +30,12 @@ pub enum BufferRef {
     Alive(usize),
     /// The queue of a stream.
     Queue(String),
+    /// The compaction boundary a kernel reads (bound to one of the physical buffers).
+    BoundaryIn,
+    /// The compaction boundary a kernel appends to.
+    BoundaryOut,
+    /// A physical boundary buffer: boundary index and which of its two buffers.
+    Boundary(usize, usize),
 }
 
 /// Where each control word lives in the control buffer.
@@ -41,6 +47,8 @@ pub struct ControlMap {
     pub queue_overflow: BTreeMap<String, u32>,
     /// Items of a stored chain alive after the last loop iteration.
     pub alive: BTreeMap<usize, u32>,
+    /// The next item index of a regenerating chain.
+    pub next: BTreeMap<usize, u32>,
     /// In-kernel loops stopped by the iteration cap.
     pub loop_capped: u32,
     /// Number of words.
@@ -60,6 +68,8 @@ pub struct CodegenContext<'a> {
     pub words: &'a BTreeMap<String, Vec<Word>>,
     /// Slots of each stored chain.
     pub state_capacity: &'a BTreeMap<usize, u64>,
+    /// Thread pool of each regenerating chain.
+    pub pools: &'a BTreeMap<usize, u64>,
     /// Capacity of each queue.
     pub queue_capacity: &'a BTreeMap<String, u64>,
     /// Control word indices.
@@ -203,24 +213,32 @@ impl CodegenContext<'_> {
         s
     }
 
+    /// `if (!f(&it)) { <fail> }` for the passes at `positions` of chain `c`.
+    fn guarded_calls(&self, c: usize, positions: std::ops::Range<usize>, fail: &str) -> String {
+        let g = self.graph();
+        let mut s = String::new();
+        for pos in positions {
+            let f = g.passes[g.chains[c].passes[pos]].function();
+            let _ = writeln!(s, "    if (!{f}(&it)) {{ {fail} }}");
+        }
+        s
+    }
+
     /// The kernel-specific part of kernel `k`'s module.
     pub fn kernel(&self, k: usize) -> String {
         let g = self.graph();
         let kp = &self.plan.kernels[k];
         let chain = &g.chains[kp.chain];
+        let c = kp.chain;
         let wg = self.plan.layout.workgroup_size;
         let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "// Kernel {}: chain of '{}', passes {:?}.",
-            kp.name,
-            chain.item,
-            self.plan
-                .kernel_passes(k)
-                .iter()
-                .map(|&p| &g.passes[p].decl.name)
-                .collect::<Vec<_>>()
-        );
+        let names: Vec<&String> = self
+            .plan
+            .kernel_passes(k)
+            .iter()
+            .map(|&p| &g.passes[p].decl.name)
+            .collect();
+        let _ = writeln!(s, "// Kernel {}: chain of '{}', passes {names:?}.", kp.name, chain.item);
 
         // Queues this kernel touches: emitted into, or consumed.
         let mut queues: Vec<String> = self.plan.queued_emits(k);
@@ -243,12 +261,12 @@ impl CodegenContext<'_> {
             let fused = kp
                 .fused_chains
                 .iter()
-                .find(|&&c| g.chains[c].entry == crate::graph::ChainEntry::Stream(name.clone()));
-            if let Some(&c) = fused {
-                let _ = writeln!(s, "fn lg_chain_{c}(item: {}) {{\n    var it = item;", st.item);
-                s.push_str(&self.run_passes(c, 0..g.chains[c].passes.len(), true, ""));
+                .find(|&&fc| g.chains[fc].entry == crate::graph::ChainEntry::Stream(name.clone()));
+            if let Some(&fc) = fused {
+                let _ = writeln!(s, "fn lg_chain_{fc}(item: {}) {{\n    var it = item;", st.item);
+                s.push_str(&self.run_passes(fc, 0..g.chains[fc].passes.len(), true, ""));
                 s.push_str("}\n");
-                let _ = writeln!(s, "fn emit_{name}(item: {}) {{ lg_chain_{c}(item); }}", st.item);
+                let _ = writeln!(s, "fn emit_{name}(item: {}) {{ lg_chain_{fc}(item); }}", st.item);
             } else if queues.contains(name) && !matches!(&kp.root, Root::Queue(q) if q == name) {
                 let _ = writeln!(
                     s,
@@ -262,10 +280,9 @@ impl CodegenContext<'_> {
                 let _ = writeln!(s, "fn emit_{name}(item: {}) {{}}", st.item);
             }
         }
-        // State of a stored chain.
-        let stored = self.plan.stored_chains.contains(&kp.chain);
+        // Item storage: slots of a stored chain, a regeneration pool, compaction boundaries.
+        let stored = self.plan.stored_chains.contains(&c);
         if stored {
-            let c = kp.chain;
             let cap = format!("LG_SLOTS_{c}");
             let _ = writeln!(s, "const {cap}: u32 = {}u;", self.state_capacity[&c]);
             let _ = writeln!(
@@ -280,25 +297,65 @@ impl CodegenContext<'_> {
             );
             s.push_str(&self.load_store(&format!("state_{c}"), &format!("lg_state_{c}"), &chain.item, &cap));
         }
+        if let Some(pool) = self.pools.get(&c) {
+            let _ = writeln!(s, "const LG_POOL: u32 = {pool}u;");
+        }
+        if kp.input.is_some() || kp.output.is_some() {
+            s.push_str("struct LgBoundary {\n    count: atomic<u32>,\n    append: atomic<u32>,\n    pad0: u32,\n    pad1: u32,\n    words: array<u32>,\n}\n");
+            if kp.input.is_some() {
+                let _ = writeln!(
+                    s,
+                    "@group(0) @binding({}) var<storage, read_write> lg_in: LgBoundary;",
+                    self.binding(&BufferRef::BoundaryIn)
+                );
+                s.push_str(&self.load_store("in", "lg_in.words", &chain.item, "LG_POOL"));
+            }
+            if kp.output.is_some() {
+                let _ = writeln!(
+                    s,
+                    "@group(0) @binding({}) var<storage, read_write> lg_out: LgBoundary;",
+                    self.binding(&BufferRef::BoundaryOut)
+                );
+                s.push_str(&self.load_store("out", "lg_out.words", &chain.item, "LG_POOL"));
+                let _ = writeln!(
+                    s,
+                    "fn lg_append(v: {}) {{\n    lg_store_out(atomicLoad(&lg_out.count) + atomicAdd(&lg_out.append, 1u), v);\n}}",
+                    chain.item
+                );
+            }
+        }
         // The per-invocation wrapper.
-        let c = kp.chain;
+        let ls = chain.loop_start.unwrap_or(chain.passes.len());
+        let steps_end = kp.segment.end.min(ls);
+        let loop_range = ls.max(kp.segment.start)..kp.segment.end;
+        let start = g.passes[chain.passes[0]].function();
         let ends_chain = kp.segment.end == chain.passes.len();
-        let keeps_item = !ends_chain || (!kp.loop_in_kernel && chain.loop_start.is_some());
         let kill = if stored {
             format!("lg_alive_{c}[lg_i] = 0u; ")
         } else {
             String::new()
         };
+        let claim = |fail: &str| {
+            format!(
+                "    let index = atomicAdd(&lg_control[{}], 1u);\n    if (index >= frame.count) {{ {fail} }}\n",
+                self.control.next.get(&c).copied().unwrap_or(0)
+            )
+        };
+        let count_alive = if kp.ends_iteration && stored {
+            format!("    atomicAdd(&lg_control[{}], 1u);\n", self.control.alive[&c])
+        } else {
+            String::new()
+        };
         s.push_str("fn lg_run(lg_i: u32) {\n");
         match &kp.root {
-            Root::Start => {
-                let start = g.passes[chain.passes[0]].function();
-                let _ = writeln!(
-                    s,
-                    "    var it: {};\n    if (!{start}(&it, frame.base + lg_i)) {{ {kill}return; }}",
-                    chain.item
-                );
-                s.push_str(&self.run_passes(c, 1..kp.segment.end, kp.loop_in_kernel, &kill));
+            Root::Queue(q) => {
+                let _ = writeln!(s, "    var it = lg_load_queue_{q}(lg_i);");
+                s.push_str(&self.run_passes(c, kp.segment.clone(), true, ""));
+            }
+            Root::Boundary => {
+                s.push_str("    var it = lg_load_in(lg_i);\n");
+                s.push_str(&self.guarded_calls(c, kp.segment.clone(), "return;"));
+                s.push_str("    lg_append(it);\n");
             }
             Root::State => {
                 let _ = writeln!(
@@ -306,16 +363,85 @@ impl CodegenContext<'_> {
                     "    if (lg_alive_{c}[lg_i] == 0u) {{ return; }}\n    var it = lg_load_state_{c}(lg_i);"
                 );
                 s.push_str(&self.run_passes(c, kp.segment.clone(), kp.loop_in_kernel, &kill));
+                if !ends_chain || !kp.loop_in_kernel && chain.loop_start.is_some() {
+                    let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);");
+                    s.push_str(&count_alive);
+                }
             }
-            Root::Queue(q) => {
-                let _ = writeln!(s, "    var it = lg_load_queue_{q}(lg_i);");
-                s.push_str(&self.run_passes(c, kp.segment.clone(), true, ""));
+            Root::Start if !kp.regenerates => {
+                let _ = writeln!(
+                    s,
+                    "    var it: {};\n    if (!{start}(&it, frame.base + lg_i)) {{ {kill}return; }}",
+                    chain.item
+                );
+                s.push_str(&self.run_passes(c, 1..kp.segment.end, kp.loop_in_kernel, &kill));
+                if stored && (!ends_chain || !kp.loop_in_kernel && chain.loop_start.is_some()) {
+                    let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);\n    lg_alive_{c}[lg_i] = 1u;");
+                }
             }
-        }
-        if stored && keeps_item {
-            let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);\n    lg_alive_{c}[lg_i] = 1u;");
-            if kp.ends_iteration {
-                let _ = writeln!(s, "    atomicAdd(&lg_control[{}], 1u);", self.control.alive[&c]);
+            Root::Start if kp.loop_in_kernel => {
+                // Persistent threads: take the next item whenever the current one is done.
+                let body: Vec<String> = loop_range
+                    .clone()
+                    .map(|pos| format!("{}(&it)", g.passes[chain.passes[pos]].function()))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "    var it: {};\n    var alive = false;\n    var lg_iterations = 0u;\n    loop {{\n        if (!alive) {{",
+                    chain.item
+                );
+                let _ = writeln!(
+                    s,
+                    "            let index = atomicAdd(&lg_control[{}], 1u);\n            if (index >= frame.count) {{ break; }}",
+                    self.control.next[&c]
+                );
+                let _ = writeln!(s, "            alive = {start}(&it, frame.base + index);");
+                for pos in 1..steps_end {
+                    let _ = writeln!(
+                        s,
+                        "            alive = alive && {}(&it);",
+                        g.passes[chain.passes[pos]].function()
+                    );
+                }
+                let _ = writeln!(
+                    s,
+                    "            lg_iterations = 0u;\n            continue;\n        }}\n        if (lg_iterations >= {}u) {{ atomicAdd(&lg_control[{}], 1u); alive = false; continue; }}\n        lg_iterations += 1u;\n        alive = {};\n    }}",
+                    self.max_loop_iterations,
+                    self.control.loop_capped,
+                    body.join(" && ")
+                );
+            }
+            Root::Start => {
+                // Regenerate into an idle slot or a compaction boundary, then run one iteration
+                // of the loop passes the kernel holds.
+                let _ = writeln!(s, "    var it: {};", chain.item);
+                let has_loop = !loop_range.is_empty();
+                if stored {
+                    let _ = writeln!(s, "    if (lg_alive_{c}[lg_i] != 0u) {{");
+                    if has_loop {
+                        let _ = writeln!(s, "        it = lg_load_state_{c}(lg_i);");
+                    } else {
+                        s.push_str("        return;\n");
+                    }
+                    s.push_str("    } else {\n");
+                } else if kp.input.is_some() {
+                    s.push_str(
+                        "    if (lg_i < atomicLoad(&lg_in.count)) {\n        it = lg_load_in(lg_i);\n    } else {\n",
+                    );
+                } else {
+                    s.push_str("    let queued = atomicLoad(&lg_out.count);\n    if (lg_i >= LG_POOL - min(queued, LG_POOL)) { return; }\n    {\n");
+                }
+                s.push_str(&claim("return;"));
+                let _ = writeln!(s, "    if (!{start}(&it, frame.base + index)) {{ return; }}");
+                s.push_str(&self.guarded_calls(c, 1..steps_end, "return;"));
+                s.push_str("    }\n");
+                s.push_str(&self.guarded_calls(c, loop_range.clone(), &format!("{kill}return;")));
+                if stored {
+                    let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);\n    lg_alive_{c}[lg_i] = 1u;");
+                    s.push_str(&count_alive);
+                } else {
+                    s.push_str("    lg_append(it);\n");
+                }
             }
         }
         s.push_str("}\n");
@@ -335,12 +461,15 @@ impl CodegenContext<'_> {
                 "    workgroupBarrier();\n    for (var c = lid; c < {n}u; c += {wg}u) {{\n        let v = atomicLoad(&lg_wg_counts[c]);\n        if (v != 0u) {{ atomicAdd(&lg_counters[c], v); }}\n    }}\n}}"
             );
         }
+        let pooled = self.pools.contains_key(&c);
         let limit = match &kp.root {
             Root::Queue(q) => format!(
                 "min(atomicLoad(&lg_control[{}]), LG_CAP_{})",
                 self.control.queue_count[q],
                 q.to_uppercase()
             ),
+            Root::Boundary => "atomicLoad(&lg_in.count)".to_string(),
+            _ if pooled => "LG_POOL".to_string(),
             _ => "frame.count".to_string(),
         };
         let _ = writeln!(
@@ -395,6 +524,54 @@ impl ArgsKernel<'_> {
 @compute @workgroup_size(1)
 fn {name}() {{
     let n = min(lg_control[{count_word}], {capacity}u);
+    let groups = (n + {workgroup}u - 1u) / {workgroup}u;
+    let x = min(groups, {max_groups}u);
+    lg_args[{args_offset}] = x;
+    lg_args[{args_offset} + 1u] = select(1u, (groups + x - 1u) / x, x > 0u);
+    lg_args[{args_offset} + 2u] = 1u;
+}}
+"
+        )
+    }
+}
+
+/// The kernel that commits a compaction boundary (the items appended since its last commit
+/// join its count) and turns the count into indirect dispatch arguments.
+pub struct CommitKernel<'a> {
+    /// Entry point name.
+    pub name: &'a str,
+    /// Binding of the boundary buffer.
+    pub boundary_binding: u32,
+    /// Binding of the indirect arguments.
+    pub args_binding: u32,
+    /// First of the three argument words.
+    pub args_offset: u32,
+    /// Workgroup size of the consumer kernel.
+    pub workgroup: u32,
+    /// Most workgroups per dispatch dimension.
+    pub max_groups: u32,
+}
+
+impl CommitKernel<'_> {
+    /// The WGSL module.
+    pub fn wgsl(&self) -> String {
+        let CommitKernel {
+            name,
+            boundary_binding,
+            args_binding,
+            args_offset,
+            workgroup,
+            max_groups,
+        } = self;
+        format!(
+            "struct LgBoundary {{ count: atomic<u32>, append: atomic<u32>, pad0: u32, pad1: u32, words: array<u32> }}
+@group(0) @binding({boundary_binding}) var<storage, read_write> lg_in: LgBoundary;
+@group(0) @binding({args_binding}) var<storage, read_write> lg_args: array<u32>;
+@compute @workgroup_size(1)
+fn {name}() {{
+    let n = atomicLoad(&lg_in.count) + atomicLoad(&lg_in.append);
+    atomicStore(&lg_in.count, n);
+    atomicStore(&lg_in.append, 0u);
     let groups = (n + {workgroup}u - 1u) / {workgroup}u;
     let x = min(groups, {max_groups}u);
     lg_args[{args_offset}] = x;

@@ -103,6 +103,7 @@ pub fn report(program: &Program, externals: &dyn Fn(&str) -> Option<u64>) -> Str
             Root::Start => "start (one thread per item)".to_string(),
             Root::State => "state buffer (one thread per slot)".to_string(),
             Root::Queue(q) => format!("queue '{q}' (indirect)"),
+            Root::Boundary => format!("boundary {} (indirect, compacted)", kp.input.map_or(0, |p| p.boundary)),
         };
         let module = &program.kernels[k];
         let text = module.source.text();

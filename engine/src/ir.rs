@@ -232,6 +232,27 @@ pub struct LayoutDecl {
     /// Where loop passes repeat.
     #[serde(default)]
     pub loops: LoopMode,
+    /// How finished items are replaced in a chain with a loop.
+    #[serde(default)]
+    pub policy: Policy,
+    /// Threads (item slots) of a regeneration or compaction pool; the whole chunk by default
+    /// for Naive, a device-sized pool otherwise.
+    #[serde(default)]
+    pub threads: Option<u64>,
+}
+
+/// How a chain with a loop keeps its threads busy (the paper's regeneration policies).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+pub enum Policy {
+    /// One thread (slot) per item; finished items leave their slot idle.
+    #[default]
+    Naive,
+    /// A fixed pool of threads; an idle thread takes the next item index from a global
+    /// counter (persistent threads with in-kernel loops, a regenerate step with host loops).
+    Regeneration,
+    /// Host loops only: surviving items are compacted into the next kernel's queue through an
+    /// atomic counter, and new items fill the pool up behind them (streaming).
+    Compaction,
 }
 
 /// Where a chain's loop passes repeat.

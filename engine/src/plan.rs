@@ -3,7 +3,7 @@
 
 use crate::error::Result;
 use crate::graph::{ChainEntry, Graph};
-use crate::ir::{LayoutDecl, LoopMode};
+use crate::ir::{LayoutDecl, LoopMode, Policy};
 use std::collections::BTreeSet;
 use std::ops::Range;
 
@@ -16,6 +16,35 @@ pub enum Root {
     Queue(String),
     /// The chain's state buffer: one invocation per slot, items stored by an earlier kernel.
     State,
+    /// A compaction boundary: one invocation per item queued there, dispatched indirectly.
+    Boundary,
+}
+
+/// Which of a ping-pong boundary's two buffers a kernel uses in the current iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// The items of this iteration.
+    Current,
+    /// The items of the next iteration.
+    Next,
+}
+
+/// A kernel's end of a compaction boundary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Port {
+    /// Index into [`Plan::boundaries`].
+    pub boundary: usize,
+    /// Which buffer of a ping-pong boundary.
+    pub side: Side,
+}
+
+/// A compaction boundary: the queue of a chain's items in front of one of its loop kernels.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Boundary {
+    /// The chain whose items it holds.
+    pub chain: usize,
+    /// Whether one kernel both reads and refills it, so it needs two buffers in turn.
+    pub pingpong: bool,
 }
 
 /// One kernel of a layout.
@@ -37,6 +66,13 @@ pub struct KernelPlan {
     pub loop_in_kernel: bool,
     /// Whether this kernel ends one host-driven loop iteration (it counts surviving items).
     pub ends_iteration: bool,
+    /// Whether it takes new item indices from the chain's counter (regeneration and
+    /// compaction policies, persistent threads).
+    pub regenerates: bool,
+    /// The compaction boundary it reads.
+    pub input: Option<Port>,
+    /// The compaction boundary it appends surviving or new items to.
+    pub output: Option<Port>,
 }
 
 /// A step of a phase's schedule.
@@ -72,6 +108,8 @@ pub struct Plan {
     pub stored_chains: BTreeSet<usize>,
     /// Streams carried by queues (their consumers run in kernels of their own).
     pub queued_streams: BTreeSet<String>,
+    /// Compaction boundaries.
+    pub boundaries: Vec<Boundary>,
 }
 
 impl Plan {
@@ -102,11 +140,15 @@ impl Plan {
                 ),
             ));
         }
+        if layout.policy != Policy::Naive && layout.threads == Some(0) {
+            return Err(graph.error_at(layout_name, format!("layout '{layout_name}': a pool of 0 threads")));
+        }
         let groups = resolve_groups(graph, layout_name, &layout)?;
         let mut kernels = Vec::new();
         for (k, group) in groups.iter().enumerate() {
             kernels.push(plan_kernel(graph, layout_name, &layout, k, group)?);
         }
+        let boundaries = apply_policy(graph, layout_name, &layout, &mut kernels)?;
         // Queue-fed chains need a kernel of their own.
         let queued_streams: BTreeSet<String> = kernels
             .iter()
@@ -118,9 +160,13 @@ impl Plan {
                 }
             })
             .collect();
+        // Chains kept in slots between dispatches: split under Naive or Regeneration, or one
+        // regenerating kernel that runs one loop iteration per dispatch.
         let stored_chains: BTreeSet<usize> = kernels
             .iter()
-            .filter(|k| k.root == Root::State)
+            .filter(|k| {
+                k.root == Root::State || (k.regenerates && !k.loop_in_kernel && k.input.is_none() && k.output.is_none())
+            })
             .map(|k| k.chain)
             .collect();
         let mut plan = Plan {
@@ -131,6 +177,7 @@ impl Plan {
             schedule: Vec::new(),
             stored_chains,
             queued_streams,
+            boundaries,
         };
         plan.check_streams(layout_name)?;
         plan.schedule = (0..graph.phases.len()).map(|ph| plan.phase_schedule(ph)).collect();
@@ -389,6 +436,15 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
         .is_some_and(|ls| segment.start <= ls && segment.end == chain.passes.len());
     let loop_in_kernel = match (&root, layout.loops) {
         (Root::Queue(_), _) => true,
+        (_, LoopMode::InKernel) if has_loop && layout.policy == Policy::Compaction => {
+            return Err(graph.error_at(
+                layout_name,
+                format!("{describe}: policy Compaction moves items between kernels, so it needs loops: Host"),
+            ));
+        }
+        (Root::State, LoopMode::InKernel) if has_loop && layout.policy == Policy::Regeneration => {
+            return Err(graph.error_at(layout_name, format!("{describe}: with in-kernel loops, policy Regeneration means persistent threads, so the start pass and the loop must share a kernel")));
+        }
         (_, LoopMode::InKernel) => {
             if has_loop && !whole_loop {
                 let ls = chain.loop_start.unwrap_or(0);
@@ -398,12 +454,13 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
             has_loop
         }
         (Root::Start, LoopMode::Host) => {
-            if has_loop {
+            if has_loop && layout.policy == Policy::Naive {
                 let first = &graph.passes[chain.passes[segment.start]].decl.name;
-                return Err(graph.error_at(first, format!("{describe} puts the start pass '{first}' and a host-driven loop in one kernel; split the start pass into its own kernel")));
+                return Err(graph.error_at(first, format!("{describe} puts the start pass '{first}' and a host-driven loop in one kernel; split the start pass into its own kernel, or regenerate (policy Regeneration or Compaction)")));
             }
             false
         }
+        (Root::Boundary, _) => unreachable!("boundaries are assigned after planning"),
         (Root::State, LoopMode::Host) => {
             if has_loop && chain.loop_start.is_some_and(|ls| segment.start < ls) {
                 let first = &graph.passes[chain.passes[segment.start]].decl.name;
@@ -414,6 +471,7 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
     };
     let ends_iteration = !loop_in_kernel && has_loop && segment.end == chain.passes.len();
     let short: Vec<&str> = names.iter().take(3).copied().collect();
+    let is_start = root == Root::Start;
     Ok(KernelPlan {
         name: format!("k{k}_{}", short.join("_")),
         phase: first_phase,
@@ -423,5 +481,75 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
         fused_chains: fused,
         loop_in_kernel,
         ends_iteration,
+        regenerates: is_start && loop_in_kernel && has_loop && layout.policy == Policy::Regeneration,
+        input: None,
+        output: None,
     })
+}
+
+/// Applies the layout's policy to the chains with host-driven loops: their start kernel
+/// regenerates, and under Compaction the loop kernels are joined by boundaries (queues of
+/// the chain's items). Returns the boundaries.
+fn apply_policy(
+    graph: &Graph,
+    layout_name: &str,
+    layout: &LayoutDecl,
+    kernels: &mut [KernelPlan],
+) -> Result<Vec<Boundary>> {
+    let mut boundaries = Vec::new();
+    if layout.policy == Policy::Naive || layout.loops != LoopMode::Host {
+        return Ok(boundaries);
+    }
+    for phase in &graph.phases {
+        let c = phase.chains[0];
+        let chain = &graph.chains[c];
+        let Some(ls) = chain.loop_start else { continue };
+        let start = kernels
+            .iter()
+            .position(|k| k.chain == c && k.root == Root::Start)
+            .expect("every start chain has a start kernel");
+        if kernels[start].segment.end < ls {
+            let step = &graph.passes[chain.passes[kernels[start].segment.end]].decl.name;
+            return Err(graph.error_at(
+                step,
+                format!("layout '{layout_name}': with policy {:?} the start kernel regenerates items every iteration, so it must also hold the step '{step}' that comes before the loop", layout.policy),
+            ));
+        }
+        kernels[start].regenerates = true;
+        if layout.policy != Policy::Compaction {
+            continue;
+        }
+        let mut loop_kernels: Vec<usize> = (0..kernels.len())
+            .filter(|&k| kernels[k].chain == c && kernels[k].segment.end > ls)
+            .collect();
+        loop_kernels.sort_by_key(|&k| kernels[k].segment.start);
+        let m = loop_kernels.len();
+        let first = boundaries.len();
+        for _ in 0..m {
+            boundaries.push(Boundary {
+                chain: c,
+                pingpong: m == 1,
+            });
+        }
+        for (j, &k) in loop_kernels.iter().enumerate() {
+            kernels[k].input = Some(Port {
+                boundary: first + j,
+                side: Side::Current,
+            });
+            kernels[k].output = Some(Port {
+                boundary: first + (j + 1) % m,
+                side: if m == 1 { Side::Next } else { Side::Current },
+            });
+            if kernels[k].root == Root::State {
+                kernels[k].root = Root::Boundary;
+            }
+        }
+        if !loop_kernels.contains(&start) {
+            kernels[start].output = Some(Port {
+                boundary: first,
+                side: Side::Current,
+            });
+        }
+    }
+    Ok(boundaries)
 }

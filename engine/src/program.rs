@@ -101,6 +101,8 @@ pub struct Program {
     pub state_capacity: BTreeMap<usize, u64>,
     /// Capacity of queues.
     pub queue_capacity: BTreeMap<String, u64>,
+    /// Thread pool of each regenerating chain (also the capacity of its boundaries).
+    pub pools: BTreeMap<usize, u64>,
     /// Control word layout.
     pub control: ControlMap,
     /// Kernel modules, in plan order.
@@ -114,6 +116,9 @@ pub struct Program {
 }
 
 const MAX_DEFAULT_IN_FLIGHT: u64 = 1 << 22;
+/// Default thread pool of regeneration and compaction layouts: about the threads a large
+/// GPU keeps resident (an H100 holds 132 x 2048).
+pub const DEFAULT_POOL: u64 = 1 << 18;
 
 impl Program {
     /// Compiles `plan` for `target` with `spec`.
@@ -174,6 +179,12 @@ impl Program {
             let n = bindings.len() as u32;
             bindings.insert(BufferRef::Queue(q.clone()), n);
         }
+        if !plan.boundaries.is_empty() {
+            for b in [BufferRef::BoundaryIn, BufferRef::BoundaryOut] {
+                let n = bindings.len() as u32;
+                bindings.insert(b, n);
+            }
+        }
         let written = g.written_resources();
         let writable =
             |name: &str| written.contains(name) || g.resources.get(name).is_some_and(|r| r.ty.contains("atomic"));
@@ -190,6 +201,10 @@ impl Program {
             control.alive.insert(c, next);
             next += 1;
         }
+        for k in plan.kernels.iter().filter(|k| k.regenerates) {
+            control.next.insert(k.chain, next);
+            next += 1;
+        }
         control.loop_capped = next;
         control.len = next + 1;
 
@@ -201,6 +216,7 @@ impl Program {
             bindings: &bindings,
             words: &BTreeMap::new(),
             state_capacity: &empty,
+            pools: &BTreeMap::new(),
             queue_capacity: &BTreeMap::new(),
             control: &control,
             writable: &writable,
@@ -232,22 +248,19 @@ impl Program {
             sizes.insert(name.clone(), ResourceSize { element_bytes, count });
         }
         let mut words = BTreeMap::new();
-        for &c in &plan.stored_chains {
-            let item = &g.chains[c].item;
-            words.insert(
-                item.clone(),
-                reflect::flatten(&rmod, item).map_err(|e| g.error_at(item, e))?,
-            );
-        }
-        for q in &plan.queued_streams {
-            let item = &g.streams[q].item;
+        let pooled_items = plan
+            .stored_chains
+            .iter()
+            .chain(plan.boundaries.iter().map(|b| &b.chain))
+            .map(|&c| &g.chains[c].item);
+        for item in pooled_items.chain(plan.queued_streams.iter().map(|q| &g.streams[q].item)) {
             words.insert(
                 item.clone(),
                 reflect::flatten(&rmod, item).map_err(|e| g.error_at(item, e))?,
             );
         }
 
-        // Queue items per chunk item (fan-out), producers before consumers.
+        // Queue items per invocation of a phase's root kernels (fan-out), producers first.
         let mut fanout: BTreeMap<String, u64> = BTreeMap::new();
         for _ in 0..=plan.kernels.len() {
             for (k, kp) in plan.kernels.iter().enumerate() {
@@ -264,9 +277,11 @@ impl Program {
                 }
             }
         }
-        // Domains and chunks: a chunk's state and queues must each fit one binding.
+        // Domains, chunks and pools: the item state and queues of a chunk (or a pool) must each
+        // fit one binding.
         let mut domains = Vec::new();
         let mut chunks = Vec::new();
+        let mut pools = BTreeMap::new();
         for (ph, phase) in g.phases.iter().enumerate() {
             let root = phase.chains[0];
             let ChainEntry::Start(over) = &g.chains[root].entry else {
@@ -276,34 +291,47 @@ impl Program {
                 .count(&vars)
                 .map_err(|e| g.error_at(&g.passes[g.chains[root].passes[0]].decl.name, e))?;
             let mut per_item_bytes: u64 = 0;
-            if plan.stored_chains.contains(&root) {
-                per_item_bytes = 4 * words[&g.chains[root].item].len() as u64;
+            if let Some(w) = words
+                .get(&g.chains[root].item)
+                .filter(|_| plan.stored_chains.contains(&root) || plan.boundaries.iter().any(|b| b.chain == root))
+            {
+                per_item_bytes = 4 * w.len() as u64;
             }
             for (q, f) in &fanout {
-                let producer_phase = g.phase_of_chain(plan.kernels[plan.consumer_kernel(q)].chain);
-                if producer_phase == ph {
+                if g.phase_of_chain(plan.kernels[plan.consumer_kernel(q)].chain) == ph {
                     per_item_bytes = per_item_bytes.max(4 * words[&g.streams[q].item].len() as u64 * f);
                 }
             }
-            let mut chunk = domain.max(1);
-            if let Some(fit) = target.max_binding_bytes.checked_div(per_item_bytes) {
-                chunk = chunk.min(plan.layout.max_items_in_flight.unwrap_or(MAX_DEFAULT_IN_FLIGHT));
-                chunk = chunk.min(fit.max(1));
+            let fit = target
+                .max_binding_bytes
+                .checked_div(per_item_bytes)
+                .map_or(u64::MAX, |f| f.max(1));
+            if plan.kernels.iter().any(|k| k.chain == root && k.regenerates) {
+                pools.insert(
+                    root,
+                    plan.layout.threads.unwrap_or(DEFAULT_POOL).min(domain.max(1)).min(fit),
+                );
+                chunks.push(domain.max(1));
+            } else if per_item_bytes > 0 {
+                chunks.push(
+                    domain
+                        .max(1)
+                        .min(plan.layout.max_items_in_flight.unwrap_or(MAX_DEFAULT_IN_FLIGHT))
+                        .min(fit),
+                );
+            } else {
+                chunks.push(domain.max(1));
             }
             domains.push(domain);
-            chunks.push(chunk);
         }
-        let state_capacity: BTreeMap<usize, u64> = plan
-            .stored_chains
-            .iter()
-            .map(|&c| (c, chunks[g.phase_of_chain(c)]))
-            .collect();
+        let slots = |c: usize| pools.get(&c).copied().unwrap_or(chunks[g.phase_of_chain(c)]);
+        let state_capacity: BTreeMap<usize, u64> = plan.stored_chains.iter().map(|&c| (c, slots(c))).collect();
         let queue_capacity: BTreeMap<String, u64> = fanout
             .iter()
             .map(|(q, f)| {
                 (
                     q.clone(),
-                    f * chunks[g.phase_of_chain(plan.kernels[plan.consumer_kernel(q)].chain)],
+                    f * slots(g.phases[g.phase_of_chain(plan.kernels[plan.consumer_kernel(q)].chain)].chains[0]),
                 )
             })
             .collect();
@@ -312,6 +340,7 @@ impl Program {
         ctx.words = &words;
         ctx.state_capacity = &state_capacity;
         ctx.queue_capacity = &queue_capacity;
+        ctx.pools = &pools;
         let prelude = ctx.prelude();
         let mut kernels = Vec::new();
         for (k, kp) in plan.kernels.iter().enumerate() {
@@ -369,6 +398,7 @@ impl Program {
             words,
             state_capacity,
             queue_capacity,
+            pools,
             control,
             kernels,
             args_kernels,

@@ -1,12 +1,12 @@
 //! Running a compiled program on a GPU: buffers, pipelines, and frames made of dispatches
-//! (direct, indirect from queue counters, and host-driven loops), with GPU timestamps and
-//! counters read back once per frame.
+//! (direct, indirect from queue and boundary counters, and host-driven loops), with GPU
+//! timestamps and counters read back once per frame.
 
-use crate::codegen::BufferRef;
+use crate::codegen::{BufferRef, CommitKernel};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::ir::Scope;
-use crate::plan::Step;
+use crate::plan::{Port, Root, Side, Step};
 use crate::program::{BindingUse, Program, entry_uses};
 use crate::wgsl::ModuleSource;
 use std::borrow::Cow;
@@ -16,6 +16,8 @@ const RECORD_STRIDE: u64 = 256;
 const MAX_QUERIES: u32 = wgpu::QUERY_SET_MAX_QUERIES;
 /// Host loop iterations after which a loop is declared stuck.
 const MAX_HOST_ITERATIONS: u32 = 1 << 20;
+/// Bytes of a boundary buffer's header (count, append, two spare words).
+const BOUNDARY_HEADER: u64 = 16;
 
 /// Statistics of one frame.
 #[derive(Debug, Clone, Default)]
@@ -38,10 +40,12 @@ impl FrameStats {
     }
 }
 
+/// A pipeline with its bind groups: one, or one per iteration parity for kernels that use a
+/// ping-pong boundary.
 struct Kernel {
     name: String,
     pipeline: wgpu::ComputePipeline,
-    bind_group: wgpu::BindGroup,
+    bind_groups: Vec<wgpu::BindGroup>,
     /// Whether it reads the frame record (bound with a dynamic offset).
     uses_frame: bool,
 }
@@ -53,13 +57,19 @@ pub struct Instance<'g> {
     buffers: BTreeMap<BufferRef, wgpu::Buffer>,
     external_counts: BTreeMap<String, u64>,
     kernels: Vec<Kernel>,
+    /// Argument kernels of queued streams, with the byte offset of their arguments.
     args: BTreeMap<String, (Kernel, u64)>,
+    /// Commit kernels of boundaries (one bind group per physical buffer), with the byte
+    /// offset of their arguments.
+    commits: Vec<(Kernel, u64)>,
     fold: Kernel,
     frame_records: wgpu::Buffer,
     records: Vec<[u32; 4]>,
     queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     readback: wgpu::Buffer,
     totals: Vec<u64>,
+    /// Host loop iterations the previous frame needed, per loop (the next frame's first batch).
+    last_iterations: BTreeMap<usize, u32>,
 }
 
 struct Recorder {
@@ -67,6 +77,8 @@ struct Recorder {
     /// Kernel index of each timestamp pair written so far.
     timed: Vec<usize>,
     host_iterations: u32,
+    /// Iteration parity of the running host loop (selects ping-pong buffers).
+    parity: usize,
 }
 
 fn compile_internal(source: &str, name: &str, program: &Program) -> Result<(naga::Module, Vec<BindingUse>)> {
@@ -75,6 +87,16 @@ fn compile_internal(source: &str, name: &str, program: &Program) -> Result<(naga
     let (module, info) = src.compile(program.target.capabilities)?;
     let uses = entry_uses(&module, &info, &program.bindings);
     Ok((module, uses))
+}
+
+/// The physical buffer of a boundary port in iteration `parity`.
+fn physical(program: &Program, port: Port, parity: usize) -> BufferRef {
+    let side = if program.plan.boundaries[port.boundary].pingpong {
+        (parity + (port.side == Side::Next) as usize) % 2
+    } else {
+        0
+    };
+    BufferRef::Boundary(port.boundary, side)
 }
 
 impl<'g> Instance<'g> {
@@ -91,7 +113,7 @@ impl<'g> Instance<'g> {
             let size = size.max(16).next_multiple_of(4);
             if usage.contains(wgpu::BufferUsages::STORAGE) && size > max_binding {
                 return Err(Error::Gpu(format!(
-                    "{label} needs {:.1} MiB but the adapter binds at most {:.1} MiB per storage buffer; use fewer items per frame (or max_items_in_flight)",
+                    "{label} needs {:.1} MiB but the adapter binds at most {:.1} MiB per storage buffer; use fewer items per frame (or max_items_in_flight, threads)",
                     size as f64 / 1048576.0,
                     max_binding as f64 / 1048576.0
                 )));
@@ -158,6 +180,16 @@ impl<'g> Instance<'g> {
                 make(&format!("queue '{q}'"), 4 * words * cap, storage)?,
             );
         }
+        for (b, boundary) in program.plan.boundaries.iter().enumerate() {
+            let words = program.words[&g.chains[boundary.chain].item].len() as u64;
+            let size = BOUNDARY_HEADER + 4 * words * program.pools[&boundary.chain];
+            for side in 0..1 + boundary.pingpong as usize {
+                buffers.insert(
+                    BufferRef::Boundary(b, side),
+                    make(&format!("boundary {b}.{side}"), size, storage)?,
+                );
+            }
+        }
         let ncounters = g.counters.len() as u64;
         buffers.insert(BufferRef::Counters, make("counters", 4 * ncounters, storage)?);
         buffers.insert(BufferRef::Totals, make("counter totals", 8 * ncounters, storage)?);
@@ -165,13 +197,10 @@ impl<'g> Instance<'g> {
             BufferRef::Control,
             make("control words", 4 * program.control.len as u64, storage)?,
         );
+        let nargs = (program.queue_capacity.len() + program.plan.boundaries.len()) as u64;
         buffers.insert(
             BufferRef::Args,
-            make(
-                "indirect arguments",
-                12 * program.queue_capacity.len() as u64,
-                storage | wgpu::BufferUsages::INDIRECT,
-            )?,
+            make("indirect arguments", 12 * nargs, storage | wgpu::BufferUsages::INDIRECT)?,
         );
         let nrecords: u64 = program
             .domains
@@ -186,10 +215,12 @@ impl<'g> Instance<'g> {
             mapped_at_creation: false,
         });
 
+        // A pipeline and one bind group per entry of `resolves`, which maps the virtual
+        // boundary bindings to physical buffers.
         let build = |name: &str,
                      module: naga::Module,
                      uses: &[BindingUse],
-                     buffers: &BTreeMap<BufferRef, wgpu::Buffer>|
+                     resolves: &[&dyn Fn(&BufferRef) -> BufferRef]|
          -> Kernel {
             let entries: Vec<wgpu::BindGroupLayoutEntry> = uses
                 .iter()
@@ -229,47 +260,91 @@ impl<'g> Instance<'g> {
                 compilation_options: Default::default(),
                 cache: None,
             });
-            let bg_entries: Vec<wgpu::BindGroupEntry> = uses
+            let bind_groups = resolves
                 .iter()
-                .map(|u| wgpu::BindGroupEntry {
-                    binding: u.binding,
-                    resource: if u.uniform {
-                        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &frame_records,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(16),
+                .map(|resolve| {
+                    let entries: Vec<wgpu::BindGroupEntry> = uses
+                        .iter()
+                        .map(|u| wgpu::BindGroupEntry {
+                            binding: u.binding,
+                            resource: if u.uniform {
+                                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                    buffer: &frame_records,
+                                    offset: 0,
+                                    size: wgpu::BufferSize::new(16),
+                                })
+                            } else {
+                                buffers[&resolve(&u.buffer)].as_entire_binding()
+                            },
                         })
-                    } else {
-                        buffers[&u.buffer].as_entire_binding()
-                    },
+                        .collect();
+                    device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some(name),
+                        layout: &bgl,
+                        entries: &entries,
+                    })
                 })
                 .collect();
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(name),
-                layout: &bgl,
-                entries: &bg_entries,
-            });
             Kernel {
                 name: name.to_string(),
                 pipeline,
-                bind_group,
+                bind_groups,
                 uses_frame: uses.iter().any(|u| u.uniform),
             }
         };
+        let identity = |b: &BufferRef| b.clone();
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut kernels = Vec::new();
-        for km in &program.kernels {
-            kernels.push(build(&km.name, km.module.clone(), &km.uses, &buffers));
+        for (km, kp) in program.kernels.iter().zip(&program.plan.kernels) {
+            let resolve = |parity: usize| {
+                let (input, output) = (kp.input, kp.output);
+                let program = &program;
+                move |b: &BufferRef| match b {
+                    BufferRef::BoundaryIn => physical(program, input.expect("reads a boundary"), parity),
+                    BufferRef::BoundaryOut => physical(program, output.expect("writes a boundary"), parity),
+                    other => other.clone(),
+                }
+            };
+            let (even, odd) = (resolve(0), resolve(1));
+            kernels.push(build(&km.name, km.module.clone(), &km.uses, &[&even, &odd]));
         }
         let mut args = BTreeMap::new();
         for (i, (q, wgsl)) in program.args_kernels.iter().enumerate() {
             let name = format!("lg_args_{q}");
             let (module, uses) = compile_internal(wgsl, &name, &program)?;
-            args.insert(q.clone(), (build(&name, module, &uses, &buffers), 12 * i as u64));
+            args.insert(q.clone(), (build(&name, module, &uses, &[&identity]), 12 * i as u64));
+        }
+        let mut commits = Vec::new();
+        for (b, boundary) in program.plan.boundaries.iter().enumerate() {
+            let slot = program.queue_capacity.len() + b;
+            let name = format!("lg_commit_{b}");
+            let wgsl = CommitKernel {
+                name: &name,
+                boundary_binding: program.bindings[&BufferRef::BoundaryIn],
+                args_binding: program.bindings[&BufferRef::Args],
+                args_offset: 3 * slot as u32,
+                workgroup: program.plan.layout.workgroup_size,
+                max_groups: program.target.max_workgroups_per_dimension,
+            }
+            .wgsl();
+            let (module, uses) = compile_internal(&wgsl, &name, &program)?;
+            let sides: Vec<Box<dyn Fn(&BufferRef) -> BufferRef>> = (0..1 + boundary.pingpong as usize)
+                .map(|side| {
+                    Box::new(move |r: &BufferRef| {
+                        if *r == BufferRef::BoundaryIn {
+                            BufferRef::Boundary(b, side)
+                        } else {
+                            r.clone()
+                        }
+                    }) as Box<dyn Fn(&BufferRef) -> BufferRef>
+                })
+                .collect();
+            let refs: Vec<&dyn Fn(&BufferRef) -> BufferRef> = sides.iter().map(|f| f.as_ref()).collect();
+            commits.push((build(&name, module, &uses, &refs), 12 * slot as u64));
         }
         let (fold_module, fold_uses) = compile_internal(&program.fold_kernel, "lg_fold", &program)?;
-        let fold = build("lg_fold", fold_module, &fold_uses, &buffers);
+        let fold = build("lg_fold", fold_module, &fold_uses, &[&identity]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "creating the pipelines of layout '{}' failed: {e}",
@@ -291,9 +366,10 @@ impl<'g> Instance<'g> {
             });
             (set, resolve)
         });
+        let readback_words = program.control.len as u64 + 4 * program.plan.boundaries.len() as u64 * 2;
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: (4 * program.control.len as u64 + 8 * ncounters + 8 * MAX_QUERIES as u64).next_multiple_of(8),
+            size: (4 * readback_words + 8 * ncounters + 8 * MAX_QUERIES as u64).next_multiple_of(8),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -305,11 +381,13 @@ impl<'g> Instance<'g> {
             external_counts,
             kernels,
             args,
+            commits,
             fold,
             frame_records,
             records: Vec::new(),
             queries,
             readback,
+            last_iterations: BTreeMap::new(),
         })
     }
 
@@ -342,7 +420,8 @@ impl<'g> Instance<'g> {
         });
         pass.set_pipeline(&k.pipeline);
         let offset = [(record as u64 * RECORD_STRIDE) as u32];
-        pass.set_bind_group(0, &k.bind_group, if k.uses_frame { &offset[..] } else { &[] });
+        let bind_group = &k.bind_groups[rec.parity % k.bind_groups.len()];
+        pass.set_bind_group(0, bind_group, if k.uses_frame { &offset[..] } else { &[] });
         match groups {
             Dispatch::Items(n) => {
                 let wg = self.program.plan.layout.workgroup_size as u64;
@@ -358,11 +437,53 @@ impl<'g> Instance<'g> {
         }
     }
 
-    fn run_steps(&self, rec: &mut Recorder, steps: &[Step], record: usize) -> Result<()> {
-        let count = self.records[record][3] as u64;
-        for step in steps {
+    /// Commits a boundary buffer (its appended items join its count) and prepares the
+    /// indirect arguments for its consumer; returns their offset.
+    fn commit(&self, rec: &mut Recorder, port: Port, record: usize) -> u64 {
+        let (kernel, offset) = &self.commits[port.boundary];
+        let side = match physical(&self.program, port, rec.parity) {
+            BufferRef::Boundary(_, side) => side,
+            _ => unreachable!("boundary ports map to boundary buffers"),
+        };
+        let saved = rec.parity;
+        rec.parity = side;
+        self.dispatch(rec, kernel, None, record, Dispatch::Single);
+        rec.parity = saved;
+        *offset
+    }
+
+    fn run_kernel(&self, rec: &mut Recorder, k: usize, record: usize) {
+        let kp = &self.program.plan.kernels[k];
+        let count = match self.program.pools.get(&kp.chain) {
+            Some(&pool) => pool,
+            None => self.records[record][3] as u64,
+        };
+        let kernel = &self.kernels[k];
+        match (kp.input, kp.output) {
+            (Some(input), _) => {
+                let offset = self.commit(rec, input, record);
+                let groups = if kp.root == Root::Boundary {
+                    Dispatch::Indirect(offset)
+                } else {
+                    Dispatch::Items(count)
+                };
+                self.dispatch(rec, kernel, Some(k), record, groups);
+                // Every item of the input was consumed.
+                let buffer = physical(&self.program, input, rec.parity);
+                rec.encoder.clear_buffer(&self.buffers[&buffer], 0, Some(8));
+            }
+            (None, Some(output)) => {
+                self.commit(rec, output, record);
+                self.dispatch(rec, kernel, Some(k), record, Dispatch::Items(count));
+            }
+            (None, None) => self.dispatch(rec, kernel, Some(k), record, Dispatch::Items(count)),
+        }
+    }
+
+    fn run_steps(&mut self, rec: &mut Recorder, steps: &[Step], record: usize) -> Result<()> {
+        for (i, step) in steps.iter().enumerate() {
             match step {
-                Step::Run(k) => self.dispatch(rec, &self.kernels[*k], Some(*k), record, Dispatch::Items(count)),
+                Step::Run(k) => self.run_kernel(rec, *k, record),
                 Step::Drain(q) => {
                     let (args, offset) = &self.args[q];
                     self.dispatch(rec, args, None, record, Dispatch::Single);
@@ -373,50 +494,85 @@ impl<'g> Instance<'g> {
                         .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word, Some(4));
                 }
                 Step::Loop { chain, body } => {
-                    let word = self.program.control.alive[chain] as u64;
-                    let mut batch = 2u32;
+                    let key = record * 64 + i;
+                    let mut batch = self.last_iterations.get(&key).copied().unwrap_or(2).max(1);
                     let mut done = 0u32;
+                    rec.parity = 0;
                     loop {
                         for _ in 0..batch {
-                            rec.encoder
-                                .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word, Some(4));
+                            if let Some(&word) = self.program.control.alive.get(chain) {
+                                rec.encoder
+                                    .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word as u64, Some(4));
+                            }
                             self.run_steps(rec, body, record)?;
+                            rec.parity ^= 1;
                         }
                         done += batch;
                         rec.host_iterations += batch;
-                        let alive = self.read_control_word(rec, word)?;
-                        if alive == 0 {
+                        if !self.loop_goes_on(rec, *chain, record)? {
                             break;
                         }
                         if done >= MAX_HOST_ITERATIONS {
                             let item = &self.program.plan.graph.chains[*chain].item;
                             return Err(Error::Runtime(format!(
-                                "{alive} items of '{item}' still alive after {done} loop iterations: a loop pass never finishes its item"
+                                "items of '{item}' still alive after {done} loop iterations: a loop pass never finishes its item"
                             )));
                         }
-                        batch = (batch * 2).min(32);
+                        batch = (batch * 2).min(64);
                     }
+                    self.last_iterations.insert(key, done);
                 }
             }
         }
         Ok(())
     }
 
-    /// Submits what is recorded, then reads one control word.
-    fn read_control_word(&self, rec: &mut Recorder, word: u64) -> Result<u32> {
+    /// Submits what is recorded and reads back whether the loop over `chain` has work left:
+    /// items alive in slots, items waiting in its boundaries, or indices not yet taken.
+    fn loop_goes_on(&self, rec: &mut Recorder, chain: usize, record: usize) -> Result<bool> {
+        let control_bytes = 4 * self.program.control.len as u64;
         rec.encoder
-            .copy_buffer_to_buffer(&self.buffers[&BufferRef::Control], 4 * word, &self.readback, 0, 4);
+            .copy_buffer_to_buffer(&self.buffers[&BufferRef::Control], 0, &self.readback, 0, control_bytes);
+        let mut at = control_bytes;
+        let mut headers = Vec::new();
+        for (b, boundary) in self.program.plan.boundaries.iter().enumerate() {
+            if boundary.chain != chain {
+                continue;
+            }
+            for side in 0..1 + boundary.pingpong as usize {
+                rec.encoder.copy_buffer_to_buffer(
+                    &self.buffers[&BufferRef::Boundary(b, side)],
+                    0,
+                    &self.readback,
+                    at,
+                    8,
+                );
+                headers.push(at);
+                at += 8;
+            }
+        }
         let encoder = std::mem::replace(
             &mut rec.encoder,
             self.gpu.device.create_command_encoder(&Default::default()),
         );
         self.gpu.queue.submit([encoder.finish()]);
-        let bytes = self.map_readback(8)?;
-        Ok(u32::from_le_bytes(bytes[0..4].try_into().expect("4 bytes")))
+        let bytes = self.map_readback(at)?;
+        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        let control = &self.program.control;
+        let alive = control.alive.get(&chain).map_or(0, |&w| words[w as usize]);
+        let pending: u64 = headers
+            .iter()
+            .map(|&h| words[h as usize / 4] as u64 + words[h as usize / 4 + 1] as u64)
+            .sum();
+        let untaken = control
+            .next
+            .get(&chain)
+            .is_some_and(|&w| (words[w as usize] as u64) < self.records[record][3] as u64);
+        Ok(alive > 0 || pending > 0 || untaken)
     }
 
     fn map_readback(&self, size: u64) -> Result<Vec<u8>> {
-        let slice = self.readback.slice(0..size);
+        let slice = self.readback.slice(0..size.next_multiple_of(8));
         slice.map_async(wgpu::MapMode::Read, |_| {});
         self.gpu.wait()?;
         let data = slice
@@ -429,10 +585,9 @@ impl<'g> Instance<'g> {
 
     /// Runs frame `index` with `seed`: every phase over all its chunks.
     pub fn run_frame(&mut self, index: u32, seed: u32) -> Result<FrameStats> {
-        let program = &self.program;
         self.records.clear();
         let mut plan_records = Vec::new();
-        for (ph, (&domain, &chunk)) in program.domains.iter().zip(&program.chunks).enumerate() {
+        for (ph, (&domain, &chunk)) in self.program.domains.iter().zip(&self.program.chunks).enumerate() {
             let mut base = 0u64;
             loop {
                 let n = chunk.min(domain - base);
@@ -454,10 +609,29 @@ impl<'g> Instance<'g> {
             encoder: self.gpu.device.create_command_encoder(&Default::default()),
             timed: Vec::new(),
             host_iterations: 0,
+            parity: 0,
         };
         rec.encoder.clear_buffer(&self.buffers[&BufferRef::Control], 0, None);
+        for (b, boundary) in self.program.plan.boundaries.iter().enumerate() {
+            for side in 0..1 + boundary.pingpong as usize {
+                rec.encoder
+                    .clear_buffer(&self.buffers[&BufferRef::Boundary(b, side)], 0, Some(8));
+            }
+        }
         for (ph, record) in plan_records {
-            self.run_steps(&mut rec, &self.program.plan.schedule[ph], record)?;
+            let steps = self.program.plan.schedule[ph].clone();
+            for word in self
+                .program
+                .plan
+                .kernels
+                .iter()
+                .filter(|k| k.phase == ph && k.regenerates)
+                .map(|k| self.program.control.next[&k.chain])
+            {
+                rec.encoder
+                    .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word as u64, Some(4));
+            }
+            self.run_steps(&mut rec, &steps, record)?;
             self.dispatch(&mut rec, &self.fold, None, record, Dispatch::Single);
         }
         // Read back control words, counter totals and timestamps.

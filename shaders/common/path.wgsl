@@ -1,6 +1,7 @@
 // Items of path tracing.
 
-// A camera path between bounces: the ray to trace next and what the path carries.
+// A camera path between stages: the ray to trace next, the hit `trace` found for it, and
+// what the path carries.
 struct CameraPath {
     origin: vec3<f32>,
     pixel: u32,
@@ -10,6 +11,9 @@ struct CameraPath {
     rng: u32,
     last_pdf: f32,          // density of the last sampled direction, for MIS on hitting a light
     last_specular: u32,     // 1 after the camera or a delta lobe: no MIS on the next light hit
+    hit_t: f32,             // distance to the hit of the last traced ray; negative: it escaped
+    hit_primitive: u32,
+    hit_uv: vec2<f32>,
 }
 
 // A next-event-estimation connection: if nothing blocks the segment, the contribution
@@ -20,4 +24,9 @@ struct ShadowRay {
     direction: vec3<f32>,
     distance: f32,
     contribution: vec3<f32>,
+}
+
+// The surface the path's last ray hit.
+fn path_surface(path: CameraPath) -> Surface {
+    return surface_at(Hit(path.hit_t, path.hit_primitive, path.hit_uv, true), path.origin, path.direction);
 }

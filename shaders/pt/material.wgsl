@@ -1,53 +1,14 @@
-// Pass `extend` (Loop): traces the path's ray, adds emission found there (MIS-weighted
-// against light sampling), emits a shadow ray for next-event estimation, and samples the
-// next direction, with Russian roulette. Returns false when the path ends.
-//
-// MIS (two strategies for lights of finite extent): a light hit by BSDF sampling with
-// density p_bsdf is weighted w(p_bsdf, p_light * pick); a light sampled directly with
-// density p_light is weighted w(p_light * pick, p_bsdf). With the albedo roulette rule,
-// p_bsdf includes the continuation probability, as in SmallVCM.
+// Pass `material` (Loop, the material stage): next-event estimation (a shadow ray towards a
+// uniformly picked light) and the next direction from the BSDF, with Russian roulette. With
+// the albedo roulette rule the BSDF densities used for MIS include the continuation
+// probability, as in SmallVCM; with the throughput rule (Mitsuba's) they do not.
 
-fn extend(path: ptr<function, CameraPath>) -> bool {
-    let o = (*path).origin;
-    let d = (*path).direction;
-    count(select(COUNTER_RAYS_EXTENSION, COUNTER_RAYS_PRIMARY, (*path).length == 0u), 1u);
-    let hit = trace_closest(o, d, INFINITE_DISTANCE);
-    (*path).length += 1u;
+fn material(path: ptr<function, CameraPath>) -> bool {
+    let s = path_surface(*path);
+    let bsdf = bsdf_setup(s.material, s.normal, -(*path).direction);
     let pick = light_pick_probability();
-    if (!hit.found) {
-        let bg = background_radiance();
-        if (bg.w > 0.0) {
-            var w = 1.0;
-            if ((*path).last_specular == 0u) {
-                w = mis_weight((*path).last_pdf, bg.w * pick);
-            }
-            film_add((*path).pixel, (*path).throughput * w * bg.xyz);
-        }
-        return false;
-    }
-    let s = surface_at(hit, o, d);
-    let bsdf = bsdf_setup(s.material, s.normal, -d);
-    if (!bsdf.valid) {
-        return false;
-    }
-    if (s.light >= 0) {
-        let le = area_light_radiance(u32(s.light), d);
-        if (le.w > 0.0) {
-            var w = 1.0;
-            if ((*path).last_specular == 0u) {
-                let light_pdf = le.w * hit.t * hit.t / abs(bsdf.fix.z);
-                w = mis_weight((*path).last_pdf, light_pdf * pick);
-            }
-            film_add((*path).pixel, (*path).throughput * w * le.xyz);
-        }
-    }
-    if ((*path).length >= MAX_PATH_LENGTH || bsdf.continuation == 0.0) {
-        return false;
-    }
     var rng = (*path).rng;
-    let roulette_in_mis = RR_ALBEDO;
-    let q_mis = select(1.0, bsdf.continuation, roulette_in_mis);
-    // Next-event estimation.
+    let q_mis = select(1.0, bsdf.continuation, RR_ALBEDO);
     let light_u = rng_f32(&rng);
     let light_uv = rng_vec2(&rng);
     if (!bsdf.is_delta && scene.num_lights > 0u) {
@@ -75,7 +36,6 @@ fn extend(path: ptr<function, CameraPath>) -> bool {
             }
         }
     }
-    // Continuation.
     let u = vec3<f32>(rng_vec2(&rng), rng_f32(&rng));
     let smp = bsdf_sample(bsdf, u);
     let roulette_u = rng_f32(&rng);
@@ -83,7 +43,7 @@ fn extend(path: ptr<function, CameraPath>) -> bool {
     if (is_black(smp.f)) {
         return false;
     }
-    var throughput = (*path).throughput * smp.f * (smp.cos_gen / smp.pdf);
+    let throughput = (*path).throughput * smp.f * (smp.cos_gen / smp.pdf);
     var q = 1.0;
     if (RR_ALBEDO) {
         q = bsdf.continuation;

@@ -1,0 +1,39 @@
+// Pass `logic` (Loop, the logic stage): what the traced ray found. An escaped ray adds the
+// background, a ray that hits an area light adds its emission (MIS-weighted against light
+// sampling), and the path ends at the length cap or on a black material.
+//
+// MIS (two strategies for lights of finite extent): a light hit by BSDF sampling with
+// density p_bsdf is weighted w(p_bsdf, p_light * pick); the same light sampled directly in
+// `material` is weighted w(p_light * pick, p_bsdf).
+
+fn logic(path: ptr<function, CameraPath>) -> bool {
+    let pick = light_pick_probability();
+    if ((*path).hit_t < 0.0) {
+        let bg = background_radiance();
+        if (bg.w > 0.0) {
+            var w = 1.0;
+            if ((*path).last_specular == 0u) {
+                w = mis_weight((*path).last_pdf, bg.w * pick);
+            }
+            film_add((*path).pixel, (*path).throughput * w * bg.xyz);
+        }
+        return false;
+    }
+    let s = path_surface(*path);
+    let bsdf = bsdf_setup(s.material, s.normal, -(*path).direction);
+    if (!bsdf.valid) {
+        return false;
+    }
+    if (s.light >= 0) {
+        let le = area_light_radiance(u32(s.light), (*path).direction);
+        if (le.w > 0.0) {
+            var w = 1.0;
+            if ((*path).last_specular == 0u) {
+                let light_pdf = le.w * (*path).hit_t * (*path).hit_t / abs(bsdf.fix.z);
+                w = mis_weight((*path).last_pdf, light_pdf * pick);
+            }
+            film_add((*path).pixel, (*path).throughput * w * le.xyz);
+        }
+    }
+    return (*path).length < MAX_PATH_LENGTH && bsdf.continuation > 0.0;
+}
