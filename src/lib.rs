@@ -4,5 +4,8 @@
 //! `lightgraph-scenes`.
 
 pub mod assets;
+pub mod bench;
 pub mod output;
+pub mod plot;
 pub mod render;
+pub mod tune;

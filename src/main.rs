@@ -3,7 +3,8 @@
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use lightgraph::render::{LoadedScene, Session, SessionOptions, load_graph, load_scene};
+use lightgraph::render::{LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
+use lightgraph_engine::ir::StateStorage;
 use lightgraph::{assets, output};
 use lightgraph_engine::{ConstValue, Gpu, Plan, Program};
 use std::collections::BTreeMap;
@@ -28,8 +29,29 @@ enum Command {
     Render(RenderArgs),
     /// Print the kernels, schedule and resources of a graph's layouts.
     Explain(ExplainArgs),
+    /// Measure layouts over a sweep of paths per frame: Markdown table, CSV and PNG plot.
+    Bench(BenchArgs),
     /// List built-in graphs with their layouts, built-in scenes and GPU adapters.
     List,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    #[command(flatten)]
+    common: Common,
+    /// Layouts to measure, comma-separated; `all` for the graph's named layouts, `auto` for
+    /// every legal layout the engine finds.
+    #[arg(long, default_value = "all")]
+    layouts: String,
+    /// Frame sizes as WxHxSPP, comma-separated (default: 3.3e5 to 1e8 paths per frame).
+    #[arg(long)]
+    points: Option<String>,
+    /// Time each layout renders at each frame size (after a warm-up frame).
+    #[arg(long, value_parser = humantime::parse_duration, default_value = "2s")]
+    time: Duration,
+    /// Output folder for bench.md, bench.csv and rays_per_second.png.
+    #[arg(long, default_value = "out/bench")]
+    out: PathBuf,
 }
 
 #[derive(Args, Clone)]
@@ -55,15 +77,36 @@ struct Common {
     /// GPU adapter whose name contains this text (also LIGHTGRAPH_ADAPTER).
     #[arg(long, env = "LIGHTGRAPH_ADAPTER")]
     adapter: Option<String>,
+    /// Thread pool of regeneration and compaction layouts (overrides the layout's).
+    #[arg(long)]
+    threads: Option<u64>,
+    /// Threads per workgroup (overrides the layout's).
+    #[arg(long)]
+    workgroup: Option<u32>,
+    /// Item state between split kernels: soa or aos (overrides the layout's).
+    #[arg(long, value_parser = parse_state)]
+    state: Option<StateStorage>,
+}
+
+fn parse_state(s: &str) -> Result<StateStorage, String> {
+    match s.to_lowercase().as_str() {
+        "soa" => Ok(StateStorage::SoA),
+        "aos" => Ok(StateStorage::AoS),
+        _ => Err(format!("'{s}' is not soa or aos")),
+    }
 }
 
 #[derive(Args)]
 struct RenderArgs {
     #[command(flatten)]
     common: Common,
-    /// Kernel layout (default: the graph's).
+    /// Kernel layout (default: the graph's); `auto` measures every legal layout first and
+    /// renders with the fastest.
     #[arg(long)]
     layout: Option<String>,
+    /// Time each layout gets when --layout auto measures it.
+    #[arg(long, value_parser = humantime::parse_duration, default_value = "500ms")]
+    tune_time: Duration,
     /// Render for this long (e.g. 10s, 2m); overrides --frames.
     #[arg(long, value_parser = humantime::parse_duration)]
     time: Option<Duration>,
@@ -139,13 +182,8 @@ fn options(
         }
         constants.insert("MAX_PATH_LENGTH".into(), ConstValue::U32(n));
     }
-    Ok(SessionOptions {
-        width,
-        height,
-        samples_per_frame: common.spp,
-        seed,
-        constants,
-    })
+    let layout = LayoutOverrides { threads: common.threads, workgroup_size: common.workgroup, state: common.state };
+    Ok(SessionOptions { width, height, samples_per_frame: common.spp, seed, constants, layout })
 }
 
 fn si(v: f64) -> String {
@@ -161,9 +199,28 @@ fn render(args: RenderArgs) -> Result<()> {
     let c = &args.common;
     let scene = load_scene(&c.scene)?;
     let graph = load_graph(&c.graph)?;
-    let layout = args.layout.clone().unwrap_or_else(|| graph.default_layout.clone());
     let gpu = Gpu::new(c.adapter.as_deref())?;
     let opts = options(c, &scene, &graph.constants, args.seed)?;
+    let (layout, decl) = match args.layout.as_deref() {
+        Some("auto") => {
+            eprintln!("--layout auto: measuring every legal layout of '{}' for {:?} each", graph.name, args.tune_time);
+            let trials = lightgraph::tune::autotune(&gpu, &graph, &scene, &opts, args.tune_time, |t| {
+                eprintln!("  {:>9.1} Msamples/s  {}", t.score() / 1e6, t.name);
+            })?;
+            let table = lightgraph::tune::table(&trials);
+            println!("{table}");
+            let report = args.out.with_extension("auto.md");
+            if let Some(dir) = report.parent() {
+                std::fs::create_dir_all(dir)?;
+            }
+            std::fs::write(&report, &table)?;
+            let best = &trials[0];
+            eprintln!("winner: {} ({:.1} Msamples/s); table in {}", best.name, best.score() / 1e6, report.display());
+            (best.name.clone(), best.decl.clone())
+        }
+        Some(name) => (name.to_string(), Plan::new(&graph, name)?.layout),
+        None => (graph.default_layout.clone(), graph.layouts[&graph.default_layout].clone()),
+    };
     let (w, h) = (opts.width, opts.height);
     eprintln!(
         "{} | scene {} ({} primitives, {} lights, loaded in {:.2} s) | graph {} layout {} | {w}x{h}",
@@ -175,7 +232,7 @@ fn render(args: RenderArgs) -> Result<()> {
         graph.name,
         layout
     );
-    let mut session = Session::new(&gpu, &graph, &layout, &scene, opts)?;
+    let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
     let bar = match args.time {
         Some(t) => ProgressBar::new(t.as_millis() as u64),
         None => ProgressBar::new(args.frames as u64),
@@ -302,6 +359,59 @@ fn explain(args: ExplainArgs) -> Result<()> {
     Ok(())
 }
 
+fn bench(args: BenchArgs) -> Result<()> {
+    let c = &args.common;
+    let scene = load_scene(&c.scene)?;
+    let graph = load_graph(&c.graph)?;
+    let gpu = Gpu::new(c.adapter.as_deref())?;
+    let points: Vec<(u32, u32, u32)> = match &args.points {
+        None => lightgraph::bench::DEFAULT_POINTS.to_vec(),
+        Some(list) => list
+            .split(',')
+            .map(|p| {
+                let v: Vec<u32> = p.split(['x', 'X']).filter_map(|n| n.trim().parse().ok()).collect();
+                match v.as_slice() {
+                    [w, h, s] if *w > 0 && *h > 0 && *s > 0 => Ok((*w, *h, *s)),
+                    _ => Err(anyhow!("--points: '{p}' is not WxHxSPP")),
+                }
+            })
+            .collect::<Result<_>>()?,
+    };
+    let layouts: Vec<(String, lightgraph_engine::ir::LayoutDecl)> = match args.layouts.as_str() {
+        "all" => graph.layouts.iter().map(|(n, d)| (n.clone(), d.clone())).collect(),
+        "auto" => lightgraph_engine::auto::legal_layouts(&graph, &graph.layouts[&graph.default_layout]),
+        list => list.split(',').map(|n| Ok((n.to_string(), Plan::new(&graph, n)?.layout))).collect::<Result<_>>()?,
+    };
+    eprintln!("{} | scene {} | graph {} | {} layouts x {} frame sizes, {:?} each", gpu.describe(), c.scene, graph.name, layouts.len(), points.len(), args.time);
+    let mut results = Vec::new();
+    for (w, h, spp) in points {
+        for (name, decl) in &layouts {
+            let mut opts = options(c, &scene, &graph.constants, 1)?;
+            (opts.width, opts.height, opts.samples_per_frame) = (w, h, spp);
+            match lightgraph::bench::measure(&gpu, &graph, name, decl.clone(), &scene, opts, args.time) {
+                Ok(m) => {
+                    eprintln!(
+                        "  {:>8.2} M paths  {:<20} {:>8.1} Mrays/s ({:>8.1} GPU) {:>8.1} Msamples/s {:>7.1} fps {:>8.1} MiB",
+                        m.paths_per_frame() as f64 / 1e6,
+                        name,
+                        m.rays_per_second() / 1e6,
+                        m.gpu_rays_per_second() / 1e6,
+                        m.samples_per_second() / 1e6,
+                        m.frames_per_second(),
+                        m.memory_bytes as f64 / 1048576.0
+                    );
+                    results.push(m);
+                }
+                Err(e) => eprintln!("  {:>8.2} M paths  {name}: failed: {e:#}", (w * h) as f64 * spp as f64 / 1e6),
+            }
+        }
+    }
+    let title = format!("{} on {}, {} ({})", graph.name, c.scene, gpu.info.name, if args.layouts == "auto" { "every legal layout" } else { "named layouts" });
+    let md = lightgraph::bench::write_reports(&args.out, &title, &results)?;
+    println!("{md}\nwrote {}/bench.md, bench.csv and rays_per_second.png", args.out.display());
+    Ok(())
+}
+
 fn list() -> Result<()> {
     println!("graphs:");
     for name in assets::graph_names() {
@@ -339,6 +449,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(a) => render(a),
         Command::Explain(a) => explain(a),
+        Command::Bench(a) => bench(a),
         Command::List => list(),
     };
     match result {

@@ -2,6 +2,7 @@
 //! GPU, run frame after frame into a progressive accumulation.
 
 use anyhow::{Context, Result, anyhow, bail};
+use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{ConstValue, FrameStats, Gpu, Graph, Instance, Plan, Program, Specialization};
 use lightgraph_scenes::model::{MisHeuristic, RussianRoulette, Scene};
 use lightgraph_scenes::{CompiledScene, parse_scene};
@@ -53,6 +54,35 @@ pub struct SessionOptions {
     pub seed: u32,
     /// Constant overrides (`--set NAME=VALUE`, `--max-path-length`).
     pub constants: BTreeMap<String, ConstValue>,
+    /// Layout option overrides.
+    pub layout: LayoutOverrides,
+}
+
+/// Options that override a layout's own (`--threads`, `--workgroup`, `--state`).
+#[derive(Debug, Clone, Default)]
+pub struct LayoutOverrides {
+    /// Thread pool size of regeneration and compaction layouts.
+    pub threads: Option<u64>,
+    /// Threads per workgroup.
+    pub workgroup_size: Option<u32>,
+    /// Item state layout between split kernels.
+    pub state: Option<lightgraph_engine::ir::StateStorage>,
+}
+
+impl LayoutOverrides {
+    /// `decl` with these overrides applied.
+    pub fn apply(&self, mut decl: LayoutDecl) -> LayoutDecl {
+        if self.threads.is_some() {
+            decl.threads = self.threads;
+        }
+        if let Some(w) = self.workgroup_size {
+            decl.workgroup_size = w;
+        }
+        if let Some(s) = self.state {
+            decl.state = s;
+        }
+        decl
+    }
 }
 
 /// The constants a scene's integrator settings imply.
@@ -132,11 +162,19 @@ pub struct Session<'g> {
 }
 
 impl<'g> Session<'g> {
-    /// Plans, compiles and instantiates `graph` in `layout` for `scene`.
-    pub fn new(
+    /// Plans, compiles and instantiates `graph` in its layout called `layout` for `scene`.
+    pub fn new(gpu: &'g Gpu, graph: &Graph, layout: &str, scene: &LoadedScene, options: SessionOptions) -> Result<Session<'g>> {
+        // Resolving by name first gives the error that lists the graph's layouts.
+        let decl = Plan::new(graph, layout)?.layout;
+        Self::with_layout(gpu, graph, layout, decl, scene, options)
+    }
+
+    /// Plans, compiles and instantiates `graph` in the layout `decl` (named `layout`).
+    pub fn with_layout(
         gpu: &'g Gpu,
         graph: &Graph,
         layout: &str,
+        decl: LayoutDecl,
         scene: &LoadedScene,
         options: SessionOptions,
     ) -> Result<Session<'g>> {
@@ -147,7 +185,7 @@ impl<'g> Session<'g> {
         if paths > u32::MAX as u64 {
             bail!("{paths} paths per frame is more than 2^32; use fewer samples per frame");
         }
-        let plan = Plan::new(graph, layout)?;
+        let plan = Plan::with_decl(graph, layout, options.layout.apply(decl))?;
         let spec = specialization(graph, &scene.scene, &options, device_flags(gpu));
         let program = Program::compile(&plan, &spec, &gpu.target())?;
         let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
@@ -188,6 +226,17 @@ impl<'g> Session<'g> {
         }
         self.loops_capped += stats.loops_capped as u64;
         Ok(stats)
+    }
+
+    /// GPU memory of the session: the buffers the layout allocates and the scene data.
+    pub fn memory_bytes(&self) -> u64 {
+        let program = self.instance.program();
+        let external: u64 = program
+            .sizes
+            .iter()
+            .filter_map(|(name, size)| self.instance.external_count(name).map(|n| n * size.element_bytes as u64))
+            .sum();
+        program.allocated_bytes().values().sum::<u64>() + external
     }
 
     /// Rays traced so far (primary, extension and shadow counters of the graph).

@@ -53,6 +53,25 @@ impl Location {
     }
 }
 
+impl Location {
+    /// The location of the first quoted `name` after the map key `"key":`, or of the key, or
+    /// of the first quoted `name`.
+    pub fn of_name_under_key(file: &str, text: &str, key: &str, name: &str) -> Self {
+        let at_key = Self::of_key(file, text, key);
+        let quoted_key = format!("\"{key}\"");
+        if let Some(k) = text
+            .find(&format!("{quoted_key}:"))
+            .or_else(|| text.find(&format!("{quoted_key} :")))
+        {
+            if let Some(i) = text[k..].find(&format!("\"{name}\"")) {
+                return Self::at_offset(file, text, k + i + 1);
+            }
+            return at_key;
+        }
+        Self::of_name(file, text, name)
+    }
+}
+
 impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}:{}:{}", self.file, self.line, self.column)

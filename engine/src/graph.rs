@@ -330,6 +330,15 @@ impl Graph {
             .collect()
     }
 
+    /// An error located at the first occurrence of `name` within the declaration of
+    /// `layout` (or at the layout's declaration).
+    pub fn error_in_layout(&self, layout: &str, name: &str, message: impl Into<String>) -> Error {
+        Error::Invalid {
+            at: crate::error::Location::of_name_under_key(&self.file, &self.text, layout, name),
+            message: message.into(),
+        }
+    }
+
     /// Index of the pass called `name`.
     pub fn pass_index(&self, name: &str) -> Option<usize> {
         self.passes.iter().position(|p| p.decl.name == name)

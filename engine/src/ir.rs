@@ -269,3 +269,18 @@ pub enum LoopMode {
 fn default_workgroup() -> u32 {
     64
 }
+
+impl Default for LayoutDecl {
+    fn default() -> Self {
+        LayoutDecl {
+            description: String::new(),
+            kernels: Vec::new(),
+            state: StateStorage::default(),
+            workgroup_size: default_workgroup(),
+            max_items_in_flight: None,
+            loops: LoopMode::default(),
+            policy: Policy::default(),
+            threads: None,
+        }
+    }
+}

@@ -8,6 +8,7 @@
 //! The stages, in order: [`Graph::load`] → [`Plan::new`] → [`Program::compile`] →
 //! [`Instance::new`] → [`Instance::run_frame`].
 
+pub mod auto;
 pub mod codegen;
 pub mod error;
 pub mod explain;

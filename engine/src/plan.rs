@@ -132,7 +132,8 @@ impl Plan {
     /// Resolves an explicit layout declaration.
     pub fn with_decl(graph: &Graph, layout_name: &str, layout: LayoutDecl) -> Result<Plan> {
         if layout.workgroup_size == 0 || layout.workgroup_size > 1024 {
-            return Err(graph.error_at(
+            return Err(graph.error_in_layout(
+                layout_name,
                 layout_name,
                 format!(
                     "layout '{layout_name}': workgroup_size {} is not in 1..=1024",
@@ -141,7 +142,11 @@ impl Plan {
             ));
         }
         if layout.policy != Policy::Naive && layout.threads == Some(0) {
-            return Err(graph.error_at(layout_name, format!("layout '{layout_name}': a pool of 0 threads")));
+            return Err(graph.error_in_layout(
+                layout_name,
+                layout_name,
+                format!("layout '{layout_name}': a pool of 0 threads"),
+            ));
         }
         let groups = resolve_groups(graph, layout_name, &layout)?;
         let mut kernels = Vec::new();
@@ -227,8 +232,9 @@ impl Plan {
                 for s in &self.graph.passes[p].decl.emits {
                     if self.queued_streams.contains(s) {
                         let pass = &self.graph.passes[p].decl.name;
-                        return Err(self.graph.error_at(
-                            s,
+                        return Err(self.graph.error_in_layout(
+                            layout_name,
+                            pass,
                             format!(
                                 "layout '{layout_name}': loop pass '{pass}' emits '{s}' inside the loop of kernel {}, so the queue of '{s}' \
                                  would have no bound; fuse its consumer '{}' into that kernel or use loops: Host",
@@ -255,9 +261,10 @@ impl Plan {
             run.extend(self.drains_after(k));
             let kp = &self.kernels[k];
             let in_host_loop = self.layout.loops == LoopMode::Host
-                && self.graph.chains[kp.chain]
-                    .loop_start
-                    .is_some_and(|ls| kp.segment.end > ls);
+                && (kp.regenerates
+                    || self.graph.chains[kp.chain]
+                        .loop_start
+                        .is_some_and(|ls| kp.segment.end > ls));
             if in_host_loop {
                 body.extend(run);
             } else {
@@ -294,7 +301,8 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
             }
             let p = graph.pass_index(name).ok_or_else(|| {
                 let known: Vec<&str> = graph.passes.iter().map(|p| p.decl.name.as_str()).collect();
-                graph.error_at(
+                graph.error_in_layout(
+                    layout_name,
                     name,
                     format!(
                         "layout '{layout_name}' names unknown pass '{name}' (passes: {})",
@@ -303,7 +311,8 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
                 )
             })?;
             if !seen.insert(p) {
-                return Err(graph.error_at(
+                return Err(graph.error_in_layout(
+                    layout_name,
                     name,
                     format!("layout '{layout_name}' puts pass '{name}' in two kernels"),
                 ));
@@ -316,7 +325,8 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
     }
     if let Some(missing) = (0..graph.passes.len()).find(|p| !seen.contains(p)) {
         let name = &graph.passes[missing].decl.name;
-        return Err(graph.error_at(
+        return Err(graph.error_in_layout(
+            layout_name,
             layout_name,
             format!("layout '{layout_name}' puts pass '{name}' in no kernel"),
         ));
@@ -337,7 +347,8 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
             Some(r) => format!("the later phase needs all of '{r}' from the earlier one (a global barrier)"),
             None => "they belong to independent phases".to_string(),
         };
-        return Err(graph.error_at(
+        return Err(graph.error_in_layout(
+            layout_name,
             b,
             format!("{describe} fuses '{a}' (phase {pa}) with '{b}' (phase {pb}) across a phase boundary: {reason}"),
         ));
@@ -360,7 +371,8 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
             let chain = &graph.chains[c];
             let gap = range.clone().find(|i| !pos.contains(i)).expect("a gap exists");
             let gap_name = &graph.passes[chain.passes[gap]].decl.name;
-            return Err(graph.error_at(
+            return Err(graph.error_in_layout(
+                layout_name,
                 gap_name,
                 format!(
                     "{describe} takes passes of the chain of '{}' around '{gap_name}' but not '{gap_name}' itself",
@@ -383,10 +395,10 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
                     .collect();
                 let inside = producers.iter().filter(|&&p| in_group(p)).count();
                 if inside > 0 && inside < producers.len() {
-                    return Err(graph.error_at(s, format!("{describe}: stream '{s}' has producers inside and outside this kernel; its consumer must run in a kernel of its own")));
+                    return Err(graph.error_in_layout(layout_name, s, format!("{describe}: stream '{s}' has producers inside and outside this kernel; its consumer must run in a kernel of its own")));
                 }
                 if inside > 0 && range.len() != chain.passes.len() {
-                    return Err(graph.error_at(s, format!("{describe}: the chain of '{}' fed by '{s}' is fused with its producer, so it must be fused whole", chain.item)));
+                    return Err(graph.error_in_layout(layout_name, s, format!("{describe}: the chain of '{}' fed by '{s}' is fused with its producer, so it must be fused whole", chain.item)));
                 }
                 inside > 0
             }
@@ -403,7 +415,8 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
             .iter()
             .map(|(c, r)| format!("'{}'", graph.passes[graph.chains[*c].passes[r.start]].decl.name))
             .collect();
-        return Err(graph.error_at(
+        return Err(graph.error_in_layout(
+            layout_name,
             &graph.passes[group[0]].decl.name,
             format!(
                 "{describe} has {} entry points ({}); a kernel runs one chain segment plus the consumers it feeds",
@@ -425,7 +438,8 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
     if let Root::Queue(s) = &root
         && segment.len() != chain.passes.len()
     {
-        return Err(graph.error_at(
+        return Err(graph.error_in_layout(
+            layout_name,
             s,
             format!("{describe}: the chain fed by queue '{s}' must run whole in one kernel"),
         ));
@@ -437,26 +451,27 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
     let loop_in_kernel = match (&root, layout.loops) {
         (Root::Queue(_), _) => true,
         (_, LoopMode::InKernel) if has_loop && layout.policy == Policy::Compaction => {
-            return Err(graph.error_at(
+            return Err(graph.error_in_layout(
+                layout_name,
                 layout_name,
                 format!("{describe}: policy Compaction moves items between kernels, so it needs loops: Host"),
             ));
         }
         (Root::State, LoopMode::InKernel) if has_loop && layout.policy == Policy::Regeneration => {
-            return Err(graph.error_at(layout_name, format!("{describe}: with in-kernel loops, policy Regeneration means persistent threads, so the start pass and the loop must share a kernel")));
+            return Err(graph.error_in_layout(layout_name, layout_name, format!("{describe}: with in-kernel loops, policy Regeneration means persistent threads, so the start pass and the loop must share a kernel")));
         }
         (_, LoopMode::InKernel) => {
             if has_loop && !whole_loop {
                 let ls = chain.loop_start.unwrap_or(0);
                 let first = &graph.passes[chain.passes[ls]].decl.name;
-                return Err(graph.error_at(first, format!("{describe} splits the loop group of the chain of '{}' (from '{first}'); with loops: InKernel the loop group must be in one kernel", chain.item)));
+                return Err(graph.error_in_layout(layout_name, first, format!("{describe} splits the loop group of the chain of '{}' (from '{first}'); with loops: InKernel the loop group must be in one kernel", chain.item)));
             }
             has_loop
         }
         (Root::Start, LoopMode::Host) => {
             if has_loop && layout.policy == Policy::Naive {
                 let first = &graph.passes[chain.passes[segment.start]].decl.name;
-                return Err(graph.error_at(first, format!("{describe} puts the start pass '{first}' and a host-driven loop in one kernel; split the start pass into its own kernel, or regenerate (policy Regeneration or Compaction)")));
+                return Err(graph.error_in_layout(layout_name, first, format!("{describe} puts the start pass '{first}' and a host-driven loop in one kernel; split the start pass into its own kernel, or regenerate (policy Regeneration or Compaction)")));
             }
             false
         }
@@ -464,7 +479,7 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
         (Root::State, LoopMode::Host) => {
             if has_loop && chain.loop_start.is_some_and(|ls| segment.start < ls) {
                 let first = &graph.passes[chain.passes[segment.start]].decl.name;
-                return Err(graph.error_at(first, format!("{describe} mixes the step '{first}' with loop passes; with loops: Host a kernel holds steps or loop passes, not both")));
+                return Err(graph.error_in_layout(layout_name, first, format!("{describe} mixes the step '{first}' with loop passes; with loops: Host a kernel holds steps or loop passes, not both")));
             }
             false
         }
@@ -510,7 +525,7 @@ fn apply_policy(
             .expect("every start chain has a start kernel");
         if kernels[start].segment.end < ls {
             let step = &graph.passes[chain.passes[kernels[start].segment.end]].decl.name;
-            return Err(graph.error_at(
+            return Err(graph.error_in_layout(layout_name, 
                 step,
                 format!("layout '{layout_name}': with policy {:?} the start kernel regenerates items every iteration, so it must also hold the step '{step}' that comes before the loop", layout.policy),
             ));

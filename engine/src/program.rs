@@ -425,6 +425,11 @@ impl Program {
             );
             out.insert(format!("alive flags of {item} (chain {c})"), 4 * cap);
         }
+        for (b, boundary) in self.plan.boundaries.iter().enumerate() {
+            let item = &g.chains[boundary.chain].item;
+            let one = 16 + 4 * self.words[item].len() as u64 * self.pools[&boundary.chain];
+            out.insert(format!("boundary {b} of {item}"), one * (1 + boundary.pingpong as u64));
+        }
         for (q, &cap) in &self.queue_capacity {
             out.insert(
                 format!("queue '{q}'"),

@@ -102,9 +102,11 @@ fn explain_prints_kernels_and_resources_of_each_layout() {
     for needle in [
         "layout 'NaivePTsk'",
         "layout 'NaivePTmk'",
-        "k0_generate_extend_shadow",
-        "k1_extend",
+        "layout 'WavefrontPT'",
+        "k0_generate_trace_logic",
+        "k1_trace_logic_material",
         "queue 'shadow'",
+        "compacted",
         "resources:",
         "film:",
         "GPU memory",
@@ -249,4 +251,26 @@ fn ambient_occlusion_renders_through_the_cli() {
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(exr.is_file());
+}
+
+#[test]
+fn fusing_across_a_barrier_names_both_passes_and_the_resource() {
+    let (text, path) = pt_variant(
+        "barrier",
+        "\"NaivePTsk\": (",
+        "\"Fused\": (kernels: [[\"generate\", \"trace\", \"logic\", \"material\", \"shadow\", \"accumulate\"]]),\n        \"NaivePTsk\": (",
+    );
+    let err = fails(&["render", "--graph", path.to_str().unwrap(), "--layout", "Fused", "--res", "8x8", "--frames", "1"]);
+    assert!(err.contains("'generate'") && err.contains("'accumulate'") && err.contains("'film'") && err.contains("barrier"), "{err}");
+    assert!(err.contains(&format!("barrier.ron:{}:", line_of(&text, "\"accumulate\"]]"))), "{err}");
+}
+
+#[test]
+fn a_layout_naming_an_unknown_pass_or_option_is_refused() {
+    let (_, path) = pt_variant("layout-pass", "\"NaivePTsk\": (", "\"Odd\": (kernels: [[\"generate\", \"trace\", \"logic\", \"material\", \"shade\"], [\"shadow\"], [\"accumulate\"]]),\n        \"NaivePTsk\": (");
+    let err = fails(&["render", "--graph", path.to_str().unwrap(), "--layout", "Odd", "--res", "8x8", "--frames", "1"]);
+    assert!(err.contains("unknown pass 'shade'") && err.contains("'Odd'"), "{err}");
+    let (text, path) = pt_variant("layout-option", "            loops: Host,\n            policy: Compaction,", "            loops: Host,\n            polcy: Compaction,");
+    let err = fails(&["render", "--graph", path.to_str().unwrap(), "--res", "8x8", "--frames", "1"]);
+    assert!(err.contains("polcy") && err.contains(&format!("layout-option.ron:{}:", line_of(&text, "polcy"))), "{err}");
 }
