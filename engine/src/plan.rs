@@ -525,7 +525,7 @@ fn apply_policy(
             .expect("every start chain has a start kernel");
         if kernels[start].segment.end < ls {
             let step = &graph.passes[chain.passes[kernels[start].segment.end]].decl.name;
-            return Err(graph.error_in_layout(layout_name, 
+            return Err(graph.error_in_layout(layout_name,
                 step,
                 format!("layout '{layout_name}': with policy {:?} the start kernel regenerates items every iteration, so it must also hold the step '{step}' that comes before the loop", layout.policy),
             ));
