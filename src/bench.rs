@@ -59,7 +59,15 @@ impl Measurement {
 }
 
 /// Renders one warm-up frame, then frames until `budget` has passed (at least one).
-pub fn measure(gpu: &Gpu, graph: &Graph, layout: &str, decl: LayoutDecl, scene: &LoadedScene, options: SessionOptions, budget: Duration) -> Result<Measurement> {
+pub fn measure(
+    gpu: &Gpu,
+    graph: &Graph,
+    layout: &str,
+    decl: LayoutDecl,
+    scene: &LoadedScene,
+    options: SessionOptions,
+    budget: Duration,
+) -> Result<Measurement> {
     let (resolution, spp) = ((options.width, options.height), options.samples_per_frame);
     let mut session = Session::with_layout(gpu, graph, layout, decl, scene, options)?;
     session.render_frame()?;
@@ -74,7 +82,12 @@ pub fn measure(gpu: &Gpu, graph: &Graph, layout: &str, decl: LayoutDecl, scene: 
     let kernel_ms: BTreeMap<String, f64> = session
         .kernel_seconds
         .iter()
-        .map(|(k, v)| (k.clone(), 1e3 * (v - kernels0.get(k).copied().unwrap_or(0.0)) / frames as f64))
+        .map(|(k, v)| {
+            (
+                k.clone(),
+                1e3 * (v - kernels0.get(k).copied().unwrap_or(0.0)) / frames as f64,
+            )
+        })
         .collect();
     Ok(Measurement {
         layout: layout.to_string(),
@@ -90,8 +103,15 @@ pub fn measure(gpu: &Gpu, graph: &Graph, layout: &str, decl: LayoutDecl, scene: 
 }
 
 /// The paper's range of paths per frame (3.3e5 to 1e8) as (width, height, spp).
-pub const DEFAULT_POINTS: [(u32, u32, u32); 7] =
-    [(768, 432, 1), (1280, 720, 1), (1280, 720, 2), (1280, 720, 4), (1280, 720, 11), (1280, 720, 33), (1280, 720, 108)];
+pub const DEFAULT_POINTS: [(u32, u32, u32); 7] = [
+    (768, 432, 1),
+    (1280, 720, 1),
+    (1280, 720, 2),
+    (1280, 720, 4),
+    (1280, 720, 11),
+    (1280, 720, 33),
+    (1280, 720, 108),
+];
 
 fn mega(v: f64) -> String {
     format!("{:.1}", v / 1e6)
@@ -99,14 +119,20 @@ fn mega(v: f64) -> String {
 
 /// A count with a k / M suffix.
 fn count(v: u64) -> String {
-    if v >= 1_000_000 { format!("{:.2} M", v as f64 / 1e6) } else { format!("{:.1} k", v as f64 / 1e3) }
+    if v >= 1_000_000 {
+        format!("{:.2} M", v as f64 / 1e6)
+    } else {
+        format!("{:.1} k", v as f64 / 1e3)
+    }
 }
 
 /// Writes `bench.csv`, `bench.md` (Mrays/s per layout and frame size, the paper's Table I
 /// form, plus a detail table) and `rays_per_second.png` into `dir`; returns the Markdown.
 pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result<String> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let mut csv = String::from("layout,width,height,spp,paths_per_frame,frames,seconds,rays,rays_per_s,gpu_rays_per_s,samples_per_s,frames_per_s,memory_mib,kernel_ms\n");
+    let mut csv = String::from(
+        "layout,width,height,spp,paths_per_frame,frames,seconds,rays,rays_per_s,gpu_rays_per_s,samples_per_s,frames_per_s,memory_mib,kernel_ms\n",
+    );
     for m in results {
         let kernels: Vec<String> = m.kernel_ms.iter().map(|(k, v)| format!("{k}={v:.4}")).collect();
         let _ = writeln!(
@@ -140,7 +166,9 @@ pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result
         }
     }
     sizes.sort();
-    let mut md = format!("## {title}\n\nMillions of rays per second (wall-clock; GPU-time rate in parentheses), by paths per frame.\n\n| layout |");
+    let mut md = format!(
+        "## {title}\n\nMillions of rays per second (wall-clock; GPU-time rate in parentheses), by paths per frame.\n\n| layout |"
+    );
     for s in &sizes {
         let _ = write!(md, " {} |", count(*s));
     }
@@ -152,7 +180,12 @@ pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result
         for s in &sizes {
             match results.iter().find(|m| m.layout == *l && m.paths_per_frame() == *s) {
                 Some(m) => {
-                    let _ = write!(md, " {} ({}) |", mega(m.rays_per_second()), mega(m.gpu_rays_per_second()));
+                    let _ = write!(
+                        md,
+                        " {} ({}) |",
+                        mega(m.rays_per_second()),
+                        mega(m.gpu_rays_per_second())
+                    );
                 }
                 None => md.push_str(" – |"),
             }
@@ -178,12 +211,22 @@ pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result
         .iter()
         .map(|l| Series {
             label: l.to_string(),
-            points: results.iter().filter(|m| m.layout == *l).map(|m| (m.paths_per_frame() as f64, m.rays_per_second() / 1e9)).collect(),
+            points: results
+                .iter()
+                .filter(|m| m.layout == *l)
+                .map(|m| (m.paths_per_frame() as f64, m.rays_per_second() / 1e9))
+                .collect(),
         })
         .collect();
     line_plot(
         &dir.join("rays_per_second.png"),
-        &Axes { title, x_label: "paths per frame", y_label: "rays per second (10^9, wall-clock)", log_x: true, log_y: false },
+        &Axes {
+            title,
+            x_label: "paths per frame",
+            y_label: "rays per second (10^9, wall-clock)",
+            log_x: true,
+            log_y: false,
+        },
         &series,
     )?;
     Ok(md)

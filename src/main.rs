@@ -4,8 +4,8 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::render::{LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
-use lightgraph_engine::ir::StateStorage;
 use lightgraph::{assets, output};
+use lightgraph_engine::ir::StateStorage;
 use lightgraph_engine::{ConstValue, Gpu, Plan, Program};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -182,8 +182,19 @@ fn options(
         }
         constants.insert("MAX_PATH_LENGTH".into(), ConstValue::U32(n));
     }
-    let layout = LayoutOverrides { threads: common.threads, workgroup_size: common.workgroup, state: common.state };
-    Ok(SessionOptions { width, height, samples_per_frame: common.spp, seed, constants, layout })
+    let layout = LayoutOverrides {
+        threads: common.threads,
+        workgroup_size: common.workgroup,
+        state: common.state,
+    };
+    Ok(SessionOptions {
+        width,
+        height,
+        samples_per_frame: common.spp,
+        seed,
+        constants,
+        layout,
+    })
 }
 
 fn si(v: f64) -> String {
@@ -203,7 +214,10 @@ fn render(args: RenderArgs) -> Result<()> {
     let opts = options(c, &scene, &graph.constants, args.seed)?;
     let (layout, decl) = match args.layout.as_deref() {
         Some("auto") => {
-            eprintln!("--layout auto: measuring every legal layout of '{}' for {:?} each", graph.name, args.tune_time);
+            eprintln!(
+                "--layout auto: measuring every legal layout of '{}' for {:?} each",
+                graph.name, args.tune_time
+            );
             let trials = lightgraph::tune::autotune(&gpu, &graph, &scene, &opts, args.tune_time, |t| {
                 eprintln!("  {:>9.1} Msamples/s  {}", t.score() / 1e6, t.name);
             })?;
@@ -215,11 +229,19 @@ fn render(args: RenderArgs) -> Result<()> {
             }
             std::fs::write(&report, &table)?;
             let best = &trials[0];
-            eprintln!("winner: {} ({:.1} Msamples/s); table in {}", best.name, best.score() / 1e6, report.display());
+            eprintln!(
+                "winner: {} ({:.1} Msamples/s); table in {}",
+                best.name,
+                best.score() / 1e6,
+                report.display()
+            );
             (best.name.clone(), best.decl.clone())
         }
         Some(name) => (name.to_string(), Plan::new(&graph, name)?.layout),
-        None => (graph.default_layout.clone(), graph.layouts[&graph.default_layout].clone()),
+        None => (
+            graph.default_layout.clone(),
+            graph.layouts[&graph.default_layout].clone(),
+        ),
     };
     let (w, h) = (opts.width, opts.height);
     eprintln!(
@@ -380,9 +402,20 @@ fn bench(args: BenchArgs) -> Result<()> {
     let layouts: Vec<(String, lightgraph_engine::ir::LayoutDecl)> = match args.layouts.as_str() {
         "all" => graph.layouts.iter().map(|(n, d)| (n.clone(), d.clone())).collect(),
         "auto" => lightgraph_engine::auto::legal_layouts(&graph, &graph.layouts[&graph.default_layout]),
-        list => list.split(',').map(|n| Ok((n.to_string(), Plan::new(&graph, n)?.layout))).collect::<Result<_>>()?,
+        list => list
+            .split(',')
+            .map(|n| Ok((n.to_string(), Plan::new(&graph, n)?.layout)))
+            .collect::<Result<_>>()?,
     };
-    eprintln!("{} | scene {} | graph {} | {} layouts x {} frame sizes, {:?} each", gpu.describe(), c.scene, graph.name, layouts.len(), points.len(), args.time);
+    eprintln!(
+        "{} | scene {} | graph {} | {} layouts x {} frame sizes, {:?} each",
+        gpu.describe(),
+        c.scene,
+        graph.name,
+        layouts.len(),
+        points.len(),
+        args.time
+    );
     let mut results = Vec::new();
     for (w, h, spp) in points {
         for (name, decl) in &layouts {
@@ -402,13 +435,29 @@ fn bench(args: BenchArgs) -> Result<()> {
                     );
                     results.push(m);
                 }
-                Err(e) => eprintln!("  {:>8.2} M paths  {name}: failed: {e:#}", (w * h) as f64 * spp as f64 / 1e6),
+                Err(e) => eprintln!(
+                    "  {:>8.2} M paths  {name}: failed: {e:#}",
+                    (w * h) as f64 * spp as f64 / 1e6
+                ),
             }
         }
     }
-    let title = format!("{} on {}, {} ({})", graph.name, c.scene, gpu.info.name, if args.layouts == "auto" { "every legal layout" } else { "named layouts" });
+    let title = format!(
+        "{} on {}, {} ({})",
+        graph.name,
+        c.scene,
+        gpu.info.name,
+        if args.layouts == "auto" {
+            "every legal layout"
+        } else {
+            "named layouts"
+        }
+    );
     let md = lightgraph::bench::write_reports(&args.out, &title, &results)?;
-    println!("{md}\nwrote {}/bench.md, bench.csv and rays_per_second.png", args.out.display());
+    println!(
+        "{md}\nwrote {}/bench.md, bench.csv and rays_per_second.png",
+        args.out.display()
+    );
     Ok(())
 }
 

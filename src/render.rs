@@ -163,7 +163,13 @@ pub struct Session<'g> {
 
 impl<'g> Session<'g> {
     /// Plans, compiles and instantiates `graph` in its layout called `layout` for `scene`.
-    pub fn new(gpu: &'g Gpu, graph: &Graph, layout: &str, scene: &LoadedScene, options: SessionOptions) -> Result<Session<'g>> {
+    pub fn new(
+        gpu: &'g Gpu,
+        graph: &Graph,
+        layout: &str,
+        scene: &LoadedScene,
+        options: SessionOptions,
+    ) -> Result<Session<'g>> {
         // Resolving by name first gives the error that lists the graph's layouts.
         let decl = Plan::new(graph, layout)?.layout;
         Self::with_layout(gpu, graph, layout, decl, scene, options)
@@ -234,7 +240,11 @@ impl<'g> Session<'g> {
         let external: u64 = program
             .sizes
             .iter()
-            .filter_map(|(name, size)| self.instance.external_count(name).map(|n| n * size.element_bytes as u64))
+            .filter_map(|(name, size)| {
+                self.instance
+                    .external_count(name)
+                    .map(|n| n * size.element_bytes as u64)
+            })
             .sum();
         program.allocated_bytes().values().sum::<u64>() + external
     }

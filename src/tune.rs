@@ -30,7 +30,11 @@ impl Trial {
 fn options_of(decl: &LayoutDecl) -> String {
     let mut s = format!("wg {}", decl.workgroup_size);
     if decl.policy != Policy::Naive {
-        let _ = write!(s, ", {} threads", decl.threads.map_or("default".to_string(), |t| t.to_string()));
+        let _ = write!(
+            s,
+            ", {} threads",
+            decl.threads.map_or("default".to_string(), |t| t.to_string())
+        );
     }
     if decl.kernels.len() > decl.kernels.iter().filter(|k| k.len() == 1).count().min(1) {
         let _ = write!(s, ", {:?}", decl.state);
@@ -40,15 +44,29 @@ fn options_of(decl: &LayoutDecl) -> String {
 
 /// Measures every legal layout for `budget` each, then the three fastest over option values;
 /// returns all trials, fastest first. `report` sees each trial as it finishes.
-pub fn autotune(gpu: &Gpu, graph: &Graph, scene: &LoadedScene, options: &SessionOptions, budget: Duration, mut report: impl FnMut(&Trial)) -> Result<Vec<Trial>> {
+pub fn autotune(
+    gpu: &Gpu,
+    graph: &Graph,
+    scene: &LoadedScene,
+    options: &SessionOptions,
+    budget: Duration,
+    mut report: impl FnMut(&Trial),
+) -> Result<Vec<Trial>> {
     let base = graph.layouts[&graph.default_layout].clone();
-    let candidates = lightgraph_engine::auto::legal_layouts(graph, &LayoutDecl { kernels: Vec::new(), ..base });
+    let candidates = lightgraph_engine::auto::legal_layouts(
+        graph,
+        &LayoutDecl {
+            kernels: Vec::new(),
+            ..base
+        },
+    );
     if candidates.is_empty() {
         bail!("graph '{}' has no legal layout", graph.name);
     }
     let mut trials = Vec::new();
     let mut run = |name: String, decl: LayoutDecl, trials: &mut Vec<Trial>| {
-        let result = measure(gpu, graph, &name, decl.clone(), scene, options.clone(), budget).map_err(|e| format!("{e:#}"));
+        let result =
+            measure(gpu, graph, &name, decl.clone(), scene, options.clone(), budget).map_err(|e| format!("{e:#}"));
         let trial = Trial { name, decl, result };
         report(&trial);
         trials.push(trial);
@@ -58,18 +76,35 @@ pub fn autotune(gpu: &Gpu, graph: &Graph, scene: &LoadedScene, options: &Session
         run(name, decl, &mut trials);
     }
     trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
-    let best: Vec<(String, LayoutDecl)> = trials.iter().take(3).map(|t| (t.name.clone(), t.decl.clone())).collect();
+    let best: Vec<(String, LayoutDecl)> = trials
+        .iter()
+        .take(3)
+        .map(|t| (t.name.clone(), t.decl.clone()))
+        .collect();
     for (name, decl) in best {
         let base_name = name.rsplit_once(" (").map_or(name.as_str(), |(n, _)| n).to_string();
         let plan = Plan::with_decl(graph, &name, decl.clone())?;
         let pooled = plan.kernels.iter().any(|k| k.regenerates);
         let stores = !plan.stored_chains.is_empty() || !plan.boundaries.is_empty() || !plan.queued_streams.is_empty();
-        let threads: Vec<Option<u64>> = if pooled { vec![Some(1 << 16), Some(1 << 17), Some(1 << 19), Some(1 << 20)] } else { vec![decl.threads] };
-        let states: &[StateStorage] = if stores { &[StateStorage::SoA, StateStorage::AoS] } else { &[StateStorage::SoA] };
+        let threads: Vec<Option<u64>> = if pooled {
+            vec![Some(1 << 16), Some(1 << 17), Some(1 << 19), Some(1 << 20)]
+        } else {
+            vec![decl.threads]
+        };
+        let states: &[StateStorage] = if stores {
+            &[StateStorage::SoA, StateStorage::AoS]
+        } else {
+            &[StateStorage::SoA]
+        };
         for workgroup_size in [32, 64, 128, 256] {
             for &t in &threads {
                 for &state in states {
-                    let variant = LayoutDecl { workgroup_size, threads: t, state, ..decl.clone() };
+                    let variant = LayoutDecl {
+                        workgroup_size,
+                        threads: t,
+                        state,
+                        ..decl.clone()
+                    };
                     let label = format!("{base_name} ({})", options_of(&variant));
                     if trials.iter().any(|tr| tr.name == label) {
                         continue;
@@ -85,7 +120,9 @@ pub fn autotune(gpu: &Gpu, graph: &Graph, scene: &LoadedScene, options: &Session
 
 /// The tuner's table as Markdown, fastest first.
 pub fn table(trials: &[Trial]) -> String {
-    let mut md = String::from("| rank | layout | Msamples/s | Mrays/s | GPU Mrays/s | memory MiB |\n|---|---|---|---|---|---|\n");
+    let mut md = String::from(
+        "| rank | layout | Msamples/s | Mrays/s | GPU Mrays/s | memory MiB |\n|---|---|---|---|---|---|\n",
+    );
     for (i, t) in trials.iter().enumerate() {
         match &t.result {
             Ok(m) => {
@@ -101,7 +138,12 @@ pub fn table(trials: &[Trial]) -> String {
                 );
             }
             Err(e) => {
-                let _ = writeln!(md, "| – | {} | failed: {} | | | |", t.name, e.replace('|', "/").replace('\n', " "));
+                let _ = writeln!(
+                    md,
+                    "| – | {} | failed: {} | | | |",
+                    t.name,
+                    e.replace('|', "/").replace('\n', " ")
+                );
             }
         }
     }

@@ -79,13 +79,28 @@ fn every_enumerated_layout_computes_the_same_walks() {
     let layouts = lightgraph_engine::auto::legal_layouts(&g, &Default::default());
     // seed/step/record in phase 0 (5 partitions) by loop mode and policy, minus the illegal
     // and the duplicates; the named layouts of the file are among them.
-    assert!(layouts.len() >= 8, "{:?}", layouts.iter().map(|(n, _)| n).collect::<Vec<_>>());
+    assert!(
+        layouts.len() >= 8,
+        "{:?}",
+        layouts.iter().map(|(n, _)| n).collect::<Vec<_>>()
+    );
     let n = 300;
     let expected = cpu_steps(n);
     for (name, decl) in layouts {
         eprintln!("layout {name}");
-        let plan = Plan::with_decl(&g, &name, LayoutDecl { threads: Some(37), ..decl }).unwrap();
-        let spec = Specialization { constants: [("N".to_string(), ConstValue::U32(n))].into_iter().collect(), ..Default::default() };
+        let plan = Plan::with_decl(
+            &g,
+            &name,
+            LayoutDecl {
+                threads: Some(37),
+                ..decl
+            },
+        )
+        .unwrap();
+        let spec = Specialization {
+            constants: [("N".to_string(), ConstValue::U32(n))].into_iter().collect(),
+            ..Default::default()
+        };
         let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
         let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
         let stats = instance.run_frame(0, 0).unwrap();

@@ -260,17 +260,62 @@ fn fusing_across_a_barrier_names_both_passes_and_the_resource() {
         "\"NaivePTsk\": (",
         "\"Fused\": (kernels: [[\"generate\", \"trace\", \"logic\", \"material\", \"shadow\", \"accumulate\"]]),\n        \"NaivePTsk\": (",
     );
-    let err = fails(&["render", "--graph", path.to_str().unwrap(), "--layout", "Fused", "--res", "8x8", "--frames", "1"]);
-    assert!(err.contains("'generate'") && err.contains("'accumulate'") && err.contains("'film'") && err.contains("barrier"), "{err}");
-    assert!(err.contains(&format!("barrier.ron:{}:", line_of(&text, "\"accumulate\"]]"))), "{err}");
+    let err = fails(&[
+        "render",
+        "--graph",
+        path.to_str().unwrap(),
+        "--layout",
+        "Fused",
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ]);
+    assert!(
+        err.contains("'generate'") && err.contains("'accumulate'") && err.contains("'film'") && err.contains("barrier"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("barrier.ron:{}:", line_of(&text, "\"accumulate\"]]"))),
+        "{err}"
+    );
 }
 
 #[test]
 fn a_layout_naming_an_unknown_pass_or_option_is_refused() {
-    let (_, path) = pt_variant("layout-pass", "\"NaivePTsk\": (", "\"Odd\": (kernels: [[\"generate\", \"trace\", \"logic\", \"material\", \"shade\"], [\"shadow\"], [\"accumulate\"]]),\n        \"NaivePTsk\": (");
-    let err = fails(&["render", "--graph", path.to_str().unwrap(), "--layout", "Odd", "--res", "8x8", "--frames", "1"]);
+    let (_, path) = pt_variant(
+        "layout-pass",
+        "\"NaivePTsk\": (",
+        "\"Odd\": (kernels: [[\"generate\", \"trace\", \"logic\", \"material\", \"shade\"], [\"shadow\"], [\"accumulate\"]]),\n        \"NaivePTsk\": (",
+    );
+    let err = fails(&[
+        "render",
+        "--graph",
+        path.to_str().unwrap(),
+        "--layout",
+        "Odd",
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ]);
     assert!(err.contains("unknown pass 'shade'") && err.contains("'Odd'"), "{err}");
-    let (text, path) = pt_variant("layout-option", "            loops: Host,\n            policy: Compaction,", "            loops: Host,\n            polcy: Compaction,");
-    let err = fails(&["render", "--graph", path.to_str().unwrap(), "--res", "8x8", "--frames", "1"]);
-    assert!(err.contains("polcy") && err.contains(&format!("layout-option.ron:{}:", line_of(&text, "polcy"))), "{err}");
+    let (text, path) = pt_variant(
+        "layout-option",
+        "            loops: Host,\n            policy: Compaction,",
+        "            loops: Host,\n            polcy: Compaction,",
+    );
+    let err = fails(&[
+        "render",
+        "--graph",
+        path.to_str().unwrap(),
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ]);
+    assert!(
+        err.contains("polcy") && err.contains(&format!("layout-option.ron:{}:", line_of(&text, "polcy"))),
+        "{err}"
+    );
 }

@@ -57,7 +57,16 @@ pub fn render(
 
 /// Like [`render`], with the layout's thread pool overridden.
 #[allow(clippy::too_many_arguments)]
-pub fn render_with(scene: &LoadedScene, graph: &str, layout: &str, size: (u32, u32), spp: u32, frames: u32, seed: u32, threads: Option<u64>) -> Rendered {
+pub fn render_with(
+    scene: &LoadedScene,
+    graph: &str,
+    layout: &str,
+    size: (u32, u32),
+    spp: u32,
+    frames: u32,
+    seed: u32,
+    threads: Option<u64>,
+) -> Rendered {
     let graph = load_graph(graph).unwrap();
     let options = SessionOptions {
         width: size.0,
@@ -65,13 +74,20 @@ pub fn render_with(scene: &LoadedScene, graph: &str, layout: &str, size: (u32, u
         samples_per_frame: spp,
         seed,
         constants: Default::default(),
-        layout: lightgraph::render::LayoutOverrides { threads, ..Default::default() },
+        layout: lightgraph::render::LayoutOverrides {
+            threads,
+            ..Default::default()
+        },
     };
     let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
     for _ in 0..frames {
         session.render_frame().unwrap();
     }
-    Rendered { image: session.image().unwrap(), counters: session.counters.clone(), loops_capped: session.loops_capped }
+    Rendered {
+        image: session.image().unwrap(),
+        counters: session.counters.clone(),
+        loops_capped: session.loops_capped,
+    }
 }
 
 /// Mean and standard error of the mean radiance over the pixels `select` keeps, per channel.

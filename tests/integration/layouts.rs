@@ -61,11 +61,27 @@ fn pooled_layouts_regenerate_across_many_iterations() {
     // A pool far smaller than the frame: every thread must take many paths in turn.
     let scene = load_scene("cornell-glossy-point").unwrap();
     let reference = render(&scene, "pt", "NaivePTsk", (24, 24), 2, 1, 5, &[]);
-    for layout in ["RegenerationPTsk", "RegenerationPTmk1", "RegenerationPTmk3", "StreamingPTmk1", "StreamingPTmk3", "WavefrontPT"] {
+    for layout in [
+        "RegenerationPTsk",
+        "RegenerationPTmk1",
+        "RegenerationPTmk3",
+        "StreamingPTmk1",
+        "StreamingPTmk3",
+        "WavefrontPT",
+    ] {
         let other = crate::common::render_with(&scene, "pt", layout, (24, 24), 2, 1, 5, Some(97));
         assert_eq!(reference.counters, other.counters, "{layout} with a pool of 97 threads");
-        let worst = reference.image.mean.iter().zip(&other.image.mean).flat_map(|(p, q)| (0..3).map(move |c| ((p[c] - q[c]).abs() / p[c].abs().max(q[c].abs()).max(1e-3)) as f64)).fold(0.0, f64::max);
-        assert!(worst < 1e-5, "{layout} with a pool of 97 threads differs by {worst:.2e}");
+        let worst = reference
+            .image
+            .mean
+            .iter()
+            .zip(&other.image.mean)
+            .flat_map(|(p, q)| (0..3).map(move |c| ((p[c] - q[c]).abs() / p[c].abs().max(q[c].abs()).max(1e-3)) as f64))
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-5,
+            "{layout} with a pool of 97 threads differs by {worst:.2e}"
+        );
     }
 }
 
@@ -73,12 +89,34 @@ fn pooled_layouts_regenerate_across_many_iterations() {
 fn auto_layout_tunes_the_ambient_occlusion_graph() {
     let graph = load_graph("ao").unwrap();
     let scene = load_scene("cornell-diffuse").unwrap();
-    let options = lightgraph::render::SessionOptions { width: 16, height: 16, samples_per_frame: 1, seed: 1, constants: Default::default(), layout: Default::default() };
+    let options = lightgraph::render::SessionOptions {
+        width: 16,
+        height: 16,
+        samples_per_frame: 1,
+        seed: 1,
+        constants: Default::default(),
+        layout: Default::default(),
+    };
     let mut seen = 0;
-    let trials = lightgraph::tune::autotune(crate::common::gpu(), &graph, &scene, &options, std::time::Duration::from_millis(20), |_| seen += 1).unwrap();
+    let trials = lightgraph::tune::autotune(
+        crate::common::gpu(),
+        &graph,
+        &scene,
+        &options,
+        std::time::Duration::from_millis(20),
+        |_| seen += 1,
+    )
+    .unwrap();
     assert_eq!(seen, trials.len());
-    assert!(trials.iter().all(|t| t.result.is_ok()), "{}", lightgraph::tune::table(&trials));
+    assert!(
+        trials.iter().all(|t| t.result.is_ok()),
+        "{}",
+        lightgraph::tune::table(&trials)
+    );
     assert!(trials.windows(2).all(|w| w[0].score() >= w[1].score()), "fastest first");
     let table = lightgraph::tune::table(&trials);
-    assert!(table.contains("ao_primary+ao_occlusion") && table.contains("[ao_primary] [ao_occlusion]"), "{table}");
+    assert!(
+        table.contains("ao_primary+ao_occlusion") && table.contains("[ao_primary] [ao_occlusion]"),
+        "{table}"
+    );
 }
