@@ -3,10 +3,11 @@
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use lightgraph::render::{LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
+use lightgraph::render::{LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
 use lightgraph::{assets, output};
 use lightgraph_engine::ir::StateStorage;
 use lightgraph_engine::{ConstValue, Gpu, Plan, Program};
+use lightgraph_scenes::bvh::BvhKind;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -86,6 +87,18 @@ struct Common {
     /// Item state between split kernels: soa or aos (overrides the layout's).
     #[arg(long, value_parser = parse_state)]
     state: Option<StateStorage>,
+    /// Acceleration structure: bvh2 (binary, both children's boxes per node) or cwbvh
+    /// (compressed 8-wide, Ylitie et al. 2017).
+    #[arg(long, value_parser = parse_bvh, default_value = "cwbvh")]
+    bvh: BvhKind,
+}
+
+fn parse_bvh(s: &str) -> Result<BvhKind, String> {
+    match s.to_lowercase().as_str() {
+        "bvh2" => Ok(BvhKind::Bvh2),
+        "cwbvh" => Ok(BvhKind::Cwbvh),
+        _ => Err(format!("'{s}' is not bvh2 or cwbvh")),
+    }
 }
 
 fn parse_state(s: &str) -> Result<StateStorage, String> {
@@ -208,7 +221,7 @@ fn si(v: f64) -> String {
 
 fn render(args: RenderArgs) -> Result<()> {
     let c = &args.common;
-    let scene = load_scene(&c.scene)?;
+    let scene = load_scene_with(&c.scene, c.bvh)?;
     let graph = load_graph(&c.graph)?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
     let opts = options(c, &scene, &graph.constants, args.seed)?;
@@ -341,7 +354,7 @@ fn render(args: RenderArgs) -> Result<()> {
 fn explain(args: ExplainArgs) -> Result<()> {
     let c = &args.common;
     let graph = load_graph(&c.graph)?;
-    let scene = load_scene(&c.scene)?;
+    let scene = load_scene_with(&c.scene, c.bvh)?;
     let opts = options(c, &scene, &graph.constants, 1)?;
     let layouts: Vec<String> = match &args.layout {
         Some(l) => vec![l.clone()],
@@ -383,7 +396,7 @@ fn explain(args: ExplainArgs) -> Result<()> {
 
 fn bench(args: BenchArgs) -> Result<()> {
     let c = &args.common;
-    let scene = load_scene(&c.scene)?;
+    let scene = load_scene_with(&c.scene, c.bvh)?;
     let graph = load_graph(&c.graph)?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
     let points: Vec<(u32, u32, u32)> = match &args.points {

@@ -4,6 +4,7 @@
 use anyhow::{Context, Result, anyhow, bail};
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{ConstValue, FrameStats, Gpu, Graph, Instance, Plan, Program, Specialization};
+use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::model::{MisHeuristic, RussianRoulette, Scene};
 use lightgraph_scenes::{CompiledScene, parse_scene};
 use std::collections::{BTreeMap, BTreeSet};
@@ -21,18 +22,33 @@ pub struct LoadedScene {
     pub load_seconds: f64,
 }
 
-/// Loads a built-in scene by name, or a scene file by path.
+/// Loads a built-in scene by name, or a scene file by path, with a BVH2.
 pub fn load_scene(name: &str) -> Result<LoadedScene> {
-    let start = Instant::now();
+    load_scene_with(name, BvhKind::Bvh2)
+}
+
+/// Loads a built-in scene by name, or a scene file by path, with a BVH of `kind`.
+pub fn load_scene_with(name: &str, kind: BvhKind) -> Result<LoadedScene> {
     let (file, text) = crate::assets::scene_text(name).map_err(|e| anyhow!(e))?;
-    let scene = parse_scene(&file, &text)?;
-    let compiled = CompiledScene::new(&scene).map_err(|e| anyhow!("{file}: {e}"))?;
-    Ok(LoadedScene {
-        name: name.to_string(),
-        scene,
-        compiled,
-        load_seconds: start.elapsed().as_secs_f64(),
-    })
+    let mut scene = LoadedScene::parse(&file, &text, kind)?;
+    scene.name = name.to_string();
+    Ok(scene)
+}
+
+impl LoadedScene {
+    /// Parses, validates and compiles the RON scene `text` (`file` names it in errors) with
+    /// a BVH of `kind`.
+    pub fn parse(file: &str, text: &str, kind: BvhKind) -> Result<LoadedScene> {
+        let start = Instant::now();
+        let scene = parse_scene(file, text)?;
+        let compiled = CompiledScene::with_bvh(&scene, kind).map_err(|e| anyhow!("{file}: {e}"))?;
+        Ok(LoadedScene {
+            name: file.to_string(),
+            scene,
+            compiled,
+            load_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
 }
 
 /// Loads a graph by built-in name or `.ron` path.
@@ -192,7 +208,9 @@ impl<'g> Session<'g> {
             bail!("{paths} paths per frame is more than 2^32; use fewer samples per frame");
         }
         let plan = Plan::with_decl(graph, layout, options.layout.apply(decl))?;
-        let spec = specialization(graph, &scene.scene, &options, device_flags(gpu));
+        let mut flags = device_flags(gpu);
+        flags.extend(scene.compiled.bvh_kind.flag().map(String::from));
+        let spec = specialization(graph, &scene.scene, &options, flags);
         let program = Program::compile(&plan, &spec, &gpu.target())?;
         let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
         // The scene offers every scene resource; a graph takes those it declares.

@@ -50,6 +50,9 @@ struct Kernel {
     uses_frame: bool,
 }
 
+/// Maps a kernel's virtual boundary bindings to physical buffers.
+type Resolve = Box<dyn Fn(&BufferRef) -> BufferRef>;
+
 /// A program instantiated on a GPU, ready to run frames.
 pub struct Instance<'g> {
     gpu: &'g Gpu,
@@ -329,7 +332,7 @@ impl<'g> Instance<'g> {
             }
             .wgsl();
             let (module, uses) = compile_internal(&wgsl, &name, &program)?;
-            let sides: Vec<Box<dyn Fn(&BufferRef) -> BufferRef>> = (0..1 + boundary.pingpong as usize)
+            let sides: Vec<Resolve> = (0..1 + boundary.pingpong as usize)
                 .map(|side| {
                     Box::new(move |r: &BufferRef| {
                         if *r == BufferRef::BoundaryIn {
@@ -337,7 +340,7 @@ impl<'g> Instance<'g> {
                         } else {
                             r.clone()
                         }
-                    }) as Box<dyn Fn(&BufferRef) -> BufferRef>
+                    }) as Resolve
                 })
                 .collect();
             let refs: Vec<&dyn Fn(&BufferRef) -> BufferRef> = sides.iter().map(|f| f.as_ref()).collect();

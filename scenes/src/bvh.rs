@@ -10,6 +10,26 @@ use std::time::Duration;
 /// Deepest traversal stack the WGSL traversal supports.
 pub const MAX_DEPTH: usize = 64;
 
+/// Which acceleration structure a compiled scene carries (and the WGSL traverses).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BvhKind {
+    /// A binary BVH ([`build`], [`GpuBvhNode`]).
+    #[default]
+    Bvh2,
+    /// A compressed eight-wide BVH ([`crate::cwbvh::build`], [`crate::gpu::GpuCwbvhNode`]).
+    Cwbvh,
+}
+
+impl BvhKind {
+    /// The WGSL preprocessor flag that selects this kind's node struct and traversal.
+    pub fn flag(self) -> Option<&'static str> {
+        match self {
+            BvhKind::Bvh2 => None,
+            BvhKind::Cwbvh => Some("CWBVH"),
+        }
+    }
+}
+
 const EMPTY_MIN: [f32; 3] = [1e30; 3];
 const EMPTY_MAX: [f32; 3] = [-1e30; 3];
 

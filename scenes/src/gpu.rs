@@ -82,9 +82,9 @@ pub struct GpuPrimitive {
     pub kind: u32,
 }
 
-/// A BVH2 node holding both children's boxes (`BvhNode` in WGSL). A child with
-/// `count == 0` is the inner node at index `first`; otherwise it is a leaf holding primitives
-/// `first .. first + count`.
+/// A BVH2 node holding both children's boxes (`BvhNode` in WGSL without the `CWBVH` flag). A
+/// child with `count == 0` is the inner node at index `first`; otherwise it is a leaf holding
+/// primitives `first .. first + count`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct GpuBvhNode {
@@ -104,6 +104,45 @@ pub struct GpuBvhNode {
     pub right_max: [f32; 3],
     /// Right child primitive count (0: inner node).
     pub right_count: u32,
+}
+
+/// A compressed wide BVH node (`BvhNode` in WGSL when the `CWBVH` flag is set): obvhs's
+/// 80-byte `CwBvhNode` (Ylitie et al. 2017, with each axis' minima and maxima stored next to
+/// each other), its bytes packed into little-endian u32 words for WGSL: byte `k` of a word
+/// sits at bits `8k .. 8k + 8`, and the byte of child `i` in a `[u32; 2]` field is byte
+/// `i % 4` of word `i / 4`.
+///
+/// Child `i`'s box is `p + q * 2^(e - 127)` per axis for its quantized bounds `q` (0..=255)
+/// and the axis' exponent byte `e`. Its meta byte is 0 for an empty slot; `0b001_11sss`
+/// (`24 + i`, bit 5 set) for an inner node, which is node `child_base` plus the number of
+/// inner children in slots below `i`; for a leaf, the primitive count in unary in bits 5..8
+/// and the offset of its first primitive from `primitive_base` in bits 0..5.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct GpuCwbvhNode {
+    /// Origin of the child grids: the minimum of the node's box.
+    pub p: [f32; 3],
+    /// Bytes 0..3: the per-axis exponents `e` (biased like an f32's); byte 3: `imask`, bit
+    /// `i` set when child `i` is an inner node.
+    pub e_imask: u32,
+    /// Index of the first inner child node.
+    pub child_base: u32,
+    /// Index (into the primitives) of the first primitive of the leaf children.
+    pub primitive_base: u32,
+    /// Meta byte per child.
+    pub child_meta: [u32; 2],
+    /// Quantized box minimum x per child.
+    pub child_min_x: [u32; 2],
+    /// Quantized box maximum x per child.
+    pub child_max_x: [u32; 2],
+    /// Quantized box minimum y per child.
+    pub child_min_y: [u32; 2],
+    /// Quantized box maximum y per child.
+    pub child_max_y: [u32; 2],
+    /// Quantized box minimum z per child.
+    pub child_min_z: [u32; 2],
+    /// Quantized box maximum z per child.
+    pub child_max_z: [u32; 2],
 }
 
 /// A material (`Material` in WGSL), see [`crate::model::Material`].

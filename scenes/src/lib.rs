@@ -2,11 +2,13 @@
 //! GPU data the light-transport shaders read.
 
 pub mod bvh;
+pub mod cwbvh;
 pub mod gpu;
 pub mod model;
 
+use bvh::BvhKind;
 use glam::{Vec3, Vec3A};
-use gpu::{GpuBvhNode, GpuCamera, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, light_kind, primitive_kind};
+use gpu::{GpuCamera, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, light_kind, primitive_kind};
 use model::{FovAxis, Light, Look, Scene, Shape};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
@@ -119,17 +121,20 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
 pub struct CompiledScene {
     /// Scene-wide values.
     pub info: GpuSceneInfo,
-    /// Primitives in BVH order.
+    /// Primitives in the leaf order of the BVH.
     pub primitives: Vec<GpuPrimitive>,
-    /// BVH nodes.
-    pub bvh: Vec<GpuBvhNode>,
+    /// The kind of BVH built.
+    pub bvh_kind: BvhKind,
+    /// The BVH's nodes as the GPU reads them: [`gpu::GpuBvhNode`]s for [`BvhKind::Bvh2`],
+    /// [`gpu::GpuCwbvhNode`]s for [`BvhKind::Cwbvh`].
+    pub bvh: Vec<u8>,
     /// `order[i]`: index (in shape order, quads counting as two triangles) of primitive `i`.
     pub order: Vec<u32>,
     /// Materials, in name order.
     pub materials: Vec<GpuMaterial>,
     /// Lights: emissive triangles first, then the scene's other lights.
     pub lights: Vec<GpuLight>,
-    /// Depth of the BVH.
+    /// Depth of the BVH (in node levels for [`BvhKind::Cwbvh`]).
     pub bvh_depth: usize,
     /// Time spent building the BVH.
     pub bvh_time: Duration,
@@ -140,8 +145,14 @@ fn v3(a: [f32; 3]) -> Vec3 {
 }
 
 impl CompiledScene {
-    /// Flattens shapes into primitives, collects lights and builds the BVH.
+    /// Flattens shapes into primitives, collects lights and builds a BVH2.
     pub fn new(scene: &Scene) -> Result<CompiledScene, String> {
+        Self::with_bvh(scene, BvhKind::Bvh2)
+    }
+
+    /// Flattens shapes into primitives, collects lights and builds a BVH of `kind`. WGSL that
+    /// traverses it needs `kind`'s flag ([`BvhKind::flag`]).
+    pub fn with_bvh(scene: &Scene, kind: BvhKind) -> Result<CompiledScene, String> {
         let material_index: BTreeMap<&str, u32> = scene
             .materials
             .keys()
@@ -265,9 +276,18 @@ impl CompiledScene {
             hi = hi.max(*b);
         }
         let start = Instant::now();
-        let bvh = bvh::build(&boxes)?;
+        let (bvh, order, bvh_depth) = match kind {
+            BvhKind::Bvh2 => {
+                let b = bvh::build(&boxes)?;
+                (bytemuck::cast_slice(&b.nodes).to_vec(), b.order, b.depth)
+            }
+            BvhKind::Cwbvh => {
+                let b = cwbvh::build(&boxes)?;
+                (bytemuck::cast_slice(&b.nodes).to_vec(), b.order, b.depth)
+            }
+        };
         let bvh_time = start.elapsed();
-        let primitives: Vec<GpuPrimitive> = bvh.order.iter().map(|&i| prims[i as usize]).collect();
+        let primitives: Vec<GpuPrimitive> = order.iter().map(|&i| prims[i as usize]).collect();
         let center = (lo + hi) * 0.5;
         let info = GpuSceneInfo {
             center: center.into(),
@@ -280,11 +300,12 @@ impl CompiledScene {
         Ok(CompiledScene {
             info,
             primitives,
-            bvh: bvh.nodes,
-            order: bvh.order,
+            bvh_kind: kind,
+            bvh,
+            order,
             materials,
             lights,
-            bvh_depth: bvh.depth,
+            bvh_depth,
             bvh_time,
         })
     }
@@ -329,7 +350,7 @@ impl CompiledScene {
             "primitives".to_string(),
             bytemuck::cast_slice(&self.primitives).to_vec(),
         );
-        out.insert("bvh".to_string(), bytemuck::cast_slice(&self.bvh).to_vec());
+        out.insert("bvh".to_string(), self.bvh.clone());
         out.insert("materials".to_string(), bytemuck::cast_slice(&self.materials).to_vec());
         out.insert("lights".to_string(), bytemuck::cast_slice(&self.lights).to_vec());
         out
@@ -374,6 +395,32 @@ mod tests {
             (c.info.radius - 3f32.sqrt()).abs() < 1e-6,
             "bounding sphere of the unit sphere's box"
         );
+    }
+
+    #[test]
+    fn both_bvh_kinds_compile_with_their_own_primitive_order() {
+        let text = BASE.replace(
+            "shapes: [",
+            "shapes: [Sphere(center: (3.0, 0.0, 0.0), radius: 0.5, material: \"m\"), Triangle(vertices: ((0.0, 0.0, 2.0), (1.0, 0.0, 2.0), (0.0, 1.0, 2.0)), material: \"m\"), ",
+        );
+        let scene = parse_scene("s.ron", &text).unwrap();
+        for (kind, node_size) in [
+            (BvhKind::Bvh2, size_of::<gpu::GpuBvhNode>()),
+            (BvhKind::Cwbvh, size_of::<gpu::GpuCwbvhNode>()),
+        ] {
+            let c = CompiledScene::with_bvh(&scene, kind).unwrap();
+            assert_eq!(c.bvh_kind, kind);
+            assert!(!c.bvh.is_empty() && c.bvh.len().is_multiple_of(node_size), "{kind:?}");
+            let mut order = c.order.clone();
+            order.sort();
+            assert_eq!(order, vec![0, 1, 2], "{kind:?}: order is a permutation");
+            for (p, &i) in c.primitives.iter().zip(&c.order) {
+                let kind_of_shape =
+                    [primitive_kind::SPHERE, primitive_kind::TRIANGLE, primitive_kind::SPHERE][i as usize];
+                assert_eq!(p.kind, kind_of_shape, "{kind:?}: primitives follow order");
+            }
+            assert_eq!(c.resources(&CompiledScene::camera(&scene, 1, 1))["bvh"], c.bvh);
+        }
     }
 
     #[test]

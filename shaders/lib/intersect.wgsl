@@ -1,6 +1,6 @@
 // Ray intersection: triangles (Moeller-Trumbore), spheres (the numerically careful form of
-// Haines et al., Ray Tracing Gems ch. 7) and BVH2 traversal, closest hit and any hit.
-// Needs the resources `primitives` and `bvh`.
+// Haines et al., Ray Tracing Gems ch. 7) and BVH traversal, closest hit and any hit: BVH2, or
+// with the CWBVH flag a compressed wide BVH. Needs the resources `primitives` and `bvh`.
 
 struct Hit {
     t: f32,
@@ -56,18 +56,6 @@ fn intersect_sphere(o: vec3<f32>, d: vec3<f32>, p: Primitive, t_max: f32) -> f32
     return -1.0;
 }
 
-// Entry distance of the ray into a box, or a value > t_max when it misses. The exit distance
-// is widened by 2 ulp-ish so that boxes touched at grazing angles are not missed (Ize 2013).
-fn intersect_box(o: vec3<f32>, inv_d: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>, t_max: f32) -> f32 {
-    let t0 = (lo - o) * inv_d;
-    let t1 = (hi - o) * inv_d;
-    let near = min(t0, t1);
-    let far = max(t0, t1);
-    let t_near = max(max(near.x, near.y), max(near.z, 0.0));
-    let t_far = min(min(far.x, far.y), min(far.z, t_max)) * 1.00000024;
-    return select(INFINITE_DISTANCE * 2.0, t_near, t_near <= t_far);
-}
-
 fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     let tiny = vec3<f32>(1e-30);
     let big = select(vec3<f32>(-1e30), vec3<f32>(1e30), d >= vec3<f32>(0.0));
@@ -87,6 +75,138 @@ fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: 
             *hit = Hit(r.x, index, r.yz, true);
         }
     }
+}
+
+#if CWBVH
+// Compressed wide BVH traversal (Ylitie, Karras and Laine, HPG 2017, algorithm 1), children
+// in the order of the ray's octant. A node group (x: index of the node's first inner child,
+// y: bits 24..32 mark the hit inner children still to visit, at bit 24 + (slot ^ octant) so
+// that the highest bit is the nearest child along the ray; bits 0..8 the node's imask) and a
+// primitive group (x: first primitive, y: bit k set for primitive x + k still to test). Each
+// level pushes at most one group, so the stack needs the tree's depth less one (the host
+// refuses deeper trees, scenes/src/cwbvh.rs MAX_DEPTH).
+const BVH_STACK_SIZE: u32 = 32u;
+
+// The byte of child `i` in a packed pair of words.
+fn cwbvh_byte(w: vec2<u32>, i: u32) -> u32 {
+    return (w[i >> 2u] >> ((i & 3u) * 8u)) & 0xffu;
+}
+
+// Intersects the children of `n` with o + t d, t in [0, t_max]: returns the hit bits of a node
+// group (bits 24..32) and of a primitive group (each hit leaf's unary primitive count shifted
+// to its primitive offset, bits 0..24). `oct_inv` has bit 2, 1, 0 set for a non-negative x, y,
+// z direction.
+fn cwbvh_intersect_children(n: BvhNode, o: vec3<f32>, inv_d: vec3<f32>, oct_inv: u32, t_max: f32) -> u32 {
+    // The ray in the node's grid: the plane at quantized q lies at t = q s + b, with s exact
+    // (e is a power of two).
+    let e = bitcast<vec3<f32>>(((vec3<u32>(n.e_imask) >> vec3<u32>(0u, 8u, 16u)) & vec3<u32>(0xffu)) << vec3<u32>(23u));
+    let s = e * inv_d;
+    let rel = n.p - o;
+    let b = rel * inv_d;
+    // A margin in t that makes the test conservative, 8 u (|p - o| + 255 e) |inv_d| with
+    // u = 2^-24: the rounding of 1 / d, p - o, b and q s + b is at most about
+    // (6 u |p - o| + 3 u 255 e) |inv_d|, and the builder's boxes may fall short of their
+    // contents by u 255 e (it rounds child - p before flooring or ceiling it to the grid).
+    let pad = (4.0 * 1.1920929e-7) * (abs(rel) + 255.0 * e) * abs(inv_d);
+    let b_near = b - pad;
+    let b_far = b + pad;
+    // Per axis, the planes the ray enters through: the minima for a non-negative direction.
+    let neg = inv_d < vec3<f32>(0.0);
+    let near_x = select(n.child_min_x, n.child_max_x, neg.x);
+    let far_x = select(n.child_max_x, n.child_min_x, neg.x);
+    let near_y = select(n.child_min_y, n.child_max_y, neg.y);
+    let far_y = select(n.child_max_y, n.child_min_y, neg.y);
+    let near_z = select(n.child_min_z, n.child_max_z, neg.z);
+    let far_z = select(n.child_max_z, n.child_min_z, neg.z);
+    let imask = n.e_imask >> 24u;
+    var hits = 0u;
+    for (var i = 0u; i < 8u; i += 1u) {
+        let child_meta = cwbvh_byte(n.child_meta, i);
+        if (child_meta == 0u) {
+            continue;
+        }
+        let q_near = vec3<f32>(vec3<u32>(cwbvh_byte(near_x, i), cwbvh_byte(near_y, i), cwbvh_byte(near_z, i)));
+        let q_far = vec3<f32>(vec3<u32>(cwbvh_byte(far_x, i), cwbvh_byte(far_y, i), cwbvh_byte(far_z, i)));
+        let t_near = q_near * s + b_near;
+        let t_far = q_far * s + b_far;
+        let t_enter = max(max(t_near.x, t_near.y), max(t_near.z, 0.0));
+        let t_exit = min(min(t_far.x, t_far.y), min(t_far.z, t_max));
+        if (t_enter <= t_exit) {
+            if (((imask >> i) & 1u) != 0u) {
+                hits |= 1u << (24u + (i ^ oct_inv));
+            } else {
+                hits |= (child_meta >> 5u) << (child_meta & 31u);
+            }
+        }
+    }
+    return hits;
+}
+
+// The closest hit along o + t d, t in (0, t_max), or with `any_hit` the first hit found.
+fn cwbvh_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
+    var hit = Hit(t_max, 0u, vec2<f32>(0.0), false);
+    let inv_d = safe_inverse(d);
+    let pos = inv_d >= vec3<f32>(0.0);
+    let oct_inv = select(0u, 4u, pos.x) | select(0u, 2u, pos.y) | select(0u, 1u, pos.z);
+    var stack: array<vec2<u32>, BVH_STACK_SIZE>;
+    var sp = 0u;
+    // The root alone: bit 31 with an empty imask visits node 0 whatever the octant.
+    var nodes = vec2<u32>(0u, 0x80000000u);
+    var prims = vec2<u32>(0u, 0u);
+    loop {
+        // The last node's leaves first: their hits shorten the ray for its inner children.
+        while (prims.y != 0u) {
+            let k = firstTrailingBit(prims.y);
+            prims.y &= prims.y - 1u;
+            intersect_primitive(o, d, prims.x + k, hit.t, &hit);
+            if (any_hit && hit.found) {
+                return hit;
+            }
+        }
+        if ((nodes.y & 0xff000000u) == 0u) {
+            if (sp == 0u) {
+                break;
+            }
+            sp -= 1u;
+            nodes = stack[sp];
+        }
+        // Visit the group's nearest child; the rest of the group waits on the stack.
+        let bit = firstLeadingBit(nodes.y);
+        let slot = (bit - 24u) ^ oct_inv;
+        let index = nodes.x + countOneBits(nodes.y & ((1u << slot) - 1u));
+        nodes.y &= ~(1u << bit);
+        if ((nodes.y & 0xff000000u) != 0u) {
+            stack[sp] = nodes;
+            sp += 1u;
+        }
+        let n = bvh[index];
+        let hits = cwbvh_intersect_children(n, o, inv_d, oct_inv, hit.t);
+        nodes = vec2<u32>(n.child_base, (hits & 0xff000000u) | (n.e_imask >> 24u));
+        prims = vec2<u32>(n.primitive_base, hits & 0x00ffffffu);
+    }
+    return hit;
+}
+
+// The closest hit along o + t d, t in (0, t_max).
+fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
+    return cwbvh_trace(o, d, t_max, false);
+}
+
+// Whether anything lies along o + t d for t in (0, t_max).
+fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
+    return cwbvh_trace(o, d, t_max, true).found;
+}
+#else
+// Entry distance of the ray into a box, or a value > t_max when it misses. The exit distance
+// is widened by 2 ulp-ish so that boxes touched at grazing angles are not missed (Ize 2013).
+fn intersect_box(o: vec3<f32>, inv_d: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>, t_max: f32) -> f32 {
+    let t0 = (lo - o) * inv_d;
+    let t1 = (hi - o) * inv_d;
+    let near = min(t0, t1);
+    let far = max(t0, t1);
+    let t_near = max(max(near.x, near.y), max(near.z, 0.0));
+    let t_far = min(min(far.x, far.y), min(far.z, t_max)) * 1.00000024;
+    return select(INFINITE_DISTANCE * 2.0, t_near, t_near <= t_far);
 }
 
 const BVH_STACK_SIZE: u32 = 64u;
@@ -185,6 +305,8 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
     }
     return false;
 }
+
+#endif
 
 // Where a ray hit: position (recomputed on the primitive for accuracy), unit geometric
 // normal, material and area light.

@@ -33,6 +33,27 @@ struct Primitive {
     kind: u32,
 }
 
+#if CWBVH
+// A compressed wide BVH node (Ylitie et al. 2017, as obvhs lays it out): up to eight children
+// with boxes quantized to bytes on a grid of origin `p` and spacing 2^(e - 127) per axis. One
+// byte per child, child i in byte i % 4 (bits 8 (i % 4) ..) of word i / 4 of a vec2 field.
+// Meta byte: 0 for an empty slot; inner node: 0b00111iii, the node child_base + (the number of
+// inner children in slots below i); leaf: the primitive count in unary in bits 5..8 and the
+// offset of its first primitive from primitive_base in bits 0..5.
+struct BvhNode {
+    p: vec3<f32>,
+    e_imask: u32,           // bytes 0..3: exponents e of x, y, z; byte 3: bit i set if child i is inner
+    child_base: u32,
+    primitive_base: u32,
+    child_meta: vec2<u32>,
+    child_min_x: vec2<u32>,
+    child_max_x: vec2<u32>,
+    child_min_y: vec2<u32>,
+    child_max_y: vec2<u32>,
+    child_min_z: vec2<u32>,
+    child_max_z: vec2<u32>,
+}
+#else
 // A BVH2 node with both children's boxes; a child with count 0 is the inner node `first`,
 // otherwise the leaf of primitives first .. first + count.
 struct BvhNode {
@@ -45,6 +66,7 @@ struct BvhNode {
     right_max: vec3<f32>,
     right_count: u32,
 }
+#endif
 
 struct Material {
     diffuse: vec3<f32>,

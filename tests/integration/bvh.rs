@@ -1,10 +1,13 @@
 //! BVH traversal on the GPU agrees with brute force on the CPU (in f64) for thousands of
 //! random rays against random triangles and spheres: hit or miss, primitive, distance to
-//! 1e-5 relative, and any-hit queries with a random distance limit.
+//! 1e-5 relative, and any-hit queries with a random distance limit; for the BVH2 and the
+//! compressed wide BVH. A second scene of axis-aligned quads on a grid, with rays partly
+//! parallel to the axes, exercises flat boxes and boxes sharing planes (as in Cornell boxes).
 
 use crate::common::{data, gpu};
 use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization};
 use lightgraph_scenes::CompiledScene;
+use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::gpu::primitive_kind;
 use lightgraph_scenes::model::{Camera, FovAxis, Integrator, Light, Look, Material, Scene, Shape};
 use std::collections::BTreeMap;
@@ -92,9 +95,28 @@ fn cpu_intersect(o: [f64; 3], d: [f64; 3], p: &lightgraph_scenes::gpu::GpuPrimit
     }
 }
 
-fn random_scene(rng: &mut Rng) -> Scene {
+/// Random triangles and spheres, or with `axis_aligned` random axis-aligned quads with
+/// corners on a grid of spacing 1/4.
+fn random_scene(rng: &mut Rng, axis_aligned: bool) -> Scene {
     let mut shapes = Vec::new();
-    for _ in 0..3000 {
+    let grid = |v: f64| ((v * 4.0).round() / 4.0) as f32;
+    let (quads, triangles, spheres) = if axis_aligned { (1500, 0, 0) } else { (0, 3000, 150) };
+    for _ in 0..quads {
+        let mut corners = [rng.point(10.0).map(grid); 4];
+        let normal = (rng.next() * 3.0) as usize;
+        let (a, b) = ((normal + 1) % 3, (normal + 2) % 3);
+        let (sa, sb) = (grid(rng.range(0.25, 3.0)), grid(rng.range(0.25, 3.0)));
+        corners[1][a] += sa;
+        corners[2][a] += sa;
+        corners[2][b] += sb;
+        corners[3][b] += sb;
+        shapes.push(Shape::Quad {
+            corners,
+            material: "m".into(),
+            emission: None,
+        });
+    }
+    for _ in 0..triangles {
         let c = rng.point(10.0);
         let size = rng.range(0.2, 4.0);
         let v = [0, 1, 2].map(|_| {
@@ -107,7 +129,7 @@ fn random_scene(rng: &mut Rng) -> Scene {
             emission: None,
         });
     }
-    for _ in 0..150 {
+    for _ in 0..spheres {
         let c = rng.point(10.0).map(|v| v as f32);
         shapes.push(Shape::Sphere {
             center: c,
@@ -116,7 +138,7 @@ fn random_scene(rng: &mut Rng) -> Scene {
         });
     }
     Scene {
-        description: "random triangles and spheres".into(),
+        description: "random shapes".into(),
         camera: Camera {
             position: [0.0; 3],
             look: Look::Forward([0.0, 0.0, 1.0]),
@@ -137,16 +159,42 @@ fn random_scene(rng: &mut Rng) -> Scene {
 }
 
 #[test]
-fn gpu_traversal_matches_brute_force() {
+fn gpu_bvh2_traversal_matches_brute_force() {
+    traversal_matches_brute_force(BvhKind::Bvh2, false);
+    traversal_matches_brute_force(BvhKind::Bvh2, true);
+}
+
+#[test]
+fn gpu_cwbvh_traversal_matches_brute_force() {
+    traversal_matches_brute_force(BvhKind::Cwbvh, false);
+    traversal_matches_brute_force(BvhKind::Cwbvh, true);
+}
+
+/// Traces 4096 random rays through a BVH of `kind` over [`random_scene`] on the GPU and
+/// compares with brute force. With `axis_aligned`, half the rays have direction components
+/// of exactly 0: a fifth run along an axis.
+fn traversal_matches_brute_force(kind: BvhKind, axis_aligned: bool) {
     let mut rng = Rng(0x9E3779B97F4A7C15);
-    let scene = random_scene(&mut rng);
-    let compiled = CompiledScene::new(&scene).unwrap();
+    let scene = random_scene(&mut rng, axis_aligned);
+    let compiled = CompiledScene::with_bvh(&scene, kind).unwrap();
+    assert_eq!(compiled.bvh_kind, kind);
     let n = 4096usize;
     let mut rays: Vec<[f32; 4]> = Vec::new();
     let mut queries = Vec::new();
     for _ in 0..n {
         let o = rng.point(15.0).map(|v| v as f32);
-        let d = rng.direction();
+        let mut d = rng.direction();
+        if axis_aligned {
+            let r = rng.next();
+            let k = (r * 30.0) as usize % 3;
+            if r < 0.3 {
+                d[k] = 0.0;
+            } else if r < 0.5 {
+                d = [0.0; 3];
+                d[k] = if r < 0.4 { 1.0 } else { -1.0 };
+            }
+            d = d.map(|v| v / dot(d, d).sqrt());
+        }
         let d32 = d.map(|v| v as f32);
         let t_any = rng.range(0.0, 30.0) as f32;
         rays.push([o[0], o[1], o[2], t_any]);
@@ -160,7 +208,7 @@ fn gpu_traversal_matches_brute_force() {
         constants: [("QUERIES".to_string(), ConstValue::U32(n as u32))]
             .into_iter()
             .collect(),
-        ..Default::default()
+        flags: kind.flag().into_iter().map(String::from).collect(),
     };
     let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
     let mut externals: BTreeMap<String, Vec<u8>> = compiled
@@ -223,8 +271,13 @@ fn gpu_traversal_matches_brute_force() {
         assert_eq!(r[2] == 1.0, cpu_any, "ray {i}: any-hit below {t_any}");
     }
     eprintln!(
-        "{n} rays: {hits} closest hits, {any_hits} any-hits, {ambiguous} skipped as ambiguous (ties {}, edges {}, f32-ill-conditioned {}, at the any-hit limit {})",
-        reasons[0], reasons[1], reasons[2], reasons[3]
+        "{kind:?} (depth {}){}, {n} rays: {hits} closest hits, {any_hits} any-hits, {ambiguous} skipped as ambiguous (ties {}, edges {}, f32-ill-conditioned {}, at the any-hit limit {})",
+        compiled.bvh_depth,
+        if axis_aligned { ", axis-aligned quads" } else { "" },
+        reasons[0],
+        reasons[1],
+        reasons[2],
+        reasons[3]
     );
     // About 2.5% of random rays meet a surface at so grazing an angle that f32 cannot give
     // their distance to 1e-5 (the estimate above bounds the measured error; its largest

@@ -5,7 +5,10 @@ use crate::common::{assert_finite, gpu, render};
 use lightgraph::assets::scene_names;
 use lightgraph::render::load_scene;
 use lightgraph_engine::reflect::struct_layout;
-use lightgraph_scenes::gpu::{GpuBvhNode, GpuCamera, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo};
+use lightgraph_engine::wgsl::preprocess;
+use lightgraph_scenes::bvh::BvhKind;
+use lightgraph_scenes::gpu::{GpuBvhNode, GpuCamera, GpuCwbvhNode, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo};
+use std::collections::BTreeSet;
 use std::mem::{offset_of, size_of};
 
 #[test]
@@ -41,13 +44,22 @@ fn every_builtin_scene_renders_without_invalid_samples() {
     }
 }
 
+/// Checks both variants of scene.wgsl: the BVH2 one, and the CWBVH one (`BvhNode` is then the
+/// compressed wide node).
 #[test]
 fn rust_scene_structs_match_the_wgsl_layout() {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/lib/scene.wgsl")).unwrap();
-    let module = naga::front::wgsl::parse_str(&text).unwrap();
+    for kind in [BvhKind::Bvh2, BvhKind::Cwbvh] {
+        let flags: BTreeSet<String> = kind.flag().into_iter().map(String::from).collect();
+        let source = preprocess("shaders/lib/scene.wgsl", &text, &flags).unwrap();
+        check_scene_structs(&naga::front::wgsl::parse_str(&source).unwrap(), kind);
+    }
+}
+
+fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
     macro_rules! check {
         ($wgsl:literal, $rust:ty, [$($field:ident),*]) => {{
-            let (size, members) = struct_layout(&module, $wgsl).expect($wgsl);
+            let (size, members) = struct_layout(module, $wgsl).expect($wgsl);
             assert_eq!(size as usize, size_of::<$rust>(), "size of {}", $wgsl);
             let rust: Vec<(String, usize)> = vec![$((stringify!($field).to_string(), offset_of!($rust, $field))),*];
             let wgsl: Vec<(String, usize)> = members.into_iter().map(|(n, o)| (n, o as usize)).collect();
@@ -65,20 +77,39 @@ fn rust_scene_structs_match_the_wgsl_layout() {
         [position, width, forward, height, right, pad0, up, pad1]
     );
     check!("Primitive", GpuPrimitive, [a, material, b, light, c, kind]);
-    check!(
-        "BvhNode",
-        GpuBvhNode,
-        [
-            left_min,
-            left_first,
-            left_max,
-            left_count,
-            right_min,
-            right_first,
-            right_max,
-            right_count
-        ]
-    );
+    match kind {
+        BvhKind::Bvh2 => check!(
+            "BvhNode",
+            GpuBvhNode,
+            [
+                left_min,
+                left_first,
+                left_max,
+                left_count,
+                right_min,
+                right_first,
+                right_max,
+                right_count
+            ]
+        ),
+        BvhKind::Cwbvh => check!(
+            "BvhNode",
+            GpuCwbvhNode,
+            [
+                p,
+                e_imask,
+                child_base,
+                primitive_base,
+                child_meta,
+                child_min_x,
+                child_max_x,
+                child_min_y,
+                child_max_y,
+                child_min_z,
+                child_max_z
+            ]
+        ),
+    }
     check!(
         "Material",
         GpuMaterial,
