@@ -75,7 +75,8 @@ pub fn measure(
     let start = Instant::now();
     let frames0 = session.frames;
     while session.frames == frames0 || start.elapsed() < budget {
-        session.render_frame()?;
+        let left = budget.saturating_sub(start.elapsed());
+        session.render_for(left.min(Duration::from_millis(100)), u32::MAX)?;
     }
     let seconds = start.elapsed().as_secs_f64();
     let frames = session.frames - frames0;

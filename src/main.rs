@@ -283,7 +283,10 @@ fn render(args: RenderArgs) -> Result<()> {
         if done {
             break;
         }
-        session.render_frame()?;
+        match args.time {
+            Some(t) => session.render_for(t.saturating_sub(elapsed).min(Duration::from_millis(100)), u32::MAX)?,
+            None => session.render_for(Duration::from_millis(100), args.frames - session.frames)?,
+        };
         let secs = start.elapsed().as_secs_f64();
         let samples = session.samples_per_pixel() as f64 * (w as f64 * h as f64);
         bar.set_message(format!(

@@ -3,6 +3,7 @@
 
 use anyhow::{Context, Result, anyhow, bail};
 use lightgraph_engine::ir::LayoutDecl;
+use lightgraph_engine::runtime::MAX_BATCH;
 use lightgraph_engine::{ConstValue, FrameStats, Gpu, Graph, Instance, Plan, Program, Specialization};
 use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::model::{MisHeuristic, RussianRoulette, Scene};
@@ -240,8 +241,14 @@ impl<'g> Session<'g> {
 
     /// Renders one more frame.
     pub fn render_frame(&mut self) -> Result<FrameStats> {
-        let stats = self.instance.run_frame(self.frames, self.options.seed)?;
-        self.frames += 1;
+        self.render_frames(1)
+    }
+
+    /// Renders `count` more frames (at most [`MAX_BATCH`]) recorded together, with one
+    /// read-back of statistics; returns the batch's statistics.
+    pub fn render_frames(&mut self, count: u32) -> Result<FrameStats> {
+        let stats = self.instance.run_frames(self.frames, count, self.options.seed)?;
+        self.frames += count;
         for (k, v) in &stats.counters {
             *self.counters.entry(k.clone()).or_insert(0) += v;
         }
@@ -250,6 +257,18 @@ impl<'g> Session<'g> {
         }
         self.loops_capped += stats.loops_capped as u64;
         Ok(stats)
+    }
+
+    /// Renders about `target` worth of frames, at most `max`, in one batch sized from the GPU
+    /// time of the frames so far (one frame when nothing is known yet).
+    pub fn render_for(&mut self, target: std::time::Duration, max: u32) -> Result<FrameStats> {
+        let per_frame = self.kernel_seconds.values().sum::<f64>() / self.frames.max(1) as f64;
+        let count = if self.frames == 0 || per_frame <= 0.0 {
+            1
+        } else {
+            (target.as_secs_f64() / per_frame).clamp(1.0, MAX_BATCH as f64) as u32
+        };
+        self.render_frames(count.min(max).max(1))
     }
 
     /// GPU memory of the session: the buffers the layout allocates and the scene data.

@@ -13,6 +13,8 @@ use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 const RECORD_STRIDE: u64 = 256;
+/// Most frames [`Instance::run_frames`] records together.
+pub const MAX_BATCH: u32 = 64;
 const MAX_QUERIES: u32 = wgpu::QUERY_SET_MAX_QUERIES;
 /// Host loop iterations after which a loop is declared stuck.
 const MAX_HOST_ITERATIONS: u32 = 1 << 20;
@@ -205,12 +207,13 @@ impl<'g> Instance<'g> {
             BufferRef::Args,
             make("indirect arguments", 12 * nargs, storage | wgpu::BufferUsages::INDIRECT)?,
         );
-        let nrecords: u64 = program
-            .domains
-            .iter()
-            .zip(&program.chunks)
-            .map(|(d, c)| d.div_ceil(*c).max(1))
-            .sum();
+        let nrecords: u64 = MAX_BATCH as u64
+            * program
+                .domains
+                .iter()
+                .zip(&program.chunks)
+                .map(|(d, c)| d.div_ceil(*c).max(1))
+                .sum::<u64>();
         let frame_records = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame records"),
             size: nrecords * RECORD_STRIDE,
@@ -497,7 +500,9 @@ impl<'g> Instance<'g> {
                         .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word, Some(4));
                 }
                 Step::Loop { chain, body } => {
-                    let key = record * 64 + i;
+                    // The same loop of every frame of a batch learns from the last one.
+                    let per_frame = self.records.iter().filter(|r| r[0] == self.records[0][0]).count();
+                    let key = (record % per_frame.max(1)) * 64 + i;
                     let mut batch = self.last_iterations.get(&key).copied().unwrap_or(2).max(1);
                     let mut done = 0u32;
                     rec.parity = 0;
@@ -588,17 +593,30 @@ impl<'g> Instance<'g> {
 
     /// Runs frame `index` with `seed`: every phase over all its chunks.
     pub fn run_frame(&mut self, index: u32, seed: u32) -> Result<FrameStats> {
+        self.run_frames(index, 1, seed)
+    }
+
+    /// Runs frames `first .. first + count` (at most [`MAX_BATCH`]) with `seed`, recorded
+    /// together and read back once: the statistics are the batch's.
+    pub fn run_frames(&mut self, first: u32, count: u32, seed: u32) -> Result<FrameStats> {
+        if count == 0 || count > MAX_BATCH {
+            return Err(Error::Runtime(format!(
+                "a batch runs 1 to {MAX_BATCH} frames, not {count}"
+            )));
+        }
         self.records.clear();
         let mut plan_records = Vec::new();
-        for (ph, (&domain, &chunk)) in self.program.domains.iter().zip(&self.program.chunks).enumerate() {
-            let mut base = 0u64;
-            loop {
-                let n = chunk.min(domain - base);
-                plan_records.push((ph, self.records.len()));
-                self.records.push([index, seed, base as u32, n as u32]);
-                base += n;
-                if base >= domain {
-                    break;
+        for index in first..first + count {
+            for (ph, (&domain, &chunk)) in self.program.domains.iter().zip(&self.program.chunks).enumerate() {
+                let mut base = 0u64;
+                loop {
+                    let n = chunk.min(domain - base);
+                    plan_records.push((ph, self.records.len()));
+                    self.records.push([index, seed, base as u32, n as u32]);
+                    base += n;
+                    if base >= domain {
+                        break;
+                    }
                 }
             }
         }

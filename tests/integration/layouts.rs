@@ -120,3 +120,41 @@ fn auto_layout_tunes_the_ambient_occlusion_graph() {
         "{table}"
     );
 }
+
+#[test]
+fn frames_recorded_in_one_batch_match_frames_run_one_by_one() {
+    use lightgraph::render::{Session, SessionOptions};
+    let scene = load_scene("cornell-glossy-point").unwrap();
+    let graph = load_graph("pt").unwrap();
+    for layout in ["NaivePTsk", "StreamingPTmk3"] {
+        let options = SessionOptions {
+            width: 16,
+            height: 16,
+            samples_per_frame: 1,
+            seed: 9,
+            constants: Default::default(),
+            layout: Default::default(),
+        };
+        let mut one = Session::new(crate::common::gpu(), &graph, layout, &scene, options.clone()).unwrap();
+        for _ in 0..5 {
+            one.render_frame().unwrap();
+        }
+        let mut batch = Session::new(crate::common::gpu(), &graph, layout, &scene, options).unwrap();
+        let stats = batch.render_frames(5).unwrap();
+        assert_eq!(one.counters, batch.counters, "{layout}");
+        assert_eq!(
+            stats.counters["rays_primary"],
+            5 * 256,
+            "{layout}: the batch's counters"
+        );
+        let (a, b) = (one.image().unwrap(), batch.image().unwrap());
+        assert_eq!(a.frames, 5);
+        let worst = a
+            .mean
+            .iter()
+            .zip(&b.mean)
+            .flat_map(|(p, q)| (0..3).map(move |c| ((p[c] - q[c]).abs() / p[c].abs().max(q[c].abs()).max(1e-3)) as f64))
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-5, "{layout}: batched frames differ by {worst:.2e}");
+    }
+}
