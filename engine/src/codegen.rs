@@ -43,6 +43,8 @@ pub enum BufferRef {
 pub struct ControlMap {
     /// Items in a stream's queue.
     pub queue_count: BTreeMap<String, u32>,
+    /// Items emitted into a stream's queue since its last commit.
+    pub queue_append: BTreeMap<String, u32>,
     /// Items a stream's queue had no room for.
     pub queue_overflow: BTreeMap<String, u32>,
     /// Items of a stored chain alive after the last loop iteration.
@@ -272,7 +274,7 @@ impl CodegenContext<'_> {
                     s,
                     "fn emit_{name}(item: {}) {{\n    let i = atomicAdd(&lg_control[{}], 1u);\n    if (i < LG_CAP_{}) {{ lg_store_queue_{name}(i, item); }} else {{ atomicAdd(&lg_control[{}], 1u); }}\n}}",
                     st.item,
-                    self.control.queue_count[name],
+                    self.control.queue_append[name],
                     name.to_uppercase(),
                     self.control.queue_overflow[name]
                 );
@@ -317,9 +319,16 @@ impl CodegenContext<'_> {
                     self.binding(&BufferRef::BoundaryOut)
                 );
                 s.push_str(&self.load_store("out", "lg_out.words", &chain.item, "LG_POOL"));
+                // A pure regeneration kernel appends behind the survivors its boundary's count
+                // holds; every other kernel appends to a boundary whose count was consumed.
+                let behind = if kp.input.is_none() {
+                    "atomicLoad(&lg_out.count) + "
+                } else {
+                    ""
+                };
                 let _ = writeln!(
                     s,
-                    "fn lg_append(v: {}) {{\n    lg_store_out(atomicLoad(&lg_out.count) + atomicAdd(&lg_out.append, 1u), v);\n}}",
+                    "fn lg_append(v: {}) {{\n    lg_store_out({behind}atomicAdd(&lg_out.append, 1u), v);\n}}",
                     chain.item
                 );
             }
@@ -463,11 +472,7 @@ impl CodegenContext<'_> {
         }
         let pooled = self.pools.contains_key(&c);
         let limit = match &kp.root {
-            Root::Queue(q) => format!(
-                "min(atomicLoad(&lg_control[{}]), LG_CAP_{})",
-                self.control.queue_count[q],
-                q.to_uppercase()
-            ),
+            Root::Queue(q) => format!("atomicLoad(&lg_control[{}])", self.control.queue_count[q]),
             Root::Boundary => "atomicLoad(&lg_in.count)".to_string(),
             _ if pooled => "LG_POOL".to_string(),
             _ => "frame.count".to_string(),
@@ -485,7 +490,9 @@ impl CodegenContext<'_> {
     }
 }
 
-/// The kernel that turns a queue's count into indirect dispatch arguments.
+/// The kernel that commits a queue (the items emitted since the last commit become the
+/// consumer's count, clamped to the capacity) and turns the count into indirect dispatch
+/// arguments.
 pub struct ArgsKernel<'a> {
     /// Entry point name.
     pub name: &'a str,
@@ -493,9 +500,11 @@ pub struct ArgsKernel<'a> {
     pub control_binding: u32,
     /// Binding of the indirect arguments.
     pub args_binding: u32,
-    /// Control word holding the queue's count.
+    /// Control word the consumer reads its count from.
     pub count_word: u32,
-    /// Queue capacity (the count is clamped to it).
+    /// Control word the producers append to.
+    pub append_word: u32,
+    /// Queue capacity.
     pub capacity: u64,
     /// First of the three argument words.
     pub args_offset: u32,
@@ -513,17 +522,20 @@ impl ArgsKernel<'_> {
             control_binding,
             args_binding,
             count_word,
+            append_word,
             capacity,
             args_offset,
             workgroup,
             max_groups,
         } = self;
         format!(
-            "@group(0) @binding({control_binding}) var<storage, read> lg_control: array<u32>;
+            "@group(0) @binding({control_binding}) var<storage, read_write> lg_control: array<u32>;
 @group(0) @binding({args_binding}) var<storage, read_write> lg_args: array<u32>;
 @compute @workgroup_size(1)
 fn {name}() {{
-    let n = min(lg_control[{count_word}], {capacity}u);
+    let n = min(lg_control[{append_word}], {capacity}u);
+    lg_control[{count_word}] = n;
+    lg_control[{append_word}] = 0u;
     let groups = (n + {workgroup}u - 1u) / {workgroup}u;
     let x = min(groups, {max_groups}u);
     lg_args[{args_offset}] = x;
@@ -550,6 +562,9 @@ pub struct CommitKernel<'a> {
     pub workgroup: u32,
     /// Most workgroups per dispatch dimension.
     pub max_groups: u32,
+    /// Whether the appended items join items still counted (after a regeneration step)
+    /// rather than replace a count already consumed.
+    pub add: bool,
 }
 
 impl CommitKernel<'_> {
@@ -562,14 +577,16 @@ impl CommitKernel<'_> {
             args_offset,
             workgroup,
             max_groups,
+            add,
         } = self;
+        let kept = if *add { "atomicLoad(&lg_in.count) + " } else { "" };
         format!(
             "struct LgBoundary {{ count: atomic<u32>, append: atomic<u32>, pad0: u32, pad1: u32, words: array<u32> }}
 @group(0) @binding({boundary_binding}) var<storage, read_write> lg_in: LgBoundary;
 @group(0) @binding({args_binding}) var<storage, read_write> lg_args: array<u32>;
 @compute @workgroup_size(1)
 fn {name}() {{
-    let n = atomicLoad(&lg_in.count) + atomicLoad(&lg_in.append);
+    let n = {kept}atomicLoad(&lg_in.append);
     atomicStore(&lg_in.count, n);
     atomicStore(&lg_in.append, 0u);
     let groups = (n + {workgroup}u - 1u) / {workgroup}u;
@@ -581,6 +598,19 @@ fn {name}() {{
 "
         )
     }
+}
+
+/// A one-thread kernel that sets control word `word` to zero (a reset that needs no break
+/// in the compute pass).
+pub fn zero_kernel(name: &str, control_binding: u32, word: u32) -> String {
+    format!(
+        "@group(0) @binding({control_binding}) var<storage, read_write> lg_control: array<u32>;
+@compute @workgroup_size(1)
+fn {name}() {{
+    lg_control[{word}] = 0u;
+}}
+"
+    )
 }
 
 /// The kernel that adds the per-chunk counters into 64-bit totals and clears them.

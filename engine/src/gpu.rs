@@ -54,7 +54,10 @@ pub fn adapters() -> Vec<wgpu::AdapterInfo> {
 
 /// Features lightgraph uses when the adapter has them.
 pub fn wanted_features() -> wgpu::Features {
-    wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SHADER_FLOAT32_ATOMIC | wgpu::Features::SUBGROUP
+    wgpu::Features::TIMESTAMP_QUERY
+        | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
+        | wgpu::Features::SHADER_FLOAT32_ATOMIC
+        | wgpu::Features::SUBGROUP
 }
 
 impl Gpu {

@@ -115,10 +115,12 @@ pub struct Program {
     pub target: Target,
 }
 
+/// Most items a split chain keeps in flight when its layout does not say.
 const MAX_DEFAULT_IN_FLIGHT: u64 = 1 << 22;
-/// Default thread pool of regeneration and compaction layouts: about the threads a large
-/// GPU keeps resident (an H100 holds 132 x 2048).
-pub const DEFAULT_POOL: u64 = 1 << 18;
+/// Default thread pool of regeneration and compaction layouts: enough items per host
+/// iteration (about 8 times the threads an H100 keeps resident) to amortise each iteration's
+/// dispatches.
+pub const DEFAULT_POOL: u64 = 1 << 20;
 
 impl Program {
     /// Compiles `plan` for `target` with `spec`.
@@ -194,8 +196,9 @@ impl Program {
         let mut next = 0u32;
         for q in &plan.queued_streams {
             control.queue_count.insert(q.clone(), next);
-            control.queue_overflow.insert(q.clone(), next + 1);
-            next += 2;
+            control.queue_append.insert(q.clone(), next + 1);
+            control.queue_overflow.insert(q.clone(), next + 2);
+            next += 3;
         }
         for &c in &plan.stored_chains {
             control.alive.insert(c, next);
@@ -374,6 +377,7 @@ impl Program {
                     control_binding: bindings[&BufferRef::Control],
                     args_binding: bindings[&BufferRef::Args],
                     count_word: control.queue_count[q],
+                    append_word: control.queue_append[q],
                     capacity: queue_capacity[q],
                     args_offset: 3 * i as u32,
                     workgroup: plan.layout.workgroup_size,

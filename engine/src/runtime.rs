@@ -16,6 +16,10 @@ const RECORD_STRIDE: u64 = 256;
 /// Most frames [`Instance::run_frames`] records together.
 pub const MAX_BATCH: u32 = 64;
 const MAX_QUERIES: u32 = wgpu::QUERY_SET_MAX_QUERIES;
+/// Timestamp pairs in the query set.
+const QUERY_PAIRS: usize = MAX_QUERIES as usize / 2;
+/// Timestamp pairs a batch can resolve; later dispatches go untimed.
+const MAX_TIMED: usize = 16 * QUERY_PAIRS;
 /// Host loop iterations after which a loop is declared stuck.
 const MAX_HOST_ITERATIONS: u32 = 1 << 20;
 /// Bytes of a boundary buffer's header (count, append, two spare words).
@@ -64,9 +68,11 @@ pub struct Instance<'g> {
     kernels: Vec<Kernel>,
     /// Argument kernels of queued streams, with the byte offset of their arguments.
     args: BTreeMap<String, (Kernel, u64)>,
-    /// Commit kernels of boundaries (one bind group per physical buffer), with the byte
-    /// offset of their arguments.
-    commits: Vec<(Kernel, u64)>,
+    /// Commit kernels of boundaries, resetting and adding (one bind group per physical
+    /// buffer), with the byte offset of their arguments.
+    commits: Vec<([Kernel; 2], u64)>,
+    /// Kernels that zero a control word, by word.
+    zeros: BTreeMap<u32, Kernel>,
     fold: Kernel,
     frame_records: wgpu::Buffer,
     records: Vec<[u32; 4]>,
@@ -77,13 +83,60 @@ pub struct Instance<'g> {
     last_iterations: BTreeMap<usize, u32>,
 }
 
+/// Commands of a batch being recorded: one compute pass stays open across dispatches until an
+/// encoder-level command (a copy, a query resolve, a submission) needs it closed.
 struct Recorder {
     encoder: wgpu::CommandEncoder,
-    /// Kernel index of each timestamp pair written so far.
+    pass: Option<wgpu::ComputePass<'static>>,
+    /// Kernel index of each timestamp pair written so far in the batch.
     timed: Vec<usize>,
+    /// Timestamp pairs already resolved into the resolve buffer.
+    resolved: usize,
     host_iterations: u32,
     /// Iteration parity of the running host loop (selects ping-pong buffers).
     parity: usize,
+}
+
+impl Recorder {
+    fn new(device: &wgpu::Device) -> Recorder {
+        Recorder {
+            encoder: device.create_command_encoder(&Default::default()),
+            pass: None,
+            timed: Vec::new(),
+            resolved: 0,
+            host_iterations: 0,
+            parity: 0,
+        }
+    }
+
+    fn pass(&mut self) -> &mut wgpu::ComputePass<'static> {
+        if self.pass.is_none() {
+            let pass = self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("lightgraph"),
+                timestamp_writes: None,
+            });
+            self.pass = Some(pass.forget_lifetime());
+        }
+        self.pass.as_mut().expect("just opened")
+    }
+
+    fn end_pass(&mut self) {
+        self.pass = None;
+    }
+
+    /// Ends the pass and resolves the timestamps written since the last resolve.
+    fn resolve(&mut self, queries: &Option<(wgpu::QuerySet, wgpu::Buffer)>) {
+        self.end_pass();
+        if let Some((set, buffer)) = queries {
+            let pairs = self.timed.len() - self.resolved;
+            if pairs > 0 {
+                let first = (self.resolved % QUERY_PAIRS) as u32 * 2;
+                self.encoder
+                    .resolve_query_set(set, first..first + 2 * pairs as u32, buffer, 16 * self.resolved as u64);
+                self.resolved = self.timed.len();
+            }
+        }
+    }
 }
 
 fn compile_internal(source: &str, name: &str, program: &Program) -> Result<(naga::Module, Vec<BindingUse>)> {
@@ -324,17 +377,6 @@ impl<'g> Instance<'g> {
         let mut commits = Vec::new();
         for (b, boundary) in program.plan.boundaries.iter().enumerate() {
             let slot = program.queue_capacity.len() + b;
-            let name = format!("lg_commit_{b}");
-            let wgsl = CommitKernel {
-                name: &name,
-                boundary_binding: program.bindings[&BufferRef::BoundaryIn],
-                args_binding: program.bindings[&BufferRef::Args],
-                args_offset: 3 * slot as u32,
-                workgroup: program.plan.layout.workgroup_size,
-                max_groups: program.target.max_workgroups_per_dimension,
-            }
-            .wgsl();
-            let (module, uses) = compile_internal(&wgsl, &name, &program)?;
             let sides: Vec<Resolve> = (0..1 + boundary.pingpong as usize)
                 .map(|side| {
                     Box::new(move |r: &BufferRef| {
@@ -347,7 +389,37 @@ impl<'g> Instance<'g> {
                 })
                 .collect();
             let refs: Vec<&dyn Fn(&BufferRef) -> BufferRef> = sides.iter().map(|f| f.as_ref()).collect();
-            commits.push((build(&name, module, &uses, &refs), 12 * slot as u64));
+            let mut modes = Vec::new();
+            for add in [false, true] {
+                let name = format!("lg_commit_{b}_{}", if add { "add" } else { "reset" });
+                let wgsl = CommitKernel {
+                    name: &name,
+                    boundary_binding: program.bindings[&BufferRef::BoundaryIn],
+                    args_binding: program.bindings[&BufferRef::Args],
+                    args_offset: 3 * slot as u32,
+                    workgroup: program.plan.layout.workgroup_size,
+                    max_groups: program.target.max_workgroups_per_dimension,
+                    add,
+                }
+                .wgsl();
+                let (module, uses) = compile_internal(&wgsl, &name, &program)?;
+                modes.push(build(&name, module, &uses, &refs));
+            }
+            let [reset, add]: [Kernel; 2] = modes
+                .try_into()
+                .map_err(|_| Error::Runtime("two commit modes".into()))?;
+            commits.push(([reset, add], 12 * slot as u64));
+        }
+        let mut zeros = BTreeMap::new();
+        let words = program.control.alive.values().chain(program.control.next.values());
+        for &word in words {
+            let name = format!("lg_zero_{word}");
+            let (module, uses) = compile_internal(
+                &crate::codegen::zero_kernel(&name, program.bindings[&BufferRef::Control], word),
+                &name,
+                &program,
+            )?;
+            zeros.insert(word, build(&name, module, &uses, &[&identity]));
         }
         let (fold_module, fold_uses) = compile_internal(&program.fold_kernel, "lg_fold", &program)?;
         let fold = build("lg_fold", fold_module, &fold_uses, &[&identity]);
@@ -358,7 +430,8 @@ impl<'g> Instance<'g> {
             )));
         }
 
-        let queries = gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
+        let timing = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES;
+        let queries = gpu.features.contains(timing).then(|| {
             let set = device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("kernel timestamps"),
                 ty: wgpu::QueryType::Timestamp,
@@ -366,7 +439,7 @@ impl<'g> Instance<'g> {
             });
             let resolve = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamp resolve"),
-                size: 8 * MAX_QUERIES as u64,
+                size: 16 * MAX_TIMED as u64,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
@@ -375,7 +448,7 @@ impl<'g> Instance<'g> {
         let readback_words = program.control.len as u64 + 4 * program.plan.boundaries.len() as u64 * 2;
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: (4 * readback_words + 8 * ncounters + 8 * MAX_QUERIES as u64).next_multiple_of(8),
+            size: (4 * readback_words + 8 * ncounters + 16 * MAX_TIMED as u64).next_multiple_of(8),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -388,6 +461,7 @@ impl<'g> Instance<'g> {
             kernels,
             args,
             commits,
+            zeros,
             fold,
             frame_records,
             records: Vec::new(),
@@ -408,25 +482,26 @@ impl<'g> Instance<'g> {
     }
 
     fn dispatch(&self, rec: &mut Recorder, k: &Kernel, timed: Option<usize>, record: usize, groups: Dispatch) {
-        let ts = match (&self.queries, timed) {
-            (Some((set, _)), Some(ki)) if (rec.timed.len() as u32 + 1) * 2 <= MAX_QUERIES => {
-                let i = rec.timed.len() as u32 * 2;
+        let query = match (&self.queries, timed) {
+            (Some(_), Some(ki)) if rec.timed.len() < MAX_TIMED => {
+                if rec.timed.len() > rec.resolved && rec.timed.len() % QUERY_PAIRS == 0 {
+                    // The query set is full: resolve it before its queries are written again.
+                    rec.resolve(&self.queries);
+                }
+                let i = (rec.timed.len() % QUERY_PAIRS) as u32 * 2;
                 rec.timed.push(ki);
-                Some(wgpu::ComputePassTimestampWrites {
-                    query_set: set,
-                    beginning_of_pass_write_index: Some(i),
-                    end_of_pass_write_index: Some(i + 1),
-                })
+                Some(i)
             }
             _ => None,
         };
-        let mut pass = rec.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(&k.name),
-            timestamp_writes: ts,
-        });
-        pass.set_pipeline(&k.pipeline);
         let offset = [(record as u64 * RECORD_STRIDE) as u32];
         let bind_group = &k.bind_groups[rec.parity % k.bind_groups.len()];
+        let set = self.queries.as_ref().map(|(set, _)| set);
+        let pass = rec.pass();
+        if let (Some(i), Some(set)) = (query, set) {
+            pass.write_timestamp(set, i);
+        }
+        pass.set_pipeline(&k.pipeline);
         pass.set_bind_group(0, bind_group, if k.uses_frame { &offset[..] } else { &[] });
         match groups {
             Dispatch::Items(n) => {
@@ -441,25 +516,29 @@ impl<'g> Instance<'g> {
             Dispatch::Indirect(offset) => pass.dispatch_workgroups_indirect(&self.buffers[&BufferRef::Args], offset),
             Dispatch::Single => pass.dispatch_workgroups(1, 1, 1),
         }
+        if let (Some(i), Some(set)) = (query, set) {
+            pass.write_timestamp(set, i + 1);
+        }
     }
 
-    /// Commits a boundary buffer (its appended items join its count) and prepares the
-    /// indirect arguments for its consumer; returns their offset.
-    fn commit(&self, rec: &mut Recorder, port: Port, record: usize) -> u64 {
-        let (kernel, offset) = &self.commits[port.boundary];
+    /// Commits a boundary buffer (its appended items become, or with `add` join, its count)
+    /// and prepares the indirect arguments for its consumer; returns their offset.
+    fn commit(&self, rec: &mut Recorder, port: Port, record: usize, add: bool) -> u64 {
+        let (kernels, offset) = &self.commits[port.boundary];
         let side = match physical(&self.program, port, rec.parity) {
             BufferRef::Boundary(_, side) => side,
             _ => unreachable!("boundary ports map to boundary buffers"),
         };
         let saved = rec.parity;
         rec.parity = side;
-        self.dispatch(rec, kernel, None, record, Dispatch::Single);
+        self.dispatch(rec, &kernels[add as usize], None, record, Dispatch::Single);
         rec.parity = saved;
         *offset
     }
 
     fn run_kernel(&self, rec: &mut Recorder, k: usize, record: usize) {
-        let kp = &self.program.plan.kernels[k];
+        let plan = &self.program.plan;
+        let kp = &plan.kernels[k];
         let count = match self.program.pools.get(&kp.chain) {
             Some(&pool) => pool,
             None => self.records[record][3] as u64,
@@ -467,19 +546,21 @@ impl<'g> Instance<'g> {
         let kernel = &self.kernels[k];
         match (kp.input, kp.output) {
             (Some(input), _) => {
-                let offset = self.commit(rec, input, record);
+                // Items a pure regeneration kernel just appended join the survivors counted
+                // before it; otherwise the last count was consumed and is replaced.
+                let after_regeneration = plan.kernels.iter().any(|r| {
+                    r.input.is_none() && r.output.map(|o| o.boundary) == Some(input.boundary) && r.root == Root::Start
+                });
+                let offset = self.commit(rec, input, record, after_regeneration);
                 let groups = if kp.root == Root::Boundary {
                     Dispatch::Indirect(offset)
                 } else {
                     Dispatch::Items(count)
                 };
                 self.dispatch(rec, kernel, Some(k), record, groups);
-                // Every item of the input was consumed.
-                let buffer = physical(&self.program, input, rec.parity);
-                rec.encoder.clear_buffer(&self.buffers[&buffer], 0, Some(8));
             }
             (None, Some(output)) => {
-                self.commit(rec, output, record);
+                self.commit(rec, output, record, false);
                 self.dispatch(rec, kernel, Some(k), record, Dispatch::Items(count));
             }
             (None, None) => self.dispatch(rec, kernel, Some(k), record, Dispatch::Items(count)),
@@ -495,9 +576,6 @@ impl<'g> Instance<'g> {
                     self.dispatch(rec, args, None, record, Dispatch::Single);
                     let k = self.program.plan.consumer_kernel(q);
                     self.dispatch(rec, &self.kernels[k], Some(k), record, Dispatch::Indirect(*offset));
-                    let word = self.program.control.queue_count[q] as u64;
-                    rec.encoder
-                        .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word, Some(4));
                 }
                 Step::Loop { chain, body } => {
                     // The same loop of every frame of a batch learns from the last one.
@@ -508,9 +586,8 @@ impl<'g> Instance<'g> {
                     rec.parity = 0;
                     loop {
                         for _ in 0..batch {
-                            if let Some(&word) = self.program.control.alive.get(chain) {
-                                rec.encoder
-                                    .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word as u64, Some(4));
+                            if let Some(word) = self.program.control.alive.get(chain) {
+                                self.dispatch(rec, &self.zeros[word], None, record, Dispatch::Single);
                             }
                             self.run_steps(rec, body, record)?;
                             rec.parity ^= 1;
@@ -536,8 +613,9 @@ impl<'g> Instance<'g> {
     }
 
     /// Submits what is recorded and reads back whether the loop over `chain` has work left:
-    /// items alive in slots, items waiting in its boundaries, or indices not yet taken.
+    /// items alive in slots, items appended to its boundaries, or indices not yet taken.
     fn loop_goes_on(&self, rec: &mut Recorder, chain: usize, record: usize) -> Result<bool> {
+        rec.end_pass();
         let control_bytes = 4 * self.program.control.len as u64;
         rec.encoder
             .copy_buffer_to_buffer(&self.buffers[&BufferRef::Control], 0, &self.readback, 0, control_bytes);
@@ -568,10 +646,8 @@ impl<'g> Instance<'g> {
         let words: &[u32] = bytemuck::cast_slice(&bytes);
         let control = &self.program.control;
         let alive = control.alive.get(&chain).map_or(0, |&w| words[w as usize]);
-        let pending: u64 = headers
-            .iter()
-            .map(|&h| words[h as usize / 4] as u64 + words[h as usize / 4 + 1] as u64)
-            .sum();
+        // Counts of consumed boundaries are stale; waiting items are the appended ones.
+        let pending: u64 = headers.iter().map(|&h| words[h as usize / 4 + 1] as u64).sum();
         let untaken = control
             .next
             .get(&chain)
@@ -626,12 +702,7 @@ impl<'g> Instance<'g> {
         }
         self.gpu.queue.write_buffer(&self.frame_records, 0, &bytes);
         let scope = self.gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let mut rec = Recorder {
-            encoder: self.gpu.device.create_command_encoder(&Default::default()),
-            timed: Vec::new(),
-            host_iterations: 0,
-            parity: 0,
-        };
+        let mut rec = Recorder::new(&self.gpu.device);
         rec.encoder.clear_buffer(&self.buffers[&BufferRef::Control], 0, None);
         for (b, boundary) in self.program.plan.boundaries.iter().enumerate() {
             for side in 0..1 + boundary.pingpong as usize {
@@ -641,20 +712,21 @@ impl<'g> Instance<'g> {
         }
         for (ph, record) in plan_records {
             let steps = self.program.plan.schedule[ph].clone();
-            for word in self
+            let next_words: Vec<u32> = self
                 .program
                 .plan
                 .kernels
                 .iter()
                 .filter(|k| k.phase == ph && k.regenerates)
                 .map(|k| self.program.control.next[&k.chain])
-            {
-                rec.encoder
-                    .clear_buffer(&self.buffers[&BufferRef::Control], 4 * word as u64, Some(4));
+                .collect();
+            for word in next_words {
+                self.dispatch(&mut rec, &self.zeros[&word], None, record, Dispatch::Single);
             }
             self.run_steps(&mut rec, &steps, record)?;
             self.dispatch(&mut rec, &self.fold, None, record, Dispatch::Single);
         }
+        rec.resolve(&self.queries);
         // Read back control words, counter totals and timestamps.
         let control_bytes = 4 * self.program.control.len as u64;
         let ncounters = self.totals.len() as u64;
@@ -671,17 +743,16 @@ impl<'g> Instance<'g> {
                 8 * ncounters,
             );
         }
-        let nq = 2 * rec.timed.len() as u32;
-        if let (Some((set, resolve)), true) = (&self.queries, nq > 0) {
-            rec.encoder.resolve_query_set(set, 0..nq, resolve, 0);
+        let pairs = rec.timed.len() as u64;
+        if let (Some((_, resolve)), true) = (&self.queries, pairs > 0) {
             rec.encoder
-                .copy_buffer_to_buffer(resolve, 0, &self.readback, ts_at, 8 * nq as u64);
+                .copy_buffer_to_buffer(resolve, 0, &self.readback, ts_at, 16 * pairs);
         }
         self.gpu.queue.submit([rec.encoder.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!("running a frame failed: {e}")));
         }
-        let data = self.map_readback(ts_at + 8 * nq as u64)?;
+        let data = self.map_readback(ts_at + 16 * pairs)?;
         let words: &[u32] = bytemuck::cast_slice(&data[..control_bytes as usize]);
         for (q, &w) in &self.program.control.queue_overflow {
             if words[w as usize] > 0 {
@@ -705,9 +776,9 @@ impl<'g> Instance<'g> {
             stats.counters.insert(name.clone(), total - self.totals[i]);
             self.totals[i] = total;
         }
-        if nq > 0 {
+        if pairs > 0 {
             let period = self.gpu.queue.get_timestamp_period() as f64 * 1e-9;
-            let ticks: &[u64] = bytemuck::cast_slice(&data[ts_at as usize..(ts_at + 8 * nq as u64) as usize]);
+            let ticks: &[u64] = bytemuck::cast_slice(&data[ts_at as usize..(ts_at + 16 * pairs) as usize]);
             for (i, &k) in rec.timed.iter().enumerate() {
                 let dt = ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f64 * period;
                 *stats.kernel_seconds.entry(self.kernels[k].name.clone()).or_insert(0.0) += dt;
