@@ -484,7 +484,7 @@ impl<'g> Instance<'g> {
     fn dispatch(&self, rec: &mut Recorder, k: &Kernel, timed: Option<usize>, record: usize, groups: Dispatch) {
         let query = match (&self.queries, timed) {
             (Some(_), Some(ki)) if rec.timed.len() < MAX_TIMED => {
-                if rec.timed.len() > rec.resolved && rec.timed.len() % QUERY_PAIRS == 0 {
+                if rec.timed.len() > rec.resolved && rec.timed.len().is_multiple_of(QUERY_PAIRS) {
                     // The query set is full: resolve it before its queries are written again.
                     rec.resolve(&self.queries);
                 }
