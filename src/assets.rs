@@ -66,6 +66,20 @@ pub fn scene_names() -> Vec<(String, String)> {
     out
 }
 
+/// The folder scene files find their assets in: `LIGHTGRAPH_ASSETS` (what `--assets` sets),
+/// else `../shared/scenes` from the current folder or from the repository lightgraph was
+/// built from, when it exists.
+pub fn asset_root() -> Option<std::path::PathBuf> {
+    if let Some(dir) = std::env::var_os("LIGHTGRAPH_ASSETS") {
+        return Some(dir.into());
+    }
+    let candidates = [
+        Path::new("../shared/scenes").to_path_buf(),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes"),
+    ];
+    candidates.into_iter().find(|d| d.is_dir())
+}
+
 /// The text of a scene given by built-in name or path, with the name errors should use.
 pub fn scene_text(scene: &str) -> Result<(String, String), String> {
     let path = Path::new(scene);

@@ -75,6 +75,10 @@ struct Common {
     /// Override a graph constant, NAME=VALUE (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     set: Vec<String>,
+    /// Folder scene files find their glTF assets in (also LIGHTGRAPH_ASSETS; default:
+    /// ../shared/scenes when it exists).
+    #[arg(long, env = "LIGHTGRAPH_ASSETS")]
+    assets: Option<PathBuf>,
     /// GPU adapter whose name contains this text (also LIGHTGRAPH_ADAPTER).
     #[arg(long, env = "LIGHTGRAPH_ADAPTER")]
     adapter: Option<String>,
@@ -511,6 +515,16 @@ fn main() -> ExitCode {
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
     let cli = Cli::parse();
+    let assets = match &cli.command {
+        Command::Render(a) => a.common.assets.clone(),
+        Command::Explain(a) => a.common.assets.clone(),
+        Command::Bench(a) => a.common.assets.clone(),
+        Command::List => None,
+    };
+    if let Some(dir) = assets {
+        // SAFETY: set before any thread starts; scene loading reads it.
+        unsafe { std::env::set_var("LIGHTGRAPH_ASSETS", dir) };
+    }
     let result = match cli.command {
         Command::Render(a) => render(a),
         Command::Explain(a) => explain(a),

@@ -28,20 +28,22 @@ pub fn load_scene(name: &str) -> Result<LoadedScene> {
     load_scene_with(name, BvhKind::Bvh2)
 }
 
-/// Loads a built-in scene by name, or a scene file by path, with a BVH of `kind`.
+/// Loads a built-in scene by name, or a scene file by path, with a BVH of `kind`; glTF
+/// assets come from [`crate::assets::asset_root`].
 pub fn load_scene_with(name: &str, kind: BvhKind) -> Result<LoadedScene> {
     let (file, text) = crate::assets::scene_text(name).map_err(|e| anyhow!(e))?;
-    let mut scene = LoadedScene::parse(&file, &text, kind)?;
+    let mut scene = LoadedScene::parse(&file, &text, kind, crate::assets::asset_root().as_deref())?;
     scene.name = name.to_string();
     Ok(scene)
 }
 
 impl LoadedScene {
     /// Parses, validates and compiles the RON scene `text` (`file` names it in errors) with
-    /// a BVH of `kind`.
-    pub fn parse(file: &str, text: &str, kind: BvhKind) -> Result<LoadedScene> {
+    /// a BVH of `kind`, importing its glTF asset from below `assets`.
+    pub fn parse(file: &str, text: &str, kind: BvhKind, assets: Option<&std::path::Path>) -> Result<LoadedScene> {
         let start = Instant::now();
-        let scene = parse_scene(file, text)?;
+        let mut scene = parse_scene(file, text)?;
+        lightgraph_scenes::resolve_gltf(&mut scene, file, assets)?;
         let compiled = CompiledScene::with_bvh(&scene, kind).map_err(|e| anyhow!("{file}: {e}"))?;
         Ok(LoadedScene {
             name: file.to_string(),

@@ -15,6 +15,13 @@ pub mod light_kind {
     pub const BACKGROUND: u32 = 3;
 }
 
+/// Bits of `Material::flags`.
+pub mod material_flags {
+    /// Both sides of the surface scatter (glTF `doubleSided`): the shading normal faces the
+    /// incoming direction.
+    pub const TWO_SIDED: u32 = 1;
+}
+
 /// Primitive kinds, as `Primitive::kind` stores them.
 pub mod primitive_kind {
     /// A triangle: `a` = v0, `b` = v1 - v0, `c` = v2 - v0.
@@ -159,8 +166,8 @@ pub struct GpuMaterial {
     pub ior: f32,
     /// Mirror/dielectric reflectance.
     pub mirror: [f32; 3],
-    /// Unused.
-    pub pad: f32,
+    /// [`material_flags`].
+    pub flags: u32,
 }
 
 /// A light (`Light` in WGSL).

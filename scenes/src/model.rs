@@ -22,8 +22,10 @@ pub struct Scene {
     #[serde(default = "default_resolution")]
     pub resolution: (u32, u32),
     /// Materials by name.
+    #[serde(default)]
     pub materials: BTreeMap<String, Material>,
     /// Geometry.
+    #[serde(default)]
     pub shapes: Vec<Shape>,
     /// Lights that are not emissive shapes.
     #[serde(default)]
@@ -31,8 +33,9 @@ pub struct Scene {
     /// Path-sampling settings the scene was specified with.
     #[serde(default)]
     pub integrator: Integrator,
-    /// A glTF 2.0 asset (path below the asset root) whose geometry joins the shapes. This
-    /// version cannot load glTF yet and refuses scenes that name one.
+    /// A glTF 2.0 asset (`.gltf` or `.glb`, a path below the asset root) whose meshes join the
+    /// shapes: every node's mesh instance with its transform, base colours (a texture
+    /// contributes its mean colour) and emission; its materials are named `gltf:NAME`.
     #[serde(default)]
     pub gltf: Option<String>,
 }
@@ -81,7 +84,7 @@ pub enum FovAxis {
 
 /// The SmallVCM material: a diffuse lobe, a Phong lobe, and a mirror or dielectric lobe.
 /// Lobes with zero reflectance are absent; a material with none is black.
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
     /// Lambertian reflectance.
@@ -99,10 +102,26 @@ pub struct Material {
     /// Index of refraction; negative means a perfect mirror (Fresnel = 1).
     #[serde(default = "mirror_ior")]
     pub ior: f32,
+    /// Whether both sides scatter (glTF `doubleSided`); otherwise the back side is black.
+    #[serde(default)]
+    pub two_sided: bool,
 }
 
 fn mirror_ior() -> f32 {
     -1.0
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            diffuse: [0.0; 3],
+            phong: [0.0; 3],
+            phong_exponent: 0.0,
+            mirror: [0.0; 3],
+            ior: mirror_ior(),
+            two_sided: false,
+        }
+    }
 }
 
 /// A piece of geometry. Triangles face the side their winding gives by the right-hand
@@ -129,6 +148,18 @@ pub enum Shape {
         #[serde(default)]
         emission: Option<Rgb>,
     },
+    /// An indexed triangle mesh (each triangle faces by its winding, as `Triangle`).
+    Mesh {
+        /// Vertex positions.
+        positions: Vec<Vec3>,
+        /// Three vertex indices per triangle.
+        indices: Vec<[u32; 3]>,
+        /// Material name.
+        material: String,
+        /// Emitted radiance: makes every triangle an area light.
+        #[serde(default)]
+        emission: Option<Rgb>,
+    },
     /// An analytic sphere (normals face outward).
     Sphere {
         /// Centre.
@@ -138,6 +169,28 @@ pub enum Shape {
         /// Material name.
         material: String,
     },
+}
+
+impl Shape {
+    /// The shape's material name.
+    pub fn material(&self) -> &str {
+        match self {
+            Shape::Triangle { material, .. }
+            | Shape::Quad { material, .. }
+            | Shape::Mesh { material, .. }
+            | Shape::Sphere { material, .. } => material,
+        }
+    }
+
+    /// Whether the shape emits light.
+    pub fn emits(&self) -> bool {
+        match self {
+            Shape::Triangle { emission, .. } | Shape::Quad { emission, .. } | Shape::Mesh { emission, .. } => {
+                emission.is_some_and(|e| e.iter().any(|&v| v > 0.0))
+            }
+            Shape::Sphere { .. } => false,
+        }
+    }
 }
 
 /// Lights that are not emissive shapes.

@@ -43,14 +43,17 @@ fn fresnel_dielectric(cos_incident: f32, ior: f32) -> f32 {
 
 fn bsdf_setup(material: u32, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bsdf {
     var b: Bsdf;
-    b.frame = frame_from_z(normal);
+    let m = materials[material];
+    // A two-sided material scatters on the side the path arrives from.
+    let two_sided = (m.flags & MATERIAL_TWO_SIDED) != 0u;
+    let n = select(normal, -normal, two_sided && dot(normal, towards_previous) < 0.0);
+    b.frame = frame_from_z(n);
     b.fix = to_local(b.frame, towards_previous);
     b.material = material;
     b.valid = abs(b.fix.z) >= EPS_COSINE;
     if (!b.valid) {
         return b;
     }
-    let m = materials[material];
     b.fresnel = fresnel_dielectric(b.fix.z, m.ior);
     let albedo_diffuse = luminance(m.diffuse);
     let albedo_phong = luminance(m.phong);

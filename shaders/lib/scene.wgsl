@@ -74,8 +74,10 @@ struct Material {
     phong: vec3<f32>,
     ior: f32,               // negative: perfect mirror
     mirror: vec3<f32>,
-    pad: f32,
+    flags: u32,             // MATERIAL_TWO_SIDED
 }
+
+const MATERIAL_TWO_SIDED: u32 = 1u;
 
 const LIGHT_AREA: u32 = 0u;
 const LIGHT_POINT: u32 = 1u;

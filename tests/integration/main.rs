@@ -6,5 +6,6 @@ mod bvh;
 mod cli;
 mod common;
 mod composition;
+mod gltf;
 mod layouts;
 mod scenes;

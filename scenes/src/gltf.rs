@@ -1,0 +1,160 @@
+//! glTF 2.0 import (`.gltf` and `.glb`, through the `gltf` crate): every mesh instance of the
+//! default scene, flattened with its node transform into [`Shape::Mesh`]es, with materials
+//! from the metallic-roughness base colour (a base-colour texture contributes its mean colour,
+//! decoded from sRGB) and emission (with KHR_materials_emissive_strength).
+
+use crate::model::{Material, Rgb, Shape};
+use glam::{Mat4, Vec3};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// What a glTF file adds to a scene.
+#[derive(Debug, Clone, Default)]
+pub struct Imported {
+    /// One mesh shape per primitive instance.
+    pub shapes: Vec<Shape>,
+    /// Materials by name (`gltf:NAME` or `gltf:#INDEX`).
+    pub materials: BTreeMap<String, Material>,
+    /// Triangles imported.
+    pub triangles: usize,
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The mean linear RGB colour of an image (alpha ignored).
+fn mean_color(image: &gltf::image::Data) -> Option<Rgb> {
+    use gltf::image::Format;
+    let channels = match image.format {
+        Format::R8G8B8 => 3,
+        Format::R8G8B8A8 => 4,
+        Format::R8 => 1,
+        Format::R8G8 => 2,
+        _ => return None,
+    };
+    // sRGB decode of every byte value, once.
+    let table: Vec<f32> = (0..256).map(|v| srgb_to_linear(v as f32 / 255.0)).collect();
+    let mut sum = [0f64; 3];
+    let n = image.pixels.len() / channels;
+    for px in image.pixels.chunks_exact(channels) {
+        let rgb = if channels >= 3 {
+            [px[0], px[1], px[2]]
+        } else {
+            [px[0]; 3]
+        };
+        for c in 0..3 {
+            sum[c] += table[rgb[c] as usize] as f64;
+        }
+    }
+    (n > 0).then(|| sum.map(|s| (s / n as f64) as f32))
+}
+
+/// Imports `path`; errors name the file and the problem.
+pub fn import(path: &Path) -> Result<Imported, String> {
+    let shown = path.display();
+    let (document, buffers, images) = gltf::import(path).map_err(|e| format!("{shown}: {e}"))?;
+    for required in document.extensions_required() {
+        if required != "KHR_materials_emissive_strength" {
+            return Err(format!(
+                "{shown}: requires the glTF extension {required}, which lightgraph does not support"
+            ));
+        }
+    }
+    let mut out = Imported::default();
+    let mut material_names = Vec::new();
+    for (i, m) in document.materials().enumerate() {
+        let name = format!("gltf:{}", m.name().map_or_else(|| format!("#{i}"), |n| n.to_string()));
+        let pbr = m.pbr_metallic_roughness();
+        let factor = pbr.base_color_factor();
+        let texture_mean = pbr
+            .base_color_texture()
+            .and_then(|t| images.get(t.texture().source().index()))
+            .and_then(mean_color)
+            .unwrap_or([1.0; 3]);
+        let diffuse = [0, 1, 2].map(|c| factor[c] * texture_mean[c]);
+        out.materials.insert(
+            name.clone(),
+            Material {
+                diffuse,
+                two_sided: m.double_sided(),
+                ..Default::default()
+            },
+        );
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let emission = m.emissive_factor().map(|e| e * strength);
+        material_names.push((name, emission));
+    }
+    let default_material = "gltf:default".to_string();
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+        .ok_or_else(|| format!("{shown}: no scene"))?;
+    let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let transform = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        for child in node.children() {
+            stack.push((child, transform));
+        }
+        let Some(mesh) = node.mesh() else { continue };
+        for primitive in mesh.primitives() {
+            if primitive.mode() != gltf::mesh::Mode::Triangles {
+                return Err(format!(
+                    "{shown}: mesh '{}' has a primitive of mode {:?}; only triangles are supported",
+                    mesh.name().unwrap_or("?"),
+                    primitive.mode()
+                ));
+            }
+            let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let Some(positions) = reader.read_positions() else {
+                continue;
+            };
+            let positions: Vec<[f32; 3]> = positions
+                .map(|p| transform.transform_point3(Vec3::from_array(p)).to_array())
+                .collect();
+            let flat: Vec<u32> = match reader.read_indices() {
+                Some(ix) => ix.into_u32().collect(),
+                None => (0..positions.len() as u32).collect(),
+            };
+            if let Some(&bad) = flat.iter().find(|&&i| i as usize >= positions.len()) {
+                return Err(format!(
+                    "{shown}: mesh '{}' indexes vertex {bad} of {}",
+                    mesh.name().unwrap_or("?"),
+                    positions.len()
+                ));
+            }
+            // A mirroring transform flips the winding; keep triangles facing as authored.
+            let flip = transform.determinant() < 0.0;
+            let indices: Vec<[u32; 3]> = flat
+                .chunks_exact(3)
+                .map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] })
+                .collect();
+            let (material, emission) = match primitive.material().index() {
+                Some(i) => material_names[i].clone(),
+                None => {
+                    out.materials.entry(default_material.clone()).or_insert(Material {
+                        diffuse: [0.8; 3],
+                        ..Default::default()
+                    });
+                    (default_material.clone(), [0.0; 3])
+                }
+            };
+            out.triangles += indices.len();
+            let emission = emission.iter().any(|&e| e > 0.0).then_some(emission);
+            out.shapes.push(Shape::Mesh {
+                positions,
+                indices,
+                material,
+                emission,
+            });
+        }
+    }
+    if out.triangles == 0 {
+        return Err(format!("{shown}: no triangles in the default scene"));
+    }
+    Ok(out)
+}
