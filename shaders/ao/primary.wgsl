@@ -15,6 +15,6 @@ fn ao_primary(s: ptr<function, AoSample>, index: u32) -> bool {
     let surface = surface_at(hit, camera.position, d);
     let n = select(-surface.normal, surface.normal, dot(surface.normal, d) < 0.0);
     let direction = to_world(frame_from_z(n), sample_cos_hemisphere(rng_vec2(&rng)));
-    emit_occlusion(OcclusionRay(offset_ray_origin(surface.position, n, scene.radius), pixel, direction));
+    emit_occlusion(OcclusionRay(offset_ray_origin(surface.position, n, surface.extent), pixel, direction));
     return false;
 }

@@ -309,20 +309,22 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
 #endif
 
 // Where a ray hit: position (recomputed on the primitive for accuracy), unit geometric
-// normal, material and area light.
+// normal, material, area light, and the primitive's extent (for offset_ray_origin).
 struct Surface {
     position: vec3<f32>,
     normal: vec3<f32>,
     material: u32,
     light: i32,
+    extent: f32,
 }
 
 fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
     let p = primitives[hit.primitive];
     if (p.kind == PRIMITIVE_SPHERE) {
         let n = normalize(o + hit.t * d - p.a);
-        return Surface(p.a + p.b.x * n, n, p.material, p.light);
+        let m = abs(p.a) + vec3<f32>(p.b.x);
+        return Surface(p.a + p.b.x * n, n, p.material, p.light, max(m.x, max(m.y, m.z)));
     }
     let position = p.a + hit.uv.x * p.b + hit.uv.y * p.c;
-    return Surface(position, normalize(cross(p.b, p.c)), p.material, p.light);
+    return Surface(position, normalize(cross(p.b, p.c)), p.material, p.light, triangle_extent(p.a, p.b, p.c));
 }

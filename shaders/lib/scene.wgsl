@@ -99,12 +99,20 @@ struct Light {
 
 // Moves `p` off its surface along `n` (which points to the side the new ray leaves on), by
 // a few units in the last place of p's coordinates (Waechter and Binder, "A fast and robust
-// method for avoiding self-intersection", Ray Tracing Gems, 2019). Near the origin, where
-// float spacing is finer than the error of computed hit points, the offset is a fixed
-// fraction of the scene radius, so a scaled scene is offset in proportion.
-fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>, scene_radius: f32) -> vec3<f32> {
+// method for avoiding self-intersection", Ray Tracing Gems, 2019). `extent` is the largest
+// coordinate magnitude of the primitive `p` was computed from: near the origin, where float
+// spacing is finer than the error of the computed point (about extent x 2^-23), the offset
+// is a fixed fraction of `extent` instead. Both scale with the primitive, so a scene scaled
+// by any factor, or one with huge coordinates elsewhere, is offset the same way.
+fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>, extent: f32) -> vec3<f32> {
     let of_i = vec3<i32>(256.0 * n);
     let p_i = bitcast<vec3<f32>>(bitcast<vec3<i32>>(p) + select(of_i, -of_i, p < vec3<f32>(0.0)));
-    let origin = scene_radius * (1.0 / 32.0);
-    return select(p_i, p + (scene_radius * (1.0 / 65536.0)) * n, abs(p) < vec3<f32>(origin));
+    let origin = extent * (1.0 / 32.0);
+    return select(p_i, p + (extent * (1.0 / 65536.0)) * n, abs(p) < vec3<f32>(origin));
+}
+
+// The largest coordinate magnitude of a triangle with corner `a` and edges `b`, `c`.
+fn triangle_extent(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
+    let m = max(abs(a), max(abs(a + b), abs(a + c)));
+    return max(m.x, max(m.y, m.z));
 }

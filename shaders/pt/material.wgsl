@@ -23,12 +23,13 @@ fn material(path: ptr<function, CameraPath>) -> bool {
                 }
                 let contribution = (*path).throughput * ill.radiance * e.f * (w * e.cos_gen / (pick * ill.pdf));
                 let side = select(-s.normal, s.normal, dot(s.normal, ill.direction) > 0.0);
-                let origin = offset_ray_origin(s.position, side, scene.radius);
+                let origin = offset_ray_origin(s.position, side, s.extent);
                 var distance = INFINITE_DISTANCE;
                 if (ill.distance < INFINITE_DISTANCE) {
                     var aim = s.position + ill.direction * ill.distance;
                     if (lights[index].kind == LIGHT_AREA) {
-                        aim = offset_ray_origin(ill.point, ill.normal, scene.radius);
+                        let l = lights[index];
+                        aim = offset_ray_origin(ill.point, ill.normal, triangle_extent(l.position, l.e1, l.e2));
                     }
                     distance = length(aim - origin);
                 }
@@ -57,7 +58,7 @@ fn material(path: ptr<function, CameraPath>) -> bool {
     (*path).last_pdf = smp.pdf * q_mis;
     (*path).last_specular = select(0u, 1u, smp.specular);
     let side = select(-s.normal, s.normal, dot(s.normal, smp.direction) > 0.0);
-    (*path).origin = offset_ray_origin(s.position, side, scene.radius);
+    (*path).origin = offset_ray_origin(s.position, side, s.extent);
     (*path).direction = smp.direction;
     return true;
 }
