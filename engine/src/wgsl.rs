@@ -100,6 +100,12 @@ impl ModuleSource {
         }
     }
 
+    /// The files the module is assembled from, naming errors that naga cannot place.
+    fn files(&self) -> String {
+        let files: Vec<&str> = self.chunks.iter().map(|(f, _)| f.as_str()).collect();
+        format!("in one of {}", files.join(", "))
+    }
+
     fn locate_span(&self, span: naga::Span) -> Option<Location> {
         if !span.is_defined() {
             return None;
@@ -116,7 +122,7 @@ impl ModuleSource {
             let primary = labels.first().and_then(|(span, _)| self.locate_span(*span));
             match primary {
                 Some(at) => msg.push_str(&format!("{at}: error: {}", e.message())),
-                None => msg.push_str(&format!("error: {}", e.message())),
+                None => msg.push_str(&format!("{}: error: {}", self.files(), e.message())),
             }
             for (span, label) in labels.iter() {
                 if let Some(at) = self.locate_span(*span)
@@ -136,7 +142,7 @@ impl ModuleSource {
             let at = spans.next().and_then(|(span, _)| self.locate_span(*span));
             let mut msg = match at {
                 Some(at) => format!("{at}: error: {}", e.as_inner()),
-                None => format!("error: {}", e.as_inner()),
+                None => format!("{}: error: {}", self.files(), e.as_inner()),
             };
             for (span, label) in e.spans() {
                 if let Some(at) = self.locate_span(*span) {
@@ -193,5 +199,16 @@ mod tests {
         m.push("shaders/x.wgsl", "fn f() -> u32 {\n  return A + undefined_name;\n}\n");
         let err = m.compile(naga::valid::Capabilities::default()).unwrap_err().to_string();
         assert!(err.contains("shaders/x.wgsl:2:"), "{err}");
+    }
+
+    #[test]
+    fn errors_without_a_span_name_the_files() {
+        let mut m = ModuleSource::default();
+        m.push(
+            "shaders/deep.wgsl",
+            &format!("fn f() -> u32 {{ return {}1u; }}\n", "(".repeat(1000)),
+        );
+        let err = m.compile(naga::valid::Capabilities::default()).unwrap_err().to_string();
+        assert!(err.starts_with("in one of shaders/deep.wgsl: error:"), "{err}");
     }
 }
