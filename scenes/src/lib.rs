@@ -227,7 +227,8 @@ impl CompiledScene {
                 kind: primitive_kind::TRIANGLE,
             });
         };
-        for shape in &scene.shapes {
+        for (s, shape) in scene.shapes.iter().enumerate() {
+            check_shape(s, shape)?;
             match shape {
                 Shape::Triangle {
                     vertices,
@@ -388,6 +389,20 @@ impl CompiledScene {
     }
 }
 
+/// Checks what [`CompiledScene::with_bvh`] needs of shape `index`: mesh indices within its
+/// vertices.
+fn check_shape(index: usize, shape: &Shape) -> Result<(), String> {
+    if let Shape::Mesh { positions, indices, .. } = shape
+        && let Some(&i) = indices.iter().flatten().find(|&&i| i as usize >= positions.len())
+    {
+        return Err(format!(
+            "shape {index}: a mesh triangle uses vertex {i}, but the mesh has {} vertices",
+            positions.len()
+        ));
+    }
+    Ok(())
+}
+
 /// The axis-aligned bounds of a primitive.
 pub fn primitive_bounds(p: &GpuPrimitive) -> (Vec3A, Vec3A) {
     let a = Vec3A::from_array(p.a);
@@ -472,6 +487,22 @@ mod tests {
         assert!(e.contains("radius"), "{e}");
         let e = error(&BASE.replace("fov_degrees: 40.0", "fov_degrees: 40.0,,"));
         assert!(e.starts_with("s.ron:2:"), "{e}");
+    }
+
+    #[test]
+    fn mesh_index_out_of_range_is_an_error() {
+        let text = BASE.replace(
+            "shapes: [",
+            "shapes: [Mesh(positions: [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0)], indices: [(0, 1, 2)], material: \"m\"), ",
+        );
+        let scene = parse_scene("s.ron", &text).unwrap();
+        for kind in [BvhKind::Bvh2, BvhKind::Cwbvh] {
+            let e = CompiledScene::with_bvh(&scene, kind).unwrap_err();
+            assert!(
+                e.contains("shape 0") && e.contains("vertex 2") && e.contains("2 vertices"),
+                "{e}"
+            );
+        }
     }
 
     #[test]
