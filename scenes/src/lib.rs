@@ -389,9 +389,29 @@ impl CompiledScene {
     }
 }
 
+/// The largest coordinate (or sphere radius) a shape may have: beyond it, the areas of boxes
+/// overflow f32 in the BVH builders.
+pub const MAX_COORDINATE: f32 = 1e12;
+
 /// Checks what [`CompiledScene::with_bvh`] needs of shape `index`: mesh indices within its
-/// vertices.
+/// vertices, finite coordinates within [`MAX_COORDINATE`].
 fn check_shape(index: usize, shape: &Shape) -> Result<(), String> {
+    let (points, radius): (&[model::Vec3], Option<&f32>) = match shape {
+        Shape::Triangle { vertices, .. } => (vertices, None),
+        Shape::Quad { corners, .. } => (corners, None),
+        Shape::Mesh { positions, .. } => (positions, None),
+        Shape::Sphere { center, radius, .. } => (std::slice::from_ref(center), Some(radius)),
+    };
+    if let Some(v) = points
+        .iter()
+        .flatten()
+        .chain(radius)
+        .find(|v| !(v.abs() <= MAX_COORDINATE))
+    {
+        return Err(format!(
+            "shape {index}: coordinate {v} is not a finite number within ±{MAX_COORDINATE:e}"
+        ));
+    }
     if let Shape::Mesh { positions, indices, .. } = shape
         && let Some(&i) = indices.iter().flatten().find(|&&i| i as usize >= positions.len())
     {
@@ -502,6 +522,25 @@ mod tests {
                 e.contains("shape 0") && e.contains("vertex 2") && e.contains("2 vertices"),
                 "{e}"
             );
+        }
+    }
+
+    #[test]
+    fn huge_or_non_finite_coordinates_are_errors() {
+        for (bad, shown) in [
+            ("3.4028235e38", "340282350000000000000000000000000000000"),
+            ("NaN", "NaN"),
+            ("inf", "inf"),
+        ] {
+            let text = BASE.replace(
+                "shapes: [",
+                &format!("shapes: [Quad(corners: ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), ({bad}, 1.0, 0.0), (0.0, 1.0, 0.0)), material: \"m\"), "),
+            );
+            let scene = parse_scene("s.ron", &text).unwrap();
+            for kind in [BvhKind::Bvh2, BvhKind::Cwbvh] {
+                let e = CompiledScene::with_bvh(&scene, kind).unwrap_err();
+                assert!(e.starts_with("shape 0: coordinate ") && e.contains(shown), "{e}");
+            }
         }
     }
 
