@@ -54,10 +54,38 @@ fn mean_color(image: &gltf::image::Data) -> Option<Rgb> {
     (n > 0).then(|| sum.map(|s| (s / n as f64) as f32))
 }
 
+/// Reads, checks and validates the document at `path`, then its buffers and images, like
+/// `gltf::import` but refusing what makes the `gltf` crate panic.
+fn load(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>, Vec<gltf::image::Data>), String> {
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let gltf = gltf::Gltf::from_reader_without_validation(std::io::BufReader::new(file)).map_err(|e| e.to_string())?;
+    let json = gltf.document.into_json();
+    // gltf-json's validation indexes the accessors with POSITION unchecked.
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            for (semantic, accessor) in &primitive.attributes {
+                if accessor.value() >= json.accessors.len() {
+                    return Err(format!(
+                        "mesh {m}, primitive {p}: attribute {} uses accessor {}, but there are {}",
+                        semantic.to_string(),
+                        accessor.value(),
+                        json.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
+    let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
+    let base = path.parent();
+    let buffers = gltf::import_buffers(&document, base, gltf.blob).map_err(|e| e.to_string())?;
+    let images = gltf::import_images(&document, base, &buffers).map_err(|e| e.to_string())?;
+    Ok((document, buffers, images))
+}
+
 /// Imports `path`; errors name the file and the problem.
 pub fn import(path: &Path) -> Result<Imported, String> {
     let shown = path.display();
-    let (document, buffers, images) = gltf::import(path).map_err(|e| format!("{shown}: {e}"))?;
+    let (document, buffers, images) = load(path).map_err(|e| format!("{shown}: {e}"))?;
     for required in document.extensions_required() {
         if required != "KHR_materials_emissive_strength" {
             return Err(format!(
@@ -157,4 +185,49 @@ pub fn import(path: &Path) -> Result<Imported, String> {
         return Err(format!("{shown}: no triangles in the default scene"));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::{Value, json};
+
+    /// Imports the committed glTF Cornell box after `edit` of its JSON and buffer, from a
+    /// temporary directory named after `test`.
+    fn import_edited(test: &str, edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> Result<Imported, String> {
+        let from = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/gltf/cornell_box");
+        let mut doc: Value =
+            serde_json::from_slice(&std::fs::read(from.join("CornellBox-Original.gltf")).unwrap()).unwrap();
+        let mut bin = std::fs::read(from.join("CornellBox-Original.bin")).unwrap();
+        edit(&mut doc, &mut bin);
+        let dir = std::env::temp_dir().join(format!("lightgraph-gltf-{test}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("CornellBox-Original.gltf"), doc.to_string()).unwrap();
+        std::fs::write(dir.join("CornellBox-Original.bin"), bin).unwrap();
+        let result = import(&dir.join("CornellBox-Original.gltf"));
+        std::fs::remove_dir_all(dir).unwrap();
+        result
+    }
+
+    fn error(test: &str, edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> String {
+        import_edited(test, edit).map(|_| ()).expect_err("the asset is refused")
+    }
+
+    #[test]
+    fn the_unedited_asset_loads() {
+        assert_eq!(import_edited("unedited", |_, _| {}).unwrap().triangles, 36);
+    }
+
+    #[test]
+    fn position_accessor_out_of_range_is_an_error() {
+        let e = error("position", |doc, _| {
+            doc["meshes"][0]["primitives"][1]["attributes"]["POSITION"] = json!(5126);
+        });
+        assert!(
+            e.ends_with(
+                "CornellBox-Original.gltf: mesh 0, primitive 1: attribute POSITION uses accessor 5126, but there are 16"
+            ),
+            "{e}"
+        );
+    }
 }
