@@ -54,6 +54,27 @@ fn mean_color(image: &gltf::image::Data) -> Option<Rgb> {
     (n > 0).then(|| sum.map(|s| (s / n as f64) as f32))
 }
 
+/// Whether `uri` percent-decodes to UTF-8.
+fn percent_decodes(uri: &str) -> bool {
+    let bytes = uri.as_bytes();
+    let hex = |j: usize| bytes.get(j).and_then(|&c| (c as char).to_digit(16));
+    let mut decoded = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        match (bytes[i], hex(i + 1), hex(i + 2)) {
+            (b'%', Some(high), Some(low)) => {
+                decoded.push((high * 16 + low) as u8);
+                i += 3;
+            }
+            (c, ..) => {
+                decoded.push(c);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8(decoded).is_ok()
+}
+
 /// Reads, checks and validates the document at `path`, then its buffers and images, like
 /// `gltf::import` but refusing what makes the `gltf` crate panic.
 fn load(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>, Vec<gltf::image::Data>), String> {
@@ -73,6 +94,25 @@ fn load(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>, Vec<glt
                     ));
                 }
             }
+        }
+    }
+    // gltf's import unwraps the percent-decoding of relative URIs.
+    let buffer_uris = json
+        .buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (format!("buffer {i}"), &b.uri));
+    let image_uris = json
+        .images
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (format!("image {i}"), &b.uri));
+    for (what, uri) in buffer_uris.chain(image_uris) {
+        if let Some(uri) = uri
+            && !uri.contains(':')
+            && !percent_decodes(uri)
+        {
+            return Err(format!("{what}: URI '{uri}' does not percent-decode to UTF-8"));
         }
     }
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
@@ -216,6 +256,16 @@ mod tests {
     #[test]
     fn the_unedited_asset_loads() {
         assert_eq!(import_edited("unedited", |_, _| {}).unwrap().triangles, 36);
+    }
+
+    #[test]
+    fn a_uri_that_does_not_decode_to_utf8_is_an_error() {
+        let e = error("uri", |doc, _| doc["buffers"][0]["uri"] = json!("%FF.bin"));
+        assert!(
+            e.ends_with("buffer 0: URI '%FF.bin' does not percent-decode to UTF-8"),
+            "{e}"
+        );
+        assert!(percent_decodes("a%20b%C3%A9%zz%"));
     }
 
     #[test]
