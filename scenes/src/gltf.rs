@@ -115,6 +115,14 @@ fn load(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>, Vec<glt
             return Err(format!("{what}: URI '{uri}' does not percent-decode to UTF-8"));
         }
     }
+    // gltf's Image::source unwraps these.
+    for (i, image) in json.images.iter().enumerate() {
+        match (&image.uri, &image.buffer_view, &image.mime_type) {
+            (None, None, _) => return Err(format!("image {i} has neither a uri nor a bufferView")),
+            (_, Some(_), None) => return Err(format!("image {i} has a bufferView but no mimeType")),
+            _ => {}
+        }
+    }
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
     let base = path.parent();
     let buffers = gltf::import_buffers(&document, base, gltf.blob).map_err(|e| e.to_string())?;
@@ -266,6 +274,14 @@ mod tests {
             "{e}"
         );
         assert!(percent_decodes("a%20b%C3%A9%zz%"));
+    }
+
+    #[test]
+    fn an_image_without_a_source_or_mime_type_is_an_error() {
+        let e = error("image-mime", |doc, _| doc["images"] = json!([{"bufferView": 0}]));
+        assert!(e.ends_with("image 0 has a bufferView but no mimeType"), "{e}");
+        let e = error("image-source", |doc, _| doc["images"] = json!([{"name": "x"}]));
+        assert!(e.ends_with("image 0 has neither a uri nor a bufferView"), "{e}");
     }
 
     #[test]
