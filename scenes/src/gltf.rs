@@ -124,6 +124,20 @@ fn load(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>, Vec<glt
         }
     }
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
+    // gltf slices buffers by views unchecked.
+    for view in document.views() {
+        let end = view.offset().checked_add(view.length());
+        if end.is_none_or(|end| end > view.buffer().length()) {
+            return Err(format!(
+                "buffer view {} (bytes {}..+{}) lies beyond its buffer {} of {} bytes",
+                view.index(),
+                view.offset(),
+                view.length(),
+                view.buffer().index(),
+                view.buffer().length()
+            ));
+        }
+    }
     let base = path.parent();
     let buffers = gltf::import_buffers(&document, base, gltf.blob).map_err(|e| e.to_string())?;
     let images = gltf::import_images(&document, base, &buffers).map_err(|e| e.to_string())?;
@@ -282,6 +296,18 @@ mod tests {
         assert!(e.ends_with("image 0 has a bufferView but no mimeType"), "{e}");
         let e = error("image-source", |doc, _| doc["images"] = json!([{"name": "x"}]));
         assert!(e.ends_with("image 0 has neither a uri nor a bufferView"), "{e}");
+    }
+
+    #[test]
+    fn a_buffer_view_beyond_its_buffer_is_an_error() {
+        let e = error("view", |doc, _| {
+            doc["images"] = json!([{"bufferView": 0, "mimeType": "image/png"}]);
+            doc["bufferViews"][0]["byteLength"] = json!(1_000_000);
+        });
+        assert!(
+            e.ends_with("buffer view 0 (bytes 0..+1000000) lies beyond its buffer 0 of 2592 bytes"),
+            "{e}"
+        );
     }
 
     #[test]
