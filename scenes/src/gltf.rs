@@ -5,6 +5,7 @@
 
 use crate::model::{Material, Rgb, Shape};
 use glam::{Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -144,6 +145,44 @@ fn load(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>, Vec<glt
     Ok((document, buffers, images))
 }
 
+/// Checks what gltf's reader assumes of an accessor: not sparse (a huge sparse count would
+/// allocate without bound), of one of `types` and of `dimensions`, with at least one element,
+/// all within its buffer view.
+fn check_accessor(a: &gltf::Accessor, types: &[DataType], dimensions: Dimensions) -> Result<(), String> {
+    let i = a.index();
+    if a.sparse().is_some() {
+        return Err(format!("accessor {i} is sparse, which lightgraph does not support"));
+    }
+    if !types.contains(&a.data_type()) || a.dimensions() != dimensions {
+        return Err(format!(
+            "accessor {i} holds {:?} of {:?}; expected {dimensions:?} of {types:?}",
+            a.dimensions(),
+            a.data_type()
+        ));
+    }
+    let view = a.view().ok_or_else(|| format!("accessor {i} has no bufferView"))?;
+    let (count, size) = (a.count(), a.size());
+    let stride = view.stride().unwrap_or(size);
+    if count == 0 || stride < size {
+        return Err(format!(
+            "accessor {i} has {count} elements of {size} bytes every {stride} bytes"
+        ));
+    }
+    let end = (count - 1)
+        .checked_mul(stride)
+        .and_then(|n| n.checked_add(size + a.offset()));
+    if end.is_none_or(|end| end > view.length()) {
+        return Err(format!(
+            "accessor {i}: {count} elements of {size} bytes every {stride} bytes from byte {} do not fit its \
+             buffer view {} of {} bytes",
+            a.offset(),
+            view.index(),
+            view.length()
+        ));
+    }
+    Ok(())
+}
+
 /// Imports `path`; errors name the file and the problem.
 pub fn import(path: &Path) -> Result<Imported, String> {
     let shown = path.display();
@@ -198,6 +237,16 @@ pub fn import(path: &Path) -> Result<Imported, String> {
                     mesh.name().unwrap_or("?"),
                     primitive.mode()
                 ));
+            }
+            let positions = primitive
+                .get(&gltf::Semantic::Positions)
+                .map(|a| (a, &[DataType::F32][..], Dimensions::Vec3));
+            let indices = primitive
+                .indices()
+                .map(|a| (a, &[DataType::U8, DataType::U16, DataType::U32][..], Dimensions::Scalar));
+            for (accessor, types, dimensions) in positions.into_iter().chain(indices) {
+                check_accessor(&accessor, types, dimensions)
+                    .map_err(|e| format!("{shown}: mesh '{}': {e}", mesh.name().unwrap_or("?")))?;
             }
             let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let Some(positions) = reader.read_positions() else {
@@ -308,6 +357,39 @@ mod tests {
             e.ends_with("buffer view 0 (bytes 0..+1000000) lies beyond its buffer 0 of 2592 bytes"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn accessors_gltf_cannot_read_are_errors() {
+        let accessor = |doc: &mut Value, field: &str, value: Value| doc["accessors"][0][field] = value;
+        let huge = |doc: &mut Value, _: &mut Vec<u8>| accessor(doc, "count", json!(1u64 << 31));
+        let e = error("count", huge);
+        assert!(e.contains("accessor 0: 2147483648 elements of 12 bytes every 12 bytes from byte 0 do not fit its buffer view 0 of 72 bytes"), "{e}");
+        let e = error("sparse", |doc, _| {
+            accessor(
+                doc,
+                "sparse",
+                json!({"count": 1u64 << 31, "indices": {"bufferView": 1, "componentType": 5125}, "values": {"bufferView": 1}}),
+            );
+            doc["accessors"][0].as_object_mut().unwrap().remove("bufferView");
+        });
+        assert!(e.contains("accessor 0 is sparse"), "{e}");
+        let e = error("type", |doc, _| accessor(doc, "type", json!("VEC2")));
+        assert!(
+            e.contains("accessor 0 holds Vec2 of F32; expected Vec3 of [F32]"),
+            "{e}"
+        );
+        let e = error("indices", |doc, _| {
+            doc["meshes"][0]["primitives"][0]["indices"] = json!(1)
+        });
+        assert!(
+            e.contains("accessor 1 holds Vec3 of F32; expected Scalar of [U8, U16, U32]"),
+            "{e}"
+        );
+        let e = error("stride", |doc, _| doc["bufferViews"][0]["byteStride"] = json!(8));
+        assert!(e.contains("accessor 0 has 6 elements of 12 bytes every 8 bytes"), "{e}");
+        let e = error("empty", |doc, _| accessor(doc, "count", json!(0)));
+        assert!(e.contains("accessor 0 has 0 elements"), "{e}");
     }
 
     #[test]
