@@ -224,7 +224,16 @@ pub fn import(path: &Path) -> Result<Imported, String> {
         .or_else(|| document.scenes().next())
         .ok_or_else(|| format!("{shown}: no scene"))?;
     let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    // The node hierarchy must be disjoint trees: a node reached twice closes a cycle (which
+    // would never end) or has two parents.
+    let mut reached = vec![false; document.nodes().len()];
     while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut reached[node.index()], true) {
+            return Err(format!(
+                "{shown}: node {} is reached twice from the scene (a cycle, or two parents)",
+                node.index()
+            ));
+        }
         let transform = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         for child in node.children() {
             stack.push((child, transform));
@@ -390,6 +399,15 @@ mod tests {
         assert!(e.contains("accessor 0 has 6 elements of 12 bytes every 8 bytes"), "{e}");
         let e = error("empty", |doc, _| accessor(doc, "count", json!(0)));
         assert!(e.contains("accessor 0 has 0 elements"), "{e}");
+    }
+
+    #[test]
+    fn a_cycle_of_nodes_is_an_error() {
+        let e = error("cycle", |doc, _| doc["nodes"][0]["children"] = json!([0]));
+        assert!(
+            e.ends_with("node 0 is reached twice from the scene (a cycle, or two parents)"),
+            "{e}"
+        );
     }
 
     #[test]
