@@ -5,7 +5,10 @@
 
 pub mod assets;
 pub mod bench;
+pub mod compare;
+pub mod metrics;
 pub mod output;
 pub mod plot;
+pub mod reference;
 pub mod render;
 pub mod tune;

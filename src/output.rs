@@ -1,14 +1,31 @@
 //! Result files: 32-bit float EXR with metadata, and sRGB PNG previews.
 
 use crate::render::Image;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, anyhow};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Writes the mean radiance as a 32-bit float RGB EXR with `metadata` as string attributes.
 pub fn write_exr(path: &Path, image: &Image, metadata: &[(&str, String)]) -> Result<()> {
+    let channel = |c: usize| image.mean.iter().map(|p| p[c]).collect::<Vec<f32>>();
+    let channels = vec![
+        ("R".into(), channel(0)),
+        ("G".into(), channel(1)),
+        ("B".into(), channel(2)),
+    ];
+    write_channels(path, (image.width, image.height), channels, metadata)
+}
+
+/// Writes named 32-bit float channels (row-major, top row first) as one EXR layer called
+/// "radiance", with `metadata` as `lightgraph.KEY` string attributes.
+pub fn write_channels(
+    path: &Path,
+    (width, height): (u32, u32),
+    channels: Vec<(String, Vec<f32>)>,
+    metadata: &[(&str, String)],
+) -> Result<()> {
     use exr::meta::attribute::{AttributeValue, Text};
     use exr::prelude::*;
-    let w = image.width as usize;
     let mut attributes = LayerAttributes::named("radiance");
     attributes.software_name = Some(Text::from("lightgraph"));
     for (k, v) in metadata {
@@ -17,14 +34,15 @@ pub fn write_exr(path: &Path, image: &Image, metadata: &[(&str, String)]) -> Res
             AttributeValue::Text(Text::from(v.as_str())),
         );
     }
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
+        .into_iter()
+        .map(|(name, values)| AnyChannel::new(name.as_str(), FlatSamples::F32(values)))
+        .collect();
     let layer = Layer::new(
-        (w, image.height as usize),
+        (width as usize, height as usize),
         attributes,
         Encoding::FAST_LOSSLESS,
-        SpecificChannels::rgb(|p: Vec2<usize>| {
-            let c = image.mean[p.y() * w + p.x()];
-            (c[0], c[1], c[2])
-        }),
+        AnyChannels::sort(list),
     );
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -34,6 +52,61 @@ pub fn write_exr(path: &Path, image: &Image, metadata: &[(&str, String)]) -> Res
         .to_file(path)
         .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
+}
+
+/// An EXR read back: its size, its channels as f32 and its `lightgraph.*` attributes.
+#[derive(Debug, Clone)]
+pub struct ExrFile {
+    /// Width and height.
+    pub size: (u32, u32),
+    /// Channels by name (row-major, top row first).
+    pub channels: BTreeMap<String, Vec<f32>>,
+    /// The `lightgraph.KEY` text attributes, by KEY.
+    pub metadata: BTreeMap<String, String>,
+}
+
+impl ExrFile {
+    /// The channel called `name`, or an error naming the file and the channels it has.
+    pub fn channel(&self, name: &str, path: &Path) -> Result<&[f32]> {
+        self.channels.get(name).map(Vec::as_slice).ok_or_else(|| {
+            anyhow!(
+                "{}: no channel '{name}' (it has {})",
+                path.display(),
+                self.channels.keys().cloned().collect::<Vec<_>>().join(", ")
+            )
+        })
+    }
+}
+
+/// Reads the first layer of an EXR file with all its channels and lightgraph attributes.
+pub fn read_exr(path: &Path) -> Result<ExrFile> {
+    use exr::meta::attribute::AttributeValue;
+    let image =
+        exr::prelude::read_first_flat_layer_from_file(path).with_context(|| format!("reading {}", path.display()))?;
+    let layer = image.layer_data;
+    let channels = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect();
+    let metadata = layer
+        .attributes
+        .other
+        .iter()
+        .filter_map(|(k, v)| match v {
+            AttributeValue::Text(t) => k
+                .to_string()
+                .strip_prefix("lightgraph.")
+                .map(|k| (k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect();
+    Ok(ExrFile {
+        size: (layer.size.width() as u32, layer.size.height() as u32),
+        channels,
+        metadata,
+    })
 }
 
 fn srgb_encode(linear: f32) -> u8 {

@@ -15,9 +15,14 @@ fn register_font() {
     });
 }
 
-/// A short tick label: 3e5 as "300k", 2.5e7 as "25M".
+/// A short tick label: 3e5 as "300k", 2.5e7 as "25M", 0.04000001 as "0.04", 2.5e-4 as
+/// "2.5e-4": three significant digits at most, no float noise.
 fn compact(v: f64) -> String {
     let a = v.abs();
+    if a != 0.0 && a < 1e-2 {
+        let s = format!("{v:.1e}");
+        return s.replacen(".0e", "e", 1);
+    }
     let (x, suffix) = if a >= 1e9 {
         (v / 1e9, "G")
     } else if a >= 1e6 {
@@ -27,14 +32,28 @@ fn compact(v: f64) -> String {
     } else {
         (v, "")
     };
-    let digits = if x.fract().abs() < 1e-9 {
-        0
-    } else if x.abs() < 10.0 {
-        2
+    let digits = (2 - x.abs().max(1e-300).log10().floor() as i32).clamp(0, 4) as usize;
+    let s = format!("{x:.digits$}");
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
     } else {
-        1
+        s
     };
-    format!("{x:.digits$}{suffix}")
+    format!("{s}{suffix}")
+}
+
+/// A logarithmic axis over `lo..hi` with ticks at 1, 2 and 5 times the powers of ten (only
+/// at the powers when the range spans more than four decades).
+fn log_axis(
+    lo: f64,
+    hi: f64,
+) -> plotters::coord::combinators::WithKeyPoints<plotters::coord::combinators::LogCoord<f64>> {
+    let steps: &[f64] = if hi / lo > 1e4 { &[1.0] } else { &[1.0, 2.0, 5.0] };
+    let ticks = (lo.log10().floor() as i32..=hi.log10().ceil() as i32)
+        .flat_map(|e| steps.iter().map(move |m| m * 10f64.powi(e)))
+        .filter(|v| (lo..=hi).contains(v))
+        .collect();
+    (lo..hi).log_scale().with_key_points(ticks)
 }
 
 /// One named series of (x, y) points.
@@ -96,6 +115,7 @@ pub fn line_plot(path: &Path, axes: &Axes, series: &[Series]) -> Result<()> {
                 .configure_mesh()
                 .x_desc(axes.x_label)
                 .x_label_formatter(&|v| compact(*v))
+                .y_label_formatter(&|v| compact(*v))
                 .y_desc(axes.y_label)
                 .label_style(("sans-serif", 18))
                 .axis_desc_style(("sans-serif", 22))
@@ -129,11 +149,28 @@ pub fn line_plot(path: &Path, axes: &Axes, series: &[Series]) -> Result<()> {
         }};
     }
     match (axes.log_x, axes.log_y) {
-        (true, true) => draw!(builder.build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())),
-        (true, false) => draw!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)),
-        (false, true) => draw!(builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())),
+        (true, true) => draw!(builder.build_cartesian_2d(log_axis(x0, x1), log_axis(y0, y1))),
+        (true, false) => draw!(builder.build_cartesian_2d(log_axis(x0, x1), y0..y1)),
+        (false, true) => draw!(builder.build_cartesian_2d(x0..x1, log_axis(y0, y1))),
         (false, false) => draw!(builder.build_cartesian_2d(x0..x1, y0..y1)),
     }
     root.present().map_err(|e| anyhow!("writing {}: {e}", path.display()))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::compact;
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(compact(3e5), "300k");
+        assert_eq!(compact(2.5e7), "25M");
+        assert_eq!(compact(0.04000000001), "0.04");
+        assert_eq!(compact(0.6000000000001), "0.6");
+        assert_eq!(compact(1.0), "1");
+        assert_eq!(compact(12.5), "12.5");
+        assert_eq!(compact(2.5e-4), "2.5e-4");
+        assert_eq!(compact(1e-3), "1e-3");
+    }
 }

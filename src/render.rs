@@ -165,6 +165,18 @@ pub struct Image {
     pub variance: Vec<[f32; 3]>,
 }
 
+/// The GPU's progressive sums: per pixel, the sum of the frames' estimates and of their
+/// squares.
+#[derive(Debug, Clone)]
+pub struct Accumulation {
+    /// Frames summed.
+    pub frames: u32,
+    /// Sum of the per-frame estimates (RGB, fourth word unused).
+    pub sum: Vec<[f32; 4]>,
+    /// Sum of their squares.
+    pub sum_sq: Vec<[f32; 4]>,
+}
+
 /// A scene rendered by a graph in one layout.
 pub struct Session<'g> {
     instance: Instance<'g>,
@@ -172,6 +184,12 @@ pub struct Session<'g> {
     pub options: SessionOptions,
     /// Frames rendered.
     pub frames: u32,
+    /// Frame index of the session's first frame: a resumed render continues the random
+    /// streams where the earlier one stopped instead of repeating them.
+    pub first_frame: u32,
+    /// Frames whose sums were taken out of the GPU accumulation by
+    /// [`Session::take_accumulation`].
+    taken_frames: u32,
     /// Counter totals.
     pub counters: BTreeMap<String, u64>,
     /// GPU time per kernel, summed over frames.
@@ -230,6 +248,8 @@ impl<'g> Session<'g> {
             instance,
             options,
             frames: 0,
+            first_frame: 0,
+            taken_frames: 0,
             counters: BTreeMap::new(),
             kernel_seconds: BTreeMap::new(),
             loops_capped: 0,
@@ -249,7 +269,11 @@ impl<'g> Session<'g> {
     /// Renders `count` more frames (at most [`MAX_BATCH`]) recorded together, with one
     /// read-back of statistics; returns the batch's statistics.
     pub fn render_frames(&mut self, count: u32) -> Result<FrameStats> {
-        let stats = self.instance.run_frames(self.frames, count, self.options.seed)?;
+        if self.first_frame as u64 + self.frames as u64 + count as u64 > u32::MAX as u64 {
+            bail!("the frame index would pass 2^32; continue with another seed");
+        }
+        let first = self.first_frame + self.frames;
+        let stats = self.instance.run_frames(first, count, self.options.seed)?;
         self.frames += count;
         for (k, v) in &stats.counters {
             *self.counters.entry(k.clone()).or_insert(0) += v;
@@ -302,12 +326,36 @@ impl<'g> Session<'g> {
         self.frames as u64 * self.options.samples_per_frame as u64
     }
 
+    /// Reads the GPU accumulation: the number of frames in it, the per-pixel sums of the
+    /// frames' estimates and the sums of their squares (RGB and an unused fourth word).
+    pub fn accumulation(&self) -> Result<Accumulation> {
+        Ok(Accumulation {
+            frames: self.frames - self.taken_frames,
+            sum: bytemuck::pod_collect_to_vec(&self.instance.read("accum")?),
+            sum_sq: bytemuck::pod_collect_to_vec(&self.instance.read("accum_sq")?),
+        })
+    }
+
+    /// Reads the GPU accumulation and empties it, so a host accumulator (in f64) can take
+    /// the sums over and the f32 sums on the GPU stay short.
+    pub fn take_accumulation(&mut self) -> Result<Accumulation> {
+        let taken = self.accumulation()?;
+        for name in ["accum", "accum_comp", "accum_sq"] {
+            self.instance.clear(name)?;
+        }
+        self.taken_frames = self.frames;
+        Ok(taken)
+    }
+
     /// The accumulated image (reads the GPU accumulation).
     pub fn image(&self) -> Result<Image> {
         let (w, h) = (self.options.width, self.options.height);
-        let sum: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&self.instance.read("accum")?);
-        let sq: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&self.instance.read("accum_sq")?);
-        let n = self.frames.max(1) as f64;
+        let Accumulation {
+            frames,
+            sum,
+            sum_sq: sq,
+        } = self.accumulation()?;
+        let n = frames.max(1) as f64;
         let mut mean = Vec::with_capacity(sum.len());
         let mut variance = Vec::with_capacity(sum.len());
         for (s, q) in sum.iter().zip(&sq) {
@@ -324,7 +372,7 @@ impl<'g> Session<'g> {
         Ok(Image {
             width: w,
             height: h,
-            frames: self.frames,
+            frames,
             mean,
             variance,
         })

@@ -6,7 +6,7 @@ use crate::common::data;
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-fn lightgraph(args: &[&str]) -> Output {
+pub(crate) fn lightgraph(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_lightgraph"))
         .args(args)
         .env("XDG_RUNTIME_DIR", std::env::temp_dir())
@@ -14,14 +14,14 @@ fn lightgraph(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
-fn temp_dir(name: &str) -> PathBuf {
+pub(crate) fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("lightgraph-cli-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
 
 /// Runs with bad input: exit code 1, an `error:` line, no panic; returns stderr.
-fn fails(args: &[&str]) -> String {
+pub(crate) fn fails(args: &[&str]) -> String {
     let out = lightgraph(args);
     let stderr = String::from_utf8_lossy(&out.stderr).to_string();
     assert_eq!(out.status.code(), Some(1), "{args:?} should fail cleanly: {stderr}");

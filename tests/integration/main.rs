@@ -8,4 +8,5 @@ mod common;
 mod composition;
 mod gltf;
 mod layouts;
+mod reference;
 mod scenes;

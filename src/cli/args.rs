@@ -1,0 +1,210 @@
+//! Options shared by the commands: scene, graph, resolution, constants, layout overrides.
+
+use anyhow::{Result, anyhow, bail};
+use clap::Args;
+use lightgraph::reference::Reference;
+use lightgraph::render::{LayoutOverrides, LoadedScene, SessionOptions};
+use lightgraph_engine::ir::LayoutDecl;
+use lightgraph_engine::ir::StateStorage;
+use lightgraph_engine::{ConstValue, Graph, Plan};
+use lightgraph_scenes::bvh::BvhKind;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The scene rendered when none is named.
+pub const DEFAULT_SCENE: &str = "cornell-mitsuba";
+/// The graph used when none is named.
+pub const DEFAULT_GRAPH: &str = "pt";
+
+/// The graph option of the commands that render one graph.
+#[derive(Args, Clone)]
+pub struct GraphArg {
+    /// Graph: a built-in name or a .ron graph file [default: pt].
+    #[arg(long)]
+    pub graph: Option<String>,
+}
+
+impl GraphArg {
+    /// The graph named, or the default.
+    pub fn name(&self) -> &str {
+        self.graph.as_deref().unwrap_or(DEFAULT_GRAPH)
+    }
+}
+
+/// Options every rendering command takes.
+#[derive(Args, Clone)]
+pub struct Common {
+    /// Scene: a built-in name (see `lightgraph list`) or a .ron scene file [default:
+    /// cornell-mitsuba].
+    #[arg(long)]
+    pub scene: Option<String>,
+    /// Image size WxH (default: the scene's).
+    #[arg(long, value_parser = parse_resolution)]
+    pub res: Option<(u32, u32)>,
+    /// Samples per pixel in each frame [default: 1].
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Maximum path length in segments (default: the scene's).
+    #[arg(long)]
+    pub max_path_length: Option<u32>,
+    /// Override a graph constant, NAME=VALUE (repeatable).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Folder scene files find their glTF assets in (also LIGHTGRAPH_ASSETS; default:
+    /// ../shared/scenes when it exists).
+    #[arg(long, env = "LIGHTGRAPH_ASSETS")]
+    pub assets: Option<PathBuf>,
+    /// GPU adapter whose name contains this text (also LIGHTGRAPH_ADAPTER).
+    #[arg(long, env = "LIGHTGRAPH_ADAPTER")]
+    pub adapter: Option<String>,
+    /// Thread pool of regeneration and compaction layouts (overrides the layout's).
+    #[arg(long)]
+    pub threads: Option<u64>,
+    /// Threads per workgroup (overrides the layout's).
+    #[arg(long)]
+    pub workgroup: Option<u32>,
+    /// Item state between split kernels: soa or aos (overrides the layout's).
+    #[arg(long, value_parser = parse_state)]
+    pub state: Option<StateStorage>,
+    /// Acceleration structure: bvh2 (binary, both children's boxes per node) or cwbvh
+    /// (compressed 8-wide, Ylitie et al. 2017).
+    #[arg(long, value_parser = parse_bvh, default_value = "cwbvh")]
+    pub bvh: BvhKind,
+}
+
+impl Common {
+    /// The scene named, or the default.
+    pub fn scene(&self) -> &str {
+        self.scene.as_deref().unwrap_or(DEFAULT_SCENE)
+    }
+}
+
+/// Parses `--bvh`.
+pub fn parse_bvh(s: &str) -> Result<BvhKind, String> {
+    match s.to_lowercase().as_str() {
+        "bvh2" => Ok(BvhKind::Bvh2),
+        "cwbvh" => Ok(BvhKind::Cwbvh),
+        _ => Err(format!("'{s}' is not bvh2 or cwbvh")),
+    }
+}
+
+/// Parses `--state`.
+pub fn parse_state(s: &str) -> Result<StateStorage, String> {
+    match s.to_lowercase().as_str() {
+        "soa" => Ok(StateStorage::SoA),
+        "aos" => Ok(StateStorage::AoS),
+        _ => Err(format!("'{s}' is not soa or aos")),
+    }
+}
+
+/// Parses `--res WxH`.
+pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WxH"))?;
+    let w: u32 = w.parse().map_err(|_| format!("bad width in '{s}'"))?;
+    let h: u32 = h.parse().map_err(|_| format!("bad height in '{s}'"))?;
+    if w == 0 || h == 0 {
+        return Err(format!("'{s}' has a zero side"));
+    }
+    Ok((w, h))
+}
+
+/// Parses `--set` values with the type of the graph's default (u32 when it has none).
+pub fn parse_sets(sets: &[String], defaults: &BTreeMap<String, ConstValue>) -> Result<BTreeMap<String, ConstValue>> {
+    let mut out = BTreeMap::new();
+    for s in sets {
+        let (name, value) = s
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--set {s}: expected NAME=VALUE"))?;
+        let bad = || anyhow!("--set {s}: '{value}' is not a valid value for {name}");
+        let v = match defaults.get(name) {
+            Some(ConstValue::F32(_)) => ConstValue::F32(value.parse().map_err(|_| bad())?),
+            Some(ConstValue::I32(_)) => ConstValue::I32(value.parse().map_err(|_| bad())?),
+            Some(ConstValue::Bool(_)) => ConstValue::Bool(value.parse().map_err(|_| bad())?),
+            _ => ConstValue::U32(value.parse().map_err(|_| bad())?),
+        };
+        out.insert(name.to_string(), v);
+    }
+    Ok(out)
+}
+
+/// The session options the shared flags give for `scene`, with the seed of the command.
+pub fn options(
+    common: &Common,
+    scene: &LoadedScene,
+    defaults: &BTreeMap<String, ConstValue>,
+    seed: u32,
+) -> Result<SessionOptions> {
+    let (width, height) = common.res.unwrap_or(scene.scene.resolution);
+    let mut constants = parse_sets(&common.set, defaults)?;
+    if let Some(n) = common.max_path_length {
+        if n == 0 {
+            bail!("--max-path-length must be at least 1");
+        }
+        constants.insert("MAX_PATH_LENGTH".into(), ConstValue::U32(n));
+    }
+    let layout = LayoutOverrides {
+        threads: common.threads,
+        workgroup_size: common.workgroup,
+        state: common.state,
+    };
+    Ok(SessionOptions {
+        width,
+        height,
+        samples_per_frame: common.spp.unwrap_or(1),
+        seed,
+        constants,
+        layout,
+    })
+}
+
+/// The layout called `name`, or the graph's default.
+pub fn named_layout(graph: &Graph, name: Option<&str>) -> Result<(String, LayoutDecl)> {
+    Ok(match name {
+        Some(name) => (name.to_string(), Plan::new(graph, name)?.layout),
+        None => (
+            graph.default_layout.clone(),
+            graph.layouts[&graph.default_layout].clone(),
+        ),
+    })
+}
+
+/// Checks that a reference has the image size of the render compared with it.
+pub fn check_size(reference: &Reference, path: &Path, size: (u32, u32)) -> Result<()> {
+    if reference.size != size {
+        bail!(
+            "{}: the reference is {}x{}, the render {}x{}; pass --res {}x{} or make a reference at this size",
+            path.display(),
+            reference.size.0,
+            reference.size.1,
+            size.0,
+            size.1,
+            reference.size.0,
+            reference.size.1
+        );
+    }
+    Ok(())
+}
+
+/// The constant overrides as `NAME=VALUE` words (the inverse of [`parse_sets`]).
+pub fn constants_text(constants: &BTreeMap<String, ConstValue>) -> String {
+    let words: Vec<String> = constants
+        .iter()
+        .map(|(k, v)| match v {
+            ConstValue::U32(x) => format!("{k}={x}"),
+            ConstValue::I32(x) => format!("{k}={x}"),
+            ConstValue::F32(x) => format!("{k}={x:?}"),
+            ConstValue::Bool(x) => format!("{k}={x}"),
+        })
+        .collect();
+    words.join(" ")
+}
+
+/// A number with an SI prefix and a trailing space, e.g. "1.28 G".
+pub fn si(v: f64) -> String {
+    match v {
+        v if v >= 1e9 => format!("{:.2} G", v / 1e9),
+        v if v >= 1e6 => format!("{:.2} M", v / 1e6),
+        v if v >= 1e3 => format!("{:.2} k", v / 1e3),
+        v => format!("{v:.1} "),
+    }
+}

@@ -1,0 +1,110 @@
+//! `lightgraph bench`: layouts over a sweep of frame sizes.
+
+use super::args::*;
+use anyhow::{Result, anyhow};
+use clap::Args;
+use lightgraph::render::{load_graph, load_scene_with};
+use lightgraph_engine::{Gpu, Plan};
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    #[command(flatten)]
+    pub common: Common,
+    #[command(flatten)]
+    pub graph: GraphArg,
+    /// Layouts to measure, comma-separated; `all` for the graph's named layouts, `auto` for
+    /// every legal layout the engine finds.
+    #[arg(long, default_value = "all")]
+    pub layouts: String,
+    /// Frame sizes as WxHxSPP, comma-separated (default: 3.3e5 to 1e8 paths per frame).
+    #[arg(long)]
+    pub points: Option<String>,
+    /// Time each layout renders at each frame size (after a warm-up frame).
+    #[arg(long, value_parser = humantime::parse_duration, default_value = "2s")]
+    pub time: Duration,
+    /// Output folder for bench.md, bench.csv and rays_per_second.png.
+    #[arg(long, default_value = "out/bench")]
+    pub out: PathBuf,
+}
+
+pub fn bench(args: BenchArgs) -> Result<()> {
+    let c = &args.common;
+    let scene = load_scene_with(c.scene(), c.bvh)?;
+    let graph = load_graph(args.graph.name())?;
+    let gpu = Gpu::new(c.adapter.as_deref())?;
+    let points: Vec<(u32, u32, u32)> = match &args.points {
+        None => lightgraph::bench::DEFAULT_POINTS.to_vec(),
+        Some(list) => list
+            .split(',')
+            .map(|p| {
+                let v: Vec<u32> = p.split(['x', 'X']).filter_map(|n| n.trim().parse().ok()).collect();
+                match v.as_slice() {
+                    [w, h, s] if *w > 0 && *h > 0 && *s > 0 => Ok((*w, *h, *s)),
+                    _ => Err(anyhow!("--points: '{p}' is not WxHxSPP")),
+                }
+            })
+            .collect::<Result<_>>()?,
+    };
+    let layouts: Vec<(String, lightgraph_engine::ir::LayoutDecl)> = match args.layouts.as_str() {
+        "all" => graph.layouts.iter().map(|(n, d)| (n.clone(), d.clone())).collect(),
+        "auto" => lightgraph_engine::auto::legal_layouts(&graph, &graph.layouts[&graph.default_layout]),
+        list => list
+            .split(',')
+            .map(|n| Ok((n.to_string(), Plan::new(&graph, n)?.layout)))
+            .collect::<Result<_>>()?,
+    };
+    eprintln!(
+        "{} | scene {} | graph {} | {} layouts x {} frame sizes, {:?} each",
+        gpu.describe(),
+        c.scene(),
+        graph.name,
+        layouts.len(),
+        points.len(),
+        args.time
+    );
+    let mut results = Vec::new();
+    for (w, h, spp) in points {
+        for (name, decl) in &layouts {
+            let mut opts = options(c, &scene, &graph.constants, 1)?;
+            (opts.width, opts.height, opts.samples_per_frame) = (w, h, spp);
+            match lightgraph::bench::measure(&gpu, &graph, name, decl.clone(), &scene, opts, args.time) {
+                Ok(m) => {
+                    eprintln!(
+                        "  {:>8.2} M paths  {:<20} {:>8.1} Mrays/s ({:>8.1} GPU) {:>8.1} Msamples/s {:>7.1} fps {:>8.1} MiB",
+                        m.paths_per_frame() as f64 / 1e6,
+                        name,
+                        m.rays_per_second() / 1e6,
+                        m.gpu_rays_per_second() / 1e6,
+                        m.samples_per_second() / 1e6,
+                        m.frames_per_second(),
+                        m.memory_bytes as f64 / 1048576.0
+                    );
+                    results.push(m);
+                }
+                Err(e) => eprintln!(
+                    "  {:>8.2} M paths  {name}: failed: {e:#}",
+                    (w * h) as f64 * spp as f64 / 1e6
+                ),
+            }
+        }
+    }
+    let title = format!(
+        "{} on {}, {} ({})",
+        graph.name,
+        c.scene(),
+        gpu.info.name,
+        if args.layouts == "auto" {
+            "every legal layout"
+        } else {
+            "named layouts"
+        }
+    );
+    let md = lightgraph::bench::write_reports(&args.out, &title, &results)?;
+    println!(
+        "{md}\nwrote {}/bench.md, bench.csv and rays_per_second.png",
+        args.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,68 @@
+//! `lightgraph explain`: kernels, schedule and resources of a graph's layouts.
+
+use super::args::*;
+use anyhow::{Context, Result};
+use clap::Args;
+use lightgraph::render::{load_graph, load_scene_with};
+use lightgraph_engine::{Gpu, Plan, Program};
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct ExplainArgs {
+    #[command(flatten)]
+    pub common: Common,
+    #[command(flatten)]
+    pub graph: GraphArg,
+    /// Layout to explain (default: all of the graph's layouts).
+    #[arg(long)]
+    pub layout: Option<String>,
+    /// Also write the graph as Graphviz DOT to this file.
+    #[arg(long)]
+    pub dot: Option<PathBuf>,
+    /// Also write each kernel's generated WGSL into this folder.
+    #[arg(long)]
+    pub wgsl: Option<PathBuf>,
+}
+
+pub fn explain(args: ExplainArgs) -> Result<()> {
+    let c = &args.common;
+    let graph = load_graph(args.graph.name())?;
+    let scene = load_scene_with(c.scene(), c.bvh)?;
+    let opts = options(c, &scene, &graph.constants, 1)?;
+    let layouts: Vec<String> = match &args.layout {
+        Some(l) => vec![l.clone()],
+        None => graph.layouts.keys().cloned().collect(),
+    };
+    let flags = Gpu::new(c.adapter.as_deref())
+        .ok()
+        .map(|g| (lightgraph::render::device_flags(&g), g.target()));
+    let (flags, target) = flags.unwrap_or_default();
+    let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
+    let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
+    let externals = scene.compiled.resources(&camera);
+    println!(
+        "layouts of graph '{}': {}\n",
+        graph.name,
+        graph.layouts.keys().cloned().collect::<Vec<_>>().join(", ")
+    );
+    for layout in layouts {
+        let plan = Plan::new(&graph, &layout)?;
+        let program = Program::compile(&plan, &spec, &target)?;
+        println!(
+            "{}",
+            lightgraph_engine::explain::report(&program, &|name| externals.get(name).map(|b| b.len() as u64))
+        );
+        if let Some(dir) = &args.wgsl {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            for k in &program.kernels {
+                let path = dir.join(format!("{}-{}-{}.wgsl", graph.name, layout, k.name));
+                std::fs::write(&path, k.source.text()).with_context(|| format!("writing {}", path.display()))?;
+            }
+        }
+    }
+    if let Some(dot) = &args.dot {
+        std::fs::write(dot, graph.to_dot()).with_context(|| format!("writing {}", dot.display()))?;
+        println!("wrote {}", dot.display());
+    }
+    Ok(())
+}

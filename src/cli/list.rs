@@ -1,0 +1,33 @@
+//! `lightgraph list`: graphs, scenes and GPU adapters.
+
+use anyhow::Result;
+use lightgraph::assets;
+use lightgraph::render::load_graph;
+
+pub fn list() -> Result<()> {
+    println!("graphs:");
+    for name in assets::graph_names() {
+        match load_graph(&name) {
+            Ok(g) => println!(
+                "  {name}: {} (layouts: {}; default {})",
+                g.description,
+                g.layouts.keys().cloned().collect::<Vec<_>>().join(", "),
+                g.default_layout
+            ),
+            Err(e) => println!("  {name}: cannot load: {e}"),
+        }
+    }
+    println!("scenes:");
+    for (name, path) in assets::scene_names() {
+        println!("  {name} ({path})");
+    }
+    println!("adapters:");
+    let adapters = lightgraph_engine::gpu::adapters();
+    if adapters.is_empty() {
+        println!("  none: {}", lightgraph_engine::gpu::NO_ADAPTER_HELP);
+    }
+    for a in adapters {
+        println!("  {} ({:?}, {:?}, {})", a.name, a.backend, a.device_type, a.driver);
+    }
+    Ok(())
+}

@@ -1,0 +1,9 @@
+//! The commands of the `lightgraph` binary, one module each, and the options they share.
+
+pub mod args;
+pub mod bench;
+pub mod compare;
+pub mod explain;
+pub mod list;
+pub mod reference;
+pub mod render;

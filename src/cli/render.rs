@@ -1,0 +1,203 @@
+//! `lightgraph render`: a progressive render to EXR and PNG.
+
+use super::args::*;
+use anyhow::Result;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use lightgraph::metrics::image_error;
+use lightgraph::output;
+use lightgraph::reference::Reference;
+use lightgraph::render::{Session, load_graph, load_scene_with};
+use lightgraph_engine::Gpu;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+#[derive(Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub common: Common,
+    #[command(flatten)]
+    pub graph: GraphArg,
+    /// Kernel layout (default: the graph's); `auto` measures every legal layout first and
+    /// renders with the fastest.
+    #[arg(long)]
+    pub layout: Option<String>,
+    /// Time each layout gets when --layout auto measures it.
+    #[arg(long, value_parser = humantime::parse_duration, default_value = "500ms")]
+    pub tune_time: Duration,
+    /// Render for this long (e.g. 10s, 2m); overrides --frames.
+    #[arg(long, value_parser = humantime::parse_duration)]
+    pub time: Option<Duration>,
+    /// Frames to render.
+    #[arg(long, default_value_t = 64)]
+    pub frames: u32,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u32,
+    /// Output EXR; a PNG preview is written beside it.
+    #[arg(long, default_value = "out/render.exr")]
+    pub out: PathBuf,
+    /// Exposure of the PNG preview in stops.
+    #[arg(long, default_value_t = 0.0)]
+    pub exposure: f32,
+    /// A reference EXR (from `lightgraph reference`): the progress line shows the error
+    /// against it, measured about once a second.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+}
+
+pub fn render(args: RenderArgs) -> Result<()> {
+    let c = &args.common;
+    let scene = load_scene_with(c.scene(), c.bvh)?;
+    let graph = load_graph(args.graph.name())?;
+    let gpu = Gpu::new(c.adapter.as_deref())?;
+    let opts = options(c, &scene, &graph.constants, args.seed)?;
+    let (layout, decl) = match args.layout.as_deref() {
+        Some("auto") => {
+            eprintln!(
+                "--layout auto: measuring every legal layout of '{}' for {:?} each",
+                graph.name, args.tune_time
+            );
+            let trials = lightgraph::tune::autotune(&gpu, &graph, &scene, &opts, args.tune_time, |t| {
+                eprintln!("  {:>9.1} Msamples/s  {}", t.score() / 1e6, t.name);
+            })?;
+            let table = lightgraph::tune::table(&trials);
+            println!("{table}");
+            let report = args.out.with_extension("auto.md");
+            if let Some(dir) = report.parent() {
+                std::fs::create_dir_all(dir)?;
+            }
+            std::fs::write(&report, &table)?;
+            let best = &trials[0];
+            eprintln!(
+                "winner: {} ({:.1} Msamples/s); table in {}",
+                best.name,
+                best.score() / 1e6,
+                report.display()
+            );
+            (best.name.clone(), best.decl.clone())
+        }
+        name => named_layout(&graph, name)?,
+    };
+    let (w, h) = (opts.width, opts.height);
+    eprintln!(
+        "{} | scene {} ({} primitives, {} lights, loaded in {:.2} s) | graph {} layout {} | {w}x{h}",
+        gpu.describe(),
+        c.scene(),
+        scene.compiled.primitives.len(),
+        scene.compiled.lights.len(),
+        scene.load_seconds,
+        graph.name,
+        layout
+    );
+    let reference = match &args.reference {
+        Some(path) => {
+            let r = Reference::read(path)?;
+            check_size(&r, path, (w, h))?;
+            Some(r.mean())
+        }
+        None => None,
+    };
+    let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
+    let mut error_text = String::new();
+    let mut error_at: Option<Instant> = None;
+    let bar = match args.time {
+        Some(t) => ProgressBar::new(t.as_millis() as u64),
+        None => ProgressBar::new(args.frames as u64),
+    };
+    bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
+    let start = Instant::now();
+    loop {
+        let elapsed = start.elapsed();
+        let done = match args.time {
+            Some(t) => elapsed >= t,
+            None => session.frames >= args.frames,
+        };
+        if done {
+            break;
+        }
+        match args.time {
+            Some(t) => session.render_for(t.saturating_sub(elapsed).min(Duration::from_millis(100)), u32::MAX)?,
+            None => session.render_for(Duration::from_millis(100), args.frames - session.frames)?,
+        };
+        let secs = start.elapsed().as_secs_f64();
+        let samples = session.samples_per_pixel() as f64 * (w as f64 * h as f64);
+        if let Some(r) = &reference
+            && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
+        {
+            error_text = format!(" | RMSE {:.4e}", image_error(&session.image()?.mean, r).rmse);
+            error_at = Some(Instant::now());
+        }
+        bar.set_message(format!(
+            "frame {} | {} samples/s | {}rays/s{error_text}",
+            session.frames,
+            si(samples / secs),
+            si(session.rays() as f64 / secs)
+        ));
+        match args.time {
+            Some(_) => bar.set_position(start.elapsed().as_millis() as u64),
+            None => bar.set_position(session.frames as u64),
+        }
+    }
+    bar.finish();
+    let seconds = start.elapsed().as_secs_f64();
+    let rejected = session.counters.get("samples_rejected").copied().unwrap_or(0);
+    let image = session.image()?;
+    if let Some(r) = &reference {
+        let e = image_error(&image.mean, r);
+        eprintln!(
+            "error against {}: RMSE {:.4e}, relMSE {:.4e}",
+            args.reference.as_ref().expect("a reference path").display(),
+            e.rmse,
+            e.rel_mse
+        );
+    }
+    let metadata = [
+        ("graph", graph.name.clone()),
+        ("layout", layout.clone()),
+        ("scene", c.scene().to_string()),
+        ("samples_per_pixel", session.samples_per_pixel().to_string()),
+        ("frames", session.frames.to_string()),
+        ("seconds", format!("{seconds:.3}")),
+        ("seed", args.seed.to_string()),
+        ("adapter", gpu.info.name.clone()),
+        ("rays", session.rays().to_string()),
+        ("rejected_samples", rejected.to_string()),
+    ];
+    output::write_exr(&args.out, &image, &metadata)?;
+    let png = args.out.with_extension("png");
+    output::write_png(&png, &image, args.exposure)?;
+    let gpu_time: f64 = session.kernel_seconds.values().sum();
+    let frames = session.frames.max(1) as f64;
+    let samples = session.samples_per_pixel() as f64 * (w * h) as f64;
+    eprintln!(
+        "{} frames, {} spp in {seconds:.2} s: {}samples/s, {}rays/s wall-clock; GPU kernel time {gpu_time:.3} s ({}rays/s); {rejected} rejected samples",
+        session.frames,
+        session.samples_per_pixel(),
+        si(samples / seconds),
+        si(session.rays() as f64 / seconds),
+        si(session.rays() as f64 / gpu_time.max(1e-12)),
+    );
+    let counters: Vec<String> = session
+        .counters
+        .iter()
+        .map(|(k, v)| format!("{k} {}", si(*v as f64 / frames)))
+        .collect();
+    eprintln!("per frame: {}", counters.join(", "));
+    let kernels: Vec<String> = session
+        .kernel_seconds
+        .iter()
+        .map(|(k, v)| format!("{k} {:.3} ms", 1e3 * v / frames))
+        .collect();
+    if !kernels.is_empty() {
+        eprintln!("GPU time per frame: {}", kernels.join(", "));
+    }
+    if session.loops_capped > 0 {
+        eprintln!(
+            "warning: {} loops hit the iteration cap (a pass that never finished its item)",
+            session.loops_capped
+        );
+    }
+    println!("wrote {} and {}", args.out.display(), png.display());
+    Ok(())
+}

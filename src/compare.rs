@@ -1,0 +1,489 @@
+//! Error against time: estimators and layouts render one scene for the same wall-clock
+//! budget, their error against a reference is sampled at log-spaced times with the clock
+//! paused, and the curves, a log-log plot, the final images and a summary of
+//! time-to-target-error speed-ups (the paper's Figure 10 and Table III) are written.
+
+use crate::metrics::{ImageError, image_error};
+use crate::plot::{Axes, Series, line_plot};
+use crate::reference::Reference;
+use crate::render::{Image, LoadedScene, Session, SessionOptions};
+use anyhow::{Context, Result, bail};
+use lightgraph_engine::{Gpu, Graph};
+use std::fmt::Write;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// One estimator in one layout to compare: `graph:layout`, or `graph` for its default layout.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSpec {
+    /// Graph name or `.ron` path.
+    pub graph: String,
+    /// Layout name; the graph's default when absent.
+    pub layout: Option<String>,
+}
+
+impl RunSpec {
+    /// Parses a comma-separated list of `graph[:layout]`.
+    pub fn parse_list(list: &str) -> Result<Vec<RunSpec>> {
+        let runs: Vec<RunSpec> = list
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(|s| match s.rsplit_once(':') {
+                Some((g, l)) if !l.is_empty() && !l.contains(['/', '\\']) => RunSpec {
+                    graph: g.to_string(),
+                    layout: Some(l.to_string()),
+                },
+                _ => RunSpec {
+                    graph: s.to_string(),
+                    layout: None,
+                },
+            })
+            .collect();
+        if runs.is_empty() {
+            bail!("--runs names no run; give graph:layout pairs, e.g. pt:NaivePTsk,pt:RegenerationPTsk");
+        }
+        Ok(runs)
+    }
+}
+
+/// The error of a run at one moment.
+#[derive(Debug, Clone, Copy)]
+pub struct ErrorSample {
+    /// Seconds on the run's clock: set-up (planning, compiling, allocating) plus rendering,
+    /// without the error evaluations.
+    pub seconds: f64,
+    /// Frames rendered.
+    pub frames: u32,
+    /// Samples per pixel.
+    pub samples_per_pixel: u64,
+    /// Error against the reference.
+    pub error: ImageError,
+}
+
+/// One run's curve and final image.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// `graph:layout`.
+    pub label: String,
+    /// Seconds spent planning, compiling and instantiating before the first frame (on the
+    /// clock).
+    pub setup_seconds: f64,
+    /// Error samples in time order; the last is at the end of the budget.
+    pub samples: Vec<ErrorSample>,
+    /// Camera samples (paths) per second over the run, set-up included.
+    pub samples_per_second: f64,
+    /// The final image.
+    pub image: Image,
+}
+
+impl RunResult {
+    /// The last error sample.
+    pub fn last(&self) -> &ErrorSample {
+        self.samples.last().expect("a run has at least one error sample")
+    }
+}
+
+/// The times (seconds) at which errors are sampled within `budget`: `per_decade` per decade,
+/// log-spaced, down to a thousandth of the budget, ending at the budget.
+pub fn sample_times(budget: f64, per_decade: u32) -> Vec<f64> {
+    let n = 3 * per_decade;
+    (0..=n)
+        .rev()
+        .map(|k| budget * 10f64.powf(-(k as f64) / per_decade as f64))
+        .collect()
+}
+
+/// Renders `graph` in `layout` for `budget` on its clock and samples its error against
+/// `reference` at `times` (and after the last frame); `progress` sees the clock and the
+/// latest error.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    gpu: &Gpu,
+    scene: &LoadedScene,
+    graph: &Graph,
+    layout: &str,
+    options: SessionOptions,
+    budget: Duration,
+    reference: &[[f32; 3]],
+    times: &[f64],
+    mut progress: impl FnMut(f64, Option<&ErrorSample>),
+) -> Result<RunResult> {
+    let label = format!("{}:{layout}", graph.name);
+    let mut clock = Stopwatch::started();
+    let mut session = Session::new(gpu, graph, layout, scene, options)?;
+    let setup_seconds = clock.seconds();
+    let budget = budget.as_secs_f64();
+    let mut samples: Vec<ErrorSample> = Vec::new();
+    let mut next = times.iter().copied().filter(|&t| t > setup_seconds).peekable();
+    while clock.seconds() < budget || session.frames == 0 {
+        let until = next.peek().copied().unwrap_or(budget).min(budget);
+        let step = (until - clock.seconds()).clamp(1e-3, 0.1);
+        session.render_for(Duration::from_secs_f64(step), u32::MAX)?;
+        let now = clock.seconds();
+        if next.peek().is_some_and(|&t| now >= t) || now >= budget {
+            while next.next_if(|&t| t <= now).is_some() {}
+            clock.pause();
+            let image = session.image()?;
+            samples.push(ErrorSample {
+                seconds: now,
+                frames: session.frames,
+                samples_per_pixel: session.samples_per_pixel(),
+                error: image_error(&image.mean, reference),
+            });
+            clock.resume();
+        }
+        progress(clock.seconds(), samples.last());
+    }
+    let seconds = clock.seconds();
+    let image = session.image()?;
+    if samples.last().is_none_or(|s| s.frames != session.frames) {
+        samples.push(ErrorSample {
+            seconds,
+            frames: session.frames,
+            samples_per_pixel: session.samples_per_pixel(),
+            error: image_error(&image.mean, reference),
+        });
+    }
+    let paths = session.samples_per_pixel() as f64 * image.mean.len() as f64;
+    Ok(RunResult {
+        label,
+        setup_seconds,
+        samples,
+        samples_per_second: paths / seconds,
+        image,
+    })
+}
+
+/// A clock that can be paused.
+struct Stopwatch {
+    running_since: Option<Instant>,
+    banked: Duration,
+}
+
+impl Stopwatch {
+    fn started() -> Stopwatch {
+        Stopwatch {
+            running_since: Some(Instant::now()),
+            banked: Duration::ZERO,
+        }
+    }
+    fn pause(&mut self) {
+        if let Some(t) = self.running_since.take() {
+            self.banked += t.elapsed();
+        }
+    }
+    fn resume(&mut self) {
+        self.running_since.get_or_insert_with(Instant::now);
+    }
+    fn seconds(&self) -> f64 {
+        (self.banked + self.running_since.map_or(Duration::ZERO, |t| t.elapsed())).as_secs_f64()
+    }
+}
+
+/// When a curve first reaches RMSE `target`: interpolated log-log between the samples that
+/// bracket it, or, when it never does, extrapolated from the last sample at the Monte Carlo
+/// rate (time ∝ RMSE⁻²). Returns the time and whether it was extrapolated.
+pub fn time_to_error(samples: &[ErrorSample], target: f64) -> Option<(f64, bool)> {
+    let ok = |s: &&ErrorSample| s.error.rmse.is_finite() && s.error.rmse > 0.0 && s.seconds > 0.0;
+    let curve: Vec<&ErrorSample> = samples.iter().filter(ok).collect();
+    let i = curve.iter().position(|s| s.error.rmse <= target);
+    match i {
+        Some(0) => Some((curve[0].seconds, false)),
+        Some(i) => {
+            let (a, b) = (curve[i - 1], curve[i]);
+            let f = (target.ln() - a.error.rmse.ln()) / (b.error.rmse.ln() - a.error.rmse.ln());
+            Some(((a.seconds.ln() + f * (b.seconds.ln() - a.seconds.ln())).exp(), false))
+        }
+        None => curve
+            .last()
+            .map(|s| (s.seconds * (s.error.rmse / target).powi(2), true)),
+    }
+}
+
+/// The convergence rate of a curve: the least-squares slope of log RMSE against log of the
+/// time since its first error sample (so the set-up and first-frame cost, a constant offset,
+/// does not bend the line), over the last decade and a half of that time. −1/2 is the Monte
+/// Carlo rate. `None` with fewer than 3 samples there.
+pub fn convergence_slope(samples: &[ErrorSample]) -> Option<f64> {
+    let (first, last) = (samples.first()?.seconds, samples.last()?.seconds);
+    let from = (last - first) / 10f64.powf(1.5);
+    let pts: Vec<(f64, f64)> = samples
+        .iter()
+        .map(|s| (s.seconds - first, s.error.rmse))
+        .filter(|&(t, e)| t > 0.0 && t >= from && e > 0.0 && e.is_finite())
+        .map(|(t, e)| (t.ln(), e.ln()))
+        .collect();
+    if pts.len() < 3 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// A file-name-safe form of a run label.
+pub fn file_stem(label: &str) -> String {
+    label
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect()
+}
+
+/// What the report says about the comparison besides the runs.
+pub struct ReportContext<'a> {
+    /// Scene name.
+    pub scene: &'a str,
+    /// GPU description.
+    pub device: &'a str,
+    /// Seconds the scene took to load, BVH build included (not on any run's clock).
+    pub load_seconds: f64,
+    /// Budget of each run.
+    pub budget: Duration,
+    /// The reference file.
+    pub reference_path: &'a Path,
+    /// The reference.
+    pub reference: &'a Reference,
+    /// Index of the baseline run.
+    pub baseline: usize,
+}
+
+/// Writes `curves.csv`, `rmse_vs_time.png`, each run's EXR and PNG, and `summary.md` into
+/// `dir`; returns the summary.
+pub fn write_report(dir: &Path, ctx: &ReportContext, runs: &[RunResult], exposure: f32) -> Result<String> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut csv = String::from(
+        "run,seconds,setup_seconds,frames,samples_per_pixel,mse,rmse,rel_mse,non_finite_pixels,reference_floor_mse\n",
+    );
+    let floor = ctx.reference.noise_floor_mse();
+    for r in runs {
+        for s in &r.samples {
+            writeln!(
+                csv,
+                "{},{:.6},{:.6},{},{},{:e},{:e},{:e},{},{floor:e}",
+                r.label,
+                s.seconds,
+                r.setup_seconds,
+                s.frames,
+                s.samples_per_pixel,
+                s.error.mse,
+                s.error.rmse,
+                s.error.rel_mse,
+                s.error.non_finite
+            )?;
+        }
+        let stem = dir.join(file_stem(&r.label));
+        let meta = [
+            ("run", r.label.clone()),
+            ("scene", ctx.scene.to_string()),
+            ("seconds", format!("{:.3}", r.last().seconds)),
+            ("samples_per_pixel", r.last().samples_per_pixel.to_string()),
+        ];
+        crate::output::write_exr(&stem.with_extension("exr"), &r.image, &meta)?;
+        crate::output::write_png(&stem.with_extension("png"), &r.image, exposure)?;
+    }
+    let csv_path = dir.join("curves.csv");
+    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    let series: Vec<Series> = runs
+        .iter()
+        .map(|r| Series {
+            label: r.label.clone(),
+            points: r.samples.iter().map(|s| (s.seconds, s.error.rmse)).collect(),
+        })
+        .collect();
+    let title = format!("RMSE vs time: {} on {}", ctx.scene, ctx.device);
+    let axes = Axes {
+        title: &title,
+        x_label: "time [s] (set-up included, error evaluation excluded)",
+        y_label: "RMSE (linear radiance)",
+        log_x: true,
+        log_y: true,
+    };
+    line_plot(&dir.join("rmse_vs_time.png"), &axes, &series)?;
+    let summary = summary(ctx, runs)?;
+    let md = dir.join("summary.md");
+    std::fs::write(&md, &summary).with_context(|| format!("writing {}", md.display()))?;
+    Ok(summary)
+}
+
+fn summary(ctx: &ReportContext, runs: &[RunResult]) -> Result<String> {
+    let base = &runs[ctx.baseline];
+    let target = base.last().error.rmse;
+    let (base_time, _) = time_to_error(&base.samples, target).unwrap_or((f64::NAN, false));
+    let floor = ctx.reference.noise_floor_mse().sqrt();
+    let info = |k: &str| ctx.reference.info.get(k).cloned().unwrap_or_default();
+    let mut s = String::new();
+    writeln!(s, "# Error against time: {}\n", ctx.scene)?;
+    writeln!(s, "- device: {}", ctx.device)?;
+    writeln!(
+        s,
+        "- budget: {:?} per run (set-up on the clock, error evaluation off it)",
+        ctx.budget
+    )?;
+    writeln!(
+        s,
+        "- scene load and BVH build: {:.2} s (before the runs, on no clock)",
+        ctx.load_seconds
+    )?;
+    writeln!(
+        s,
+        "- reference: `{}`: graph {} layout {}, {} spp, seed {}; its own noise is RMSE {floor:.3e}",
+        ctx.reference_path.display(),
+        info("graph"),
+        info("layout"),
+        ctx.reference.samples_per_pixel(),
+        info("seed")
+    )?;
+    writeln!(
+        s,
+        "- target: RMSE {target:.4e}, what the baseline **{}** reaches at the end of its budget\n",
+        base.label
+    )?;
+    writeln!(
+        s,
+        "| run | set-up s | frames | spp | Msamples/s | final RMSE | final relMSE | slope | time to target s | speed-up |"
+    )?;
+    writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    let mut extrapolated = false;
+    for r in runs {
+        let last = r.last();
+        let slope = convergence_slope(&r.samples).map_or("n/a".to_string(), |v| format!("{v:.2}"));
+        let (time, speedup) = match time_to_error(&r.samples, target) {
+            Some((t, x)) => {
+                extrapolated |= x;
+                let mark = if x { " ‡" } else { "" };
+                (format!("{t:.3}{mark}"), format!("{:.2}×", base_time / t))
+            }
+            None => ("never".to_string(), "n/a".to_string()),
+        };
+        writeln!(
+            s,
+            "| {} | {:.2} | {} | {} | {:.2} | {:.4e} | {:.4e} | {slope} | {time} | {speedup} |",
+            r.label,
+            r.setup_seconds,
+            last.frames,
+            last.samples_per_pixel,
+            r.samples_per_second / 1e6,
+            last.error.rmse,
+            last.error.rel_mse
+        )?;
+    }
+    writeln!(
+        s,
+        "\nSpeed-up = the baseline's time to the target over the run's. Slope: least-squares slope \
+         of log RMSE against log time since the run's first error sample, over the last 1.5 decades \
+         (−0.5 is the Monte Carlo rate; flatter means bias, or that the error nears the reference's \
+         own noise; a few very noisy pixels, such as the edges of a visible light, make it wander)."
+    )?;
+    if extrapolated {
+        writeln!(
+            s,
+            "\n‡ The run did not reach the target within its budget: its time is extrapolated from \
+             its last sample at the Monte Carlo rate (time ∝ RMSE⁻²)."
+        )?;
+    }
+    if floor > 0.5 * target {
+        writeln!(
+            s,
+            "\n**Warning**: the reference's own noise (RMSE {floor:.3e}) is more than half the target; \
+             render a longer reference (`lightgraph reference --resume`) before trusting these numbers."
+        )?;
+    }
+    let bad: Vec<&str> = runs
+        .iter()
+        .filter(|r| r.last().error.non_finite > 0)
+        .map(|r| r.label.as_str())
+        .collect();
+    if !bad.is_empty() {
+        writeln!(s, "\n**Warning**: NaN or infinite pixels in {}.", bad.join(", "))?;
+    }
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn curve(points: &[(f64, f64)]) -> Vec<ErrorSample> {
+        points
+            .iter()
+            .map(|&(t, e)| ErrorSample {
+                seconds: t,
+                frames: 1,
+                samples_per_pixel: 1,
+                error: ImageError {
+                    mse: e * e,
+                    rmse: e,
+                    rel_mse: e,
+                    non_finite: 0,
+                },
+            })
+            .collect()
+    }
+
+    #[test]
+    fn run_lists_parse() {
+        let runs = RunSpec::parse_list("pt:NaivePTsk, pt ,tests/x.ron:L").unwrap();
+        assert_eq!(runs[0].layout.as_deref(), Some("NaivePTsk"));
+        assert_eq!((runs[1].graph.as_str(), runs[1].layout.as_ref()), ("pt", None));
+        assert_eq!(
+            (runs[2].graph.as_str(), runs[2].layout.as_deref()),
+            ("tests/x.ron", Some("L"))
+        );
+        assert!(RunSpec::parse_list(" , ").is_err());
+    }
+
+    #[test]
+    fn sample_times_are_log_spaced_up_to_the_budget() {
+        let t = sample_times(10.0, 4);
+        assert_eq!(t.len(), 13);
+        assert!((t[0] - 0.01).abs() < 1e-12 && (t[12] - 10.0).abs() < 1e-12);
+        for w in t.windows(2) {
+            assert!((w[1] / w[0] - 10f64.powf(0.25)).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn time_to_error_interpolates_and_extrapolates() {
+        // RMSE = t^-1/2: 1 at t = 1, 0.5 at t = 4.
+        let c = curve(&[(1.0, 1.0), (4.0, 0.5), (16.0, 0.25)]);
+        let (t, x) = time_to_error(&c, 0.5f64.powf(1.5)).unwrap();
+        assert!(!x && (t - 8.0).abs() < 1e-9, "{t}");
+        let (t, x) = time_to_error(&c, 0.125).unwrap();
+        assert!(x && (t - 64.0).abs() < 1e-9, "{t}");
+        assert_eq!(time_to_error(&c, 2.0), Some((1.0, false)));
+    }
+
+    #[test]
+    fn slope_of_a_monte_carlo_curve_after_a_start_up_delay() {
+        // RMSE = (t - 2)^-1/2 from a first sample at t = 2 (when the first frame is done).
+        let mut points = vec![(2.0, 3.0)];
+        points.extend([1.0, 4.0, 16.0, 64.0].map(|dt: f64| (2.0 + dt, dt.powf(-0.5))));
+        let slope = convergence_slope(&curve(&points)).unwrap();
+        assert!((slope + 0.5).abs() < 1e-12, "{slope}");
+        assert_eq!(convergence_slope(&curve(&points[..3])), None);
+    }
+
+    #[test]
+    fn a_paused_stopwatch_stands_still() {
+        let mut w = Stopwatch::started();
+        w.pause();
+        let t = w.seconds();
+        std::thread::sleep(Duration::from_millis(20));
+        assert_eq!(w.seconds(), t);
+        w.resume();
+        std::thread::sleep(Duration::from_millis(5));
+        assert!(w.seconds() > t);
+    }
+}

@@ -1,0 +1,183 @@
+//! `lightgraph reference` and the error measures around it: a resumed reference equals one
+//! rendered in one go, settings that would mix two estimates are refused, and `render
+//! --reference` / `compare` check what they are given.
+
+use crate::cli::{fails, lightgraph, temp_dir};
+use lightgraph::reference::Reference;
+use std::path::Path;
+
+const SCENE: [&str; 6] = ["--scene", "cornell-diffuse", "--res", "16x12", "--spp", "2"];
+
+fn reference(args: &[&str], out: &Path) -> Reference {
+    let run = lightgraph(&[&["reference"], &SCENE[..], args, &["--out", out.to_str().unwrap()]].concat());
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    Reference::read(out).expect("a reference was written")
+}
+
+#[test]
+fn a_resumed_reference_equals_one_rendered_at_once() {
+    let dir = temp_dir("resume");
+    let whole = reference(&["--frames", "6"], &dir.join("whole.exr"));
+    let part = dir.join("part.exr");
+    reference(&["--frames", "2"], &part);
+    // Resuming takes the scene, resolution, spp and seed from the file.
+    let run = lightgraph(&["reference", "--resume", part.to_str().unwrap(), "--frames", "4"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let resumed = Reference::read(&part).unwrap();
+    assert_eq!((resumed.frames, whole.frames), (6, 6));
+    assert_eq!(resumed.samples_per_pixel(), 12);
+    assert_eq!(resumed.info["seed"], "1000003");
+    // The frames continue the random streams, so the six frames are the same ones; only the
+    // f32 storage of the first part and the order of the f64 sums differ.
+    let (a, b) = (whole.mean(), resumed.mean());
+    let (va, vb) = (whole.variance_of_mean(), resumed.variance_of_mean());
+    assert!(a.iter().flatten().any(|&v| v > 0.0), "the reference is black");
+    for i in 0..a.len() {
+        for c in 0..3 {
+            assert!(
+                (a[i][c] - b[i][c]).abs() <= 1e-5 * a[i][c].abs().max(1.0),
+                "pixel {i}: {:?} vs {:?}",
+                a[i],
+                b[i]
+            );
+            assert!(
+                (va[i][c] - vb[i][c]).abs() <= 1e-4 * va[i][c].abs().max(1e-3),
+                "variance {i}: {:?} vs {:?}",
+                va[i],
+                vb[i]
+            );
+        }
+    }
+    assert!(dir.join("part.png").is_file());
+}
+
+#[test]
+fn settings_that_would_mix_estimates_are_refused() {
+    let dir = temp_dir("mix");
+    let path = dir.join("ref.exr");
+    reference(&["--frames", "1"], &path);
+    let p = path.to_str().unwrap();
+    let err = fails(&["reference", "--resume", p, "--frames", "1", "--seed", "5"]);
+    assert!(
+        err.contains("ref.exr") && err.contains("seed is '1000003' there, '5' here"),
+        "{err}"
+    );
+    let err = fails(&["reference", "--resume", p, "--frames", "1", "--max-path-length", "3"]);
+    assert!(err.contains("constants is '' there, 'MAX_PATH_LENGTH=3' here"), "{err}");
+    let err = fails(&["reference", "--resume", p, "--frames", "1", "--res", "8x8"]);
+    assert!(err.contains("the reference is 16x12, the render 8x8"), "{err}");
+    // Runs with the reference's own seed would repeat its random numbers.
+    let out = dir.join("cmp");
+    let err = fails(&[
+        "compare",
+        "--runs",
+        "pt",
+        "--reference",
+        p,
+        "--seed",
+        "1000003",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(err.contains("seed 1000003") && err.contains("another --seed"), "{err}");
+    let err = fails(&[
+        "compare",
+        "--runs",
+        "pt",
+        "--reference",
+        p,
+        "--scene",
+        "cornell-mitsuba",
+    ]);
+    assert!(
+        err.contains("the reference shows scene 'cornell-diffuse', not 'cornell-mitsuba'"),
+        "{err}"
+    );
+    let err = fails(&["compare", "--runs", "pt:NoSuchLayout", "--reference", p]);
+    assert!(err.contains("NoSuchLayout"), "{err}");
+    let err = fails(&[
+        "compare",
+        "--runs",
+        "pt,pt:NaivePTmk",
+        "--reference",
+        p,
+        "--baseline",
+        "Nope",
+    ]);
+    assert!(
+        err.contains("--baseline Nope is none of the runs (pt:NaivePTsk, pt:NaivePTmk)"),
+        "{err}"
+    );
+    // A render is not a reference.
+    let render = dir.join("render.exr");
+    let run = lightgraph(
+        &[
+            &["render"],
+            &SCENE[..],
+            &["--frames", "1", "--out", render.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert!(run.status.success());
+    let err = fails(&[
+        "render",
+        "--scene",
+        "cornell-diffuse",
+        "--res",
+        "16x12",
+        "--frames",
+        "1",
+        "--reference",
+        render.to_str().unwrap(),
+        "--out",
+        dir.join("x.exr").to_str().unwrap(),
+    ]);
+    assert!(err.contains("render.exr: not a lightgraph reference"), "{err}");
+}
+
+#[test]
+fn render_reports_its_error_against_a_reference() {
+    let dir = temp_dir("render-error");
+    let path = dir.join("ref.exr");
+    reference(&["--frames", "400"], &path);
+    let render = |frames: &str| {
+        let run = lightgraph(
+            &[
+                &["render"],
+                &SCENE[..],
+                &[
+                    "--frames",
+                    frames,
+                    "--reference",
+                    path.to_str().unwrap(),
+                    "--out",
+                    dir.join("r.exr").to_str().unwrap(),
+                ],
+            ]
+            .concat(),
+        );
+        let text = String::from_utf8_lossy(&run.stderr).to_string();
+        assert!(run.status.success(), "{text}");
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("error against"))
+            .unwrap_or_else(|| panic!("no error line:\n{text}"));
+        let rmse: f64 = line
+            .split("RMSE ")
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        rmse
+    };
+    // Four times the samples halve the expected RMSE (plus the reference's own noise): the
+    // ratio of 1 to 16 frames is far from 1, whatever the noise of two small images.
+    let (few, many) = (render("1"), render("16"));
+    assert!(
+        few.is_finite() && many.is_finite() && many < 0.75 * few,
+        "RMSE {few} with 1 frame, {many} with 16"
+    );
+}
