@@ -5,6 +5,9 @@
 
 use std::collections::BTreeMap;
 
+/// The most tokens a count expression may have (which bounds how deep it nests).
+const MAX_TOKENS: usize = 256;
+
 /// A parsed count expression.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Expr {
@@ -22,6 +25,13 @@ impl Expr {
     /// Parses `text`; the error names the column and what was expected.
     pub fn parse(text: &str) -> Result<Expr, String> {
         let tokens = tokenize(text)?;
+        // The parser, evaluation and drop recurse as deep as the expression nests.
+        if tokens.len() > MAX_TOKENS {
+            return Err(format!(
+                "count expression of {} tokens is too long (at most {MAX_TOKENS})",
+                tokens.len()
+            ));
+        }
         let mut parser = Parser { tokens, pos: 0 };
         let expr = parser.sum()?;
         if parser.pos != parser.tokens.len() {
@@ -254,5 +264,14 @@ mod tests {
         let err = Expr::parse("DEPTH").unwrap().count(&vars()).unwrap_err();
         assert!(err.contains("DEPTH"), "{err}");
         assert!(Expr::parse("0 - WIDTH").unwrap().count(&vars()).is_err());
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_stack_overflow() {
+        let deep = format!("{}WIDTH{}", "(".repeat(5000), ")".repeat(5000));
+        assert!(Expr::parse(&deep).unwrap_err().contains("10001 tokens is too long"));
+        assert!(Expr::parse(&vec!["WIDTH"; 5000].join(" + ")).is_err());
+        let nested = format!("{}WIDTH{}", "(".repeat(100), ")".repeat(100));
+        assert_eq!(Expr::parse(&nested).unwrap().count(&vars()).unwrap(), 640);
     }
 }
