@@ -509,15 +509,19 @@ mod tests {
         assert!(e.starts_with("s.ron:2:"), "{e}");
     }
 
+    /// The errors of both BVH kinds for the base scene with `shape` first.
+    fn bvh_errors(shape: &str) -> Vec<String> {
+        let scene = parse_scene("s.ron", &BASE.replace("shapes: [", &format!("shapes: [{shape}, "))).unwrap();
+        [BvhKind::Bvh2, BvhKind::Cwbvh]
+            .map(|kind| CompiledScene::with_bvh(&scene, kind).unwrap_err())
+            .to_vec()
+    }
+
     #[test]
     fn mesh_index_out_of_range_is_an_error() {
-        let text = BASE.replace(
-            "shapes: [",
-            "shapes: [Mesh(positions: [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0)], indices: [(0, 1, 2)], material: \"m\"), ",
-        );
-        let scene = parse_scene("s.ron", &text).unwrap();
-        for kind in [BvhKind::Bvh2, BvhKind::Cwbvh] {
-            let e = CompiledScene::with_bvh(&scene, kind).unwrap_err();
+        for e in
+            bvh_errors("Mesh(positions: [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0)], indices: [(0, 1, 2)], material: \"m\")")
+        {
             assert!(
                 e.contains("shape 0") && e.contains("vertex 2") && e.contains("2 vertices"),
                 "{e}"
@@ -532,13 +536,10 @@ mod tests {
             ("NaN", "NaN"),
             ("inf", "inf"),
         ] {
-            let text = BASE.replace(
-                "shapes: [",
-                &format!("shapes: [Quad(corners: ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), ({bad}, 1.0, 0.0), (0.0, 1.0, 0.0)), material: \"m\"), "),
+            let quad = format!(
+                "Quad(corners: ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), ({bad}, 1.0, 0.0), (0.0, 1.0, 0.0)), material: \"m\")"
             );
-            let scene = parse_scene("s.ron", &text).unwrap();
-            for kind in [BvhKind::Bvh2, BvhKind::Cwbvh] {
-                let e = CompiledScene::with_bvh(&scene, kind).unwrap_err();
+            for e in bvh_errors(&quad) {
                 assert!(e.starts_with("shape 0: coordinate ") && e.contains(shown), "{e}");
             }
         }
