@@ -406,7 +406,7 @@ fn check_shape(index: usize, shape: &Shape) -> Result<(), String> {
         .iter()
         .flatten()
         .chain(radius)
-        .find(|v| !(v.abs() <= MAX_COORDINATE))
+        .find(|v| !v.is_finite() || v.abs() > MAX_COORDINATE)
     {
         return Err(format!(
             "shape {index}: coordinate {v} is not a finite number within ±{MAX_COORDINATE:e}"
