@@ -34,6 +34,13 @@ pub fn load_scene_with(name: &str, kind: BvhKind) -> Result<LoadedScene> {
     let (file, text) = crate::assets::scene_text(name).map_err(|e| anyhow!(e))?;
     let mut scene = LoadedScene::parse(&file, &text, kind, crate::assets::asset_root().as_deref())?;
     scene.name = name.to_string();
+    if scene.compiled.clipped_primitives > 0 {
+        eprintln!(
+            "warning: {file}: {} primitives reach beyond ±{:e}, where the BVH clips them: rays do not find those parts",
+            scene.compiled.clipped_primitives,
+            lightgraph_scenes::TRACED_EXTENT
+        );
+    }
     Ok(scene)
 }
 

@@ -157,6 +157,8 @@ pub struct CompiledScene {
     pub bvh_depth: usize,
     /// Time spent building the BVH.
     pub bvh_time: Duration,
+    /// Primitives reaching beyond ±[`TRACED_EXTENT`], whose boxes the BVH clips there.
+    pub clipped_primitives: usize,
 }
 
 fn v3(a: [f32; 3]) -> Vec3 {
@@ -301,7 +303,18 @@ impl CompiledScene {
             }
             lights.push(l);
         }
-        let boxes: Vec<(Vec3A, Vec3A)> = prims.iter().map(primitive_bounds).collect();
+        let limit = Vec3A::splat(TRACED_EXTENT);
+        let mut clipped_primitives = 0;
+        let boxes: Vec<(Vec3A, Vec3A)> = prims
+            .iter()
+            .map(|p| {
+                let (a, b) = primitive_bounds(p);
+                if a.min_element() < -TRACED_EXTENT || b.max_element() > TRACED_EXTENT {
+                    clipped_primitives += 1;
+                }
+                (a.clamp(-limit, limit), b.clamp(-limit, limit))
+            })
+            .collect();
         let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
         for (a, b) in &boxes {
             lo = lo.min(*a);
@@ -339,6 +352,7 @@ impl CompiledScene {
             lights,
             bvh_depth,
             bvh_time,
+            clipped_primitives,
         })
     }
 
@@ -389,9 +403,14 @@ impl CompiledScene {
     }
 }
 
-/// The largest coordinate (or sphere radius) a shape may have: beyond it, the areas of boxes
-/// overflow f32 in the BVH builders.
-pub const MAX_COORDINATE: f32 = 1e12;
+/// The largest coordinate (or sphere radius) a shape may have: as far as a ray travels
+/// (`INFINITE_DISTANCE` in the WGSL).
+pub const MAX_COORDINATE: f32 = 1e30;
+
+/// How far from the origin the BVH bounds geometry. Beyond it, primitive boxes are clipped
+/// (rays do not find the parts of primitives out there): the builders' surface areas stay
+/// finite in f32, and f32 positions that far apart are coarser than 1e8 units anyway.
+pub const TRACED_EXTENT: f32 = 1e15;
 
 /// Checks what [`CompiledScene::with_bvh`] needs of shape `index`: mesh indices within its
 /// vertices, finite coordinates within [`MAX_COORDINATE`].
