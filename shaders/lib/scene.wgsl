@@ -101,14 +101,15 @@ struct Light {
 // a few units in the last place of p's coordinates (Waechter and Binder, "A fast and robust
 // method for avoiding self-intersection", Ray Tracing Gems, 2019). `extent` is the largest
 // coordinate magnitude of the primitive `p` was computed from: near the origin, where float
-// spacing is finer than the error of the computed point (about extent x 2^-23), the offset
-// is a fixed fraction of `extent` instead. Both scale with the primitive, so a scene scaled
-// by any factor, or one with huge coordinates elsewhere, is offset the same way.
+// spacing is finer than the error of the computed point (a few times extent x 2^-23), the
+// offset is extent x 2^-19 instead, about 16 such units, as 256 units of p are at the
+// threshold |p| = extent / 32. Both scale with the primitive, so a scene scaled by any
+// factor, or one with huge coordinates elsewhere, is offset the same way.
 fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>, extent: f32) -> vec3<f32> {
     let of_i = vec3<i32>(256.0 * n);
     let p_i = bitcast<vec3<f32>>(bitcast<vec3<i32>>(p) + select(of_i, -of_i, p < vec3<f32>(0.0)));
     let origin = extent * (1.0 / 32.0);
-    return select(p_i, p + (extent * (1.0 / 65536.0)) * n, abs(p) < vec3<f32>(origin));
+    return select(p_i, p + (extent * (1.0 / 524288.0)) * n, abs(p) < vec3<f32>(origin));
 }
 
 // The largest coordinate magnitude of a triangle with corner `a` and edges `b`, `c`.
