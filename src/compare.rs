@@ -84,19 +84,23 @@ impl RunResult {
     }
 }
 
-/// The times (seconds) at which errors are sampled within `budget`: `per_decade` per decade,
-/// log-spaced, down to a thousandth of the budget, ending at the budget.
-pub fn sample_times(budget: f64, per_decade: u32) -> Vec<f64> {
-    let n = 3 * per_decade;
-    (0..=n)
-        .rev()
-        .map(|k| budget * 10f64.powf(-(k as f64) / per_decade as f64))
-        .collect()
+/// Fewest error samples a run takes after its first frame.
+pub const MIN_SAMPLES: usize = 12;
+
+/// The times (seconds) at which errors are sampled after the first frame ended at `first`:
+/// log-spaced from there to `budget`, `per_decade` per decade and at least [`MIN_SAMPLES`].
+pub fn sample_times(first: f64, budget: f64, per_decade: u32) -> Vec<f64> {
+    if first >= budget {
+        return Vec::new();
+    }
+    let ratio = budget / first;
+    let n = ((per_decade as f64 * ratio.log10()).ceil() as usize).max(MIN_SAMPLES);
+    (1..=n).map(|k| first * ratio.powf(k as f64 / n as f64)).collect()
 }
 
 /// Renders `graph` in `layout` for `budget` on its clock and samples its error against
-/// `reference` at `times` (and after the last frame); `progress` sees the clock and the
-/// latest error.
+/// `reference` after the first frame, then at log-spaced times (see [`sample_times`]) and
+/// after the last frame; `progress` sees the clock and the latest error.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     gpu: &Gpu,
@@ -106,7 +110,7 @@ pub fn run(
     options: SessionOptions,
     budget: Duration,
     reference: &[[f32; 3]],
-    times: &[f64],
+    per_decade: u32,
     mut progress: impl FnMut(f64, Option<&ErrorSample>),
 ) -> Result<RunResult> {
     let label = format!("{}:{layout}", graph.name);
@@ -115,36 +119,37 @@ pub fn run(
     let setup_seconds = clock.seconds();
     let budget = budget.as_secs_f64();
     let mut samples: Vec<ErrorSample> = Vec::new();
-    let mut next = times.iter().copied().filter(|&t| t > setup_seconds).peekable();
-    while clock.seconds() < budget || session.frames == 0 {
-        let until = next.peek().copied().unwrap_or(budget).min(budget);
-        let step = (until - clock.seconds()).clamp(1e-3, 0.1);
-        session.render_for(Duration::from_secs_f64(step), u32::MAX)?;
-        let now = clock.seconds();
-        if next.peek().is_some_and(|&t| now >= t) || now >= budget {
-            while next.next_if(|&t| t <= now).is_some() {}
-            clock.pause();
-            let image = session.image()?;
-            samples.push(ErrorSample {
-                seconds: now,
-                frames: session.frames,
-                samples_per_pixel: session.samples_per_pixel(),
-                error: image_error(&image.mean, reference),
-            });
-            clock.resume();
-        }
-        progress(clock.seconds(), samples.last());
-    }
-    let seconds = clock.seconds();
-    let image = session.image()?;
-    if samples.last().is_none_or(|s| s.frames != session.frames) {
+    // The error now, measured with the clock stopped.
+    let mut measure = |session: &Session, clock: &mut Stopwatch, samples: &mut Vec<ErrorSample>| -> Result<()> {
+        let seconds = clock.seconds();
+        clock.pause();
+        let image = session.image()?;
         samples.push(ErrorSample {
             seconds,
             frames: session.frames,
             samples_per_pixel: session.samples_per_pixel(),
             error: image_error(&image.mean, reference),
         });
+        clock.resume();
+        progress(seconds, samples.last());
+        Ok(())
+    };
+    session.render_frame()?;
+    measure(&session, &mut clock, &mut samples)?;
+    let times = sample_times(clock.seconds(), budget, per_decade);
+    let mut next = times.iter().copied().peekable();
+    while clock.seconds() < budget {
+        let until = next.peek().copied().unwrap_or(budget).min(budget);
+        let step = (until - clock.seconds()).clamp(1e-3, 0.1);
+        session.render_for(Duration::from_secs_f64(step), u32::MAX)?;
+        let now = clock.seconds();
+        if next.peek().is_some_and(|&t| now >= t) || now >= budget {
+            while next.next_if(|&t| t <= now).is_some() {}
+            measure(&session, &mut clock, &mut samples)?;
+        }
     }
+    let seconds = clock.seconds();
+    let image = session.image()?;
     let paths = session.samples_per_pixel() as f64 * image.mean.len() as f64;
     Ok(RunResult {
         label,
@@ -445,13 +450,16 @@ mod tests {
     }
 
     #[test]
-    fn sample_times_are_log_spaced_up_to_the_budget() {
-        let t = sample_times(10.0, 4);
-        assert_eq!(t.len(), 13);
-        assert!((t[0] - 0.01).abs() < 1e-12 && (t[12] - 10.0).abs() < 1e-12);
+    fn sample_times_are_log_spaced_from_the_first_frame_to_the_budget() {
+        let t = sample_times(0.01, 10.0, 6);
+        assert_eq!(t.len(), 18);
+        assert!((t[17] - 10.0).abs() < 1e-12);
         for w in t.windows(2) {
-            assert!((w[1] / w[0] - 10f64.powf(0.25)).abs() < 1e-9);
+            assert!((w[1] / w[0] - 10f64.powf(0.5 / 3.0)).abs() < 1e-9);
         }
+        // A slow first frame still leaves a curve.
+        assert_eq!(sample_times(8.0, 10.0, 6).len(), MIN_SAMPLES);
+        assert!(sample_times(10.0, 10.0, 6).is_empty());
     }
 
     #[test]

@@ -12,9 +12,9 @@
 //!
 //! Tolerance: the slope is fitted as `compare` fits it (log RMSE against log time since the
 //! first error sample, over the last 1.5 decades), after subtracting the reference's own noise
-//! from the MSE (E[(x − r)²] = MSE(x) + Var(r) for independent x and r). Over seeds 2 to 5 on
-//! lavapipe the slopes were −0.46 to −0.54 (standard deviation ≈ 0.03); the test accepts
-//! −0.5 ± 0.15, five standard deviations. A biased estimator flattens the curve towards its
+//! from the MSE (E[(x − r)²] = MSE(x) + Var(r) for independent x and r). Over nine runs (seeds
+//! 1 to 7) on lavapipe the slopes were −0.48 to −0.60 (mean −0.53, standard deviation 0.04);
+//! the test accepts −0.5 ± 0.15, over three standard deviations from that mean. A biased estimator flattens the curve towards its
 //! bias and leaves that band; so does a throughput that changes during the run.
 
 use lightgraph::compare::{ErrorSample, convergence_slope};

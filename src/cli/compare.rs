@@ -4,7 +4,7 @@ use super::args::*;
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use lightgraph::compare::{ReportContext, RunSpec, run, sample_times, write_report};
+use lightgraph::compare::{ReportContext, RunSpec, run, write_report};
 use lightgraph::reference::Reference;
 use lightgraph::render::{load_graph, load_scene_with};
 use lightgraph_engine::Gpu;
@@ -29,7 +29,8 @@ pub struct CompareArgs {
     /// The run the others are measured against [default: the first].
     #[arg(long)]
     pub baseline: Option<String>,
-    /// Error samples per decade of time (log-spaced, down to a thousandth of the budget).
+    /// Error samples per decade of time (log-spaced from the first frame to the end, at
+    /// least 12).
     #[arg(long, default_value_t = 6)]
     pub per_decade: u32,
     /// Seed of the runs' random streams (must differ from the reference's).
@@ -111,7 +112,6 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
         reference.samples_per_pixel()
     );
     let ref_mean = reference.mean();
-    let times = sample_times(args.time.as_secs_f64(), args.per_decade);
     let mut results = Vec::new();
     for (label, graph, layout, opts) in runs {
         let bar = ProgressBar::new(args.time.as_millis() as u64);
@@ -125,7 +125,7 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
             opts,
             args.time,
             &ref_mean,
-            &times,
+            args.per_decade,
             |t, e| {
                 bar.set_position((t * 1e3) as u64);
                 if let Some(e) = e {
