@@ -11,4 +11,5 @@ pub mod output;
 pub mod plot;
 pub mod reference;
 pub mod render;
+pub mod stress;
 pub mod tune;

@@ -8,6 +8,7 @@ use cli::compare::CompareArgs;
 use cli::explain::ExplainArgs;
 use cli::reference::ReferenceArgs;
 use cli::render::RenderArgs;
+use cli::stress::StressArgs;
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -30,6 +31,9 @@ enum Command {
     /// Render several estimators and layouts for the same time and plot their error against
     /// a reference over time.
     Compare(CompareArgs),
+    /// Run the numerical stress suite: extreme scenes with every estimator, each checked
+    /// against its invariant.
+    Stress(StressArgs),
     /// Print the kernels, schedule and resources of a graph's layouts.
     Explain(ExplainArgs),
     /// Measure layouts over a sweep of paths per frame: Markdown table, CSV and PNG plot.
@@ -50,7 +54,7 @@ fn main() -> ExitCode {
         Command::Compare(a) => a.common.assets.clone(),
         Command::Explain(a) => a.common.assets.clone(),
         Command::Bench(a) => a.common.assets.clone(),
-        Command::List => None,
+        Command::List | Command::Stress(_) => None,
     };
     if let Some(dir) = assets {
         // SAFETY: set before any thread starts; scene loading reads it.
@@ -63,6 +67,7 @@ fn main() -> ExitCode {
         Command::Explain(a) => cli::explain::explain(a),
         Command::Bench(a) => cli::bench::bench(a),
         Command::List => cli::list::list(),
+        Command::Stress(a) => cli::stress::stress(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

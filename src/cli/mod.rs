@@ -7,3 +7,4 @@ pub mod explain;
 pub mod list;
 pub mod reference;
 pub mod render;
+pub mod stress;

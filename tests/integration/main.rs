@@ -10,3 +10,4 @@ mod gltf;
 mod layouts;
 mod reference;
 mod scenes;
+mod stress;

@@ -16,7 +16,8 @@ fn every_builtin_scene_renders_without_invalid_samples() {
     let _ = gpu();
     let names = scene_names();
     assert!(names.len() >= 6, "the six Cornell scenes are built in: {names:?}");
-    for (name, path) in names {
+    // The stress scenes have their own invariants (tests/integration/stress.rs): one is black.
+    for (name, path) in names.into_iter().filter(|(_, p)| !p.starts_with("scenes/stress/")) {
         let text = lightgraph::assets::builtin().read(&path).unwrap();
         let spec = lightgraph_scenes::parse_scene(&path, &text).unwrap();
         if let Some(asset) = &spec.gltf
