@@ -16,14 +16,18 @@ struct Bsdf {
     refract_prob: f32,
     continuation: f32,          // Russian roulette continuation probability (albedo bound)
     fresnel: f32,
+    cos_t: f32,                 // cosine of the refracted direction (0: none)
     is_delta: bool,
     valid: bool,
 }
 
-// Fresnel reflectance of a smooth dielectric, unpolarised; `ior` < 0 means a perfect mirror.
-fn fresnel_dielectric(cos_incident: f32, ior: f32) -> f32 {
+// Fresnel reflectance of a smooth dielectric, unpolarised, and the cosine of the refracted
+// direction (0 under total internal reflection); `ior` < 0 means a perfect mirror. Both come
+// from one computation of sin^2 of the refraction angle, so that the reflectance and the
+// sampling of refraction agree on where total internal reflection begins.
+fn fresnel_dielectric(cos_incident: f32, ior: f32) -> vec2<f32> {
     if (ior < 0.0) {
-        return 1.0;
+        return vec2<f32>(1.0, 0.0);
     }
     var cos_i = cos_incident;
     var eta = 1.0 / ior;
@@ -32,13 +36,13 @@ fn fresnel_dielectric(cos_incident: f32, ior: f32) -> f32 {
         eta = ior;
     }
     let sin_t2 = eta * eta * (1.0 - cos_i * cos_i);
-    if (sin_t2 > 1.0) {
-        return 1.0;
+    if (sin_t2 >= 1.0) {
+        return vec2<f32>(1.0, 0.0);
     }
     let cos_t = sqrt(max(0.0, 1.0 - sin_t2));
     let r_parallel = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     let r_perpendicular = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    return 0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular);
+    return vec2<f32>(0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular), cos_t);
 }
 
 fn bsdf_setup(material: u32, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bsdf {
@@ -54,7 +58,9 @@ fn bsdf_setup(material: u32, normal: vec3<f32>, towards_previous: vec3<f32>) -> 
     if (!b.valid) {
         return b;
     }
-    b.fresnel = fresnel_dielectric(b.fix.z, m.ior);
+    let fresnel = fresnel_dielectric(b.fix.z, m.ior);
+    b.fresnel = fresnel.x;
+    b.cos_t = fresnel.y;
     let albedo_diffuse = luminance(m.diffuse);
     let albedo_phong = luminance(m.phong);
     let albedo_reflect = b.fresnel * luminance(m.mirror);
@@ -69,7 +75,11 @@ fn bsdf_setup(material: u32, normal: vec3<f32>, towards_previous: vec3<f32>) -> 
     b.phong_prob = albedo_phong / total;
     b.reflect_prob = albedo_reflect / total;
     b.refract_prob = albedo_refract / total;
-    b.continuation = clamp(max_component(m.diffuse + m.phong + b.fresnel * m.mirror) + (1.0 - b.fresnel), 0.0, 1.0);
+    // The specular lobes' albedo: F mirror, plus 1 - F through a dielectric, written as
+    // 1 - F (1 - mirror) so that a lossless dielectric continues with probability exactly 1.
+    let one = vec3<f32>(1.0);
+    let specular = select(b.fresnel * m.mirror, one - b.fresnel * (one - m.mirror), m.ior > 0.0);
+    b.continuation = clamp(max_component(m.diffuse + m.phong + specular), 0.0, 1.0);
     b.is_delta = b.diffuse_prob == 0.0 && b.phong_prob == 0.0;
     return b;
 }
@@ -156,19 +166,13 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
         if (m.ior < 0.0) {
             return s;
         }
-        var cos_i = b.fix.z;
+        // Refraction is only picked where the Fresnel term let some light through, so cos_t > 0.
         var eta = 1.0 / m.ior;
-        var sign_t = -1.0;
-        if (cos_i < 0.0) {
+        var cos_t = -b.cos_t;
+        if (b.fix.z < 0.0) {
             eta = m.ior;
-            cos_i = -cos_i;
-            sign_t = 1.0;
+            cos_t = b.cos_t;
         }
-        let sin_t2 = eta * eta * (1.0 - cos_i * cos_i);
-        if (sin_t2 >= 1.0) {
-            return s;
-        }
-        let cos_t = sign_t * sqrt(max(0.0, 1.0 - sin_t2));
         gen = vec3<f32>(-eta * b.fix.x, -eta * b.fix.y, cos_t);
         s.pdf = b.refract_prob;
         s.f = vec3<f32>((1.0 - b.fresnel) * eta * eta / abs(cos_t));
