@@ -326,5 +326,5 @@ fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
         return Surface(p.a + p.b.x * n, n, p.material, p.light, max(m.x, max(m.y, m.z)));
     }
     let position = p.a + hit.uv.x * p.b + hit.uv.y * p.c;
-    return Surface(position, normalize(cross(p.b, p.c)), p.material, p.light, triangle_extent(p.a, p.b, p.c));
+    return Surface(position, triangle_normal(p.b, p.c), p.material, p.light, triangle_extent(p.a, p.b, p.c));
 }

@@ -117,3 +117,12 @@ fn triangle_extent(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
     let m = max(abs(a), max(abs(a + b), abs(a + c)));
     return max(m.x, max(m.y, m.z));
 }
+
+// The unit normal of a triangle with edges `e1`, `e2` (by its winding), computed on edges
+// scaled to at most 1, so that neither huge (1e30) nor tiny triangles overflow or underflow.
+fn triangle_normal(e1: vec3<f32>, e2: vec3<f32>) -> vec3<f32> {
+    let m3 = max(abs(e1), abs(e2));
+    let m = max(m3.x, max(m3.y, m3.z));
+    let s = select(1.0 / m, 1.0, m == 0.0);
+    return normalize(cross(e1 * s, e2 * s));
+}
