@@ -29,6 +29,9 @@ pub struct StressArgs {
     /// Folder for stress.md and a PNG of each render.
     #[arg(long, default_value = "out/stress")]
     pub out: PathBuf,
+    /// Acceleration structure: bvh2 or cwbvh.
+    #[arg(long, value_parser = super::args::parse_bvh, default_value = "cwbvh")]
+    pub bvh: lightgraph_scenes::bvh::BvhKind,
     /// GPU adapter whose name contains this text (also LIGHTGRAPH_ADAPTER).
     #[arg(long, env = "LIGHTGRAPH_ADAPTER")]
     pub adapter: Option<String>,
@@ -45,6 +48,7 @@ pub fn stress(args: StressArgs) -> Result<()> {
         spp: args.spp.max(1),
         frames: args.frames,
         seed: args.seed,
+        bvh: args.bvh,
     };
     let mut runner = Runner::new(&gpu, settings)?;
     let selected: Vec<_> = cases()

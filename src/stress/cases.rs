@@ -20,8 +20,14 @@ pub enum Invariant {
     ScaledCopyOf(&'static str, f64),
     /// Exactly the scene's background radiance at every pixel (relative tolerance).
     Background(f64),
-    /// Exactly zero at every pixel.
-    Black,
+    /// A lossless object in a uniform environment: every pixel is the environment's radiance,
+    /// none brighter beyond rounding; a path lost on the way (a sample of 0) shows as a deficit,
+    /// and at most this fraction of the samples may be lost (see README, "Stress suite").
+    Furnace(f64),
+    /// An enclosure that hides a bright environment: black, but for rays that slip through
+    /// the single-precision triangle test at an edge, each of which sees the environment. At
+    /// most this fraction of the samples may (see README, "Stress suite").
+    Enclosed(f64),
 }
 
 /// Closed-form expectations.
@@ -86,11 +92,11 @@ pub fn cases() -> Vec<Case> {
         ),
         case("stress-degenerate-mesh", SameAs("cornell-diffuse"), (32, 32)),
         case("stress-grazing-camera", Expect(SkyOverPlane), (32, 32)),
-        case("stress-camera-inside-object", Black, (32, 32)),
+        case("stress-camera-inside-object", Enclosed(1e-7), (32, 32)),
         case("stress-camera-facing-away", Background(1e-6), (32, 32)),
         case("stress-phong-1e5", Expect(PhongFurnace), (32, 32)),
-        case("stress-glass-ior-1.0001", Background(1e-3), (32, 32)),
-        case("stress-glass-ior-3", Background(1e-3), (32, 32)),
+        case("stress-glass-ior-1.0001", Furnace(1e-7), (32, 32)),
+        case("stress-glass-ior-3", Furnace(1e-7), (32, 32)),
         case("stress-point-light-1e-6-above", Expect(PointLightOverPlane), (32, 32)),
     ]
 }

@@ -39,6 +39,8 @@ pub struct Settings {
     pub frames: u32,
     /// Seed of the random streams.
     pub seed: u32,
+    /// Acceleration structure.
+    pub bvh: BvhKind,
 }
 
 impl Default for Settings {
@@ -48,6 +50,7 @@ impl Default for Settings {
             spp: 1,
             frames: MIN_FRAMES as u32,
             seed: 1,
+            bvh: BvhKind::Cwbvh,
         }
     }
 }
@@ -126,7 +129,7 @@ impl<'g> Runner<'g> {
     fn comparison(&mut self, scene: &str, graph: &str, size: (u32, u32), seed: u32) -> Result<Frames> {
         let key = (scene.to_string(), graph.to_string(), size, seed);
         if !self.renders.contains_key(&key) {
-            let r = self.render(&load_scene_with(scene, BvhKind::Cwbvh)?, graph, size, seed)?;
+            let r = self.render(&load_scene_with(scene, self.settings.bvh)?, graph, size, seed)?;
             if r.rejected > 0 || r.loops_capped > 0 {
                 bail!(
                     "the comparison scene {scene} itself had {} rejected samples and {} capped loops",
@@ -158,7 +161,7 @@ impl<'g> Runner<'g> {
         let start = Instant::now();
         let s = self.settings;
         let size = (case.resolution.0 * s.scale, case.resolution.1 * s.scale);
-        let loaded = load_scene_with(case.scene, BvhKind::Cwbvh)?;
+        let loaded = load_scene_with(case.scene, s.bvh)?;
         let render = self.render(&loaded, graph, size, s.seed)?;
         let mut failures = Vec::new();
         if render.rejected > 0 {
@@ -188,7 +191,14 @@ impl<'g> Runner<'g> {
                 check_scaled(&mean, &base.mean(), factor, &mut failures)
             }
             Invariant::Background(rel) => check_exact(&mean, cases::background(scene), rel, &mut failures),
-            Invariant::Black => check_exact(&mean, [0.0; 3], 0.0, &mut failures),
+            Invariant::Furnace(rate) => {
+                let samples = (s.spp * s.frames) as f64;
+                check_furnace(&mean, cases::background(scene), samples, rate, &mut failures)
+            }
+            Invariant::Enclosed(rate) => {
+                let samples = (s.spp * s.frames) as f64;
+                check_enclosed(&mean, cases::background(scene), samples, rate, &mut failures)
+            }
         };
         let image = crate::render::Image {
             width: size.0,
@@ -326,6 +336,58 @@ fn check_exact(image: &[[f64; 3]], value: [f64; 3], rel: f64, failures: &mut Vec
         failures.push(format!("pixel {} is {:?}, not {value:?}", worst.1, image[worst.1]));
     }
     format!("worst absolute error {:.2e}", worst.0)
+}
+
+/// A white furnace with a lossless object: no pixel above the environment by more than
+/// rounding (1e-5), and the pixels below it by more than rounding add up to at most `rate` of
+/// all samples lost.
+fn check_furnace(
+    image: &[[f64; 3]],
+    environment: [f64; 3],
+    samples: f64,
+    rate: f64,
+    failures: &mut Vec<String>,
+) -> String {
+    let l = environment[1];
+    let brightest = image.iter().map(|p| p[1]).fold(0.0f64, f64::max);
+    if brightest > l * (1.0 + 1e-5) {
+        failures.push(format!("a pixel is {brightest}, brighter than the environment's {l}"));
+    }
+    let lost = 0.0
+        + image
+            .iter()
+            .map(|p| (l - p[1]) / l)
+            .filter(|&d| d > 1e-5)
+            .map(|d| d * samples)
+            .sum::<f64>();
+    let total = samples * image.len() as f64;
+    let allowed = (rate * total).floor();
+    if lost.round() > allowed {
+        failures.push(format!(
+            "{lost:.1} of {total:.0} samples were lost (at most {allowed:.0} may be)"
+        ));
+    }
+    format!("{lost:.1} lost samples of {total:.0}; brightest {brightest:.7}")
+}
+
+/// An enclosure's image: each pixel is (leaked samples / samples) x the environment, so the
+/// image counts the rays that slipped through; at most `rate` of all samples may have.
+fn check_enclosed(
+    image: &[[f64; 3]],
+    environment: [f64; 3],
+    samples: f64,
+    rate: f64,
+    failures: &mut Vec<String>,
+) -> String {
+    let leaked: f64 = image.iter().map(|p| p[1] / environment[1] * samples).sum();
+    let total = samples * image.len() as f64;
+    let allowed = (rate * total).floor();
+    if leaked.round() > allowed {
+        failures.push(format!(
+            "{leaked:.0} of {total:.0} samples saw the environment through the walls (at most {allowed:.0} may)"
+        ));
+    }
+    format!("{leaked:.0} leaked samples of {total:.0}")
 }
 
 /// A Markdown table of outcomes.
