@@ -227,6 +227,7 @@ pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result
             y_label: "rays per second (10^9, wall-clock)",
             log_x: true,
             log_y: false,
+            legend: plotters::prelude::SeriesLabelPosition::LowerRight,
         },
         &series,
     )?;

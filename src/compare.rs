@@ -314,6 +314,7 @@ pub fn write_report(dir: &Path, ctx: &ReportContext, runs: &[RunResult], exposur
         y_label: "RMSE (linear radiance)",
         log_x: true,
         log_y: true,
+        legend: plotters::prelude::SeriesLabelPosition::UpperRight,
     };
     line_plot(&dir.join("rmse_vs_time.png"), &axes, &series)?;
     let summary = summary(ctx, runs)?;

@@ -76,6 +76,8 @@ pub struct Axes<'a> {
     pub log_x: bool,
     /// Logarithmic y axis.
     pub log_y: bool,
+    /// Corner of the legend: one the curves leave free.
+    pub legend: SeriesLabelPosition,
 }
 
 /// Draws `series` as lines with markers into a 1200x750 PNG at `path`.
@@ -143,7 +145,7 @@ pub fn line_plot(path: &Path, axes: &Axes, series: &[Series]) -> Result<()> {
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
                 .label_font(("sans-serif", 16))
-                .position(SeriesLabelPosition::LowerRight)
+                .position(axes.legend.clone())
                 .draw()
                 .map_err(|e| anyhow!("{e}"))?;
         }};
