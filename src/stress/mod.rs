@@ -338,6 +338,27 @@ fn check_exact(image: &[[f64; 3]], value: [f64; 3], rel: f64, failures: &mut Vec
     format!("worst absolute error {:.2e}", worst.0)
 }
 
+/// Samples per pixel that went wrong, summed over an image of `samples` per pixel: `share`
+/// gives each pixel's wrong fraction. At most `rate` of all samples may be wrong.
+fn check_count(
+    image: &[[f64; 3]],
+    samples: f64,
+    rate: f64,
+    share: impl Fn(&[f64; 3]) -> f64,
+    what: &str,
+    failures: &mut Vec<String>,
+) -> String {
+    let count = 0.0 + image.iter().map(|p| share(p) * samples).sum::<f64>();
+    let total = samples * image.len() as f64;
+    let allowed = (rate * total).floor();
+    if count.round() > allowed {
+        failures.push(format!(
+            "{count:.0} of {total:.0} samples {what} (at most {allowed:.0} may)"
+        ));
+    }
+    format!("{count:.0} samples of {total:.0} {what}")
+}
+
 /// A white furnace with a lossless object: no pixel above the environment by more than
 /// rounding (1e-5), and the pixels below it by more than rounding add up to at most `rate` of
 /// all samples lost.
@@ -353,21 +374,9 @@ fn check_furnace(
     if brightest > l * (1.0 + 1e-5) {
         failures.push(format!("a pixel is {brightest}, brighter than the environment's {l}"));
     }
-    let lost = 0.0
-        + image
-            .iter()
-            .map(|p| (l - p[1]) / l)
-            .filter(|&d| d > 1e-5)
-            .map(|d| d * samples)
-            .sum::<f64>();
-    let total = samples * image.len() as f64;
-    let allowed = (rate * total).floor();
-    if lost.round() > allowed {
-        failures.push(format!(
-            "{lost:.1} of {total:.0} samples were lost (at most {allowed:.0} may be)"
-        ));
-    }
-    format!("{lost:.1} lost samples of {total:.0}; brightest {brightest:.7}")
+    let lost = |p: &[f64; 3]| Some((l - p[1]) / l).filter(|&d| d > 1e-5).unwrap_or(0.0);
+    let stat = check_count(image, samples, rate, lost, "were lost", failures);
+    format!("{stat}; brightest {brightest:.7}")
 }
 
 /// An enclosure's image: each pixel is (leaked samples / samples) x the environment, so the
@@ -379,15 +388,15 @@ fn check_enclosed(
     rate: f64,
     failures: &mut Vec<String>,
 ) -> String {
-    let leaked: f64 = image.iter().map(|p| p[1] / environment[1] * samples).sum();
-    let total = samples * image.len() as f64;
-    let allowed = (rate * total).floor();
-    if leaked.round() > allowed {
-        failures.push(format!(
-            "{leaked:.0} of {total:.0} samples saw the environment through the walls (at most {allowed:.0} may)"
-        ));
-    }
-    format!("{leaked:.0} leaked samples of {total:.0}")
+    let leaked = |p: &[f64; 3]| p[1] / environment[1];
+    check_count(
+        image,
+        samples,
+        rate,
+        leaked,
+        "saw the environment through the walls",
+        failures,
+    )
 }
 
 /// A Markdown table of outcomes.
