@@ -20,6 +20,10 @@ pub mod material_flags {
     /// Both sides of the surface scatter (glTF `doubleSided`): the shading normal faces the
     /// incoming direction.
     pub const TWO_SIDED: u32 = 1;
+    /// glTF's metallic-roughness model instead of the SmallVCM lobes.
+    pub const PBR: u32 = 2;
+    /// Alpha below `alpha_cutoff` is a hole that rays pass through (glTF `MASK`).
+    pub const ALPHA_MASK: u32 = 4;
 }
 
 /// Primitive kinds, as `Primitive::kind` stores them.
@@ -152,11 +156,12 @@ pub struct GpuCwbvhNode {
     pub child_max_z: [u32; 2],
 }
 
-/// A material (`Material` in WGSL), see [`crate::model::Material`].
+/// A material (`Material` in WGSL), see [`crate::model::Material`]: the SmallVCM lobes, or
+/// with [`material_flags::PBR`] glTF's metallic-roughness model.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct GpuMaterial {
-    /// Lambertian reflectance.
+    /// Lambertian reflectance, or the PBR base colour.
     pub diffuse: [f32; 3],
     /// Phong exponent.
     pub phong_exponent: f32,
@@ -168,6 +173,40 @@ pub struct GpuMaterial {
     pub mirror: [f32; 3],
     /// [`material_flags`].
     pub flags: u32,
+    /// Emitted radiance factor (glTF emissiveFactor times emissive strength).
+    pub emission: [f32; 3],
+    /// PBR metalness.
+    pub metallic: f32,
+    /// PBR perceptual roughness (GGX alpha = roughness^2).
+    pub roughness: f32,
+    /// PBR transmission weight (KHR_materials_transmission).
+    pub transmission: f32,
+    /// Base colour alpha factor.
+    pub alpha: f32,
+    /// Alpha mask threshold.
+    pub alpha_cutoff: f32,
+    /// Base colour texture index, or -1.
+    pub base_color_texture: i32,
+    /// Metallic-roughness texture index (B: metalness, G: roughness), or -1.
+    pub metallic_roughness_texture: i32,
+    /// Emissive texture index, or -1.
+    pub emissive_texture: i32,
+    /// Normal texture index, or -1.
+    pub normal_texture: i32,
+}
+
+impl Default for GpuMaterial {
+    fn default() -> Self {
+        GpuMaterial {
+            ior: -1.0,
+            alpha: 1.0,
+            base_color_texture: -1,
+            metallic_roughness_texture: -1,
+            emissive_texture: -1,
+            normal_texture: -1,
+            ..bytemuck::Zeroable::zeroed()
+        }
+    }
 }
 
 /// A light (`Light` in WGSL).

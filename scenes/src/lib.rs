@@ -190,6 +190,7 @@ impl CompiledScene {
                 ior: m.ior,
                 mirror: m.mirror,
                 flags: if m.two_sided { gpu::material_flags::TWO_SIDED } else { 0 },
+                ..GpuMaterial::default()
             })
             .collect();
         let mut prims: Vec<GpuPrimitive> = Vec::new();

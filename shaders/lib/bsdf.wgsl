@@ -2,14 +2,15 @@
 // smooth dielectric lobe, one lobe picked per sample in proportion to its albedo estimate.
 // Directions in the local frame have the geometric normal as +z. `fix` is the direction
 // towards the previous path vertex; `gen` the one generated or evaluated. Radiance (camera)
-// paths scale refraction by eta^2. Needs the resource `materials`.
+// paths scale refraction by eta^2. Works on a material resolved at the surface point
+// (`material_at`).
 
 const EPS_PHONG: f32 = 1e-3;
 
 struct Bsdf {
     frame: Frame3,
     fix: vec3<f32>,             // local direction towards the previous vertex
-    material: u32,
+    m: Material,
     diffuse_prob: f32,
     phong_prob: f32,
     reflect_prob: f32,
@@ -45,15 +46,14 @@ fn fresnel_dielectric(cos_incident: f32, ior: f32) -> vec2<f32> {
     return vec2<f32>(0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular), cos_t);
 }
 
-fn bsdf_setup(material: u32, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bsdf {
+fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bsdf {
     var b: Bsdf;
-    let m = materials[material];
     // A two-sided material scatters on the side the path arrives from.
     let two_sided = (m.flags & MATERIAL_TWO_SIDED) != 0u;
     let n = select(normal, -normal, two_sided && dot(normal, towards_previous) < 0.0);
     b.frame = frame_from_z(n);
     b.fix = to_local(b.frame, towards_previous);
-    b.material = material;
+    b.m = m;
     b.valid = abs(b.fix.z) >= EPS_COSINE;
     if (!b.valid) {
         return b;
@@ -102,7 +102,7 @@ fn bsdf_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     if (gen.z * b.fix.z < 0.0 || b.fix.z < EPS_COSINE || gen.z < EPS_COSINE) {
         return e;
     }
-    let m = materials[b.material];
+    let m = b.m;
     if (b.diffuse_prob > 0.0) {
         e.f += m.diffuse * INV_PI;
         e.pdf_forward += b.diffuse_prob * gen.z * INV_PI;
@@ -136,7 +136,7 @@ struct BsdfSample {
 // Samples a direction with three uniform numbers; f = 0 means the sample is void.
 fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
     var s = BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
-    let m = materials[b.material];
+    let m = b.m;
     var gen: vec3<f32>;
     if (u.z < b.diffuse_prob + b.phong_prob) {
         if (u.z < b.diffuse_prob) {

@@ -309,13 +309,15 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
 #endif
 
 // Where a ray hit: position (recomputed on the primitive for accuracy), unit geometric
-// normal, material, area light, and the primitive's extent (for offset_ray_origin).
+// normal, material, area light, the primitive's extent (for offset_ray_origin) and texture
+// coordinates.
 struct Surface {
     position: vec3<f32>,
     normal: vec3<f32>,
     material: u32,
     light: i32,
     extent: f32,
+    tex: vec2<f32>,
 }
 
 fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
@@ -323,8 +325,8 @@ fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
     if (p.kind == PRIMITIVE_SPHERE) {
         let n = normalize(o + hit.t * d - p.a);
         let m = abs(p.a) + vec3<f32>(p.b.x);
-        return Surface(p.a + p.b.x * n, n, p.material, p.light, max(m.x, max(m.y, m.z)));
+        return Surface(p.a + p.b.x * n, n, p.material, p.light, max(m.x, max(m.y, m.z)), vec2<f32>(0.0));
     }
     let position = p.a + hit.uv.x * p.b + hit.uv.y * p.c;
-    return Surface(position, triangle_normal(p.b, p.c), p.material, p.light, triangle_extent(p.a, p.b, p.c));
+    return Surface(position, triangle_normal(p.b, p.c), p.material, p.light, triangle_extent(p.a, p.b, p.c), vec2<f32>(0.0));
 }

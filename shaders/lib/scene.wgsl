@@ -68,16 +68,33 @@ struct BvhNode {
 }
 #endif
 
+// A material. The SmallVCM lobes (diffuse, Phong, mirror or smooth dielectric) unless the
+// PBR flag is set; then glTF's metallic-roughness model: `diffuse` is the base colour,
+// with metallic, roughness (perceptual, GGX alpha = roughness^2) and transmission (through
+// a dielectric of index `ior`). Textures (indices into the texture table, -1 for none)
+// scale the factors; `material_at` resolves them at a surface point.
 struct Material {
-    diffuse: vec3<f32>,
+    diffuse: vec3<f32>,     // Lambertian reflectance, or the PBR base colour
     phong_exponent: f32,
     phong: vec3<f32>,
     ior: f32,               // negative: perfect mirror
     mirror: vec3<f32>,
-    flags: u32,             // MATERIAL_TWO_SIDED
+    flags: u32,             // MATERIAL_TWO_SIDED, MATERIAL_PBR, MATERIAL_ALPHA_MASK
+    emission: vec3<f32>,    // emitted radiance factor (glTF emissiveFactor x strength)
+    metallic: f32,
+    roughness: f32,
+    transmission: f32,
+    alpha: f32,             // base colour alpha factor
+    alpha_cutoff: f32,      // MATERIAL_ALPHA_MASK: alpha below it is a hole
+    base_color_texture: i32,
+    metallic_roughness_texture: i32,
+    emissive_texture: i32,
+    normal_texture: i32,
 }
 
 const MATERIAL_TWO_SIDED: u32 = 1u;
+const MATERIAL_PBR: u32 = 2u;
+const MATERIAL_ALPHA_MASK: u32 = 4u;
 
 const LIGHT_AREA: u32 = 0u;
 const LIGHT_POINT: u32 = 1u;

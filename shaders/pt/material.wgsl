@@ -5,7 +5,7 @@
 
 fn material(path: ptr<function, CameraPath>) -> bool {
     let s = path_surface(*path);
-    let bsdf = bsdf_setup(s.material, s.normal, -(*path).direction);
+    let bsdf = bsdf_setup(material_at(s.material, s.tex), s.normal, -(*path).direction);
     let pick = light_pick_probability();
     var rng = (*path).rng;
     let q_mis = select(1.0, bsdf.continuation, RR_ALBEDO);

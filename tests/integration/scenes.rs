@@ -122,7 +122,24 @@ fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
     check!(
         "Material",
         GpuMaterial,
-        [diffuse, phong_exponent, phong, ior, mirror, flags]
+        [
+            diffuse,
+            phong_exponent,
+            phong,
+            ior,
+            mirror,
+            flags,
+            emission,
+            metallic,
+            roughness,
+            transmission,
+            alpha,
+            alpha_cutoff,
+            base_color_texture,
+            metallic_roughness_texture,
+            emissive_texture,
+            normal_texture
+        ]
     );
     check!(
         "Light",
