@@ -180,19 +180,7 @@ impl CompiledScene {
             .enumerate()
             .map(|(i, k)| (k.as_str(), i as u32))
             .collect();
-        let materials = scene
-            .materials
-            .values()
-            .map(|m| GpuMaterial {
-                diffuse: m.diffuse,
-                phong_exponent: m.phong_exponent,
-                phong: m.phong,
-                ior: m.ior,
-                mirror: m.mirror,
-                flags: if m.two_sided { gpu::material_flags::TWO_SIDED } else { 0 },
-                ..GpuMaterial::default()
-            })
-            .collect();
+        let materials = scene.materials.values().map(gpu_material).collect();
         let mut prims: Vec<GpuPrimitive> = Vec::new();
         let mut lights: Vec<GpuLight> = Vec::new();
         let push_triangle = |v: [Vec3; 3],
@@ -401,6 +389,32 @@ impl CompiledScene {
         out.insert("materials".to_string(), bytemuck::cast_slice(&self.materials).to_vec());
         out.insert("lights".to_string(), bytemuck::cast_slice(&self.lights).to_vec());
         out
+    }
+}
+
+/// A material as the GPU reads it.
+fn gpu_material(m: &model::Material) -> GpuMaterial {
+    let two_sided = if m.two_sided { gpu::material_flags::TWO_SIDED } else { 0 };
+    match &m.pbr {
+        None => GpuMaterial {
+            diffuse: m.diffuse,
+            phong_exponent: m.phong_exponent,
+            phong: m.phong,
+            ior: m.ior,
+            mirror: m.mirror,
+            flags: two_sided,
+            ..GpuMaterial::default()
+        },
+        Some(p) => GpuMaterial {
+            diffuse: p.base_color,
+            ior: p.ior,
+            flags: two_sided | gpu::material_flags::PBR,
+            emission: p.emission,
+            metallic: p.metallic,
+            roughness: p.roughness,
+            transmission: p.transmission,
+            ..GpuMaterial::default()
+        },
     }
 }
 

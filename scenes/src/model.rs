@@ -105,6 +105,55 @@ pub struct Material {
     /// Whether both sides scatter (glTF `doubleSided`); otherwise the back side is black.
     #[serde(default)]
     pub two_sided: bool,
+    /// glTF's metallic-roughness model; when present it replaces the SmallVCM lobes above.
+    #[serde(default)]
+    pub pbr: Option<Pbr>,
+}
+
+/// glTF 2.0's metallic-roughness material: a diffuse base under a GGX microfacet specular
+/// layer, metals tinted by the base colour, and optional transmission through a dielectric.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pbr {
+    /// Base colour (linear).
+    #[serde(default = "white")]
+    pub base_color: Rgb,
+    /// Metalness in [0, 1].
+    #[serde(default)]
+    pub metallic: f32,
+    /// Perceptual roughness in [0, 1] (GGX alpha = roughness^2).
+    #[serde(default = "unit")]
+    pub roughness: f32,
+    /// Transmission weight in [0, 1] (KHR_materials_transmission).
+    #[serde(default)]
+    pub transmission: f32,
+    /// Index of refraction of the dielectric (KHR_materials_ior).
+    #[serde(default = "default_ior")]
+    pub ior: f32,
+    /// Emitted radiance (glTF emissiveFactor times KHR_materials_emissive_strength).
+    #[serde(default)]
+    pub emission: Rgb,
+}
+
+fn white() -> Rgb {
+    [1.0; 3]
+}
+
+fn default_ior() -> f32 {
+    1.5
+}
+
+impl Default for Pbr {
+    fn default() -> Self {
+        Pbr {
+            base_color: white(),
+            metallic: 0.0,
+            roughness: 1.0,
+            transmission: 0.0,
+            ior: default_ior(),
+            emission: [0.0; 3],
+        }
+    }
 }
 
 fn mirror_ior() -> f32 {
@@ -120,6 +169,7 @@ impl Default for Material {
             mirror: [0.0; 3],
             ior: mirror_ior(),
             two_sided: false,
+            pbr: None,
         }
     }
 }
