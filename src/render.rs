@@ -93,6 +93,9 @@ pub struct LayoutOverrides {
     pub workgroup_size: Option<u32>,
     /// Item state layout between split kernels.
     pub state: Option<lightgraph_engine::ir::StateStorage>,
+    /// Compile the code of every scene feature into the kernels, not only the scene's (to
+    /// measure what scene-specialised kernels buy).
+    pub all_features: bool,
 }
 
 impl LayoutOverrides {
@@ -133,6 +136,19 @@ pub fn device_flags(gpu: &Gpu) -> BTreeSet<String> {
     if gpu.features.contains(wgpu::Features::SHADER_FLOAT32_ATOMIC) {
         flags.insert("FLOAT32_ATOMIC".to_string());
     }
+    flags
+}
+
+/// The preprocessor flags of kernels for `scene`: the device's, the BVH's, and the scene's
+/// features (every feature with `all_features`).
+pub fn kernel_flags(device: BTreeSet<String>, scene: &LoadedScene, all_features: bool) -> BTreeSet<String> {
+    let mut flags = device;
+    flags.extend(scene.compiled.bvh_kind.flag().map(String::from));
+    flags.extend(if all_features {
+        lightgraph_scenes::features::all()
+    } else {
+        lightgraph_scenes::features::used(&scene.compiled)
+    });
     flags
 }
 
@@ -236,8 +252,7 @@ impl<'g> Session<'g> {
             bail!("{paths} paths per frame is more than 2^32; use fewer samples per frame");
         }
         let plan = Plan::with_decl(graph, layout, options.layout.apply(decl))?;
-        let mut flags = device_flags(gpu);
-        flags.extend(scene.compiled.bvh_kind.flag().map(String::from));
+        let flags = kernel_flags(device_flags(gpu), scene, options.layout.all_features);
         let spec = specialization(graph, &scene.scene, &options, flags);
         let program = Program::compile(&plan, &spec, &gpu.target())?;
         let camera = CompiledScene::camera(&scene.scene, options.width, options.height);

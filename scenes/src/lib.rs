@@ -3,6 +3,7 @@
 
 pub mod bvh;
 pub mod cwbvh;
+pub mod features;
 pub mod gltf;
 pub mod gpu;
 pub mod model;

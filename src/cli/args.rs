@@ -70,6 +70,10 @@ pub struct Common {
     /// (compressed 8-wide, Ylitie et al. 2017).
     #[arg(long, value_parser = parse_bvh, default_value = "cwbvh")]
     pub bvh: BvhKind,
+    /// Compile every scene feature (all light kinds, BSDFs, textures, ...) into the kernels
+    /// instead of only those the scene uses.
+    #[arg(long)]
+    pub all_features: bool,
 }
 
 impl Common {
@@ -146,6 +150,7 @@ pub fn options(
         threads: common.threads,
         workgroup_size: common.workgroup,
         state: common.state,
+        all_features: common.all_features,
     };
     Ok(SessionOptions {
         width,

@@ -33,10 +33,12 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
         Some(l) => vec![l.clone()],
         None => graph.layouts.keys().cloned().collect(),
     };
-    let flags = Gpu::new(c.adapter.as_deref())
+    let device = Gpu::new(c.adapter.as_deref())
         .ok()
         .map(|g| (lightgraph::render::device_flags(&g), g.target()));
-    let (flags, target) = flags.unwrap_or_default();
+    let (device, target) = device.unwrap_or_default();
+    let flags = lightgraph::render::kernel_flags(device, &scene, c.all_features);
+    print_features(&flags);
     let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
     let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
     let externals = scene.compiled.resources(&camera);
@@ -65,4 +67,24 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
         println!("wrote {}", dot.display());
     }
     Ok(())
+}
+
+/// Lists the scene features compiled into the kernels and those left out.
+fn print_features(flags: &std::collections::BTreeSet<String>) {
+    let (used, unused): (Vec<_>, Vec<_>) = lightgraph_scenes::features::ALL
+        .iter()
+        .partition(|(f, _)| flags.contains(*f));
+    println!("scene features compiled in:");
+    for (f, what) in used {
+        println!("  {f:<18} {what}");
+    }
+    let names: Vec<&str> = unused.iter().map(|(f, _)| *f).collect();
+    println!(
+        "left out: {}\n",
+        if names.is_empty() {
+            "none".to_string()
+        } else {
+            names.join(", ")
+        }
+    );
 }

@@ -1,0 +1,94 @@
+//! The scene features that decide which WGSL code a kernel contains. Each feature is a
+//! preprocessor flag of the shaders (`#if LIGHT_POINT` ... `#endif`): a kernel specialised
+//! for a scene is generated with the flags of the features the scene uses, so a Cornell box
+//! kernel carries no texture, microfacet or environment-map code.
+
+use crate::CompiledScene;
+use crate::gpu::{light_kind, material_flags, primitive_kind};
+use std::collections::BTreeSet;
+
+/// Every feature flag, with what it compiles in.
+pub const ALL: &[(&str, &str)] = &[
+    ("SPHERES", "analytic spheres"),
+    ("BSDF_PHONG", "the Phong lobe"),
+    (
+        "BSDF_SPECULAR",
+        "mirrors and smooth dielectrics of the SmallVCM materials",
+    ),
+    (
+        "BSDF_PBR",
+        "glTF metallic-roughness: GGX microfacets, rough and smooth transmission",
+    ),
+    (
+        "TEXTURES",
+        "texture lookups (base colour, metallic-roughness, emission)",
+    ),
+    ("ALPHA_MASK", "alpha-masked cut-outs in ray traversal"),
+    ("LIGHT_AREA", "emissive triangles"),
+    ("LIGHT_POINT", "point lights"),
+    ("LIGHT_DIRECTIONAL", "directional lights"),
+    ("LIGHT_BACKGROUND", "a constant background"),
+];
+
+/// The features `scene` uses, as flag names.
+pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    let mut add = |flag: &str, on: bool| {
+        if on {
+            out.insert(flag.to_string());
+        }
+    };
+    add(
+        "SPHERES",
+        scene.primitives.iter().any(|p| p.kind == primitive_kind::SPHERE),
+    );
+    let vcm = |m: &&crate::gpu::GpuMaterial| m.flags & material_flags::PBR == 0;
+    add(
+        "BSDF_PHONG",
+        scene
+            .materials
+            .iter()
+            .filter(vcm)
+            .any(|m| m.phong.iter().any(|&c| c > 0.0)),
+    );
+    add(
+        "BSDF_SPECULAR",
+        scene
+            .materials
+            .iter()
+            .filter(vcm)
+            .any(|m| m.ior > 0.0 || m.mirror.iter().any(|&c| c > 0.0)),
+    );
+    add(
+        "BSDF_PBR",
+        scene.materials.iter().any(|m| m.flags & material_flags::PBR != 0),
+    );
+    add(
+        "TEXTURES",
+        scene
+            .materials
+            .iter()
+            .any(|m| m.base_color_texture >= 0 || m.metallic_roughness_texture >= 0 || m.emissive_texture >= 0),
+    );
+    add(
+        "ALPHA_MASK",
+        scene
+            .materials
+            .iter()
+            .any(|m| m.flags & material_flags::ALPHA_MASK != 0),
+    );
+    for (flag, kind) in [
+        ("LIGHT_AREA", light_kind::AREA),
+        ("LIGHT_POINT", light_kind::POINT),
+        ("LIGHT_DIRECTIONAL", light_kind::DIRECTIONAL),
+        ("LIGHT_BACKGROUND", light_kind::BACKGROUND),
+    ] {
+        add(flag, scene.lights.iter().any(|l| l.kind == kind));
+    }
+    out
+}
+
+/// Every feature flag: kernels that handle any scene.
+pub fn all() -> BTreeSet<String> {
+    ALL.iter().map(|(f, _)| f.to_string()).collect()
+}
