@@ -1,9 +1,11 @@
-// The Cornell-set BSDF (SmallVCM's model): a Lambertian lobe, a Phong lobe, and a mirror or
-// smooth dielectric lobe, one lobe picked per sample in proportion to its albedo estimate.
-// Directions in the local frame have the geometric normal as +z. `fix` is the direction
-// towards the previous path vertex; `gen` the one generated or evaluated. Radiance (camera)
-// paths scale refraction by eta^2. Works on a material resolved at the surface point
-// (`material_at`).
+// The BSDFs. The Cornell-set BSDF (SmallVCM's model): a Lambertian lobe, a Phong lobe, and a
+// mirror or smooth dielectric lobe, one lobe picked per sample in proportion to its albedo
+// estimate; and, for materials with MATERIAL_PBR, glTF's metallic-roughness model (below
+// `bsdf_sample`). Directions in the local frame have the geometric normal as +z. `fix` is the
+// direction towards the previous path vertex; `gen` the one generated or evaluated. Radiance
+// (camera) paths scale refraction by eta^2 = (ior on fix's side / ior on gen's side)^2;
+// importance (light) paths, `adjoint`, do not. Works on a material resolved at the surface
+// point (`material_at`).
 
 const EPS_PHONG: f32 = 1e-3;
 
@@ -20,6 +22,10 @@ struct Bsdf {
     cos_t: f32,                 // cosine of the refracted direction (0: none)
     is_delta: bool,
     valid: bool,
+    pbr: bool,                  // glTF metallic-roughness (the fields below)
+    alpha: f32,                 // GGX alpha; 0: the specular lobes are smooth (delta)
+    spec_prob: f32,             // probability of the rough specular lobe (reflection and refraction)
+    adjoint: bool,              // importance transport: refraction without the eta^2 scaling
 }
 
 // Fresnel reflectance of a smooth dielectric, unpolarised, and the cosine of the refracted
@@ -55,8 +61,12 @@ fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bs
     b.fix = to_local(b.frame, towards_previous);
     b.m = m;
     b.valid = abs(b.fix.z) >= EPS_COSINE;
+    b.adjoint = false;
     if (!b.valid) {
         return b;
+    }
+    if ((m.flags & MATERIAL_PBR) != 0u) {
+        return pbr_setup(b);
     }
     let fresnel = fresnel_dielectric(b.fix.z, m.ior);
     b.fresnel = fresnel.x;
@@ -98,6 +108,9 @@ struct BsdfEval {
 }
 
 fn bsdf_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
+    if (b.pbr) {
+        return pbr_eval_local(b, gen);
+    }
     var e = BsdfEval(vec3<f32>(0.0), abs(gen.z), 0.0, 0.0);
     if (gen.z * b.fix.z < 0.0 || b.fix.z < EPS_COSINE || gen.z < EPS_COSINE) {
         return e;
@@ -135,6 +148,9 @@ struct BsdfSample {
 
 // Samples a direction with three uniform numbers; f = 0 means the sample is void.
 fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
+    if (b.pbr) {
+        return pbr_sample(b, u);
+    }
     var s = BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
     let m = b.m;
     var gen: vec3<f32>;
@@ -175,13 +191,280 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
         }
         gen = vec3<f32>(-eta * b.fix.x, -eta * b.fix.y, cos_t);
         s.pdf = b.refract_prob;
-        s.f = vec3<f32>((1.0 - b.fresnel) * eta * eta / abs(cos_t));
+        s.f = vec3<f32>((1.0 - b.fresnel) * select(eta * eta, 1.0, b.adjoint) / abs(cos_t));
         s.specular = true;
     }
     s.cos_gen = abs(gen.z);
     if (s.cos_gen < EPS_COSINE) {
         return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
     }
+    s.direction = to_world(b.frame, gen);
+    return s;
+}
+
+// glTF 2.0 metallic-roughness, with KHR_materials_transmission and KHR_materials_ior.
+// Three lobes on a macro-surface of dielectric index `ior` (clamped to at least PBR_MIN_IOR):
+// - specular reflection, GGX microfacets with height-correlated Smith masking-shadowing:
+//   D G2 / (4 |cos_o| |cos_i|) x (metallic Schlick(base colour, o.h) + (1 - metallic) F(o.h)),
+//   F the exact dielectric Fresnel reflectance; the metal part only on the outside (+z);
+// - specular transmission through the same microfacets (Walter et al. 2007), tinted by
+//   (1 - metallic) transmission base colour, with (1 - F(o.h)), on both sides;
+// - diffuse on the outside only: (1 - metallic) (1 - transmission) base / pi, scaled by
+//   (1 - F(cos_o)) (1 - F(cos_i)), the light that enters and leaves through a smooth
+//   interface: symmetric, so reciprocal, and with reflection never above 1 (the light the
+//   interface reflects back down is dropped: a white base reflects 1 - F_avg of the
+//   diffuse light, 0.91 for ior 1.5).
+// Opaque materials (no transmission) are black from behind. Roughness (perceptual, in [0, 1])
+// gives alpha = roughness^2; below PBR_SMOOTH_ALPHA (roughness 0.0316) the specular lobes are
+// smooth: a perfect mirror for metals, a smooth dielectric for glass (delta lobes), so alpha
+// never underflows and no pdf is infinite. A sample first picks diffuse or specular in
+// proportion to the lobes' albedo estimates at `fix`; specular samples a visible microfacet
+// normal, then reflects or refracts in proportion to the reflected and transmitted weights at
+// that normal. The reverse pdf makes the same choices at `gen`.
+
+const PBR_SMOOTH_ALPHA: f32 = 1e-3;
+const PBR_MIN_IOR: f32 = 1.001;
+
+fn pbr_setup(bsdf: Bsdf) -> Bsdf {
+    var b = bsdf;
+    let m = b.m;
+    b.pbr = true;
+    b.m.ior = max(m.ior, PBR_MIN_IOR);
+    let roughness = clamp(m.roughness, 0.0, 1.0);
+    b.alpha = select(roughness * roughness, 0.0, roughness * roughness < PBR_SMOOTH_ALPHA);
+    let fresnel = fresnel_dielectric(b.fix.z, b.m.ior);
+    b.fresnel = fresnel.x;
+    b.cos_t = fresnel.y;
+    let lobes = pbr_lobe_probs(b, b.fix.z);
+    b.diffuse_prob = lobes.y;
+    b.spec_prob = lobes.x;
+    if (b.alpha == 0.0) {
+        let w = pbr_spec_weights(b, b.fix.z > 0.0, abs(b.fix.z), b.fresnel);
+        b.reflect_prob = b.spec_prob * w.x / max(w.x + w.y, 1e-30);
+        b.refract_prob = b.spec_prob - b.reflect_prob;
+        b.spec_prob = 0.0;
+    }
+    // Albedo bound: everything the interface reflects plus what it lets through to the
+    // base, metal on the outside.
+    let base = m.diffuse;
+    let dielectric = (1.0 - m.metallic) * (b.fresnel + (1.0 - b.fresnel) * base);
+    var bound = select(vec3<f32>(0.0), dielectric, pbr_scatters(b, b.fix.z));
+    if (b.fix.z > 0.0) {
+        bound += m.metallic * fresnel_schlick(base, b.fix.z);
+    }
+    b.continuation = clamp(max_component(bound), 0.0, 1.0);
+    if (b.diffuse_prob + b.spec_prob + b.reflect_prob + b.refract_prob <= 0.0) {
+        b.continuation = 0.0;
+    }
+    b.is_delta = b.diffuse_prob == 0.0 && b.spec_prob == 0.0;
+    return b;
+}
+
+fn pbr_transmissive(b: Bsdf) -> bool {
+    return b.m.transmission > 0.0 && b.m.metallic < 1.0;
+}
+
+// Whether anything scatters for a direction with local z `cos_w`: opaque materials are black
+// from behind.
+fn pbr_scatters(b: Bsdf, cos_w: f32) -> bool {
+    return cos_w > 0.0 || pbr_transmissive(b);
+}
+
+// Probabilities of the specular and diffuse lobes for a path arriving from a direction with
+// local z `cos_w`, in proportion to their albedo estimates (luminance of the weights at the
+// macro-surface normal).
+fn pbr_lobe_probs(b: Bsdf, cos_w: f32) -> vec2<f32> {
+    if (!pbr_scatters(b, cos_w)) {
+        return vec2<f32>(0.0);
+    }
+    let m = b.m;
+    let f = fresnel_dielectric(cos_w, m.ior).x;
+    let w = pbr_spec_weights(b, cos_w > 0.0, abs(cos_w), f);
+    var diffuse = 0.0;
+    if (cos_w > 0.0) {
+        diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * luminance(m.diffuse) * (1.0 - f);
+    }
+    let total = w.x + w.y + diffuse;
+    if (total <= 1e-9) {
+        return vec2<f32>(0.0);
+    }
+    return vec2<f32>(w.x + w.y, diffuse) / total;
+}
+
+// Luminance weights of specular reflection (x) and refraction (y) at a microfacet seen at
+// cosine `cos_h` (> 0) from the outside (`outside`) or the inside, with dielectric Fresnel
+// reflectance `f` there.
+fn pbr_spec_weights(b: Bsdf, outside: bool, cos_h: f32, f: f32) -> vec2<f32> {
+    let m = b.m;
+    var reflected = (1.0 - m.metallic) * f;
+    if (outside) {
+        reflected += m.metallic * luminance(fresnel_schlick(m.diffuse, cos_h));
+    }
+    let refracted = (1.0 - m.metallic) * m.transmission * luminance(m.diffuse) * (1.0 - f);
+    return vec2<f32>(reflected, refracted);
+}
+
+// The specular reflectance at a microfacet seen at cosine `cos_h` with dielectric Fresnel `f`.
+fn pbr_spec_color(b: Bsdf, outside: bool, cos_h: f32, f: f32) -> vec3<f32> {
+    var c = vec3<f32>((1.0 - b.m.metallic) * f);
+    if (outside) {
+        c += b.m.metallic * fresnel_schlick(b.m.diffuse, cos_h);
+    }
+    return c;
+}
+
+// Probability of reflecting (rather than refracting) at a sampled microfacet.
+fn pbr_reflect_prob(w: vec2<f32>) -> f32 {
+    return select(w.x / (w.x + w.y), 1.0, w.x + w.y <= 0.0);
+}
+
+fn pbr_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
+    var e = BsdfEval(vec3<f32>(0.0), abs(gen.z), 0.0, 0.0);
+    let o = b.fix;
+    let outside_o = o.z > 0.0;
+    let outside_i = gen.z > 0.0;
+    if (abs(gen.z) < EPS_COSINE || !pbr_scatters(b, o.z) || !pbr_scatters(b, gen.z)) {
+        return e;
+    }
+    let m = b.m;
+    let lobes_o = pbr_lobe_probs(b, o.z);
+    let lobes_i = pbr_lobe_probs(b, gen.z);
+    let f_o = fresnel_dielectric(o.z, m.ior).x;
+    let f_i = fresnel_dielectric(gen.z, m.ior).x;
+    if (outside_o && outside_i) {
+        let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * (1.0 - f_o) * (1.0 - f_i) * INV_PI;
+        e.f += m.diffuse * diffuse;
+        e.pdf_forward += lobes_o.y * gen.z * INV_PI;
+        e.pdf_reverse += lobes_i.y * o.z * INV_PI;
+    }
+    if (b.alpha == 0.0) {
+        return e;
+    }
+    // The frame mirrored so that `fix` is above the surface; `eta` = ior below / ior above.
+    let s = select(-1.0, 1.0, outside_o);
+    let wo = vec3<f32>(o.xy, s * o.z);
+    let wi = vec3<f32>(gen.xy, s * gen.z);
+    let alpha = b.alpha;
+    if (outside_o == outside_i) {
+        let h = normalize(wo + wi);
+        let c = dot(wo, h);
+        if (c <= 0.0) {
+            return e;
+        }
+        let f = fresnel_dielectric(s * c, m.ior).x;
+        let d = ggx_d(h, alpha);
+        e.f += pbr_spec_color(b, outside_o, c, f) * (d * ggx_g2(wo, wi, alpha) / (4.0 * wo.z * wi.z));
+        let p_reflect = pbr_reflect_prob(pbr_spec_weights(b, outside_o, c, f));
+        // Reflection keeps the side, so both directions choose alike.
+        e.pdf_forward += lobes_o.x * p_reflect * ggx_visible_pdf(wo, h, alpha) / (4.0 * c);
+        e.pdf_reverse += lobes_i.x * p_reflect * ggx_visible_pdf(wi, h, alpha) / (4.0 * c);
+        return e;
+    }
+    // Refraction: the generalised half vector, on the side of `fix`.
+    let eta = select(1.0 / m.ior, m.ior, outside_o);
+    let hv = wo + eta * wi;
+    if (dot(hv, hv) < 1e-12) {
+        return e;
+    }
+    var h = normalize(hv);
+    h = select(h, -h, h.z < 0.0);
+    let c_o = dot(wo, h);
+    let c_i = dot(wi, h);
+    if (c_o <= 0.0 || c_i >= 0.0) {
+        return e;
+    }
+    let f = fresnel_dielectric(s * c_o, m.ior).x;
+    let denom = c_o + eta * c_i;
+    let d = ggx_d(h, alpha);
+    let value = (1.0 - f) * d * ggx_g2(wo, wi, alpha) * c_o * (-c_i) / (wo.z * (-wi.z) * denom * denom);
+    let tint = (1.0 - m.metallic) * m.transmission * m.diffuse;
+    e.f = tint * value * select(1.0, eta * eta, b.adjoint);
+    // The reverse choice is made at `gen` (inside if `fix` is outside): the same Fresnel
+    // factor (reflectance is equal at both angles of a refraction), other weights.
+    let p_forward = 1.0 - pbr_reflect_prob(pbr_spec_weights(b, outside_o, c_o, f));
+    let p_reverse = 1.0 - pbr_reflect_prob(pbr_spec_weights(b, outside_i, -c_i, f));
+    let vis_o = ggx_g1(wo, alpha) * c_o * d / wo.z;
+    let vis_i = ggx_g1(wi, alpha) * (-c_i) * d / (-wi.z);
+    e.pdf_forward = lobes_o.x * p_forward * vis_o * eta * eta * (-c_i) / (denom * denom);
+    e.pdf_reverse = lobes_i.x * p_reverse * vis_i * c_o / (denom * denom);
+    return e;
+}
+
+fn pbr_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
+    var s = BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
+    let o = b.fix;
+    let m = b.m;
+    var gen: vec3<f32>;
+    if (u.z < b.diffuse_prob) {
+        gen = sample_cos_hemisphere(u.xy);
+    } else if (b.alpha == 0.0) {
+        // Smooth specular: the interface's own reflection or refraction.
+        if (u.z < b.diffuse_prob + b.reflect_prob) {
+            gen = reflect_local(o);
+            s.pdf = b.reflect_prob;
+            s.f = pbr_spec_color(b, o.z > 0.0, abs(o.z), b.fresnel) / abs(o.z);
+        } else {
+            if (b.refract_prob <= 0.0 || b.cos_t <= 0.0) {
+                return s;
+            }
+            var eta = 1.0 / m.ior;              // ior of fix's side over gen's
+            var cos_t = -b.cos_t;
+            if (o.z < 0.0) {
+                eta = m.ior;
+                cos_t = b.cos_t;
+            }
+            gen = vec3<f32>(-eta * o.x, -eta * o.y, cos_t);
+            s.pdf = b.refract_prob;
+            let tint = (1.0 - m.metallic) * m.transmission * m.diffuse;
+            s.f = tint * ((1.0 - b.fresnel) * select(eta * eta, 1.0, b.adjoint) / abs(cos_t));
+        }
+        s.specular = true;
+        s.cos_gen = abs(gen.z);
+        if (s.cos_gen < EPS_COSINE) {
+            return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
+        }
+        s.direction = to_world(b.frame, gen);
+        return s;
+    } else {
+        let outside = o.z > 0.0;
+        let side = select(-1.0, 1.0, outside);
+        let wo = vec3<f32>(o.xy, side * o.z);
+        let h = ggx_sample_visible(wo, b.alpha, u.xy);
+        let c = dot(wo, h);
+        if (c <= 0.0) {
+            return s;
+        }
+        let f = fresnel_dielectric(side * c, m.ior).x;
+        let p_reflect = pbr_reflect_prob(pbr_spec_weights(b, outside, c, f));
+        // The lobe's share of u.z, rescaled to [0, 1), picks reflection or refraction.
+        let v = (u.z - b.diffuse_prob) / max(b.spec_prob, 1e-30);
+        var wi: vec3<f32>;
+        if (v < p_reflect) {
+            wi = 2.0 * c * h - wo;
+            if (wi.z <= 0.0) {
+                return s;
+            }
+        } else {
+            let eta = select(1.0 / m.ior, m.ior, outside);      // ior below / ior above
+            let sin2_t = (1.0 - c * c) / (eta * eta);
+            if (sin2_t >= 1.0) {
+                return s;
+            }
+            let cos_t = sqrt(1.0 - sin2_t);
+            wi = (c / eta - cos_t) * h - wo / eta;
+            if (wi.z >= 0.0) {
+                return s;
+            }
+        }
+        gen = vec3<f32>(wi.xy, side * wi.z);
+    }
+    let e = pbr_eval_local(b, gen);
+    if (e.pdf_forward <= 0.0) {
+        return s;
+    }
+    s.f = e.f;
+    s.pdf = e.pdf_forward;
+    s.cos_gen = e.cos_gen;
     s.direction = to_world(b.frame, gen);
     return s;
 }

@@ -2,12 +2,15 @@
 //! layouts, analytic radiance, the built-in scenes, the CLI and its errors.
 
 mod analytic;
+mod bsdf;
 mod bvh;
+mod chi2;
 mod cli;
 mod common;
 mod composition;
 mod gltf;
 mod layouts;
+mod probe;
 mod reference;
 mod scenes;
 mod stress;
