@@ -97,6 +97,7 @@ pub fn cases() -> Vec<Case> {
         case("stress-phong-1e5", Expect(PhongFurnace), (32, 32)),
         case("stress-glass-ior-1.0001", Furnace(1e-7), (32, 32)),
         case("stress-glass-ior-3", Furnace(1e-7), (32, 32)),
+        case("stress-ggx-roughness-1e-4", Furnace(1e-7), (32, 32)),
         case("stress-point-light-1e-6-above", Expect(PointLightOverPlane), (32, 32)),
     ]
 }

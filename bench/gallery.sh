@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# The gallery of docs/gallery/: every scene file of scenes/cornell and scenes/gltf, and every
+# glTF asset of the shared scenes given bare on the command line (default camera, default
+# environment when it has no light), rendered with PT on the GPU machine from the repo root
+# with carry [".gpu"] after `../shared/tools/gpu-bundle.sh --scene NAME ...` for the assets.
+# PNG previews land in OUT_DIR; a failing scene is reported and the sweep goes on.
+#   bash bench/gallery.sh OUT_DIR [SECONDS]
+set -uo pipefail
+out=${1:?usage: bash bench/gallery.sh OUT_DIR [SECONDS]}
+secs=${2:-4}
+lg() { bash .gpu/run.sh lightgraph "$@"; }
+mkdir -p "$out"
+work=$(mktemp -d)
+shot() {
+  local name=$1; shift
+  if lg render "$@" --res 480x270 --spp 4 --time "${secs}s" --out "$work/$name.exr" >"$work/$name.log" 2>&1; then
+    cp "$work/$name.png" "$out/$name.png"
+    echo "ok   $name: $(grep ' spp in ' "$work/$name.log" | cut -d: -f1)"
+  else
+    echo "FAIL $name: $(tail -2 "$work/$name.log" | tr '\n' ' ')"
+  fi
+}
+for f in scenes/cornell/*.ron scenes/gltf/*.ron; do
+  shot "$(basename "$f" .ron)" --scene "$(basename "$f" .ron)"
+done
+for f in $(find .gpu/scenes -name '*.gltf' -o -name '*.glb' | sort); do
+  name=$(basename "$f"); name=${name%.*}
+  [ -e "$out/$name.png" ] || shot "$name" --scene "$f"
+done
