@@ -65,16 +65,32 @@ fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bs
     if (!b.valid) {
         return b;
     }
+#if BSDF_PBR
     if ((m.flags & MATERIAL_PBR) != 0u) {
         return pbr_setup(b);
     }
+#endif
+    let albedo_diffuse = luminance(m.diffuse);
+#if BSDF_PHONG
+    let albedo_phong = luminance(m.phong);
+#else
+    let albedo_phong = 0.0;
+#endif
+#if BSDF_SPECULAR
     let fresnel = fresnel_dielectric(b.fix.z, m.ior);
     b.fresnel = fresnel.x;
     b.cos_t = fresnel.y;
-    let albedo_diffuse = luminance(m.diffuse);
-    let albedo_phong = luminance(m.phong);
     let albedo_reflect = b.fresnel * luminance(m.mirror);
     let albedo_refract = select(0.0, 1.0 - b.fresnel, m.ior > 0.0);
+    // The specular lobes' albedo: F mirror, plus 1 - F through a dielectric, written as
+    // 1 - F (1 - mirror) so that a lossless dielectric continues with probability exactly 1.
+    let one = vec3<f32>(1.0);
+    let specular = select(b.fresnel * m.mirror, one - b.fresnel * (one - m.mirror), m.ior > 0.0);
+#else
+    let albedo_reflect = 0.0;
+    let albedo_refract = 0.0;
+    let specular = vec3<f32>(0.0);
+#endif
     let total = albedo_diffuse + albedo_phong + albedo_reflect + albedo_refract;
     if (total < 1e-9) {
         b.continuation = 0.0;
@@ -85,10 +101,6 @@ fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bs
     b.phong_prob = albedo_phong / total;
     b.reflect_prob = albedo_reflect / total;
     b.refract_prob = albedo_refract / total;
-    // The specular lobes' albedo: F mirror, plus 1 - F through a dielectric, written as
-    // 1 - F (1 - mirror) so that a lossless dielectric continues with probability exactly 1.
-    let one = vec3<f32>(1.0);
-    let specular = select(b.fresnel * m.mirror, one - b.fresnel * (one - m.mirror), m.ior > 0.0);
     b.continuation = clamp(max_component(m.diffuse + m.phong + specular), 0.0, 1.0);
     b.is_delta = b.diffuse_prob == 0.0 && b.phong_prob == 0.0;
     return b;
@@ -108,9 +120,11 @@ struct BsdfEval {
 }
 
 fn bsdf_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
+#if BSDF_PBR
     if (b.pbr) {
         return pbr_eval_local(b, gen);
     }
+#endif
     var e = BsdfEval(vec3<f32>(0.0), abs(gen.z), 0.0, 0.0);
     if (gen.z * b.fix.z < 0.0 || b.fix.z < EPS_COSINE || gen.z < EPS_COSINE) {
         return e;
@@ -121,6 +135,7 @@ fn bsdf_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
         e.pdf_forward += b.diffuse_prob * gen.z * INV_PI;
         e.pdf_reverse += b.diffuse_prob * b.fix.z * INV_PI;
     }
+#if BSDF_PHONG
     if (b.phong_prob > 0.0) {
         let cos_r = dot(reflect_local(b.fix), gen);
         if (cos_r > EPS_PHONG) {
@@ -130,6 +145,7 @@ fn bsdf_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
             e.f += m.phong * ((m.phong_exponent + 2.0) * 0.5 * INV_PI) * pow(cos_r, m.phong_exponent);
         }
     }
+#endif
     return e;
 }
 
@@ -148,9 +164,11 @@ struct BsdfSample {
 
 // Samples a direction with three uniform numbers; f = 0 means the sample is void.
 fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
+#if BSDF_PBR
     if (b.pbr) {
         return pbr_sample(b, u);
     }
+#endif
     var s = BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
     let m = b.m;
     var gen: vec3<f32>;
@@ -161,11 +179,15 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
             }
             gen = sample_cos_hemisphere(u.xy);
         } else {
+#if BSDF_PHONG
             let r = reflect_local(b.fix);
             gen = to_world(frame_from_z(r), sample_power_cos(u.xy, m.phong_exponent));
             if (dot(r, gen) <= EPS_PHONG) {
                 return s;
             }
+#else
+            return s;
+#endif
         }
         let e = bsdf_eval_local(b, gen);
         s.f = e.f;
@@ -173,6 +195,7 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
         if (s.pdf <= 0.0) {
             return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
         }
+#if BSDF_SPECULAR
     } else if (u.z < b.diffuse_prob + b.phong_prob + b.reflect_prob) {
         gen = reflect_local(b.fix);
         s.pdf = b.reflect_prob;
@@ -194,6 +217,11 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
         s.f = vec3<f32>((1.0 - b.fresnel) * select(eta * eta, 1.0, b.adjoint) / abs(cos_t));
         s.specular = true;
     }
+#else
+    } else {
+        return s;
+    }
+#endif
     s.cos_gen = abs(gen.z);
     if (s.cos_gen < EPS_COSINE) {
         return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
@@ -202,6 +230,7 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
     return s;
 }
 
+#if BSDF_PBR
 // glTF 2.0 metallic-roughness, with KHR_materials_transmission and KHR_materials_ior.
 // Three lobes on a macro-surface of dielectric index `ior` (clamped to at least PBR_MIN_IOR):
 // - specular reflection, GGX microfacets with height-correlated Smith masking-shadowing:
@@ -468,3 +497,4 @@ fn pbr_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
     s.direction = to_world(b.frame, gen);
     return s;
 }
+#endif

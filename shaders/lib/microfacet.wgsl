@@ -3,7 +3,7 @@
 // height-correlated masking-shadowing G2 = 1 / (1 + Lambda(o) + Lambda(i)) (Heitz 2014),
 // sampling of the normals visible from a direction (Heitz 2018) with its density, and
 // Schlick's Fresnel approximation for metals. `alpha` is GGX's roughness parameter.
-
+#if BSDF_PBR
 // Density of microfacet normals `h` (per unit solid angle of h, projected: integrates
 // h.z D(h) to 1 over the upper hemisphere).
 fn ggx_d(h: vec3<f32>, alpha: f32) -> f32 {
@@ -66,3 +66,4 @@ fn fresnel_schlick(f0: vec3<f32>, cos_theta: f32) -> vec3<f32> {
     let m2 = m * m;
     return f0 + (vec3<f32>(1.0) - f0) * (m2 * m2 * m);
 }
+#endif

@@ -13,4 +13,5 @@ mod layouts;
 mod probe;
 mod reference;
 mod scenes;
+mod specialize;
 mod stress;

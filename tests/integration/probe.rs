@@ -10,7 +10,7 @@
 //! `rng_seed(frame.seed, frame.index, index)`.
 
 use crate::common::gpu;
-use lightgraph::render::{LoadedScene, device_flags, load_graph};
+use lightgraph::render::{LoadedScene, device_flags, kernel_flags, load_graph};
 use lightgraph_engine::ir::Scope;
 use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization, Vfs};
 use lightgraph_scenes::CompiledScene;
@@ -107,8 +107,7 @@ fn run(
     values.insert("N".to_string(), ConstValue::U32(n));
     values.insert("PER_INDEX".to_string(), ConstValue::U32(per_index));
     values.extend(constants.iter().map(|(k, v)| (k.to_string(), *v)));
-    let mut flags = device_flags(gpu());
-    flags.extend(scene.compiled.bvh_kind.flag().map(String::from));
+    let flags = kernel_flags(device_flags(gpu()), scene, false);
     let spec = Specialization {
         constants: values,
         flags,

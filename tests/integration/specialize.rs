@@ -1,0 +1,102 @@
+//! Scene-specialised kernels: the scene's features decide which WGSL code is generated, and a
+//! specialised kernel renders the same image as one with every feature compiled in.
+
+use crate::common::gpu;
+use lightgraph::render::{
+    LayoutOverrides, LoadedScene, Session, SessionOptions, device_flags, kernel_flags, load_graph, load_scene,
+    specialization,
+};
+use lightgraph_engine::{Plan, Program};
+
+/// The generated WGSL of every kernel of `pt` in NaivePTsk for `scene`.
+fn kernel_source(scene: &LoadedScene, all_features: bool) -> String {
+    let graph = load_graph("pt").unwrap();
+    let options = SessionOptions {
+        width: 8,
+        height: 8,
+        samples_per_frame: 1,
+        seed: 1,
+        constants: Default::default(),
+        layout: Default::default(),
+    };
+    let flags = kernel_flags(device_flags(gpu()), scene, all_features);
+    let spec = specialization(&graph, &scene.scene, &options, flags);
+    let plan = Plan::new(&graph, "NaivePTsk").unwrap();
+    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    program
+        .kernels
+        .iter()
+        .map(|k| k.source.text())
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Functions of features no Cornell box uses: the microfacet BSDF.
+const NOT_IN_CORNELL: &[&str] = &["fn ggx_d", "fn pbr_setup", "fn pbr_sample"];
+
+#[test]
+fn cornell_kernels_contain_no_code_of_features_they_do_not_use() {
+    for name in ["cornell-diffuse", "cornell-glossy-point", "cornell-mitsuba"] {
+        let scene = load_scene(name).unwrap();
+        let specialised = kernel_source(&scene, false);
+        let general = kernel_source(&scene, true);
+        for f in NOT_IN_CORNELL {
+            assert!(
+                !specialised.contains(f),
+                "{name}: the specialised kernel contains '{f}'"
+            );
+            assert!(general.contains(f), "{name}: the all-features kernel lacks '{f}'");
+        }
+        assert!(
+            specialised.len() < general.len(),
+            "{name}: specialised {} bytes, all features {} bytes",
+            specialised.len(),
+            general.len()
+        );
+    }
+    // The diffuse box has no Phong lobe, mirror or glass either.
+    let diffuse = kernel_source(&load_scene("cornell-diffuse").unwrap(), false);
+    for f in ["power_cos_pdf(cos_r", "fresnel_dielectric(b.fix.z"] {
+        assert!(!diffuse.contains(f), "cornell-diffuse: the kernel contains '{f}'");
+    }
+}
+
+#[test]
+fn specialised_and_all_features_kernels_render_the_same_image() {
+    let graph = load_graph("pt").unwrap();
+    for name in ["cornell-glossy-point", "cornell-glossy-background", "cornell-diffuse"] {
+        let scene = load_scene(name).unwrap();
+        let image = |all_features: bool| {
+            let options = SessionOptions {
+                width: 24,
+                height: 24,
+                samples_per_frame: 2,
+                seed: 7,
+                constants: Default::default(),
+                layout: LayoutOverrides {
+                    all_features,
+                    ..Default::default()
+                },
+            };
+            let mut session = Session::new(gpu(), &graph, "NaivePTsk", &scene, options).unwrap();
+            session.render_frames(2).unwrap();
+            (session.image().unwrap(), session.counters.clone())
+        };
+        let (a, ca) = image(false);
+        let (b, cb) = image(true);
+        assert_eq!(ca, cb, "{name}: the kernels trace different rays");
+        let mut worst = 0f64;
+        for (p, q) in a.mean.iter().zip(&b.mean) {
+            for c in 0..3 {
+                let (x, y) = (p[c] as f64, q[c] as f64);
+                // The same arithmetic on the same random numbers; only the order of the film's
+                // atomic additions may differ: a few ulps of the magnitude.
+                worst = worst.max((x - y).abs() / x.abs().max(y.abs()).max(1e-3));
+            }
+        }
+        assert!(
+            worst < 1e-5,
+            "{name}: specialised and all-features images differ by {worst:.2e}"
+        );
+    }
+}
