@@ -3,11 +3,13 @@
 
 mod analytic;
 mod bvh;
+mod chi2;
 mod cli;
 mod common;
 mod composition;
 mod gltf;
 mod layouts;
+mod probe;
 mod reference;
 mod scenes;
 mod stress;
