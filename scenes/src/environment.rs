@@ -6,8 +6,9 @@
 //! angle from +Y is θ = π v and the azimuth φ = 2π (u − 1/2), so that
 //! direction(u, v) = (sin θ sin φ, cos θ, −sin θ cos φ): the image's centre column (u = 1/2)
 //! looks along −Z, u = 3/4 along +X, and u = 0 and 1 along +Z. Radiance is looked up in the
-//! texel containing (u, v) (no filtering), so the sampling density is exactly proportional
-//! to luminance within each texel.
+//! texel containing (u, v) (no filtering). A texel is sampled with probability proportional
+//! to its luminance × solid angle, uniformly in (u, v) within it: the solid-angle density is
+//! pdf(u, v) / (2π² sin θ), proportional to luminance × sin θ_centre / sin θ.
 
 use crate::alias::luminance;
 use std::f64::consts::PI;

@@ -37,7 +37,9 @@ fn env_lookup(direction: vec3<f32>) -> vec4<f32> {
     let d = env_to_map(direction);
     let uv = vec2<f32>(0.5 + atan2(d.x, -d.z) * (0.5 * INV_PI), acos(clamp(d.y, -1.0, 1.0)) * INV_PI);
     let t = env_texels[env_texel_index(uv)];
-    let sin_theta = sqrt(max(0.0, 1.0 - d.y * d.y));
+    // From the horizontal components: exact near the poles (where 1 - cos^2 loses digits),
+    // as the density grows like 1 / sin theta there.
+    let sin_theta = length(d.xz);
     if (sin_theta <= 0.0) {
         return vec4<f32>(t.xyz, 0.0);
     }

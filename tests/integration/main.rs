@@ -9,6 +9,7 @@ mod common;
 mod composition;
 mod gltf;
 mod layouts;
+mod lights;
 mod probe;
 mod reference;
 mod scenes;
