@@ -3,7 +3,7 @@
 //! KHR_lights_punctual import, environment maps and their errors.
 
 use crate::chi2::{SphereBins, goodness_of_fit, pearson, significance};
-use crate::common::{data, render};
+use crate::common::{data, region, render};
 use crate::probe::{probe, scene};
 use lightgraph::render::LoadedScene;
 use lightgraph_engine::ConstValue;
@@ -531,4 +531,44 @@ fn environment_map_errors_name_the_file_and_the_asset_root() {
     let map = EnvironmentMap::load(&root.join("sky.exr")).unwrap();
     assert_eq!((map.width, map.height), (2, 1));
     std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
+fn a_diffuse_sphere_under_a_constant_environment_map_is_albedo_times_its_radiance() {
+    // A convex diffuse sphere (albedo 0.5) under a map of constant radiance L × scale 2:
+    // every reflected path escapes, so the sphere shows 0.5 × 2 L and the rest 2 L, whatever
+    // the mix of light sampling and BSDF sampling MIS makes (a wrong density in either
+    // strategy's weight or estimate would bias it).
+    let radiance = [0.4f32, 0.6, 0.8];
+    let root = environment_root("constant", "flat.exr", 8, 4, |_, _| radiance);
+    let text = environment_scene("Environment(file: \"flat.exr\", scale: 2.0, rotation_degrees: 10.0)");
+    let s = LoadedScene::parse("env.ron", &text, BvhKind::Bvh2, Some(&root)).unwrap();
+    std::fs::remove_dir_all(&root).unwrap();
+    let r = render(&s, "pt", "NaivePTsk", (32, 32), 16, 16, 9, &[]);
+    // The central 4 x 4 pixels see only the sphere (its image is 11 pixels wide); the corner
+    // pixels see only the environment.
+    let (mean, se, n) = region(&r.image, |x, y| (14..18).contains(&x) && (14..18).contains(&y));
+    assert_eq!(n, 16);
+    let (sky, _, _) = region(&r.image, |x, y| x < 4 && y < 4);
+    for c in 0..3 {
+        let expected = 0.5 * 2.0 * radiance[c] as f64;
+        // Four standard errors of the region mean (from 16 independent frames per pixel),
+        // which must itself be small enough (2%) to catch a bias of a few percent.
+        assert!(
+            se[c] < 0.02 * expected,
+            "channel {c}: standard error {} too large",
+            se[c]
+        );
+        assert!(
+            (mean[c] - expected).abs() < 4.0 * se[c],
+            "channel {c}: sphere {} ± {}, expected {expected}",
+            mean[c],
+            se[c]
+        );
+        assert!(
+            (sky[c] - 2.0 * radiance[c] as f64).abs() < 1e-5,
+            "channel {c}: sky {}",
+            sky[c]
+        );
+    }
 }
