@@ -1,9 +1,10 @@
 //! glTF 2.0 import (`.gltf` and `.glb`, through the `gltf` crate): every mesh instance of the
 //! default scene, flattened with its node transform into [`Shape::Mesh`]es, with materials
 //! from the metallic-roughness base colour (a base-colour texture contributes its mean colour,
-//! decoded from sRGB) and emission (with KHR_materials_emissive_strength).
+//! decoded from sRGB) and emission (with KHR_materials_emissive_strength), and the
+//! KHR_lights_punctual lights of its nodes ([`punctual_light`]).
 
-use crate::model::{Material, Rgb, Shape};
+use crate::model::{Light, Material, Rgb, Shape};
 use glam::{Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use std::collections::BTreeMap;
@@ -18,6 +19,8 @@ pub struct Imported {
     pub materials: BTreeMap<String, Material>,
     /// Triangles imported.
     pub triangles: usize,
+    /// KHR_lights_punctual lights placed by their nodes.
+    pub lights: Vec<Light>,
 }
 
 fn srgb_to_linear(c: f32) -> f32 {
@@ -188,7 +191,7 @@ pub fn import(path: &Path) -> Result<Imported, String> {
     let shown = path.display();
     let (document, buffers, images) = load(path).map_err(|e| format!("{shown}: {e}"))?;
     for required in document.extensions_required() {
-        if required != "KHR_materials_emissive_strength" {
+        if !["KHR_materials_emissive_strength", "KHR_lights_punctual"].contains(&required) {
             return Err(format!(
                 "{shown}: requires the glTF extension {required}, which lightgraph does not support"
             ));
@@ -237,6 +240,10 @@ pub fn import(path: &Path) -> Result<Imported, String> {
         let transform = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         for child in node.children() {
             stack.push((child, transform));
+        }
+        if let Some(light) = node.light() {
+            out.lights
+                .push(punctual_light(&light, &transform).map_err(|e| format!("{shown}: node {}: {e}", node.index()))?);
         }
         let Some(mesh) = node.mesh() else { continue };
         for primitive in mesh.primitives() {
@@ -305,6 +312,65 @@ pub fn import(path: &Path) -> Result<Imported, String> {
         return Err(format!("{shown}: no triangles in the default scene"));
     }
     Ok(out)
+}
+
+/// A KHR_lights_punctual light placed by its node's world `transform`: at the node's origin,
+/// shining along the node's −Z axis, with colour × intensity. Units: lightgraph is
+/// radiometric, so glTF's photometric intensity is taken as is, as radiant intensity in W/sr
+/// (point, spot) and irradiance in W/m² (directional), with no 683 lm/W conversion: scenes
+/// authored for a physical camera's exposure come out bright, which `--exposure` corrects.
+/// `range` is ignored (a physically based renderer lets light fall off with the inverse
+/// square law only; the extension allows it). Spot cones keep glTF's smooth falloff.
+fn punctual_light(light: &gltf::khr_lights_punctual::Light, transform: &Mat4) -> Result<Light, String> {
+    use gltf::khr_lights_punctual::Kind;
+    let color = light.color();
+    let intensity = light.intensity();
+    if !(intensity.is_finite() && intensity >= 0.0) || color.iter().any(|c| !(c.is_finite() && *c >= 0.0)) {
+        return Err(format!(
+            "light {}: colour {color:?} and intensity {intensity} must be finite and non-negative",
+            light.index()
+        ));
+    }
+    let value = color.map(|c| c * intensity);
+    let position = transform.transform_point3(Vec3::ZERO).to_array();
+    let direction = transform.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    if direction == Vec3::ZERO && !matches!(light.kind(), Kind::Point) {
+        return Err(format!(
+            "light {}: its node's transform has no −Z direction",
+            light.index()
+        ));
+    }
+    Ok(match light.kind() {
+        Kind::Point => Light::Point {
+            position,
+            intensity: value,
+        },
+        Kind::Directional => Light::Directional {
+            direction: direction.to_array(),
+            irradiance: value,
+        },
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => {
+            if !(0.0 <= inner_cone_angle
+                && inner_cone_angle <= outer_cone_angle
+                && outer_cone_angle <= std::f32::consts::FRAC_PI_2)
+            {
+                return Err(format!(
+                    "light {}: spot cone angles inner {inner_cone_angle} and outer {outer_cone_angle} radians must satisfy 0 <= inner <= outer <= pi/2",
+                    light.index()
+                ));
+            }
+            Light::Spot {
+                position,
+                direction: direction.to_array(),
+                intensity: value,
+                inner_cone_degrees: inner_cone_angle.to_degrees(),
+                outer_cone_degrees: outer_cone_angle.to_degrees(),
+            }
+        }
+    })
 }
 
 #[cfg(test)]

@@ -13,6 +13,10 @@ pub mod light_kind {
     pub const DIRECTIONAL: u32 = 2;
     /// A constant background.
     pub const BACKGROUND: u32 = 3;
+    /// A spot light: a point light whose intensity falls off outside a cone.
+    pub const SPOT: u32 = 4;
+    /// An environment map (equirectangular, importance-sampled).
+    pub const ENVIRONMENT: u32 = 5;
 }
 
 /// Bits of `Material::flags`.
@@ -213,24 +217,54 @@ impl Default for GpuMaterial {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct GpuLight {
-    /// Area: v0; point: position; directional: unit direction of travel.
+    /// Area: v0; point, spot: position; directional: unit direction of travel.
     pub position: [f32; 3],
     /// [`light_kind`].
     pub kind: u32,
-    /// Area: v1 - v0.
+    /// Area: v1 - v0; spot: unit axis (the direction the light shines in).
     pub e1: [f32; 3],
     /// Area: 1 / area.
     pub inv_area: f32,
     /// Area: v2 - v0.
     pub e2: [f32; 3],
-    /// Unused.
-    pub pad0: f32,
+    /// Spot: cosine of the inner cone angle (full intensity inside it).
+    pub cos_inner: f32,
     /// Area: unit normal (the emitting side).
     pub normal: [f32; 3],
-    /// Unused.
-    pub pad1: f32,
-    /// Radiance (area, background), intensity (point) or irradiance (directional).
+    /// Spot: cosine of the outer cone angle (no light outside it).
+    pub cos_outer: f32,
+    /// Radiance (area, background), intensity (point, spot), irradiance (directional), or
+    /// the scale of an environment map's radiance.
     pub radiance: [f32; 3],
     /// Unused.
     pub pad2: f32,
+}
+
+/// One entry of the light-selection alias table (`AliasEntry` in WGSL, Walker's alias method):
+/// slot `i` keeps light `i` with probability `threshold` and otherwise gives its alias, light
+/// `other`; `pmf` is the probability with which light `i` is picked overall.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct GpuAliasEntry {
+    /// Probability of keeping this slot's own light.
+    pub threshold: f32,
+    /// The light picked otherwise (the alias; `alias` is a WGSL keyword).
+    pub other: u32,
+    /// Probability of picking light `i` (the slot's own), for MIS.
+    pub pmf: f32,
+}
+
+/// The environment map's shape and orientation (`Environment` in WGSL); its texels and
+/// sampling distribution are the `env_texels` and `env_cdf` resources.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct GpuEnvironment {
+    /// Texels per row (0: no map).
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Cosine of the map's rotation about +Y.
+    pub cos_rotation: f32,
+    /// Sine of the map's rotation about +Y.
+    pub sin_rotation: f32,
 }

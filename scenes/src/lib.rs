@@ -1,16 +1,22 @@
 //! lightgraph-scenes: the scene model, RON scene files, validation, BVH building and the
 //! GPU data the light-transport shaders read.
 
+pub mod alias;
 pub mod bvh;
 pub mod cwbvh;
+pub mod environment;
 pub mod features;
 pub mod gltf;
 pub mod gpu;
 pub mod model;
 
 use bvh::BvhKind;
+use bytemuck::Zeroable;
 use glam::{Vec3, Vec3A};
-use gpu::{GpuCamera, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, light_kind, primitive_kind};
+use gpu::{
+    GpuAliasEntry, GpuCamera, GpuEnvironment, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, light_kind,
+    primitive_kind,
+};
 use model::{FovAxis, Light, Look, Scene, Shape};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
@@ -76,15 +82,7 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
             "the scene has no light: add an emissive shape or a light (Point, Directional, Background)".into(),
         ));
     }
-    if scene
-        .lights
-        .iter()
-        .filter(|l| matches!(l, Light::Background { .. }))
-        .count()
-        > 1
-    {
-        return Err(err("Background", "a scene has at most one Background light".into()));
-    }
+    check_lights(&scene.lights).map_err(|(needle, message)| err(needle, message))?;
     let (w, h) = scene.resolution;
     if w == 0 || h == 0 {
         return Err(err("resolution", "resolution must be at least 1x1".into()));
@@ -101,8 +99,9 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
-/// Imports the scene's glTF asset (a path below `asset_root`) into its shapes and materials,
-/// then checks that the scene has geometry and light.
+/// Imports the scene's glTF asset (a path below `asset_root`) into its shapes, materials and
+/// lights (KHR_lights_punctual), loads the environment maps its lights name (paths below
+/// `asset_root` too), then checks that the scene has geometry and light.
 pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path::Path>) -> Result<(), SceneError> {
     let err = |message: String| SceneError {
         file: file.to_string(),
@@ -123,7 +122,28 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
         let imported = gltf::import(&path).map_err(err)?;
         scene.materials.extend(imported.materials);
         scene.shapes.extend(imported.shapes);
+        scene.lights.extend(imported.lights);
     }
+    for light in &mut scene.lights {
+        if let Light::Environment { file: image, map, .. } = light
+            && map.is_none()
+        {
+            let root = asset_root.ok_or_else(|| {
+                err(format!("the scene needs the environment map '{image}' but no asset root is set: pass --assets DIR or set LIGHTGRAPH_ASSETS (the maps are in shared/scenes/envmaps beside the repository)"))
+            })?;
+            let path = root.join(&*image);
+            if !path.is_file() {
+                return Err(err(format!(
+                    "environment map '{image}' not found under the asset root {} (set --assets DIR or LIGHTGRAPH_ASSETS; the maps come from shared/scenes/envmaps beside the repository, whose SOURCE.md says where they came from)",
+                    root.display()
+                )));
+            }
+            *map = Some(std::sync::Arc::new(
+                environment::EnvironmentMap::load(&path).map_err(err)?,
+            ));
+        }
+    }
+    check_lights(&scene.lights).map_err(|(_, message)| err(message))?;
     if scene.shapes.is_empty() {
         return Err(err("the scene is empty: it has no shapes".into()));
     }
@@ -154,6 +174,17 @@ pub struct CompiledScene {
     pub materials: Vec<GpuMaterial>,
     /// Lights: emissive triangles first, then the scene's other lights.
     pub lights: Vec<GpuLight>,
+    /// Each light's estimated power (luminance of its emitted flux, see [`light_power`]).
+    pub light_power: Vec<f64>,
+    /// The alias table that picks lights in proportion to `light_power`.
+    pub light_alias: Vec<GpuAliasEntry>,
+    /// The environment map's size and rotation (width 0 when the scene has none).
+    pub environment: GpuEnvironment,
+    /// The environment map's texels and sampling density ([`environment::Distribution`]);
+    /// one zero texel when there is no map.
+    pub env_texels: Vec<[f32; 4]>,
+    /// The environment map's CDFs; `[0, 1]` when there is no map.
+    pub env_cdf: Vec<f32>,
     /// Depth of the BVH (in node levels for [`BvhKind::Cwbvh`]).
     pub bvh_depth: usize,
     /// Time spent building the BVH.
@@ -200,9 +231,9 @@ impl CompiledScene {
                         e1: e1.into(),
                         inv_area: if area > 0.0 { 1.0 / area } else { 0.0 },
                         e2: e2.into(),
-                        pad0: 0.0,
+                        cos_inner: 0.0,
                         normal: cross.normalize_or_zero().into(),
-                        pad1: 0.0,
+                        cos_outer: 0.0,
                         radiance,
                         pad2: 0.0,
                     });
@@ -272,13 +303,29 @@ impl CompiledScene {
             }
         }
         let mut background = -1;
+        let mut environment = GpuEnvironment::zeroed();
+        let mut env_distribution = None;
         for light in &scene.lights {
-            let mut l: GpuLight = bytemuck::Zeroable::zeroed();
+            let mut l = GpuLight::zeroed();
             match light {
                 Light::Point { position, intensity } => {
                     l.kind = light_kind::POINT;
                     l.position = *position;
                     l.radiance = *intensity;
+                }
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    inner_cone_degrees,
+                    outer_cone_degrees,
+                } => {
+                    l.kind = light_kind::SPOT;
+                    l.position = *position;
+                    l.e1 = v3(*direction).normalize_or_zero().into();
+                    l.radiance = *intensity;
+                    l.cos_inner = inner_cone_degrees.to_radians().cos();
+                    l.cos_outer = outer_cone_degrees.to_radians().cos();
                 }
                 Light::Directional { direction, irradiance } => {
                     l.kind = light_kind::DIRECTIONAL;
@@ -289,6 +336,27 @@ impl CompiledScene {
                     l.kind = light_kind::BACKGROUND;
                     l.radiance = radiance.map(|c| c * scale);
                     background = lights.len() as i32;
+                }
+                Light::Environment {
+                    file,
+                    scale,
+                    rotation_degrees,
+                    map,
+                } => {
+                    let map = map.as_ref().ok_or_else(|| {
+                        format!("environment map '{file}' was not loaded (resolve the scene's assets first)")
+                    })?;
+                    l.kind = light_kind::ENVIRONMENT;
+                    l.radiance = [*scale; 3];
+                    background = lights.len() as i32;
+                    let (sin, cos) = rotation_degrees.to_radians().sin_cos();
+                    environment = GpuEnvironment {
+                        width: map.width,
+                        height: map.height,
+                        cos_rotation: cos,
+                        sin_rotation: sin,
+                    };
+                    env_distribution = Some(map.distribution());
                 }
             }
             lights.push(l);
@@ -324,9 +392,20 @@ impl CompiledScene {
         let bvh_time = start.elapsed();
         let primitives: Vec<GpuPrimitive> = order.iter().map(|&i| prims[i as usize]).collect();
         let center = (lo + hi) * 0.5;
+        let radius = ((hi - lo) * 0.5).length();
+        let mean_env_luminance = env_distribution.as_ref().map_or(0.0, |d| d.mean_luminance);
+        let light_power: Vec<f64> = lights
+            .iter()
+            .map(|l| light_power(l, radius as f64, mean_env_luminance))
+            .collect();
+        let light_alias = alias::build(&light_power);
+        let (env_texels, env_cdf) = match env_distribution {
+            Some(d) => (d.texels, d.cdf),
+            None => (vec![[0.0; 4]], vec![0.0, 1.0]),
+        };
         let info = GpuSceneInfo {
             center: center.into(),
-            radius: ((hi - lo) * 0.5).length(),
+            radius,
             num_lights: lights.len() as u32,
             background,
             num_primitives: primitives.len() as u32,
@@ -340,6 +419,11 @@ impl CompiledScene {
             order,
             materials,
             lights,
+            light_power,
+            light_alias,
+            environment,
+            env_texels,
+            env_cdf,
             bvh_depth,
             bvh_time,
             clipped_primitives,
@@ -389,8 +473,77 @@ impl CompiledScene {
         out.insert("bvh".to_string(), self.bvh.clone());
         out.insert("materials".to_string(), bytemuck::cast_slice(&self.materials).to_vec());
         out.insert("lights".to_string(), bytemuck::cast_slice(&self.lights).to_vec());
+        out.insert(
+            "light_alias".to_string(),
+            bytemuck::cast_slice(&self.light_alias).to_vec(),
+        );
+        out.insert(
+            "environment".to_string(),
+            bytemuck::bytes_of(&self.environment).to_vec(),
+        );
+        out.insert(
+            "env_texels".to_string(),
+            bytemuck::cast_slice(&self.env_texels).to_vec(),
+        );
+        out.insert("env_cdf".to_string(), bytemuck::cast_slice(&self.env_cdf).to_vec());
         out
     }
+}
+
+/// A light's estimated power: the luminance of the flux it emits. Area: π A L (one side);
+/// point: 4π I; spot: I × its cone's integral of the falloff, 2π ((1 − cos inner) +
+/// (cos inner − cos outer) / 3); directional: E π r² through a disk of the scene's bounding
+/// radius `radius`; background and environment: the flux π L̄ × π r² they send onto one side of
+/// that disk, with L̄ the mean luminance over the sphere (`mean_env_luminance` × scale for a
+/// map). Only ratios matter: they set how often each light is picked.
+pub fn light_power(l: &GpuLight, radius: f64, mean_env_luminance: f64) -> f64 {
+    use std::f64::consts::PI;
+    let lum = alias::luminance(l.radiance);
+    let disk = PI * radius * radius;
+    match l.kind {
+        light_kind::AREA if l.inv_area > 0.0 => PI * lum / l.inv_area as f64,
+        light_kind::AREA => 0.0,
+        light_kind::POINT => 4.0 * PI * lum,
+        light_kind::SPOT => {
+            let (ci, co) = (l.cos_inner as f64, l.cos_outer as f64);
+            2.0 * PI * lum * ((1.0 - ci) + (ci - co).max(0.0) / 3.0)
+        }
+        light_kind::DIRECTIONAL => lum * disk,
+        light_kind::BACKGROUND => PI * lum * disk,
+        _ => PI * lum * mean_env_luminance * disk,
+    }
+}
+
+/// Checks the lights of a scene: at most one Background or Environment, spot cones within
+/// 0 ≤ inner ≤ outer ≤ 90 degrees. Errors give a word to locate and the message.
+fn check_lights(lights: &[Light]) -> Result<(), (&'static str, String)> {
+    let environments = lights
+        .iter()
+        .filter(|l| matches!(l, Light::Background { .. } | Light::Environment { .. }))
+        .count();
+    if environments > 1 {
+        return Err((
+            "Environment",
+            format!("a scene has at most one Background or Environment light; this one has {environments}"),
+        ));
+    }
+    for light in lights {
+        if let Light::Spot {
+            inner_cone_degrees: inner,
+            outer_cone_degrees: outer,
+            ..
+        } = light
+            && !(0.0 <= *inner && inner <= outer && *outer <= 90.0)
+        {
+            return Err((
+                "Spot",
+                format!(
+                    "spot light cone angles inner {inner} and outer {outer} degrees must satisfy 0 <= inner <= outer <= 90"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A material as the GPU reads it.

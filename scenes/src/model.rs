@@ -268,6 +268,44 @@ pub enum Light {
         #[serde(default = "unit")]
         scale: f32,
     },
+    /// A point light shining into a cone, with glTF's smooth falloff between the inner and
+    /// outer cone: intensity × t² for t = (cos θ − cos outer) / (cos inner − cos outer)
+    /// clamped to [0, 1], θ the angle from the axis.
+    Spot {
+        /// Position.
+        position: Vec3,
+        /// The axis: the direction the light shines in (normalised on load).
+        direction: Vec3,
+        /// Radiant intensity on the axis (W/sr).
+        intensity: Rgb,
+        /// Half-angle of the cone of full intensity, in degrees (glTF's default 0).
+        #[serde(default)]
+        inner_cone_degrees: f32,
+        /// Half-angle outside which there is no light, in degrees, at most 90 (glTF's
+        /// default 45).
+        #[serde(default = "default_outer_cone")]
+        outer_cone_degrees: f32,
+    },
+    /// An equirectangular environment map seen in every direction nothing else is
+    /// (`.hdr` or `.exr`, a path below the asset root): +Y is up (the top row), the image's
+    /// centre column looks along −Z and u grows towards +X (u = 0 and 1 are +Z).
+    Environment {
+        /// The image file, below the asset root.
+        file: String,
+        /// Scale applied to the radiance.
+        #[serde(default = "unit")]
+        scale: f32,
+        /// Rotation of the map about +Y, counter-clockwise seen from above.
+        #[serde(default)]
+        rotation_degrees: f32,
+        /// The decoded map, once the scene's assets are resolved.
+        #[serde(skip)]
+        map: Option<std::sync::Arc<crate::environment::EnvironmentMap>>,
+    },
+}
+
+fn default_outer_cone() -> f32 {
+    45.0
 }
 
 fn unit() -> f32 {

@@ -1,6 +1,8 @@
 // Lights: sampling a point or direction for next-event estimation, and the radiance a path
-// finds when it hits an area light or escapes to the background. Lights are picked
-// uniformly. Needs the resources `lights` and `scene`.
+// finds when it hits an area light or escapes to the background. Lights are picked in
+// proportion to their estimated power through an alias table (`pick_light`; `light_pmf`
+// gives the probability for MIS). Needs the resources `lights`, `light_alias`, `scene` and
+// those of environment.wgsl.
 
 struct Illumination {
     radiance: vec3<f32>,
@@ -12,8 +14,39 @@ struct Illumination {
     normal: vec3<f32>,          // area lights: the light's normal
 }
 
-fn light_pick_probability() -> f32 {
-    return 1.0 / f32(scene.num_lights);
+struct LightPick {
+    index: u32,
+    probability: f32,
+}
+
+// Picks a light (the scene has at least one) with probability proportional to its power,
+// from one uniform number: its integer part in [0, num_lights) picks a slot of the alias
+// table, its fraction whether the slot keeps its own light or gives its other light.
+fn pick_light(u: f32) -> LightPick {
+    let x = u * f32(scene.num_lights);
+    let slot = min(u32(x), scene.num_lights - 1u);
+    let entry = light_alias[slot];
+    let index = select(entry.other, slot, x - f32(slot) < entry.threshold);
+    return LightPick(index, light_alias[index].pmf);
+}
+
+// The probability with which `pick_light` picks light `index`.
+fn light_pmf(index: u32) -> f32 {
+    return light_alias[index].pmf;
+}
+
+// glTF's spot falloff towards unit direction `d` (travelling away from the light): 1 inside
+// the inner cone, 0 outside the outer one, the square of the linear ramp in cos theta between.
+fn spot_falloff(l: Light, d: vec3<f32>) -> f32 {
+    let c = dot(l.e1, d);
+    if (c >= l.cos_inner) {
+        return 1.0;
+    }
+    if (c <= l.cos_outer) {
+        return 0.0;
+    }
+    let t = (c - l.cos_outer) / (l.cos_inner - l.cos_outer);
+    return t * t;
 }
 
 fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
@@ -37,7 +70,7 @@ fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
             r.pdf = l.inv_area * dist2 / cos_light;
             r.radiance = l.radiance;
         }
-        case LIGHT_POINT: {
+        case LIGHT_POINT, LIGHT_SPOT: {
             let to_light = l.position - p;
             let dist2 = dot(to_light, to_light);
             r.distance = sqrt(dist2);
@@ -45,6 +78,9 @@ fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
             r.pdf = dist2;
             r.is_delta = true;
             r.radiance = l.radiance;
+            if (l.kind == LIGHT_SPOT) {
+                r.radiance *= spot_falloff(l, -r.direction);
+            }
         }
         case LIGHT_DIRECTIONAL: {
             r.direction = -l.position;
@@ -52,6 +88,13 @@ fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
             r.pdf = 1.0;
             r.is_delta = true;
             r.radiance = l.radiance;
+        }
+        case LIGHT_ENVIRONMENT: {
+            let e = env_sample(u);
+            r.direction = e.direction;
+            r.distance = INFINITE_DISTANCE;
+            r.pdf = e.pdf;
+            r.radiance = select(vec3<f32>(0.0), l.radiance * e.radiance, e.pdf > 0.0);
         }
         default: {
             r.direction = sample_uniform_sphere(u);
@@ -73,10 +116,17 @@ fn area_light_radiance(index: u32, direction: vec3<f32>) -> vec4<f32> {
     return vec4<f32>(l.radiance, l.inv_area);
 }
 
-// Background radiance and the solid angle density of sampling that direction.
-fn background_radiance() -> vec4<f32> {
+// The background's (constant or environment map) radiance towards `direction` (unit, away
+// from the scene), and the solid angle density with which `illuminate` samples that
+// direction (not counting the pick).
+fn background_radiance(direction: vec3<f32>) -> vec4<f32> {
     if (scene.background < 0) {
         return vec4<f32>(0.0);
     }
-    return vec4<f32>(lights[u32(scene.background)].radiance, UNIFORM_SPHERE_PDF);
+    let l = lights[u32(scene.background)];
+    if (l.kind == LIGHT_ENVIRONMENT) {
+        let e = env_lookup(direction);
+        return vec4<f32>(l.radiance * e.xyz, e.w);
+    }
+    return vec4<f32>(l.radiance, UNIFORM_SPHERE_PDF);
 }

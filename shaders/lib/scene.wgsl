@@ -100,18 +100,36 @@ const LIGHT_AREA: u32 = 0u;
 const LIGHT_POINT: u32 = 1u;
 const LIGHT_DIRECTIONAL: u32 = 2u;
 const LIGHT_BACKGROUND: u32 = 3u;
+const LIGHT_SPOT: u32 = 4u;
+const LIGHT_ENVIRONMENT: u32 = 5u;
 
 struct Light {
-    position: vec3<f32>,    // area v0, point position, or directional direction of travel
+    position: vec3<f32>,    // area v0, point and spot position, or directional direction of travel
     kind: u32,
-    e1: vec3<f32>,
+    e1: vec3<f32>,          // area v1 - v0, or the spot's unit axis (direction of travel)
     inv_area: f32,
     e2: vec3<f32>,
-    pad0: f32,
+    cos_inner: f32,         // spot: full intensity within this cone
     normal: vec3<f32>,      // area: the emitting side
-    pad1: f32,
-    radiance: vec3<f32>,    // radiance, intensity (point) or irradiance (directional)
+    cos_outer: f32,         // spot: no light outside this cone
+    radiance: vec3<f32>,    // radiance, intensity (point, spot), irradiance (directional) or environment scale
     pad2: f32,
+}
+
+// Light selection by Walker's alias method: slot i keeps light i with probability
+// `threshold`, else gives light `other`; `pmf` is light i's overall pick probability.
+struct AliasEntry {
+    threshold: f32,
+    other: u32,
+    pmf: f32,
+}
+
+// The environment map's size (width 0: none) and rotation about +Y.
+struct Environment {
+    width: u32,
+    height: u32,
+    cos_rotation: f32,
+    sin_rotation: f32,
 }
 
 // Moves `p` off its surface along `n` (which points to the side the new ray leaves on), by

@@ -3,17 +3,17 @@
 // sampling), and the path ends at the length cap or on a black material.
 //
 // MIS (two strategies for lights of finite extent): a light hit by BSDF sampling with
-// density p_bsdf is weighted w(p_bsdf, p_light * pick); the same light sampled directly in
-// `material` is weighted w(p_light * pick, p_bsdf).
+// density p_bsdf is weighted w(p_bsdf, p_light * pick), pick being the light's selection
+// probability (`light_pmf`); the same light sampled directly in `material` is weighted
+// w(p_light * pick, p_bsdf).
 
 fn logic(path: ptr<function, CameraPath>) -> bool {
-    let pick = light_pick_probability();
     if ((*path).hit_t < 0.0) {
-        let bg = background_radiance();
-        if (bg.w > 0.0) {
+        let bg = background_radiance((*path).direction);
+        if (!is_black(bg.xyz)) {
             var w = 1.0;
             if ((*path).last_specular == 0u) {
-                w = mis_weight((*path).last_pdf, bg.w * pick);
+                w = mis_weight((*path).last_pdf, bg.w * light_pmf(u32(scene.background)));
             }
             film_add((*path).pixel, (*path).throughput * w * bg.xyz);
         }
@@ -30,7 +30,7 @@ fn logic(path: ptr<function, CameraPath>) -> bool {
             var w = 1.0;
             if ((*path).last_specular == 0u) {
                 let light_pdf = le.w * (*path).hit_t * (*path).hit_t / abs(bsdf.fix.z);
-                w = mis_weight((*path).last_pdf, light_pdf * pick);
+                w = mis_weight((*path).last_pdf, light_pdf * light_pmf(u32(s.light)));
             }
             film_add((*path).pixel, (*path).throughput * w * le.xyz);
         }

@@ -1,18 +1,19 @@
 // Pass `material` (Loop, the material stage): next-event estimation (a shadow ray towards a
-// uniformly picked light) and the next direction from the BSDF, with Russian roulette. With
+// light picked in proportion to its power) and the next direction from the BSDF, with Russian roulette. With
 // the albedo roulette rule the BSDF densities used for MIS include the continuation
 // probability, as in SmallVCM; with the throughput rule (Mitsuba's) they do not.
 
 fn material(path: ptr<function, CameraPath>) -> bool {
     let s = path_surface(*path);
     let bsdf = bsdf_setup(material_at(s.material, s.tex), s.normal, -(*path).direction);
-    let pick = light_pick_probability();
     var rng = (*path).rng;
     let q_mis = select(1.0, bsdf.continuation, RR_ALBEDO);
     let light_u = rng_f32(&rng);
     let light_uv = rng_vec2(&rng);
     if (!bsdf.is_delta && scene.num_lights > 0u) {
-        let index = min(u32(light_u * f32(scene.num_lights)), scene.num_lights - 1u);
+        let picked = pick_light(light_u);
+        let index = picked.index;
+        let pick = picked.probability;
         let ill = illuminate(index, s.position, light_uv);
         if (!is_black(ill.radiance)) {
             let e = bsdf_eval(bsdf, ill.direction);

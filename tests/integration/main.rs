@@ -10,6 +10,7 @@ mod common;
 mod composition;
 mod gltf;
 mod layouts;
+mod lights;
 mod probe;
 mod reference;
 mod scenes;

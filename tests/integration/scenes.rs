@@ -7,7 +7,10 @@ use lightgraph::render::load_scene;
 use lightgraph_engine::reflect::struct_layout;
 use lightgraph_engine::wgsl::preprocess;
 use lightgraph_scenes::bvh::BvhKind;
-use lightgraph_scenes::gpu::{GpuBvhNode, GpuCamera, GpuCwbvhNode, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo};
+use lightgraph_scenes::gpu::{
+    GpuAliasEntry, GpuBvhNode, GpuCamera, GpuCwbvhNode, GpuEnvironment, GpuLight, GpuMaterial, GpuPrimitive,
+    GpuSceneInfo,
+};
 use std::collections::BTreeSet;
 use std::mem::{offset_of, size_of};
 
@@ -144,6 +147,14 @@ fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
     check!(
         "Light",
         GpuLight,
-        [position, kind, e1, inv_area, e2, pad0, normal, pad1, radiance, pad2]
+        [
+            position, kind, e1, inv_area, e2, cos_inner, normal, cos_outer, radiance, pad2
+        ]
+    );
+    check!("AliasEntry", GpuAliasEntry, [threshold, other, pmf]);
+    check!(
+        "Environment",
+        GpuEnvironment,
+        [width, height, cos_rotation, sin_rotation]
     );
 }

@@ -77,6 +77,8 @@ fn emissions(s: &Scene) -> Vec<[f32; 3]> {
         Light::Point { intensity, .. } => *intensity,
         Light::Directional { irradiance, .. } => *irradiance,
         Light::Background { radiance, .. } => *radiance,
+        Light::Spot { intensity, .. } => *intensity,
+        Light::Environment { scale, .. } => [*scale; 3],
     }));
     e
 }
