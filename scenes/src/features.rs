@@ -25,9 +25,12 @@ pub const ALL: &[(&str, &str)] = &[
     ),
     ("ALPHA_MASK", "alpha-masked cut-outs in ray traversal"),
     ("LIGHT_AREA", "emissive triangles"),
+    ("LIGHT_PUNCTUAL", "point or spot lights"),
     ("LIGHT_POINT", "point lights"),
+    ("LIGHT_SPOT", "spot lights"),
     ("LIGHT_DIRECTIONAL", "directional lights"),
     ("LIGHT_BACKGROUND", "a constant background"),
+    ("LIGHT_ENVIRONMENT", "an environment map"),
 ];
 
 /// The features `scene` uses, as flag names.
@@ -77,14 +80,14 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
             .iter()
             .any(|m| m.flags & material_flags::ALPHA_MASK != 0),
     );
-    for (flag, kind) in [
-        ("LIGHT_AREA", light_kind::AREA),
-        ("LIGHT_POINT", light_kind::POINT),
-        ("LIGHT_DIRECTIONAL", light_kind::DIRECTIONAL),
-        ("LIGHT_BACKGROUND", light_kind::BACKGROUND),
-    ] {
-        add(flag, scene.lights.iter().any(|l| l.kind == kind));
-    }
+    let has = |kind: u32| scene.lights.iter().any(|l| l.kind == kind);
+    add("LIGHT_AREA", has(light_kind::AREA));
+    add("LIGHT_PUNCTUAL", has(light_kind::POINT) || has(light_kind::SPOT));
+    add("LIGHT_POINT", has(light_kind::POINT));
+    add("LIGHT_SPOT", has(light_kind::SPOT));
+    add("LIGHT_DIRECTIONAL", has(light_kind::DIRECTIONAL));
+    add("LIGHT_BACKGROUND", has(light_kind::BACKGROUND));
+    add("LIGHT_ENVIRONMENT", has(light_kind::ENVIRONMENT));
     out
 }
 

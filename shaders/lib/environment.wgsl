@@ -3,7 +3,7 @@
 // sin theta). Needs the resources `environment`, `env_texels` and `env_cdf` (see
 // scenes/src/environment.rs for the layout and the convention: map space has +Y up at row 0,
 // the image centre looks along -Z, u grows towards +X; world = rotation about +Y of map).
-
+#if LIGHT_ENVIRONMENT
 // The map-space direction of image coordinates `uv` in [0, 1]^2, and sin theta.
 fn env_direction(uv: vec2<f32>) -> vec4<f32> {
     let theta = PI * uv.y;
@@ -88,3 +88,4 @@ fn env_sample(u: vec2<f32>) -> EnvironmentSample {
     r.pdf = select(0.0, t.w / (2.0 * PI * PI * d.w), d.w > 0.0);
     return r;
 }
+#endif

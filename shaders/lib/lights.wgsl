@@ -35,6 +35,7 @@ fn light_pmf(index: u32) -> f32 {
     return light_alias[index].pmf;
 }
 
+#if LIGHT_SPOT
 // glTF's spot falloff towards unit direction `d` (travelling away from the light): 1 inside
 // the inner cone, 0 outside the outer one, the square of the linear ramp in cos theta between.
 fn spot_falloff(l: Light, d: vec3<f32>) -> f32 {
@@ -48,6 +49,7 @@ fn spot_falloff(l: Light, d: vec3<f32>) -> f32 {
     let t = (c - l.cos_outer) / (l.cos_inner - l.cos_outer);
     return t * t;
 }
+#endif
 
 fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
     let l = lights[index];
@@ -55,6 +57,7 @@ fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
     r.radiance = vec3<f32>(0.0);
     r.is_delta = false;
     switch l.kind {
+#if LIGHT_AREA
         case LIGHT_AREA: {
             let bc = sample_uniform_triangle(u);
             r.point = l.position + bc.x * l.e1 + bc.y * l.e2;
@@ -70,6 +73,8 @@ fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
             r.pdf = l.inv_area * dist2 / cos_light;
             r.radiance = l.radiance;
         }
+#endif
+#if LIGHT_PUNCTUAL
         case LIGHT_POINT, LIGHT_SPOT: {
             let to_light = l.position - p;
             let dist2 = dot(to_light, to_light);
@@ -78,10 +83,14 @@ fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
             r.pdf = dist2;
             r.is_delta = true;
             r.radiance = l.radiance;
+#if LIGHT_SPOT
             if (l.kind == LIGHT_SPOT) {
                 r.radiance *= spot_falloff(l, -r.direction);
             }
+#endif
         }
+#endif
+#if LIGHT_DIRECTIONAL
         case LIGHT_DIRECTIONAL: {
             r.direction = -l.position;
             r.distance = INFINITE_DISTANCE;
@@ -89,6 +98,8 @@ fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
             r.is_delta = true;
             r.radiance = l.radiance;
         }
+#endif
+#if LIGHT_ENVIRONMENT
         case LIGHT_ENVIRONMENT: {
             let e = env_sample(u);
             r.direction = e.direction;
@@ -96,12 +107,16 @@ fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
             r.pdf = e.pdf;
             r.radiance = select(vec3<f32>(0.0), l.radiance * e.radiance, e.pdf > 0.0);
         }
-        default: {
+#endif
+#if LIGHT_BACKGROUND
+        case LIGHT_BACKGROUND: {
             r.direction = sample_uniform_sphere(u);
             r.distance = INFINITE_DISTANCE;
             r.pdf = UNIFORM_SPHERE_PDF;
             r.radiance = l.radiance;
         }
+#endif
+        default: {}
     }
     return r;
 }
@@ -124,9 +139,11 @@ fn background_radiance(direction: vec3<f32>) -> vec4<f32> {
         return vec4<f32>(0.0);
     }
     let l = lights[u32(scene.background)];
+#if LIGHT_ENVIRONMENT
     if (l.kind == LIGHT_ENVIRONMENT) {
         let e = env_lookup(direction);
         return vec4<f32>(l.radiance * e.xyz, e.w);
     }
+#endif
     return vec4<f32>(l.radiance, UNIFORM_SPHERE_PDF);
 }

@@ -31,8 +31,16 @@ fn kernel_source(scene: &LoadedScene, all_features: bool) -> String {
         .join("\n")
 }
 
-/// Functions of features no Cornell box uses: the microfacet BSDF.
-const NOT_IN_CORNELL: &[&str] = &["fn ggx_d", "fn pbr_setup", "fn pbr_sample"];
+/// Functions of features no Cornell box uses: the microfacet BSDF, environment maps, spot
+/// lights.
+const NOT_IN_CORNELL: &[&str] = &[
+    "fn ggx_d",
+    "fn pbr_setup",
+    "fn pbr_sample",
+    "fn env_lookup",
+    "fn env_sample",
+    "fn spot_falloff",
+];
 
 #[test]
 fn cornell_kernels_contain_no_code_of_features_they_do_not_use() {
