@@ -7,7 +7,10 @@ use lightgraph::render::load_scene;
 use lightgraph_engine::reflect::struct_layout;
 use lightgraph_engine::wgsl::preprocess;
 use lightgraph_scenes::bvh::BvhKind;
-use lightgraph_scenes::gpu::{GpuBvhNode, GpuCamera, GpuCwbvhNode, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo};
+use lightgraph_scenes::gpu::{
+    GpuBvhNode, GpuCamera, GpuCwbvhNode, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, GpuTextureInfo,
+    GpuTriangleAttributes,
+};
 use std::collections::BTreeSet;
 use std::mem::{offset_of, size_of};
 
@@ -140,6 +143,16 @@ fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
             emissive_texture,
             normal_texture
         ]
+    );
+    check!(
+        "TextureInfo",
+        GpuTextureInfo,
+        [row0, offset, row1, flags, width, height, pad]
+    );
+    check!(
+        "TriangleAttributes",
+        GpuTriangleAttributes,
+        [uv0, uv1, uv2, n0, n1, n2, flags]
     );
     check!(
         "Light",
