@@ -11,3 +11,4 @@ mod layouts;
 mod reference;
 mod scenes;
 mod stress;
+mod textures;
