@@ -40,8 +40,9 @@ pub struct Scene {
     #[serde(default)]
     pub integrator: Integrator,
     /// A glTF 2.0 asset (`.gltf` or `.glb`, a path below the asset root) whose meshes join the
-    /// shapes: every node's mesh instance with its transform, base colours (a texture
-    /// contributes its mean colour) and emission; its materials are named `gltf:NAME`.
+    /// shapes: every node's mesh instance with its transform, normals and texture
+    /// coordinates; its metallic-roughness materials, with their textures, are named
+    /// `gltf:NAME` (see [`crate::gltf`]).
     #[serde(default)]
     pub gltf: Option<String>,
     /// Images the materials' textures refer to (filled by the glTF import).
