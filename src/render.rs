@@ -268,6 +268,7 @@ impl<'g> Session<'g> {
         let plan = Plan::with_decl(graph, layout, options.layout.apply(decl))?;
         let mut flags = device_flags(gpu);
         flags.extend(scene.compiled.bvh_kind.flag().map(String::from));
+        flags.extend(scene.compiled.feature_flags().into_iter().map(String::from));
         let spec = specialization(graph, &scene.scene, &options, flags);
         let program = Program::compile(&plan, &spec, &gpu.target())?;
         let camera = CompiledScene::camera(&scene.scene, options.width, options.height);

@@ -541,6 +541,24 @@ impl CompiledScene {
         })
     }
 
+    /// The preprocessor flags of the scene's shading features: [`FLAG_TEXTURES`] when a
+    /// material samples a texture, [`FLAG_ALPHA_MASK`] when a material is alpha-masked.
+    /// Kernels compiled without them leave out texture sampling and the alpha test.
+    pub fn feature_flags(&self) -> Vec<&'static str> {
+        let mut flags = Vec::new();
+        if !self.textures.is_empty() {
+            flags.push(FLAG_TEXTURES);
+        }
+        if self
+            .materials
+            .iter()
+            .any(|m| m.flags & gpu::material_flags::ALPHA_MASK != 0)
+        {
+            flags.push(FLAG_ALPHA_MASK);
+        }
+        flags
+    }
+
     /// The camera for an image of `width` x `height` pixels.
     pub fn camera(scene: &Scene, width: u32, height: u32) -> GpuCamera {
         let c = &scene.camera.clone().unwrap_or_else(|| default_camera(scene));
@@ -665,6 +683,12 @@ fn triangle_attributes(
     }
     a
 }
+
+/// The WGSL flag under which materials sample their textures (`material_at`).
+pub const FLAG_TEXTURES: &str = "TEXTURES";
+
+/// The WGSL flag under which ray traversal tests alpha masks.
+pub const FLAG_ALPHA_MASK: &str = "ALPHA_MASK";
 
 /// The largest coordinate (or sphere radius) a shape may have: as far as a ray travels
 /// (`INFINITE_DISTANCE` in the WGSL).

@@ -1,7 +1,7 @@
 // Ray intersection: triangles (Moeller-Trumbore), spheres (the numerically careful form of
 // Haines et al., Ray Tracing Gems ch. 7) and BVH traversal, closest hit and any hit: BVH2, or
-// with the CWBVH flag a compressed wide BVH. Alpha-masked triangles let rays through where
-// their alpha is below the cutoff. Needs the resources `primitives`, `bvh`, `attributes`,
+// with the CWBVH flag a compressed wide BVH. With the ALPHA_MASK flag, alpha-masked triangles
+// let rays through where their alpha is below the cutoff. Needs the resources `primitives`, `bvh`, `attributes`,
 // `materials`, `textures` and `texels`, and the library file textures.wgsl.
 
 struct Hit {
@@ -58,19 +58,22 @@ fn intersect_sphere(o: vec3<f32>, d: vec3<f32>, p: Primitive, t_max: f32) -> f32
     return -1.0;
 }
 
-// ---- alpha mask: cut-outs rays pass through ----
+// ---- alpha mask: cut-outs rays pass through (only with the ALPHA_MASK flag, which the
+// host sets for scenes with an alpha-masked material) ----
+#if ALPHA_MASK
 
 // Whether primitive `index` of material `material` is solid at barycentrics `uv`: always,
 // unless the material is alpha-masked (one flag test for the rest) and its alpha there is
 // below the cutoff.
 fn alpha_solid(material: u32, index: u32, uv: vec2<f32>) -> bool {
-    let m = materials[material];
-    if ((m.flags & MATERIAL_ALPHA_MASK) == 0u) {
+    if ((materials[material].flags & MATERIAL_ALPHA_MASK) == 0u) {
         return true;
     }
+    let m = materials[material];
     return material_alpha(m, surface_tex(index, uv)) >= m.alpha_cutoff;
 }
 
+#endif
 // ---- end of alpha mask ----
 
 // Texture coordinates on primitive `index` at barycentrics `uv` ((0, 0) without attributes).
@@ -115,7 +118,11 @@ fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: 
         }
     } else {
         let r = intersect_triangle(o, d, p, t_max);
+#if ALPHA_MASK
         if (r.x > 0.0 && alpha_solid(p.material, index, r.yz)) {
+#else
+        if (r.x > 0.0) {
+#endif
             *hit = Hit(r.x, index, r.yz, true);
         }
     }

@@ -56,6 +56,8 @@ fn texture_sample(index: u32, uv: vec2<f32>) -> vec4<f32> {
 // Material `index` resolved at texture coordinates `tex`.
 fn material_at(index: u32, tex: vec2<f32>) -> Material {
     var m = materials[index];
+// Only scenes with textures (the host sets the TEXTURES flag) sample them.
+#if TEXTURES
     if (m.base_color_texture >= 0) {
         let c = texture_sample(u32(m.base_color_texture), tex);
         m.diffuse *= c.rgb;
@@ -69,6 +71,7 @@ fn material_at(index: u32, tex: vec2<f32>) -> Material {
     if (m.emissive_texture >= 0) {
         m.emission *= texture_sample(u32(m.emissive_texture), tex).rgb;
     }
+#endif
     return m;
 }
 

@@ -36,7 +36,8 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
     let flags = Gpu::new(c.adapter.as_deref())
         .ok()
         .map(|g| (lightgraph::render::device_flags(&g), g.target()));
-    let (flags, target) = flags.unwrap_or_default();
+    let (mut flags, target) = flags.unwrap_or_default();
+    flags.extend(scene.compiled.feature_flags().into_iter().map(String::from));
     let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
     let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
     let externals = scene.compiled.resources(&camera);

@@ -157,7 +157,13 @@ fn surface_queries(
         constants: [("QUERIES".to_string(), ConstValue::U32(queries.len() as u32))]
             .into_iter()
             .collect(),
-        flags: compiled.bvh_kind.flag().into_iter().map(String::from).collect(),
+        flags: compiled
+            .bvh_kind
+            .flag()
+            .into_iter()
+            .chain(compiled.feature_flags())
+            .map(String::from)
+            .collect(),
     };
     let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
     let mut externals: BTreeMap<String, Vec<u8>> = compiled
@@ -468,4 +474,27 @@ fn occlusion_rays_pass_through_alpha_masked_holes() {
             "cutoff {cutoff}: occlusion mean {mean}, expected in {range:?}"
         );
     }
+}
+
+/// Kernels sample textures and test alpha masks only for scenes that have them.
+#[test]
+fn only_scenes_with_textures_or_masks_set_their_flags() {
+    let cornell = lightgraph::render::load_scene("cornell-diffuse").unwrap();
+    assert!(cornell.compiled.feature_flags().is_empty());
+    let textured = |cutoff| {
+        let textures = PbrTextures {
+            base_color: Some(TextureRef::new(0)),
+            ..PbrTextures::default()
+        };
+        let s = scene(
+            vec![("m", pbr([1.0; 3], textures, cutoff))],
+            vec![quad("m", [-1.0, 1.0, -1.0, 1.0, 0.0], None)],
+            vec![],
+            vec![alpha_ramp()],
+            camera_looking_down(1.0, 40.0),
+        );
+        CompiledScene::new(&s).unwrap().feature_flags()
+    };
+    assert_eq!(textured(None), vec!["TEXTURES"]);
+    assert_eq!(textured(Some(0.5)), vec!["TEXTURES", "ALPHA_MASK"]);
 }
