@@ -401,6 +401,12 @@ struct MaterialImport<'a> {
 impl MaterialImport<'_> {
     /// Adds material `m` to the output; returns its name, the emission its triangles give
     /// off as area lights, and the texture coordinate set its textures read.
+    ///
+    /// The area lights' radiance is the emissive factor (times its strength) alone: the
+    /// emissive texture scales only the material's emission (`material_at`), so a light
+    /// whose texture is mostly dark (DamagedHelmet) shines as if it were white. Applying the
+    /// texture where lights are hit and sampled (and the texture's mean to the light's power
+    /// estimate) belongs to the light code.
     fn material(&mut self, m: &gltf::Material) -> Result<(String, Rgb, u32), String> {
         let index = m.index().map_or_else(|| "default".to_string(), |i| format!("#{i}"));
         let name = format!("gltf:{}", m.name().map_or(index, String::from));
