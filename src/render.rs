@@ -28,11 +28,22 @@ pub fn load_scene(name: &str) -> Result<LoadedScene> {
     load_scene_with(name, BvhKind::Bvh2)
 }
 
-/// Loads a built-in scene by name, or a scene file by path, with a BVH of `kind`; glTF
-/// assets come from [`crate::assets::asset_root`].
+/// Loads a built-in scene by name, a scene file by path, or a bare glTF file (`.gltf`,
+/// `.glb`; see [`LoadedScene::from_gltf`]), with a BVH of `kind`; the glTF assets of scene
+/// files come from [`crate::assets::asset_root`].
 pub fn load_scene_with(name: &str, kind: BvhKind) -> Result<LoadedScene> {
-    let (file, text) = crate::assets::scene_text(name).map_err(|e| anyhow!(e))?;
-    let mut scene = LoadedScene::parse(&file, &text, kind, crate::assets::asset_root().as_deref())?;
+    let lower = name.to_ascii_lowercase();
+    let bare_gltf = (lower.ends_with(".gltf") || lower.ends_with(".glb")) && std::path::Path::new(name).is_file();
+    let (file, mut scene) = if bare_gltf {
+        (
+            name.to_string(),
+            LoadedScene::from_gltf(std::path::Path::new(name), kind)?,
+        )
+    } else {
+        let (file, text) = crate::assets::scene_text(name).map_err(|e| anyhow!(e))?;
+        let scene = LoadedScene::parse(&file, &text, kind, crate::assets::asset_root().as_deref())?;
+        (file, scene)
+    };
     scene.name = name.to_string();
     if scene.compiled.clipped_primitives > 0 {
         eprintln!(
@@ -54,6 +65,25 @@ impl LoadedScene {
         let compiled = CompiledScene::with_bvh(&scene, kind).map_err(|e| anyhow!("{file}: {e}"))?;
         Ok(LoadedScene {
             name: file.to_string(),
+            scene,
+            compiled,
+            load_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// Loads the bare glTF file at `path` with a BVH of `kind`: its first camera, else one
+    /// framing its bounds, and a constant background when it has no light; says on stderr
+    /// which of these defaults it took.
+    pub fn from_gltf(path: &std::path::Path, kind: BvhKind) -> Result<LoadedScene> {
+        let start = Instant::now();
+        let (scene, notes) = lightgraph_scenes::scene_from_gltf(path)?;
+        for note in notes {
+            eprintln!("note: {}: {note}", path.display());
+        }
+        let file = path.display().to_string();
+        let compiled = CompiledScene::with_bvh(&scene, kind).map_err(|e| anyhow!("{file}: {e}"))?;
+        Ok(LoadedScene {
+            name: file,
             scene,
             compiled,
             load_seconds: start.elapsed().as_secs_f64(),

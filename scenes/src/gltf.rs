@@ -1,10 +1,13 @@
 //! glTF 2.0 import (`.gltf` and `.glb`, through the `gltf` crate): every mesh instance of the
-//! default scene, flattened with its node transform into [`Shape::Mesh`]es, with materials
-//! from the metallic-roughness base colour (a base-colour texture contributes its mean colour,
-//! decoded from sRGB) and emission (with KHR_materials_emissive_strength), and the
-//! KHR_lights_punctual lights of its nodes ([`punctual_light`]).
+//! default scene, flattened with its node transform into [`Shape::Mesh`]es with their normals
+//! and texture coordinates; metallic-roughness materials ([`Pbr`]) with their base-colour,
+//! metallic-roughness and emissive textures (KHR_texture_transform), alpha mask,
+//! KHR_materials_emissive_strength, KHR_materials_transmission and KHR_materials_ior; and the
+//! perspective cameras the scene's nodes place, and the KHR_lights_punctual lights of its
+//! nodes ([`punctual_light`]).
 
-use crate::model::{Light, Material, Rgb, Shape};
+use crate::model::{Camera, FovAxis, Light, Look, Material, Pbr, Rgb, Shape};
+use crate::texture::{PbrTextures, Texture, TextureRef, Wrap};
 use glam::{Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use std::collections::BTreeMap;
@@ -21,41 +24,25 @@ pub struct Imported {
     pub triangles: usize,
     /// KHR_lights_punctual lights placed by their nodes.
     pub lights: Vec<Light>,
+    /// Images the materials' textures use; [`TextureRef::texture`] indexes them.
+    pub textures: Vec<Texture>,
+    /// Perspective cameras placed by the scene's nodes.
+    pub cameras: Vec<ImportedCamera>,
+    /// What was imported only approximately (one line each).
+    pub warnings: Vec<String>,
 }
 
-fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// The mean linear RGB colour of an image (alpha ignored).
-fn mean_color(image: &gltf::image::Data) -> Option<Rgb> {
-    use gltf::image::Format;
-    let channels = match image.format {
-        Format::R8G8B8 => 3,
-        Format::R8G8B8A8 => 4,
-        Format::R8 => 1,
-        Format::R8G8 => 2,
-        _ => return None,
-    };
-    // sRGB decode of every byte value, once.
-    let table: Vec<f32> = (0..256).map(|v| srgb_to_linear(v as f32 / 255.0)).collect();
-    let mut sum = [0f64; 3];
-    let n = image.pixels.len() / channels;
-    for px in image.pixels.chunks_exact(channels) {
-        let rgb = if channels >= 3 {
-            [px[0], px[1], px[2]]
-        } else {
-            [px[0]; 3]
-        };
-        for c in 0..3 {
-            sum[c] += table[rgb[c] as usize] as f64;
-        }
-    }
-    (n > 0).then(|| sum.map(|s| (s / n as f64) as f32))
+/// A camera of the asset, placed by the first node holding it.
+#[derive(Debug, Clone)]
+pub struct ImportedCamera {
+    /// Its index in the asset's `cameras`.
+    pub index: usize,
+    /// Its name and its node's name, where they have one.
+    pub names: Vec<String>,
+    /// The camera (vertical field of view).
+    pub camera: Camera,
+    /// Width over height, when the asset gives it.
+    pub aspect_ratio: Option<f32>,
 }
 
 /// Whether `uri` percent-decodes to UTF-8.
@@ -186,40 +173,35 @@ fn check_accessor(a: &gltf::Accessor, types: &[DataType], dimensions: Dimensions
     Ok(())
 }
 
+/// Required glTF extensions the importer supports.
+const SUPPORTED_REQUIRED: &[&str] = &[
+    "KHR_materials_emissive_strength",
+    "KHR_lights_punctual",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_texture_transform",
+];
+
 /// Imports `path`; errors name the file and the problem.
 pub fn import(path: &Path) -> Result<Imported, String> {
     let shown = path.display();
     let (document, buffers, images) = load(path).map_err(|e| format!("{shown}: {e}"))?;
     for required in document.extensions_required() {
-        if !["KHR_materials_emissive_strength", "KHR_lights_punctual"].contains(&required) {
+        if !SUPPORTED_REQUIRED.contains(&required) {
             return Err(format!(
                 "{shown}: requires the glTF extension {required}, which lightgraph does not support"
             ));
         }
     }
     let mut out = Imported::default();
+    let mut materials = MaterialImport {
+        images: &images,
+        image_texture: vec![None; images.len()],
+        out: &mut out,
+    };
     let mut material_names = Vec::new();
-    for (i, m) in document.materials().enumerate() {
-        let name = format!("gltf:{}", m.name().map_or_else(|| format!("#{i}"), |n| n.to_string()));
-        let pbr = m.pbr_metallic_roughness();
-        let factor = pbr.base_color_factor();
-        let texture_mean = pbr
-            .base_color_texture()
-            .and_then(|t| images.get(t.texture().source().index()))
-            .and_then(mean_color)
-            .unwrap_or([1.0; 3]);
-        let diffuse = [0, 1, 2].map(|c| factor[c] * texture_mean[c]);
-        out.materials.insert(
-            name.clone(),
-            Material {
-                diffuse,
-                two_sided: m.double_sided(),
-                ..Default::default()
-            },
-        );
-        let strength = m.emissive_strength().unwrap_or(1.0);
-        let emission = m.emissive_factor().map(|e| e * strength);
-        material_names.push((name, emission));
+    for m in document.materials() {
+        material_names.push(materials.material(&m).map_err(|e| format!("{shown}: {e}"))?);
     }
     let default_material = "gltf:default".to_string();
     let scene = document
@@ -230,6 +212,7 @@ pub fn import(path: &Path) -> Result<Imported, String> {
     // The node hierarchy must be disjoint trees: a node reached twice closes a cycle (which
     // would never end) or has two parents.
     let mut reached = vec![false; document.nodes().len()];
+    let mut camera_nodes: Vec<Option<(Option<String>, Mat4)>> = vec![None; document.cameras().len()];
     while let Some((node, parent)) = stack.pop() {
         if std::mem::replace(&mut reached[node.index()], true) {
             return Err(format!(
@@ -245,72 +228,48 @@ pub fn import(path: &Path) -> Result<Imported, String> {
             out.lights
                 .push(punctual_light(&light, &transform).map_err(|e| format!("{shown}: node {}: {e}", node.index()))?);
         }
+        if let Some(camera) = node.camera() {
+            camera_nodes[camera.index()].get_or_insert((node.name().map(String::from), transform));
+        }
         let Some(mesh) = node.mesh() else { continue };
+        let mesh_name = mesh.name().unwrap_or("?");
         for primitive in mesh.primitives() {
             if primitive.mode() != gltf::mesh::Mode::Triangles {
                 return Err(format!(
-                    "{shown}: mesh '{}' has a primitive of mode {:?}; only triangles are supported",
-                    mesh.name().unwrap_or("?"),
+                    "{shown}: mesh '{mesh_name}' has a primitive of mode {:?}; only triangles are supported",
                     primitive.mode()
                 ));
             }
-            let positions = primitive
-                .get(&gltf::Semantic::Positions)
-                .map(|a| (a, &[DataType::F32][..], Dimensions::Vec3));
-            let indices = primitive
-                .indices()
-                .map(|a| (a, &[DataType::U8, DataType::U16, DataType::U32][..], Dimensions::Scalar));
-            for (accessor, types, dimensions) in positions.into_iter().chain(indices) {
-                check_accessor(&accessor, types, dimensions)
-                    .map_err(|e| format!("{shown}: mesh '{}': {e}", mesh.name().unwrap_or("?")))?;
-            }
-            let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-            let Some(positions) = reader.read_positions() else {
-                continue;
-            };
-            let positions: Vec<[f32; 3]> = positions
-                .map(|p| transform.transform_point3(Vec3::from_array(p)).to_array())
-                .collect();
-            let flat: Vec<u32> = match reader.read_indices() {
-                Some(ix) => ix.into_u32().collect(),
-                None => (0..positions.len() as u32).collect(),
-            };
-            if let Some(&bad) = flat.iter().find(|&&i| i as usize >= positions.len()) {
-                return Err(format!(
-                    "{shown}: mesh '{}' indexes vertex {bad} of {}",
-                    mesh.name().unwrap_or("?"),
-                    positions.len()
-                ));
-            }
-            // A mirroring transform flips the winding; keep triangles facing as authored.
-            let flip = transform.determinant() < 0.0;
-            let indices: Vec<[u32; 3]> = flat
-                .chunks_exact(3)
-                .map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] })
-                .collect();
-            let (material, emission) = match primitive.material().index() {
+            let (material, emission, uv_set) = match primitive.material().index() {
                 Some(i) => material_names[i].clone(),
                 None => {
                     out.materials.entry(default_material.clone()).or_insert(Material {
                         diffuse: [0.8; 3],
                         ..Default::default()
                     });
-                    (default_material.clone(), [0.0; 3])
+                    (default_material.clone(), [0.0; 3], 0)
                 }
             };
-            out.triangles += indices.len();
-            let emission = emission.iter().any(|&e| e > 0.0).then_some(emission);
+            let Some(data) = read_primitive(&primitive, &buffers, transform, uv_set)
+                .map_err(|e| format!("{shown}: mesh '{mesh_name}': {e}"))?
+            else {
+                continue;
+            };
+            out.triangles += data.indices.len();
             out.shapes.push(Shape::Mesh {
-                positions,
-                indices,
+                positions: data.positions,
+                indices: data.indices,
                 material,
-                emission,
+                emission: emission.iter().any(|&e| e > 0.0).then_some(emission),
+                uvs: data.uvs,
+                normals: data.normals,
             });
         }
     }
     if out.triangles == 0 {
         return Err(format!("{shown}: no triangles in the default scene"));
     }
+    out.cameras = cameras(&document, &camera_nodes);
     Ok(out)
 }
 
@@ -370,6 +329,294 @@ fn punctual_light(light: &gltf::khr_lights_punctual::Light, transform: &Mat4) ->
                 outer_cone_degrees: outer_cone_angle.to_degrees(),
             }
         }
+    })
+}
+
+/// A mesh primitive read from its accessors, in world space.
+struct MeshData {
+    positions: Vec<[f32; 3]>,
+    indices: Vec<[u32; 3]>,
+    uvs: Option<Vec<[f32; 2]>>,
+    normals: Option<Vec<[f32; 3]>>,
+}
+
+/// Reads a triangle primitive's positions, indices, normals and texture coordinates (set
+/// `uv_set`), placed by `transform`; `None` when it has no positions.
+fn read_primitive(
+    primitive: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+    transform: Mat4,
+    uv_set: u32,
+) -> Result<Option<MeshData>, String> {
+    let f32_only = &[DataType::F32][..];
+    let uv_types = &[DataType::F32, DataType::U8, DataType::U16][..];
+    let positions = primitive
+        .get(&gltf::Semantic::Positions)
+        .map(|a| (a, f32_only, Dimensions::Vec3));
+    let normals = primitive
+        .get(&gltf::Semantic::Normals)
+        .map(|a| (a, f32_only, Dimensions::Vec3));
+    let uvs = primitive
+        .get(&gltf::Semantic::TexCoords(uv_set))
+        .map(|a| (a, uv_types, Dimensions::Vec2));
+    let indices = primitive
+        .indices()
+        .map(|a| (a, &[DataType::U8, DataType::U16, DataType::U32][..], Dimensions::Scalar));
+    for (accessor, types, dimensions) in positions.into_iter().chain(normals).chain(uvs).chain(indices) {
+        check_accessor(&accessor, types, dimensions)?;
+    }
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let Some(positions) = reader.read_positions() else {
+        return Ok(None);
+    };
+    let positions: Vec<[f32; 3]> = positions
+        .map(|p| transform.transform_point3(Vec3::from_array(p)).to_array())
+        .collect();
+    let vertices = positions.len();
+    let per_vertex = |what: &str, count: usize| {
+        if count == vertices {
+            Ok(())
+        } else {
+            Err(format!("{count} {what} for {vertices} vertices"))
+        }
+    };
+    // Normals are covectors: they map by the inverse transpose, which keeps them on the side
+    // the (possibly re-wound) triangles face.
+    let normal_matrix = glam::Mat3::from_mat4(transform).inverse().transpose();
+    let normals = match reader.read_normals() {
+        Some(n) => {
+            let n: Vec<[f32; 3]> = n
+                .map(|n| (normal_matrix * Vec3::from_array(n)).normalize_or_zero().to_array())
+                .collect();
+            per_vertex("normals", n.len())?;
+            Some(n)
+        }
+        None => None,
+    };
+    let uvs = match reader.read_tex_coords(uv_set) {
+        Some(t) => {
+            let t: Vec<[f32; 2]> = t.into_f32().collect();
+            per_vertex("texture coordinates", t.len())?;
+            Some(t)
+        }
+        None => None,
+    };
+    let flat: Vec<u32> = match reader.read_indices() {
+        Some(ix) => ix.into_u32().collect(),
+        None => (0..vertices as u32).collect(),
+    };
+    if let Some(&bad) = flat.iter().find(|&&i| i as usize >= vertices) {
+        return Err(format!("indexes vertex {bad} of {vertices}"));
+    }
+    // A mirroring transform flips the winding; keep triangles facing as authored.
+    let flip = transform.determinant() < 0.0;
+    let indices: Vec<[u32; 3]> = flat
+        .chunks_exact(3)
+        .map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] })
+        .collect();
+    Ok(Some(MeshData {
+        positions,
+        indices,
+        uvs,
+        normals,
+    }))
+}
+
+/// The perspective cameras of the document that a node of the scene holds, placed by the
+/// first such node: glTF cameras look down their local -Z with +Y up.
+fn cameras(document: &gltf::Document, nodes: &[Option<(Option<String>, Mat4)>]) -> Vec<ImportedCamera> {
+    let mut out = Vec::new();
+    for camera in document.cameras() {
+        let Some((node_name, transform)) = &nodes[camera.index()] else {
+            continue;
+        };
+        let gltf::camera::Projection::Perspective(p) = camera.projection() else {
+            continue;
+        };
+        let forward = transform.transform_vector3(Vec3::NEG_Z);
+        let up = transform.transform_vector3(Vec3::Y);
+        out.push(ImportedCamera {
+            index: camera.index(),
+            names: camera
+                .name()
+                .into_iter()
+                .chain(node_name.as_deref())
+                .map(String::from)
+                .collect(),
+            camera: Camera {
+                position: transform.transform_point3(Vec3::ZERO).to_array(),
+                look: Look::Forward(forward.to_array()),
+                up: up.to_array(),
+                fov_degrees: p.yfov().to_degrees(),
+                fov_axis: FovAxis::Vertical,
+            },
+            aspect_ratio: p.aspect_ratio(),
+        });
+    }
+    out
+}
+
+/// Turns glTF materials into [`Material`]s with [`Pbr`] parameters, and the images their
+/// textures use into [`Texture`]s (each image once).
+struct MaterialImport<'a> {
+    images: &'a [gltf::image::Data],
+    /// The texture made of each image, once one is.
+    image_texture: Vec<Option<u32>>,
+    out: &'a mut Imported,
+}
+
+impl MaterialImport<'_> {
+    /// Adds material `m` to the output; returns its name, the emission its triangles give
+    /// off as area lights, and the texture coordinate set its textures read.
+    ///
+    /// The area lights' radiance is the emissive factor (times its strength) alone: the
+    /// emissive texture scales only the material's emission (`material_at`), so a light
+    /// whose texture is mostly dark (DamagedHelmet) shines as if it were white. Applying the
+    /// texture where lights are hit and sampled (and the texture's mean to the light's power
+    /// estimate) belongs to the light code.
+    fn material(&mut self, m: &gltf::Material) -> Result<(String, Rgb, u32), String> {
+        let index = m.index().map_or_else(|| "default".to_string(), |i| format!("#{i}"));
+        let name = format!("gltf:{}", m.name().map_or(index, String::from));
+        let pbr = m.pbr_metallic_roughness();
+        let factor = pbr.base_color_factor();
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        let emission = m.emissive_factor().map(|e| e * strength);
+        let alpha_cutoff = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => None,
+            gltf::material::AlphaMode::Mask => Some(m.alpha_cutoff().unwrap_or(0.5)),
+            gltf::material::AlphaMode::Blend => {
+                self.out.warnings.push(format!(
+                    "material '{name}': alpha mode BLEND is rendered as MASK at 0.5"
+                ));
+                Some(0.5)
+            }
+        };
+        let textures = PbrTextures {
+            base_color: pbr.base_color_texture().map(|t| self.texture(&t)).transpose()?,
+            metallic_roughness: pbr.metallic_roughness_texture().map(|t| self.texture(&t)).transpose()?,
+            emissive: m.emissive_texture().map(|t| self.texture(&t)).transpose()?,
+        };
+        // One set of texture coordinates per mesh: the base colour's, else another slot's.
+        let slots = [&textures.base_color, &textures.metallic_roughness, &textures.emissive];
+        let sets: Vec<u32> = slots.iter().filter_map(|t| t.map(|t| t.tex_coord)).collect();
+        let uv_set = sets.first().copied().unwrap_or(0);
+        if sets.iter().any(|&s| s != uv_set) {
+            self.out.warnings.push(format!(
+                "material '{name}': its textures read texture coordinate sets {sets:?}; all read set {uv_set}"
+            ));
+        }
+        self.out.materials.insert(
+            name.clone(),
+            Material {
+                two_sided: m.double_sided(),
+                pbr: Some(Pbr {
+                    base_color: [factor[0], factor[1], factor[2]],
+                    alpha: factor[3],
+                    alpha_cutoff,
+                    metallic: pbr.metallic_factor(),
+                    roughness: pbr.roughness_factor(),
+                    transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()),
+                    ior: m.ior().unwrap_or(1.5),
+                    emission,
+                    textures,
+                }),
+                ..Default::default()
+            },
+        );
+        Ok((name, emission, uv_set))
+    }
+
+    /// The reference a material slot makes to a texture, converting its image on first use.
+    fn texture(&mut self, info: &gltf::texture::Info) -> Result<TextureRef, String> {
+        let texture = info.texture();
+        let image = texture.source().index();
+        let data = self
+            .images
+            .get(image)
+            .ok_or_else(|| format!("texture {} uses image {image}, which was not loaded", texture.index()))?;
+        let index = match self.image_texture[image] {
+            Some(i) => i,
+            None => {
+                let name = texture
+                    .source()
+                    .name()
+                    .map_or_else(|| format!("image {image}"), String::from);
+                let converted = rgba8(data, &name)?;
+                self.out.textures.push(converted);
+                let i = self.out.textures.len() as u32 - 1;
+                self.image_texture[image] = Some(i);
+                i
+            }
+        };
+        let wrap = |mode| match mode {
+            gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+            gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        };
+        let sampler = texture.sampler();
+        let mut r = TextureRef::new(index);
+        r.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
+        r.tex_coord = info.tex_coord();
+        if let Some(t) = info.texture_transform() {
+            // KHR_texture_transform: translation x rotation x scale, rotating counter-clockwise
+            // in uv (the extension's matrix).
+            let ([ox, oy], [sx, sy], (sin, cos)) = (t.offset(), t.scale(), t.rotation().sin_cos());
+            r.transform = [[cos * sx, sin * sy, ox], [-sin * sx, cos * sy, oy]];
+            r.tex_coord = t.tex_coord().unwrap_or(r.tex_coord);
+        }
+        Ok(r)
+    }
+}
+
+/// An image as RGBA8 texels (grey fills R, G and B; missing alpha is opaque; 16-bit and float
+/// channels are rounded to 8 bits, floats clamped to [0, 1]).
+fn rgba8(image: &gltf::image::Data, name: &str) -> Result<Texture, String> {
+    use gltf::image::Format;
+    let (channels, bytes) = match image.format {
+        Format::R8 => (1, 1),
+        Format::R8G8 => (2, 1),
+        Format::R8G8B8 => (3, 1),
+        Format::R8G8B8A8 => (4, 1),
+        Format::R16 => (1, 2),
+        Format::R16G16 => (2, 2),
+        Format::R16G16B16 => (3, 2),
+        Format::R16G16B16A16 => (4, 2),
+        Format::R32G32B32FLOAT => (3, 4),
+        Format::R32G32B32A32FLOAT => (4, 4),
+    };
+    let (w, h) = (image.width as usize, image.height as usize);
+    if w == 0 || h == 0 || image.pixels.len() != w * h * channels * bytes {
+        return Err(format!(
+            "{name}: {} bytes of pixels for {w}x{h} texels of {channels} channels",
+            image.pixels.len()
+        ));
+    }
+    let channel = |c: &[u8]| -> u32 {
+        match bytes {
+            1 => c[0] as u32,
+            2 => u16::from_ne_bytes([c[0], c[1]]) as u32 >> 8,
+            _ => (f32::from_ne_bytes([c[0], c[1], c[2], c[3]]).clamp(0.0, 1.0) * 255.0).round() as u32,
+        }
+    };
+    let texels = image
+        .pixels
+        .chunks_exact(channels * bytes)
+        .map(|px| {
+            let v: Vec<u32> = px.chunks_exact(bytes).map(channel).collect();
+            let (rgb, a) = match channels {
+                1 => ([v[0]; 3], 255),
+                2 => ([v[0]; 3], v[1]),
+                3 => ([v[0], v[1], v[2]], 255),
+                _ => ([v[0], v[1], v[2]], v[3]),
+            };
+            rgb[0] | rgb[1] << 8 | rgb[2] << 16 | a << 24
+        })
+        .collect();
+    Ok(Texture {
+        name: name.to_string(),
+        width: image.width,
+        height: image.height,
+        texels,
     })
 }
 

@@ -268,3 +268,82 @@ pub struct GpuEnvironment {
     /// Sine of the map's rotation about +Y.
     pub sin_rotation: f32,
 }
+
+/// Bits of `TextureInfo::flags`.
+pub mod texture_flags {
+    /// Colour channels are sRGB-encoded: decoded to linear before filtering.
+    pub const SRGB: u32 = 1;
+    /// Where the wrap mode along u sits (two bits).
+    pub const WRAP_S_SHIFT: u32 = 1;
+    /// Where the wrap mode along v sits (two bits).
+    pub const WRAP_T_SHIFT: u32 = 3;
+    /// Wrap mode: repeat.
+    pub const WRAP_REPEAT: u32 = 0;
+    /// Wrap mode: clamp to the edge texels.
+    pub const WRAP_CLAMP: u32 = 1;
+    /// Wrap mode: mirrored repeat.
+    pub const WRAP_MIRROR: u32 = 2;
+}
+
+/// One material slot's texture (`TextureInfo` in WGSL): where its image lies in the texel
+/// buffer, its size, wrap modes and sRGB flag, and the KHR_texture_transform matrix.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct GpuTextureInfo {
+    /// First row of the 2x3 texture-coordinate transform.
+    pub row0: [f32; 3],
+    /// Index of the image's first texel in `texels`.
+    pub offset: u32,
+    /// Second row of the transform.
+    pub row1: [f32; 3],
+    /// [`texture_flags`].
+    pub flags: u32,
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Unused.
+    pub pad: [u32; 2],
+}
+
+/// Bits of `TriangleAttributes::flags`.
+pub mod attribute_flags {
+    /// The triangle has vertex normals (`n0`..`n2`).
+    pub const NORMALS: u32 = 1;
+}
+
+/// Per-vertex attributes of one primitive (`TriangleAttributes` in WGSL), in BVH order like
+/// the primitives: texture coordinates and unit shading normals, octahedral-encoded in two
+/// snorm16 halves (WGSL `unpack2x16snorm`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, Default, PartialEq)]
+pub struct GpuTriangleAttributes {
+    /// Texture coordinates of v0.
+    pub uv0: [f32; 2],
+    /// Texture coordinates of v1.
+    pub uv1: [f32; 2],
+    /// Texture coordinates of v2.
+    pub uv2: [f32; 2],
+    /// Normal at v0.
+    pub n0: u32,
+    /// Normal at v1.
+    pub n1: u32,
+    /// Normal at v2.
+    pub n2: u32,
+    /// [`attribute_flags`].
+    pub flags: u32,
+}
+
+/// A unit vector in octahedral encoding (Meyer et al. 2010), x in the low 16 bits and y in
+/// the high, as snorm16.
+pub fn encode_octahedral(n: [f32; 3]) -> u32 {
+    let l1 = n[0].abs() + n[1].abs() + n[2].abs();
+    let (mut x, mut y) = if l1 > 0.0 { (n[0] / l1, n[1] / l1) } else { (0.0, 0.0) };
+    if n[2] < 0.0 {
+        let (ox, oy) = (x, y);
+        x = (1.0 - oy.abs()) * if ox >= 0.0 { 1.0 } else { -1.0 };
+        y = (1.0 - ox.abs()) * if oy >= 0.0 { 1.0 } else { -1.0 };
+    }
+    let snorm = |v: f32| ((v.clamp(-1.0, 1.0) * 32767.0).round() as i16) as u16 as u32;
+    snorm(x) | snorm(y) << 16
+}

@@ -9,17 +9,19 @@ pub mod features;
 pub mod gltf;
 pub mod gpu;
 pub mod model;
+pub mod texture;
 
 use bvh::BvhKind;
 use bytemuck::Zeroable;
 use glam::{Vec3, Vec3A};
 use gpu::{
-    GpuAliasEntry, GpuCamera, GpuEnvironment, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, light_kind,
-    primitive_kind,
+    GpuAliasEntry, GpuCamera, GpuEnvironment, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, GpuTextureInfo,
+    GpuTriangleAttributes, light_kind, primitive_kind,
 };
-use model::{FovAxis, Light, Look, Scene, Shape};
+use model::{Camera, FovAxis, Light, Look, Scene, Shape};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
+use texture::PackedTextures;
 
 /// A scene error: the file, a position where one is known, and the problem.
 #[derive(Debug, thiserror::Error)]
@@ -87,11 +89,27 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
     if w == 0 || h == 0 {
         return Err(err("resolution", "resolution must be at least 1x1".into()));
     }
-    if !(scene.camera.fov_degrees > 0.0 && scene.camera.fov_degrees < 180.0) {
-        return Err(err(
-            "fov_degrees",
-            format!("field of view {} is not in (0, 180) degrees", scene.camera.fov_degrees),
-        ));
+    match (&scene.camera, &scene.gltf_camera, &scene.gltf) {
+        (Some(camera), None, _) => check_fov(camera.fov_degrees).map_err(|e| err("fov_degrees", e))?,
+        (None, Some(_), Some(_)) => {}
+        (Some(_), Some(_), _) => {
+            return Err(err(
+                "gltf_camera",
+                "the scene has both a camera and a gltf_camera; keep one".into(),
+            ));
+        }
+        (None, Some(_), None) => {
+            return Err(err(
+                "gltf_camera",
+                "gltf_camera needs a glTF asset (gltf: \"...\")".into(),
+            ));
+        }
+        (None, None, _) => {
+            return Err(err(
+                "Scene",
+                "the scene has no camera: add camera: (position: .., look: .., up: .., fov_degrees: ..), or gltf_camera: Index(0) or Name(\"...\") with a glTF asset".into(),
+            ));
+        }
     }
     if scene.integrator.max_path_length == 0 {
         return Err(err("max_path_length", "max_path_length must be at least 1".into()));
@@ -99,9 +117,19 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
-/// Imports the scene's glTF asset (a path below `asset_root`) into its shapes, materials and
-/// lights (KHR_lights_punctual), loads the environment maps its lights name (paths below
-/// `asset_root` too), then checks that the scene has geometry and light.
+fn check_fov(fov_degrees: f32) -> Result<(), String> {
+    if fov_degrees > 0.0 && fov_degrees < 180.0 {
+        Ok(())
+    } else {
+        Err(format!("field of view {fov_degrees} is not in (0, 180) degrees"))
+    }
+}
+
+/// Imports the scene's glTF asset (a path below `asset_root`) into its shapes, materials,
+/// textures, camera (`gltf_camera`) and lights (KHR_lights_punctual), loads the environment
+/// maps its lights name (paths below `asset_root` too), then checks that the scene has
+/// geometry and light.
+/// Approximations of the import are printed to stderr as warnings.
 pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path::Path>) -> Result<(), SceneError> {
     let err = |message: String| SceneError {
         file: file.to_string(),
@@ -119,10 +147,7 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
                 root.display()
             )));
         }
-        let imported = gltf::import(&path).map_err(err)?;
-        scene.materials.extend(imported.materials);
-        scene.shapes.extend(imported.shapes);
-        scene.lights.extend(imported.lights);
+        add_gltf(scene, &path).map_err(err)?;
     }
     for light in &mut scene.lights {
         if let Light::Environment { file: image, map, .. } = light
@@ -144,16 +169,150 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
         }
     }
     check_lights(&scene.lights).map_err(|(_, message)| err(message))?;
+    check_resolved(scene).map_err(err)
+}
+
+/// Checks that a scene with its glTF asset imported has geometry and light.
+fn check_resolved(scene: &Scene) -> Result<(), String> {
     if scene.shapes.is_empty() {
-        return Err(err("the scene is empty: it has no shapes".into()));
+        return Err("the scene is empty: it has no shapes".into());
     }
     let emissive = scene.shapes.iter().any(Shape::emits);
     if !emissive && scene.lights.is_empty() {
-        return Err(err(
-            "the scene has no light: add an emissive shape or a light (Point, Directional, Background)".into(),
-        ));
+        return Err("the scene has no light: add an emissive shape or a light (Point, Directional, Background)".into());
     }
     Ok(())
+}
+
+/// Imports the glTF file at `path` into `scene` and picks its `gltf_camera`; returns the
+/// asset's cameras.
+fn add_gltf(scene: &mut Scene, path: &std::path::Path) -> Result<Vec<gltf::ImportedCamera>, String> {
+    let mut imported = gltf::import(path)?;
+    for warning in &imported.warnings {
+        eprintln!("warning: {}: {warning}", path.display());
+    }
+    // The asset's texture indices count from the scene's textures so far.
+    let first_texture = scene.textures.len() as u32;
+    for pbr in imported.materials.values_mut().filter_map(|m| m.pbr.as_mut()) {
+        let t = &mut pbr.textures;
+        for r in [&mut t.base_color, &mut t.metallic_roughness, &mut t.emissive]
+            .into_iter()
+            .flatten()
+        {
+            r.texture += first_texture;
+        }
+    }
+    scene.textures.extend(imported.textures);
+    if let Some(wanted) = &scene.gltf_camera {
+        let found = imported.cameras.iter().find(|c| match wanted {
+            model::GltfCamera::Index(i) => c.index == *i,
+            model::GltfCamera::Name(n) => c.names.contains(n),
+        });
+        let Some(found) = found else {
+            let known: Vec<String> = imported
+                .cameras
+                .iter()
+                .map(|c| format!("{} {:?}", c.index, c.names))
+                .collect();
+            return Err(format!(
+                "{}: no perspective camera {wanted:?} placed by a node (cameras: {})",
+                path.display(),
+                if known.is_empty() {
+                    "none".to_string()
+                } else {
+                    known.join(", ")
+                }
+            ));
+        };
+        check_fov(found.camera.fov_degrees).map_err(|e| format!("{}: camera {}: {e}", path.display(), found.index))?;
+        scene.camera = Some(found.camera.clone());
+    }
+    scene.materials.extend(imported.materials);
+    scene.shapes.extend(imported.shapes);
+    scene.lights.extend(imported.lights);
+    Ok(imported.cameras)
+}
+
+/// The scene of a bare glTF file (`.gltf` or `.glb`): its first perspective camera (at the
+/// camera's aspect ratio, 512 texels high), else a default camera framing its bounds, and a
+/// constant white background when it has no light. Also returns a note for each of these
+/// defaults taken.
+pub fn scene_from_gltf(path: &std::path::Path) -> Result<(Scene, Vec<String>), SceneError> {
+    let file = path.display().to_string();
+    let err = |message: String| SceneError {
+        file: file.clone(),
+        at: None,
+        message,
+    };
+    let mut scene = Scene {
+        description: format!("the glTF asset {file}"),
+        camera: None,
+        gltf_camera: None,
+        resolution: (512, 512),
+        materials: BTreeMap::new(),
+        shapes: Vec::new(),
+        lights: Vec::new(),
+        integrator: Default::default(),
+        gltf: Some(file.clone()),
+        textures: Vec::new(),
+    };
+    let cameras = add_gltf(&mut scene, path).map_err(err)?;
+    let mut notes = Vec::new();
+    match cameras.iter().find(|c| check_fov(c.camera.fov_degrees).is_ok()) {
+        Some(c) => {
+            scene.camera = Some(c.camera.clone());
+            if let Some(aspect) = c.aspect_ratio.filter(|a| a.is_finite() && *a > 0.0) {
+                scene.resolution = (((512.0 * aspect).round() as u32).clamp(1, 16384), 512);
+            }
+        }
+        None => {
+            scene.camera = Some(default_camera(&scene));
+            notes.push("it has no perspective camera: a default camera frames its bounds".to_string());
+        }
+    }
+    if !scene.shapes.iter().any(Shape::emits) && scene.lights.is_empty() {
+        scene.lights.push(Light::Background {
+            radiance: [1.0; 3],
+            scale: 1.0,
+        });
+        notes.push("it has no light: a constant white background (radiance 1) lights it".to_string());
+    }
+    check_resolved(&scene).map_err(err)?;
+    Ok((scene, notes))
+}
+
+/// A camera looking down -Z (glTF's default view) at the centre of the scene's bounding
+/// sphere, far enough back for a vertical field of view of 45 degrees to hold all of it.
+pub fn default_camera(scene: &Scene) -> Camera {
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    let mut add = |p: Vec3, r: f32| {
+        if p.is_finite() && r.is_finite() {
+            lo = lo.min(p - r);
+            hi = hi.max(p + r);
+        }
+    };
+    for shape in &scene.shapes {
+        match shape {
+            Shape::Triangle { vertices, .. } => vertices.iter().for_each(|&v| add(v3(v), 0.0)),
+            Shape::Quad { corners, .. } => corners.iter().for_each(|&v| add(v3(v), 0.0)),
+            Shape::Mesh { positions, .. } => positions.iter().for_each(|&v| add(v3(v), 0.0)),
+            Shape::Sphere { center, radius, .. } => add(v3(*center), *radius),
+        }
+    }
+    let (center, radius) = if lo.x <= hi.x {
+        ((lo + hi) * 0.5, ((hi - lo) * 0.5).length().max(1e-6))
+    } else {
+        (Vec3::ZERO, 1.0)
+    };
+    let fov_degrees: f32 = 45.0;
+    let distance = radius / (fov_degrees.to_radians() * 0.5).sin();
+    Camera {
+        position: (center + Vec3::Z * distance).to_array(),
+        look: Look::Target(center.to_array()),
+        up: [0.0, 1.0, 0.0],
+        fov_degrees,
+        fov_axis: FovAxis::Smaller,
+    }
 }
 
 /// The scene flattened for the GPU, with its BVH.
@@ -185,6 +344,13 @@ pub struct CompiledScene {
     pub env_texels: Vec<[f32; 4]>,
     /// The environment map's CDFs; `[0, 1]` when there is no map.
     pub env_cdf: Vec<f32>,
+    /// Vertex attributes per primitive, in the primitives' order; empty when no mesh has
+    /// texture coordinates or normals.
+    pub attributes: Vec<GpuTriangleAttributes>,
+    /// The texture table: one entry per material slot with a texture.
+    pub textures: Vec<GpuTextureInfo>,
+    /// Every texture's texels (RGBA8), one image after another.
+    pub texels: Vec<u32>,
     /// Depth of the BVH (in node levels for [`BvhKind::Cwbvh`]).
     pub bvh_depth: usize,
     /// Time spent building the BVH.
@@ -212,7 +378,19 @@ impl CompiledScene {
             .enumerate()
             .map(|(i, k)| (k.as_str(), i as u32))
             .collect();
-        let materials = scene.materials.values().map(gpu_material).collect();
+        let mut packed = PackedTextures::new(&scene.textures)?;
+        let materials = scene
+            .materials
+            .iter()
+            .map(|(name, m)| {
+                gpu_material(m, &mut packed, &scene.textures).map_err(|e| format!("material '{name}': {e}"))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        let with_attributes = scene
+            .shapes
+            .iter()
+            .any(|s| matches!(s, Shape::Mesh { uvs, normals, .. } if uvs.is_some() || normals.is_some()));
+        let mut attrs: Vec<GpuTriangleAttributes> = Vec::new();
         let mut prims: Vec<GpuPrimitive> = Vec::new();
         let mut lights: Vec<GpuLight> = Vec::new();
         let push_triangle = |v: [Vec3; 3],
@@ -281,11 +459,16 @@ impl CompiledScene {
                     indices,
                     material,
                     emission,
+                    uvs,
+                    normals,
                 } => {
                     let m = material_index[material.as_str()];
                     for t in indices {
                         let v = t.map(|i| v3(positions[i as usize]));
                         push_triangle(v, m, *emission, &mut prims, &mut lights);
+                        if with_attributes {
+                            attrs.push(triangle_attributes(*t, uvs.as_deref(), normals.as_deref()));
+                        }
                     }
                 }
                 Shape::Sphere {
@@ -300,6 +483,9 @@ impl CompiledScene {
                     c: [0.0; 3],
                     kind: primitive_kind::SPHERE,
                 }),
+            }
+            if with_attributes {
+                attrs.resize(prims.len(), GpuTriangleAttributes::default());
             }
         }
         let mut background = -1;
@@ -391,6 +577,11 @@ impl CompiledScene {
         };
         let bvh_time = start.elapsed();
         let primitives: Vec<GpuPrimitive> = order.iter().map(|&i| prims[i as usize]).collect();
+        let attributes = if with_attributes {
+            order.iter().map(|&i| attrs[i as usize]).collect()
+        } else {
+            Vec::new()
+        };
         let center = (lo + hi) * 0.5;
         let radius = ((hi - lo) * 0.5).length();
         let mean_env_luminance = env_distribution.as_ref().map_or(0.0, |d| d.mean_luminance);
@@ -424,6 +615,9 @@ impl CompiledScene {
             environment,
             env_texels,
             env_cdf,
+            attributes,
+            textures: packed.infos,
+            texels: packed.texels,
             bvh_depth,
             bvh_time,
             clipped_primitives,
@@ -432,7 +626,7 @@ impl CompiledScene {
 
     /// The camera for an image of `width` x `height` pixels.
     pub fn camera(scene: &Scene, width: u32, height: u32) -> GpuCamera {
-        let c = &scene.camera;
+        let c = &scene.camera.clone().unwrap_or_else(|| default_camera(scene));
         let position = v3(c.position);
         let forward = match c.look {
             Look::Forward(d) => v3(d),
@@ -486,6 +680,12 @@ impl CompiledScene {
             bytemuck::cast_slice(&self.env_texels).to_vec(),
         );
         out.insert("env_cdf".to_string(), bytemuck::cast_slice(&self.env_cdf).to_vec());
+        out.insert(
+            "attributes".to_string(),
+            bytemuck::cast_slice(&self.attributes).to_vec(),
+        );
+        out.insert("textures".to_string(), bytemuck::cast_slice(&self.textures).to_vec());
+        out.insert("texels".to_string(), bytemuck::cast_slice(&self.texels).to_vec());
         out
     }
 }
@@ -546,10 +746,14 @@ fn check_lights(lights: &[Light]) -> Result<(), (&'static str, String)> {
     Ok(())
 }
 
-/// A material as the GPU reads it.
-fn gpu_material(m: &model::Material) -> GpuMaterial {
+/// A material as the GPU reads it, its textures added to `packed`.
+fn gpu_material(
+    m: &model::Material,
+    packed: &mut PackedTextures,
+    textures: &[texture::Texture],
+) -> Result<GpuMaterial, String> {
     let two_sided = if m.two_sided { gpu::material_flags::TWO_SIDED } else { 0 };
-    match &m.pbr {
+    Ok(match &m.pbr {
         None => GpuMaterial {
             diffuse: m.diffuse,
             phong_exponent: m.phong_exponent,
@@ -559,17 +763,59 @@ fn gpu_material(m: &model::Material) -> GpuMaterial {
             flags: two_sided,
             ..GpuMaterial::default()
         },
-        Some(p) => GpuMaterial {
-            diffuse: p.base_color,
-            ior: p.ior,
-            flags: two_sided | gpu::material_flags::PBR,
-            emission: p.emission,
-            metallic: p.metallic,
-            roughness: p.roughness,
-            transmission: p.transmission,
-            ..GpuMaterial::default()
-        },
+        Some(p) => {
+            let mut slot = |r: &Option<texture::TextureRef>, srgb: bool| match r {
+                None => Ok(-1),
+                Some(r) if (r.texture as usize) < textures.len() => Ok(packed.add(r, srgb, textures)),
+                Some(r) => Err(format!("texture {} of {}", r.texture, textures.len())),
+            };
+            let mask = if p.alpha_cutoff.is_some() {
+                gpu::material_flags::ALPHA_MASK
+            } else {
+                0
+            };
+            GpuMaterial {
+                diffuse: p.base_color,
+                ior: p.ior,
+                flags: two_sided | gpu::material_flags::PBR | mask,
+                emission: p.emission,
+                metallic: p.metallic,
+                roughness: p.roughness,
+                transmission: p.transmission,
+                alpha: p.alpha,
+                alpha_cutoff: p.alpha_cutoff.unwrap_or(0.0),
+                base_color_texture: slot(&p.textures.base_color, true)?,
+                metallic_roughness_texture: slot(&p.textures.metallic_roughness, false)?,
+                emissive_texture: slot(&p.textures.emissive, true)?,
+                ..GpuMaterial::default()
+            }
+        }
+    })
+}
+
+/// The attributes of mesh triangle `t`: its vertices' texture coordinates ((0, 0) without),
+/// and their normals when all three are finite and non-zero (else the geometric normal
+/// shades it).
+fn triangle_attributes(
+    t: [u32; 3],
+    uvs: Option<&[[f32; 2]]>,
+    normals: Option<&[model::Vec3]>,
+) -> GpuTriangleAttributes {
+    let uv = |i: u32| uvs.map_or([0.0; 2], |u| u[i as usize]);
+    let mut a = GpuTriangleAttributes {
+        uv0: uv(t[0]),
+        uv1: uv(t[1]),
+        uv2: uv(t[2]),
+        ..Default::default()
+    };
+    if let Some(n) = normals {
+        let n = t.map(|i| v3(n[i as usize]));
+        if n.iter().all(|n| n.is_finite() && n.length_squared() > 0.0) {
+            [a.n0, a.n1, a.n2] = n.map(|n| gpu::encode_octahedral(n.normalize().to_array()));
+            a.flags = gpu::attribute_flags::NORMALS;
+        }
     }
+    a
 }
 
 /// The largest coordinate (or sphere radius) a shape may have: as far as a ray travels
@@ -600,13 +846,36 @@ fn check_shape(index: usize, shape: &Shape) -> Result<(), String> {
             "shape {index}: coordinate {v} is not a finite number within ±{MAX_COORDINATE:e}"
         ));
     }
-    if let Shape::Mesh { positions, indices, .. } = shape
-        && let Some(&i) = indices.iter().flatten().find(|&&i| i as usize >= positions.len())
+    if let Shape::Mesh {
+        positions,
+        indices,
+        uvs,
+        normals,
+        ..
+    } = shape
     {
-        return Err(format!(
-            "shape {index}: a mesh triangle uses vertex {i}, but the mesh has {} vertices",
-            positions.len()
-        ));
+        if let Some(&i) = indices.iter().flatten().find(|&&i| i as usize >= positions.len()) {
+            return Err(format!(
+                "shape {index}: a mesh triangle uses vertex {i}, but the mesh has {} vertices",
+                positions.len()
+            ));
+        }
+        let counts = [
+            ("uvs", uvs.as_ref().map(Vec::len)),
+            ("normals", normals.as_ref().map(Vec::len)),
+        ];
+        if let Some((what, n)) = counts
+            .iter()
+            .find_map(|(w, n)| n.filter(|&n| n != positions.len()).map(|n| (w, n)))
+        {
+            return Err(format!(
+                "shape {index}: the mesh has {n} {what} for {} vertices",
+                positions.len()
+            ));
+        }
+        if let Some(v) = uvs.iter().flatten().flatten().find(|v| !v.is_finite()) {
+            return Err(format!("shape {index}: texture coordinate {v} is not a finite number"));
+        }
     }
     Ok(())
 }

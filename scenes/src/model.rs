@@ -1,6 +1,7 @@
 //! The scene model and its RON file format, written by hand: camera, materials, shapes,
 //! lights and integrator settings.
 
+use crate::texture::{PbrTextures, Texture};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
@@ -16,8 +17,13 @@ pub struct Scene {
     /// What the scene shows.
     #[serde(default)]
     pub description: String,
-    /// The pinhole camera.
-    pub camera: Camera,
+    /// The pinhole camera; optional when the glTF asset provides one (`gltf_camera`) or, for
+    /// a bare glTF file, a default framing its bounds.
+    #[serde(default)]
+    pub camera: Option<Camera>,
+    /// A camera of the glTF asset to use instead of `camera`.
+    #[serde(default)]
+    pub gltf_camera: Option<GltfCamera>,
     /// Default image size (width, height) when none is asked for.
     #[serde(default = "default_resolution")]
     pub resolution: (u32, u32),
@@ -34,10 +40,24 @@ pub struct Scene {
     #[serde(default)]
     pub integrator: Integrator,
     /// A glTF 2.0 asset (`.gltf` or `.glb`, a path below the asset root) whose meshes join the
-    /// shapes: every node's mesh instance with its transform, base colours (a texture
-    /// contributes its mean colour) and emission; its materials are named `gltf:NAME`.
+    /// shapes: every node's mesh instance with its transform, normals and texture
+    /// coordinates; its metallic-roughness materials, with their textures, are named
+    /// `gltf:NAME` (see [`crate::gltf`]).
     #[serde(default)]
     pub gltf: Option<String>,
+    /// Images the materials' textures refer to (filled by the glTF import).
+    #[serde(skip)]
+    pub textures: Vec<Texture>,
+}
+
+/// A camera of a glTF asset: by its index in the asset's `cameras`, or by the name of the
+/// camera or of a node holding it.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub enum GltfCamera {
+    /// The camera at this index.
+    Index(usize),
+    /// The camera (or camera node) of this name.
+    Name(String),
 }
 
 fn default_resolution() -> (u32, u32) {
@@ -133,6 +153,15 @@ pub struct Pbr {
     /// Emitted radiance (glTF emissiveFactor times KHR_materials_emissive_strength).
     #[serde(default)]
     pub emission: Rgb,
+    /// Base colour alpha (glTF baseColorFactor's fourth component).
+    #[serde(default = "unit")]
+    pub alpha: f32,
+    /// Alpha mask (glTF alphaMode MASK): where alpha is below this, rays pass through.
+    #[serde(default)]
+    pub alpha_cutoff: Option<f32>,
+    /// Textures scaling the factors (from glTF assets; RON materials have none).
+    #[serde(skip)]
+    pub textures: PbrTextures,
 }
 
 fn white() -> Rgb {
@@ -152,6 +181,9 @@ impl Default for Pbr {
             transmission: 0.0,
             ior: default_ior(),
             emission: [0.0; 3],
+            alpha: 1.0,
+            alpha_cutoff: None,
+            textures: PbrTextures::default(),
         }
     }
 }
@@ -209,6 +241,13 @@ pub enum Shape {
         /// Emitted radiance: makes every triangle an area light.
         #[serde(default)]
         emission: Option<Rgb>,
+        /// Texture coordinates per vertex (glTF TEXCOORD_n); (0, 0) without them.
+        #[serde(default)]
+        uvs: Option<Vec<[f32; 2]>>,
+        /// Unit shading normals per vertex, on the side the winding's normal faces; the
+        /// geometric normal without them (flat shading).
+        #[serde(default)]
+        normals: Option<Vec<Vec3>>,
     },
     /// An analytic sphere (normals face outward).
     Sphere {

@@ -1,6 +1,8 @@
 // Ray intersection: triangles (Moeller-Trumbore), spheres (the numerically careful form of
 // Haines et al., Ray Tracing Gems ch. 7) and BVH traversal, closest hit and any hit: BVH2, or
-// with the CWBVH flag a compressed wide BVH. Needs the resources `primitives` and `bvh`.
+// with the CWBVH flag a compressed wide BVH. With the ALPHA_MASK flag, alpha-masked triangles
+// let rays through where their alpha is below the cutoff. Needs the resources `primitives`, `bvh`, `attributes`,
+// `materials`, `textures` and `texels`, and the library file textures.wgsl.
 
 struct Hit {
     t: f32,
@@ -56,6 +58,51 @@ fn intersect_sphere(o: vec3<f32>, d: vec3<f32>, p: Primitive, t_max: f32) -> f32
     return -1.0;
 }
 
+// ---- alpha mask: cut-outs rays pass through (only with the ALPHA_MASK flag, which the
+// host sets for scenes with an alpha-masked material) ----
+#if ALPHA_MASK
+
+// Whether primitive `index` of material `material` is solid at barycentrics `uv`: always,
+// unless the material is alpha-masked (one flag test for the rest) and its alpha there is
+// below the cutoff.
+fn alpha_solid(material: u32, index: u32, uv: vec2<f32>) -> bool {
+    if ((materials[material].flags & MATERIAL_ALPHA_MASK) == 0u) {
+        return true;
+    }
+    let m = materials[material];
+    return material_alpha(m, surface_tex(index, uv)) >= m.alpha_cutoff;
+}
+
+#endif
+// ---- end of alpha mask ----
+
+// Texture coordinates on primitive `index` at barycentrics `uv` ((0, 0) without attributes).
+fn surface_tex(index: u32, uv: vec2<f32>) -> vec2<f32> {
+    if (index >= arrayLength(&attributes)) {
+        return vec2<f32>(0.0);
+    }
+    let a = attributes[index];
+    return (1.0 - uv.x - uv.y) * a.uv0 + uv.x * a.uv1 + uv.y * a.uv2;
+}
+
+// The shading normal of primitive `index` at barycentrics `uv`: its interpolated vertex
+// normals, turned to the side of the geometric normal `ng`; `ng` without vertex normals.
+fn shading_normal(index: u32, uv: vec2<f32>, ng: vec3<f32>) -> vec3<f32> {
+    if (index >= arrayLength(&attributes)) {
+        return ng;
+    }
+    let a = attributes[index];
+    if ((a.flags & ATTRIBUTE_NORMALS) == 0u) {
+        return ng;
+    }
+    let n = (1.0 - uv.x - uv.y) * decode_octahedral(a.n0) + uv.x * decode_octahedral(a.n1) + uv.y * decode_octahedral(a.n2);
+    let len = length(n);
+    if (!(len > 0.0)) {
+        return ng;
+    }
+    return select(n / len, -n / len, dot(n, ng) < 0.0);
+}
+
 fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     let tiny = vec3<f32>(1e-30);
     let big = select(vec3<f32>(-1e30), vec3<f32>(1e30), d >= vec3<f32>(0.0));
@@ -64,14 +111,22 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
 
 fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: ptr<function, Hit>) {
     let p = primitives[index];
+#if SPHERES
     if (p.kind == PRIMITIVE_SPHERE) {
         let t = intersect_sphere(o, d, p, t_max);
         if (t > 0.0) {
             *hit = Hit(t, index, vec2<f32>(0.0), true);
         }
     } else {
+#else
+    {
+#endif
         let r = intersect_triangle(o, d, p, t_max);
+#if ALPHA_MASK
+        if (r.x > 0.0 && alpha_solid(p.material, index, r.yz)) {
+#else
         if (r.x > 0.0) {
+#endif
             *hit = Hit(r.x, index, r.yz, true);
         }
     }
@@ -309,8 +364,9 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
 #endif
 
 // Where a ray hit: position (recomputed on the primitive for accuracy), unit geometric
-// normal, material, area light, the primitive's extent (for offset_ray_origin) and texture
-// coordinates.
+// normal, material, area light, the primitive's extent (for offset_ray_origin), texture
+// coordinates, and the unit shading normal (interpolated vertex normals on the geometric
+// normal's side; the geometric normal on spheres and triangles without vertex normals).
 struct Surface {
     position: vec3<f32>,
     normal: vec3<f32>,
@@ -318,15 +374,21 @@ struct Surface {
     light: i32,
     extent: f32,
     tex: vec2<f32>,
+    shading_normal: vec3<f32>,
 }
 
 fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
     let p = primitives[hit.primitive];
+#if SPHERES
     if (p.kind == PRIMITIVE_SPHERE) {
         let n = normalize(o + hit.t * d - p.a);
         let m = abs(p.a) + vec3<f32>(p.b.x);
-        return Surface(p.a + p.b.x * n, n, p.material, p.light, max(m.x, max(m.y, m.z)), vec2<f32>(0.0));
+        return Surface(p.a + p.b.x * n, n, p.material, p.light, max(m.x, max(m.y, m.z)), vec2<f32>(0.0), n);
     }
+#endif
     let position = p.a + hit.uv.x * p.b + hit.uv.y * p.c;
-    return Surface(position, triangle_normal(p.b, p.c), p.material, p.light, triangle_extent(p.a, p.b, p.c), vec2<f32>(0.0));
+    let ng = triangle_normal(p.b, p.c);
+    let tex = surface_tex(hit.primitive, hit.uv);
+    let ns = shading_normal(hit.primitive, hit.uv, ng);
+    return Surface(position, ng, p.material, p.light, triangle_extent(p.a, p.b, p.c), tex, ns);
 }

@@ -96,6 +96,50 @@ const MATERIAL_TWO_SIDED: u32 = 1u;
 const MATERIAL_PBR: u32 = 2u;
 const MATERIAL_ALPHA_MASK: u32 = 4u;
 
+// One material slot's texture: its image at texels[offset ..] (width x height, rows from the
+// top, RGBA8 with R in the low byte), sampled at uv' = (dot(row0, (u, v, 1)),
+// dot(row1, (u, v, 1))) (KHR_texture_transform).
+struct TextureInfo {
+    row0: vec3<f32>,
+    offset: u32,
+    row1: vec3<f32>,
+    flags: u32,             // TEXTURE_SRGB; wrap modes at bits 1..3 (u) and 3..5 (v)
+    width: u32,
+    height: u32,
+    pad: vec2<u32>,
+}
+
+const TEXTURE_SRGB: u32 = 1u;
+const TEXTURE_WRAP_S_SHIFT: u32 = 1u;
+const TEXTURE_WRAP_T_SHIFT: u32 = 3u;
+const TEXTURE_WRAP_REPEAT: u32 = 0u;
+const TEXTURE_WRAP_CLAMP: u32 = 1u;
+const TEXTURE_WRAP_MIRROR: u32 = 2u;
+
+// Vertex attributes of one primitive, in BVH order like the primitives: texture coordinates,
+// and unit shading normals in octahedral encoding (snorm16 x, y; decode_octahedral).
+struct TriangleAttributes {
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    uv2: vec2<f32>,
+    n0: u32,
+    n1: u32,
+    n2: u32,
+    flags: u32,             // ATTRIBUTE_NORMALS: n0..n2 hold vertex normals
+}
+
+const ATTRIBUTE_NORMALS: u32 = 1u;
+
+// The unit vector an octahedral code stands for (Meyer et al. 2010).
+fn decode_octahedral(code: u32) -> vec3<f32> {
+    let e = unpack2x16snorm(code);
+    var n = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) {
+        n = vec3<f32>((1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0)), n.z);
+    }
+    return normalize(n);
+}
+
 const LIGHT_AREA: u32 = 0u;
 const LIGHT_POINT: u32 = 1u;
 const LIGHT_DIRECTIONAL: u32 = 2u;

@@ -34,8 +34,9 @@ impl GraphArg {
 /// Options every rendering command takes.
 #[derive(Args, Clone)]
 pub struct Common {
-    /// Scene: a built-in name (see `lightgraph list`) or a .ron scene file [default:
-    /// cornell-mitsuba].
+    /// Scene: a built-in name (see `lightgraph list`), a .ron scene file, or a bare .gltf/.glb
+    /// file (its first camera or one framing it; a white background if it has no light)
+    /// [default: cornell-mitsuba].
     #[arg(long)]
     pub scene: Option<String>,
     /// Image size WxH (default: the scene's).

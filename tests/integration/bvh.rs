@@ -139,13 +139,14 @@ fn random_scene(rng: &mut Rng, axis_aligned: bool) -> Scene {
     }
     Scene {
         description: "random shapes".into(),
-        camera: Camera {
+        camera: Some(Camera {
             position: [0.0; 3],
             look: Look::Forward([0.0, 0.0, 1.0]),
             up: [0.0, 1.0, 0.0],
             fov_degrees: 45.0,
             fov_axis: FovAxis::Horizontal,
-        },
+        }),
+        gltf_camera: None,
         resolution: (1, 1),
         materials: [("m".to_string(), Material::default())].into_iter().collect(),
         shapes,
@@ -155,6 +156,7 @@ fn random_scene(rng: &mut Rng, axis_aligned: bool) -> Scene {
         }],
         integrator: Integrator::default(),
         gltf: None,
+        textures: Vec::new(),
     }
 }
 
@@ -208,13 +210,18 @@ fn traversal_matches_brute_force(kind: BvhKind, axis_aligned: bool) {
         constants: [("QUERIES".to_string(), ConstValue::U32(n as u32))]
             .into_iter()
             .collect(),
-        flags: kind.flag().into_iter().map(String::from).collect(),
+        flags: kind
+            .flag()
+            .map(String::from)
+            .into_iter()
+            .chain(lightgraph_scenes::features::used(&compiled))
+            .collect(),
     };
     let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
     let mut externals: BTreeMap<String, Vec<u8>> = compiled
         .resources(&CompiledScene::camera(&scene, 1, 1))
         .into_iter()
-        .filter(|(k, _)| k == "primitives" || k == "bvh")
+        .filter(|(k, _)| graph.resources.contains_key(k))
         .collect();
     externals.insert("rays".into(), bytemuck::cast_slice(&rays).to_vec());
     let mut instance = Instance::new(gpu(), program, &externals).unwrap();

@@ -16,3 +16,4 @@ mod reference;
 mod scenes;
 mod specialize;
 mod stress;
+mod textures;

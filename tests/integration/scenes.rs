@@ -9,7 +9,7 @@ use lightgraph_engine::wgsl::preprocess;
 use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::gpu::{
     GpuAliasEntry, GpuBvhNode, GpuCamera, GpuCwbvhNode, GpuEnvironment, GpuLight, GpuMaterial, GpuPrimitive,
-    GpuSceneInfo,
+    GpuSceneInfo, GpuTextureInfo, GpuTriangleAttributes,
 };
 use std::collections::BTreeSet;
 use std::mem::{offset_of, size_of};
@@ -143,6 +143,16 @@ fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
             emissive_texture,
             normal_texture
         ]
+    );
+    check!(
+        "TextureInfo",
+        GpuTextureInfo,
+        [row0, offset, row1, flags, width, height, pad]
+    );
+    check!(
+        "TriangleAttributes",
+        GpuTriangleAttributes,
+        [uv0, uv1, uv2, n0, n1, n2, flags]
     );
     check!(
         "Light",
