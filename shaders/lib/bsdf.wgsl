@@ -20,6 +20,7 @@ struct Bsdf {
     cos_t: f32,                 // cosine of the refracted direction (0: none)
     is_delta: bool,
     valid: bool,
+    adjoint: bool,              // importance (light) path: refraction without the eta^2 radiance scaling
 }
 
 // Fresnel reflectance of a smooth dielectric, unpolarised, and the cosine of the refracted
@@ -54,6 +55,7 @@ fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bs
     b.frame = frame_from_z(n);
     b.fix = to_local(b.frame, towards_previous);
     b.m = m;
+    b.adjoint = false;
     b.valid = abs(b.fix.z) >= EPS_COSINE;
     if (!b.valid) {
         return b;
@@ -175,7 +177,7 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
         }
         gen = vec3<f32>(-eta * b.fix.x, -eta * b.fix.y, cos_t);
         s.pdf = b.refract_prob;
-        s.f = vec3<f32>((1.0 - b.fresnel) * eta * eta / abs(cos_t));
+        s.f = vec3<f32>((1.0 - b.fresnel) * select(eta * eta, 1.0, b.adjoint) / abs(cos_t));
         s.specular = true;
     }
     s.cos_gen = abs(gen.z);
