@@ -148,36 +148,79 @@ fn light_tracing_agrees_with_path_tracing_on_the_diffuse_box() {
     );
 }
 
-/// Every block `keep` selects of `scene`: `graph` in `layout` against path tracing, `spp`
-/// samples per pixel in each of FRAMES frames.
-fn agrees_with_pt(scene_name: &str, graph: &str, layout: &str, spp: u32, keep: impl Fn(usize) -> bool) {
+/// How a comparison with path tracing samples: image size (square, in 4 x 4 blocks) and
+/// samples per pixel in each of FRAMES frames, for path tracing and the other estimator.
+#[derive(Clone, Copy)]
+struct Sampling {
+    size: u32,
+    pt_spp: u32,
+    spp: u32,
+    /// Blocks where the camera sees a light through a specular surface: like the blocks that
+    /// see it directly, their noise comes from pixel jitter at the light's edge, which both
+    /// estimators share, so they are exempt from the power check (not from agreement).
+    light_images: &'static [usize],
+    /// The power check: each other block's combined standard error must be under this
+    /// fraction of its mean.
+    max_rel_se: f64,
+}
+
+/// The sampling of most comparisons: 32 x 32 pixels, 2 samples per pixel per frame each.
+const SMALL: Sampling = Sampling {
+    size: 32,
+    pt_spp: 2,
+    spp: 2,
+    light_images: &[],
+    max_rel_se: 0.05,
+};
+
+/// Every block `keep` selects of `scene`: `graph` in `layout` against path tracing.
+fn agrees_with_pt(scene_name: &str, graph: &str, layout: &str, sampling: Sampling, keep: impl Fn(usize) -> bool) {
     let scene = load_scene(scene_name).unwrap();
-    let (size, n) = (32, 4);
-    let pt = render_frames(&scene, "pt", "NaivePTsk", size, spp, FRAMES, 17, n);
-    let other = render_frames(&scene, graph, layout, size, spp, FRAMES, 18, n);
+    let (size, n) = (sampling.size, 4);
+    let pt = render_frames(&scene, "pt", "NaivePTsk", size, sampling.pt_spp, FRAMES, 17, n);
+    let other = render_frames(&scene, graph, layout, size, sampling.spp, FRAMES, 18, n);
     let keep: Vec<bool> = (0..(n * n) as usize).map(keep).collect();
-    let noisy = direct_light_blocks(&scene, size, n);
+    let mut noisy = direct_light_blocks(&scene, size, n);
+    for b in sampling.light_images {
+        noisy[*b] = true;
+    }
     let what = format!("{scene_name}: {graph}:{layout} vs pt");
-    let z = worst_z(&other, &pt, &keep, &noisy, 0.05, &what);
+    let z = worst_z(&other, &pt, &keep, &noisy, sampling.max_rel_se, &what);
     assert!(z < 4.0, "{what}: differs by {z:.2} standard errors");
 }
 
 #[test]
 fn naive_bpt_agrees_with_path_tracing_on_the_diffuse_box() {
-    agrees_with_pt("cornell-diffuse", "bpt-naive", "NaiveBPT", 2, |_| true);
+    agrees_with_pt("cornell-diffuse", "bpt-naive", "NaiveBPT", SMALL, |_| true);
 }
 
 #[test]
 fn naive_bpt_agrees_with_path_tracing_on_the_glossy_box_with_background() {
-    agrees_with_pt("cornell-glossy-background", "bpt-naive", "NaiveBPT", 2, |_| true);
+    agrees_with_pt("cornell-glossy-background", "bpt-naive", "NaiveBPT", SMALL, |_| true);
 }
 
+/// The mirror ball: NaiveBPT is unbiased here (checked at 16 x 16 with 512 path-tracing and
+/// 128 BPT samples per pixel per frame over 64 frames, twice with other seeds: every block
+/// within 3.4 standard errors, and the blocks that differed most, where the camera sees the
+/// light in the mirror, differed in opposite directions in the two runs). Those blocks are
+/// noisy for both estimators (the light's reflection covers a few pixels, a pixel-jitter
+/// event). Elsewhere both estimators are heavy-tailed: path tracing reaches the light through
+/// the mirror by chance, and BPT's connections near the ball's contact with the glossy floor
+/// carry 1/d^2. So the power check asks for standard errors under 8% of the means (the
+/// darkest block needs about 6% at these samples; 5% would take 4 times the samples), and
+/// path tracing, the cheaper per sample, takes 4 times BPT's samples (about 30 s on
+/// lavapipe for both).
 #[test]
-#[ignore = "not yet powerful enough at CI size: agreement holds (largest |z| 2.5 at 8 spp x 48 frames), but dark blocks keep standard errors above 5% of their means"]
 fn naive_bpt_agrees_with_path_tracing_on_the_mirror_ball_box() {
-    // The caustic of the mirror ball is a rare event for path tracing (a small light hit
-    // through the mirror), so more samples per frame keep its standard error meaningful.
-    agrees_with_pt("cornell-glossy-mirrorball", "bpt-naive", "NaiveBPT", 8, |_| true);
+    let sampling = Sampling {
+        size: 16,
+        pt_spp: 128,
+        spp: 32,
+        // The top of the ball, which reflects the ceiling light.
+        light_images: &[5, 6],
+        max_rel_se: 0.08,
+    };
+    agrees_with_pt("cornell-glossy-mirrorball", "bpt-naive", "NaiveBPT", sampling, |_| true);
 }
 
 /// Every layout of an estimator renders what its single-kernel layout renders for the same
