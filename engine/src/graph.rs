@@ -3,7 +3,9 @@
 
 use crate::error::{Error, Location, Result};
 use crate::expr::Expr;
-use crate::ir::{CatalogFile, ConstValue, GraphFile, LayoutDecl, PassDecl, PassEntry, ResourceDecl, Role, StreamDecl};
+use crate::ir::{
+    CatalogFile, ConstValue, GraphFile, LayoutDecl, PassDecl, PassEntry, PerCall, ResourceDecl, Role, StreamDecl,
+};
 use crate::vfs::Vfs;
 use petgraph::graph::{DiGraph, NodeIndex};
 use petgraph::visit::{Bfs, Reversed};
@@ -273,8 +275,16 @@ impl Graph {
                     ),
                 ));
             }
-            if s.per_call == 0 {
-                return Err(err_key(name, format!("stream '{name}' has per_call 0")));
+            match &s.per_call {
+                PerCall::Number(0) => {
+                    return Err(err_key(name, format!("stream '{name}' has per_call 0")));
+                }
+                PerCall::Expr(e) => {
+                    if let Err(why) = crate::expr::Expr::parse(e) {
+                        return Err(err_key(name, format!("stream '{name}': per_call: {why}")));
+                    }
+                }
+                PerCall::Number(_) => {}
             }
         }
         if !g.layouts.contains_key(&g.default_layout) {

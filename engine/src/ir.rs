@@ -142,11 +142,31 @@ pub struct StreamDecl {
     pub to: String,
     /// The most items one call of a producing pass emits (sizes split-layout queues).
     #[serde(default = "one")]
-    pub per_call: u32,
+    pub per_call: PerCall,
 }
 
-fn one() -> u32 {
-    1
+fn one() -> PerCall {
+    PerCall::Number(1)
+}
+
+/// A stream's `per_call`: a number, or a count expression over the constants (e.g.
+/// `"MAX_PATH_LENGTH + 1"`), evaluated when the program is compiled.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum PerCall {
+    /// A fixed count.
+    Number(u32),
+    /// A count expression.
+    Expr(String),
+}
+
+impl std::fmt::Display for PerCall {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PerCall::Number(n) => write!(f, "{n}"),
+            PerCall::Expr(e) => write!(f, "{e}"),
+        }
+    }
 }
 
 /// A constant's value, emitted as a WGSL `const`.

@@ -27,10 +27,12 @@ fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
                 if (!is_black(ray.contribution)) {
                     emit_shadow(ray);
                 }
-                (*p).light[(*p).light_count] = v;
-                (*p).light_count += 1u;
+                if (lp.length + 2u <= MAX_PATH_LENGTH) {
+                    (*p).light[(*p).light_count] = v;
+                    (*p).light_count += 1u;
+                }
             }
-            if (lp.length + 2u > BPT_MAX_LENGTH || !light_path_scatter(&lp, s, bsdf)) {
+            if (lp.length + 2u > MAX_PATH_LENGTH || !light_path_scatter(&lp, s, bsdf)) {
                 break;
             }
         }

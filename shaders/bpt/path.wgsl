@@ -1,9 +1,11 @@
 // Bidirectional path tracing with both sub-paths of a sample in one thread (NaiveBPT): the
-// item carries the camera sub-path and the stored vertices of its own light sub-path. The
-// longest path any strategy forms is BPT_MAX_LENGTH segments: MAX_PATH_LENGTH, or fewer when
-// the LIGHT_VERTEX_SLOTS per item would not hold the light sub-path.
+// item carries the camera sub-path and the stored vertices of its own light sub-path. A
+// connection joins a light vertex to a camera vertex with at least one camera segment, so a
+// stored vertex is at most MAX_PATH_LENGTH - 2 segments from the light: that many slots hold
+// every vertex a path of MAX_PATH_LENGTH segments can use (the graph's `shadow` stream
+// declares one more emit per call, the light sample).
 
-const BPT_MAX_LENGTH: u32 = min(MAX_PATH_LENGTH, LIGHT_VERTEX_SLOTS + 1u);
+const LIGHT_VERTEX_SLOTS: u32 = max(MAX_PATH_LENGTH, 3u) - 2u;
 
 struct BptPath {
     origin: vec3<f32>,

@@ -33,7 +33,7 @@ fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
     var rng = (*p).rng;
     let light_u = rng_f32(&rng);
     let light_uv = rng_vec2(&rng);
-    if ((*p).length >= BPT_MAX_LENGTH) {
+    if ((*p).length >= MAX_PATH_LENGTH) {
         return false;
     }
     if (!bsdf.is_delta) {
@@ -45,7 +45,7 @@ fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
         }
         for (var i = 0u; i < (*p).light_count; i += 1u) {
             let v = (*p).light[i];
-            if (light_vertex_length(v) + 1u + (*p).length > BPT_MAX_LENGTH) {
+            if (light_vertex_length(v) + 1u + (*p).length > MAX_PATH_LENGTH) {
                 break;
             }
             let ray = bpt_connect(*p, s, bsdf, v);

@@ -20,12 +20,15 @@ use std::time::Instant;
 /// Built-in graphs that do not estimate radiance, so have no stress invariant to keep.
 pub const NOT_RADIANCE: [&str; 1] = ["ao"];
 
-/// Built-in radiance estimators that cannot sample every path, so cannot keep the invariants,
-/// with the reason: light tracing misses lights seen directly and whatever is seen through a
-/// specular surface; NaiveBPT holds LIGHT_VERTEX_SLOTS light vertices per sample, so its
-/// paths end at 10 segments, short of the emissive boxes' hundreds of bounces.
+/// Built-in radiance estimators left out of the stress suite, with the reason: light tracing
+/// misses lights seen directly and whatever is seen through a specular surface, so it cannot
+/// keep the invariants; NaiveBPT keeps a sample's light vertices in its item, 48 bytes for
+/// each of MAX_PATH_LENGTH - 2 slots, too large for the emissive boxes' hundreds of bounces.
 pub const INCOMPLETE: [(&str, &str); 2] = [
-    ("bpt-naive", "paths capped at LIGHT_VERTEX_SLOTS + 1 segments"),
+    (
+        "bpt-naive",
+        "items hold MAX_PATH_LENGTH - 2 light vertices: too large for hundreds of bounces",
+    ),
     ("lt", "light tracing misses directly visible lights and specular paths"),
 ];
 
