@@ -40,10 +40,26 @@ pub struct GraphFile {
     /// Resources the host reads after frames (passes that contribute to none are culled).
     #[serde(default)]
     pub outputs: Vec<String>,
+    /// `f32` constants the host measures before rendering, by a run of the graph itself.
+    #[serde(default)]
+    pub measured: BTreeMap<String, MeasuredDecl>,
     /// Named kernel layouts.
     pub layouts: BTreeMap<String, LayoutDecl>,
     /// The layout used when none is asked for.
     pub default_layout: String,
+}
+
+/// How the host measures a constant: it runs one frame of the graph (same layout and
+/// scene) with the constants `set`, and the constant becomes the ratio of two counters'
+/// totals, `ratio.0 / ratio.1`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeasuredDecl {
+    /// Constants of the measuring frame, e.g. a flag that makes the passes only count.
+    #[serde(default)]
+    pub set: BTreeMap<String, ConstValue>,
+    /// Numerator and denominator counters.
+    pub ratio: (String, String),
 }
 
 /// A graph's reference to a catalog pass, or a pass declared inline.

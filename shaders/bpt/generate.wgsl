@@ -32,7 +32,7 @@ fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
                     (*p).light_count += 1u;
                 }
             }
-            if (lp.length + 2u > MAX_PATH_LENGTH || !light_path_scatter(&lp, s, bsdf)) {
+            if (lp.length + 2u > MAX_PATH_LENGTH || !light_path_scatter(&lp, s, bsdf, 1.0)) {
                 break;
             }
         }

@@ -24,6 +24,19 @@ struct BptPath {
     light: array<LightVertex, LIGHT_VERTEX_SLOTS>,
 }
 
+// What the strategies at a camera vertex need of the camera sub-path (NaiveBPT and LVC-BPT).
+struct CameraVertex {
+    throughput: vec3<f32>,
+    pixel: u32,
+    d_vcm: f32,
+    d_vc: f32,
+    length: u32,                // camera segments traced so far
+}
+
+fn bpt_camera_vertex(p: BptPath) -> CameraVertex {
+    return CameraVertex(p.throughput, p.pixel, p.d_vcm, p.d_vc, p.length);
+}
+
 // The camera ray of sample `index` (pixel index % PIXELS, jittered) with its MIS quantity.
 fn bpt_camera_start(p: ptr<function, BptPath>, index: u32, rng: ptr<function, u32>) {
     let pixel = index % PIXELS;
@@ -41,17 +54,21 @@ fn bpt_camera_start(p: ptr<function, BptPath>, index: u32, rng: ptr<function, u3
 
 // MIS weight of the s = 0 strategy (the camera sub-path hits a light) with emission
 // densities (area or solid angle `direct_pdf`, `emission_pdf`) already including the pick.
-fn bpt_hit_weight(p: BptPath, direct_pdf: f32, emission_pdf: f32) -> f32 {
+// `eta` is how many times a vertex connection (s >= 2, t >= 2) is sampled per camera
+// vertex relative to the other strategies (1 in NaiveBPT; see `scatter`): the light vertex
+// here was reached by a camera scatter, whose d_vcm counts eta, but the strategy that picks
+// the light point directly (s = 1) counts once.
+fn bpt_hit_weight(p: CameraVertex, direct_pdf: f32, emission_pdf: f32, eta: f32) -> f32 {
     if (p.length == 1u) {
         return 1.0;
     }
-    let w_camera = mis_pow(direct_pdf) * p.d_vcm + mis_pow(emission_pdf) * p.d_vc;
+    let w_camera = mis_pow(direct_pdf) * p.d_vcm / mis_pow(eta) + mis_pow(emission_pdf) * p.d_vc;
     return 1.0 / (1.0 + w_camera);
 }
 
 // The s = 1 strategy: a shadow ray towards a light sampled from the camera vertex; a zero
 // contribution when there is none.
-fn bpt_direct(p: BptPath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) -> ShadowRay {
+fn bpt_direct(p: CameraVertex, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) -> ShadowRay {
     var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
     let pick = light_pick(u);
     let ill = illuminate(pick.index, s.position, uv);
@@ -83,8 +100,9 @@ fn bpt_direct(p: BptPath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) -> Shad
     return ray;
 }
 
-// The s >= 2 strategies: connects the camera vertex to a stored light vertex.
-fn bpt_connect(p: BptPath, s: Surface, bsdf: Bsdf, v: LightVertex) -> ShadowRay {
+// The s >= 2 strategies: connects the camera vertex to a stored light vertex; the strategy
+// counts `eta` times against the others (see `bpt_hit_weight`).
+fn bpt_connect(p: CameraVertex, s: Surface, bsdf: Bsdf, v: LightVertex, eta: f32) -> ShadowRay {
     var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
     let to_light = v.position - s.position;
     let distance2 = dot(to_light, to_light);
@@ -110,7 +128,7 @@ fn bpt_connect(p: BptPath, s: Surface, bsdf: Bsdf, v: LightVertex) -> ShadowRay 
     let light_pdf_a = el.pdf_forward * ql * ec.cos_gen / distance2;
     let w_light = mis_pow(camera_pdf_a) * (v.d_vcm + v.d_vc * mis_pow(el.pdf_reverse * ql));
     let w_camera = mis_pow(light_pdf_a) * (p.d_vcm + p.d_vc * mis_pow(ec.pdf_reverse * qc));
-    let w = 1.0 / (w_light + 1.0 + w_camera);
+    let w = 1.0 / ((w_light + w_camera) / mis_pow(eta) + 1.0);
     ray.contribution = p.throughput * v.throughput * ec.f * el.f * (w * ec.cos_gen * el.cos_gen / distance2);
     ray.origin = offset_ray_origin(s.position, side_normal(s.normal, direction), s.extent);
     ray.direction = direction;

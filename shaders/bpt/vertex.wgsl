@@ -7,7 +7,7 @@ fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
         let bg = background_radiance();
         if (bg.w > 0.0) {
             let pmf = light_pmf(u32(scene.background));
-            let w = bpt_hit_weight(*p, bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf);
+            let w = bpt_hit_weight(bpt_camera_vertex(*p), bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, 1.0);
             film_add((*p).pixel, (*p).throughput * w * bg.xyz);
         }
         return false;
@@ -26,7 +26,7 @@ fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
         if (le.w > 0.0) {
             let pmf = light_pmf(u32(s.light));
             let cos_light = dot(lights[u32(s.light)].normal, -(*p).direction);
-            let w = bpt_hit_weight(*p, le.w * pmf, le.w * cos_light * INV_PI * pmf);
+            let w = bpt_hit_weight(bpt_camera_vertex(*p), le.w * pmf, le.w * cos_light * INV_PI * pmf, 1.0);
             film_add((*p).pixel, (*p).throughput * w * le.xyz);
         }
     }
@@ -38,7 +38,7 @@ fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
     }
     if (!bsdf.is_delta) {
         if (scene.num_lights > 0u) {
-            let ray = bpt_direct(*p, s, bsdf, light_u, light_uv);
+            let ray = bpt_direct(bpt_camera_vertex(*p), s, bsdf, light_u, light_uv);
             if (!is_black(ray.contribution)) {
                 emit_shadow(ray);
             }
@@ -48,13 +48,13 @@ fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
             if (light_vertex_length(v) + 1u + (*p).length > MAX_PATH_LENGTH) {
                 break;
             }
-            let ray = bpt_connect(*p, s, bsdf, v);
+            let ray = bpt_connect(bpt_camera_vertex(*p), s, bsdf, v, 1.0);
             if (!is_black(ray.contribution)) {
                 emit_shadow(ray);
             }
         }
     }
-    let r = scatter(bsdf, s, (*p).throughput, (*p).d_vcm, (*p).d_vc, &rng);
+    let r = scatter(bsdf, s, (*p).throughput, (*p).d_vcm, (*p).d_vc, 1.0, &rng);
     (*p).rng = rng;
     if (!r.alive) {
         return false;

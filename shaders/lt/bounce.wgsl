@@ -20,5 +20,5 @@ fn light_bounce(p: ptr<function, LightPath>) -> bool {
     if ((*p).length + 2u > MAX_PATH_LENGTH) {
         return false;
     }
-    return light_path_scatter(p, s, bsdf);
+    return light_path_scatter(p, s, bsdf, 1.0);
 }

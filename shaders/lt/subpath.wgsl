@@ -194,7 +194,11 @@ fn light_vertex_to_camera(v: LightVertex, bsdf: Bsdf) -> ShadowRay {
 
 // Samples the next direction with Russian roulette (continuation probability from the
 // albedo) and updates throughput and MIS quantities; false when the sub-path ends. Used by
-// light and camera sub-paths alike (`bsdf.adjoint` tells them apart).
+// light and camera sub-paths alike (`bsdf.adjoint` tells them apart). `eta` is the count of
+// the vertex-connection strategies (s >= 2, t >= 2) against the others in the balance
+// heuristic (sum of n_i p_i): 1 in NaiveBPT, connections per camera vertex over the average
+// cached vertices per light sub-path in LVC-BPT. d_vcm of the next vertex stands for the
+// strategy connecting the current vertex to it, always a vertex connection.
 struct Scatter {
     origin: vec3<f32>,
     direction: vec3<f32>,
@@ -204,7 +208,7 @@ struct Scatter {
     alive: bool,
 }
 
-fn scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vcm: f32, d_vc: f32, rng: ptr<function, u32>) -> Scatter {
+fn scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vcm: f32, d_vc: f32, eta: f32, rng: ptr<function, u32>) -> Scatter {
     var r = Scatter(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
     let u = vec3<f32>(rng_vec2(rng), rng_f32(rng));
     let roulette_u = rng_f32(rng);
@@ -223,7 +227,7 @@ fn scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vcm: f32, d_vc: f32,
     } else {
         let reverse = bsdf_eval(bsdf, smp.direction).pdf_reverse * q;
         r.d_vc = mis_clamp(mis_pow(smp.cos_gen / pdf) * (d_vc * mis_pow(reverse) + d_vcm));
-        r.d_vcm = mis_clamp(mis_pow(1.0 / pdf));
+        r.d_vcm = mis_clamp(mis_pow(eta / pdf));
     }
     r.throughput = throughput * smp.f * (smp.cos_gen / pdf);
     r.origin = offset_ray_origin(s.position, side_normal(s.normal, smp.direction), s.extent);
@@ -232,10 +236,11 @@ fn scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vcm: f32, d_vc: f32,
     return r;
 }
 
-// Continues a light sub-path from its current vertex; false when it ends.
-fn light_path_scatter(p: ptr<function, LightPath>, s: Surface, bsdf: Bsdf) -> bool {
+// Continues a light sub-path from its current vertex (connections counting `eta`, see
+// `scatter`); false when it ends.
+fn light_path_scatter(p: ptr<function, LightPath>, s: Surface, bsdf: Bsdf, eta: f32) -> bool {
     var rng = (*p).rng;
-    let r = scatter(bsdf, s, (*p).throughput, (*p).d_vcm, (*p).d_vc, &rng);
+    let r = scatter(bsdf, s, (*p).throughput, (*p).d_vcm, (*p).d_vc, eta, &rng);
     (*p).rng = rng;
     if (!r.alive) {
         return false;

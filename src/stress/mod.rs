@@ -24,7 +24,8 @@ pub const NOT_RADIANCE: [&str; 1] = ["ao"];
 /// misses lights seen directly and whatever is seen through a specular surface, so it cannot
 /// keep the invariants; NaiveBPT keeps a sample's light vertices in its item, 48 bytes for
 /// each of MAX_PATH_LENGTH - 2 slots, too large for the emissive boxes' hundreds of bounces.
-pub const INCOMPLETE: [(&str, &str); 2] = [
+pub const INCOMPLETE: [(&str, &str); 3] = [
+    ("bpt-lvc", "new: not yet run through the stress suite"),
     (
         "bpt-naive",
         "items hold MAX_PATH_LENGTH - 2 light vertices: too large for hundreds of bounces",
