@@ -283,8 +283,7 @@ impl<'g> Session<'g> {
         }
         let plan = Plan::with_decl(graph, layout, options.layout.apply(decl))?;
         let flags = kernel_flags(device_flags(gpu), scene, options.layout.all_features);
-        let spec = specialization(graph, &scene.scene, &options, flags);
-        let program = Program::compile(&plan, &spec, &gpu.target())?;
+        let mut spec = specialization(graph, &scene.scene, &options, flags);
         let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
         // The scene offers every scene resource; a graph takes those it declares.
         let mut externals = scene.compiled.resources(&camera);
@@ -294,6 +293,29 @@ impl<'g> Session<'g> {
                 .get(name)
                 .is_some_and(|r| r.scope == lightgraph_engine::ir::Scope::External)
         });
+        // Measured constants (unless given): one frame with the measuring constants set.
+        for (name, m) in &graph.measured {
+            if options.constants.contains_key(name) {
+                continue;
+            }
+            let mut measuring = spec.clone();
+            measuring.constants.extend(m.set.clone());
+            let program = Program::compile(&plan, &measuring, &gpu.target())?;
+            let mut instance = Instance::new(gpu, program, &externals)
+                .with_context(|| format!("measuring '{name}' of graph '{}' in layout '{layout}'", graph.name))?;
+            let stats = instance.run_frames(0, 1, options.seed)?;
+            let (a, b) = (stats.counters[&m.ratio.0], stats.counters[&m.ratio.1]);
+            if b == 0 {
+                bail!(
+                    "measuring '{name}' of graph '{}': counter '{}' stayed 0 (no light in the scene?)",
+                    graph.name,
+                    m.ratio.1
+                );
+            }
+            spec.constants
+                .insert(name.clone(), ConstValue::F32((a as f64 / b as f64) as f32));
+        }
+        let program = Program::compile(&plan, &spec, &gpu.target())?;
         let instance = Instance::new(gpu, program, &externals)
             .with_context(|| format!("instantiating graph '{}' in layout '{layout}'", graph.name))?;
         Ok(Session {

@@ -3,7 +3,10 @@
 
 use crate::error::{Error, Location, Result};
 use crate::expr::Expr;
-use crate::ir::{CatalogFile, ConstValue, GraphFile, LayoutDecl, PassDecl, PassEntry, ResourceDecl, Role, StreamDecl};
+use crate::ir::{
+    CatalogFile, ConstValue, GraphFile, LayoutDecl, MeasuredDecl, PassDecl, PassEntry, PerCall, ResourceDecl, Role,
+    StreamDecl,
+};
 use crate::vfs::Vfs;
 use petgraph::graph::{DiGraph, NodeIndex};
 use petgraph::visit::{Bfs, Reversed};
@@ -80,6 +83,8 @@ pub struct Graph {
     pub constants: BTreeMap<String, ConstValue>,
     /// Resources read by the host.
     pub outputs: Vec<String>,
+    /// Constants the host measures before rendering.
+    pub measured: BTreeMap<String, MeasuredDecl>,
     /// Layouts by name.
     pub layouts: BTreeMap<String, LayoutDecl>,
     /// The default layout.
@@ -273,8 +278,40 @@ impl Graph {
                     ),
                 ));
             }
-            if s.per_call == 0 {
-                return Err(err_key(name, format!("stream '{name}' has per_call 0")));
+            match &s.per_call {
+                PerCall::Number(0) => {
+                    return Err(err_key(name, format!("stream '{name}' has per_call 0")));
+                }
+                PerCall::Expr(e) => {
+                    if let Err(why) = crate::expr::Expr::parse(e) {
+                        return Err(err_key(name, format!("stream '{name}': per_call: {why}")));
+                    }
+                }
+                PerCall::Number(_) => {}
+            }
+        }
+        for (name, m) in &g.measured {
+            if !matches!(g.constants.get(name), Some(ConstValue::F32(_))) {
+                return Err(err_key(
+                    name,
+                    format!("measured constant '{name}' must be declared as an F32 constant"),
+                ));
+            }
+            for c in [&m.ratio.0, &m.ratio.1] {
+                if !g.counters.contains(c) {
+                    return Err(err_key(name, format!("measured constant '{name}': no counter '{c}'")));
+                }
+            }
+            for (c, v) in &m.set {
+                match g.constants.get(c) {
+                    Some(d) if d.wgsl_type() == v.wgsl_type() => {}
+                    _ => {
+                        return Err(err_key(
+                            name,
+                            format!("measured constant '{name}': sets '{c}', which is no constant of that type"),
+                        ));
+                    }
+                }
             }
         }
         if !g.layouts.contains_key(&g.default_layout) {
@@ -296,6 +333,7 @@ impl Graph {
             counters: g.counters.clone(),
             constants: g.constants.clone(),
             outputs: g.outputs.clone(),
+            measured: g.measured.clone(),
             layouts: g.layouts.clone(),
             default_layout: g.default_layout.clone(),
             chains: Vec::new(),

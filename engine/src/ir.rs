@@ -40,10 +40,26 @@ pub struct GraphFile {
     /// Resources the host reads after frames (passes that contribute to none are culled).
     #[serde(default)]
     pub outputs: Vec<String>,
+    /// `f32` constants the host measures before rendering, by a run of the graph itself.
+    #[serde(default)]
+    pub measured: BTreeMap<String, MeasuredDecl>,
     /// Named kernel layouts.
     pub layouts: BTreeMap<String, LayoutDecl>,
     /// The layout used when none is asked for.
     pub default_layout: String,
+}
+
+/// How the host measures a constant: it runs one frame of the graph (same layout and
+/// scene) with the constants `set`, and the constant becomes the ratio of two counters'
+/// totals, `ratio.0 / ratio.1`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeasuredDecl {
+    /// Constants of the measuring frame, e.g. a flag that makes the passes only count.
+    #[serde(default)]
+    pub set: BTreeMap<String, ConstValue>,
+    /// Numerator and denominator counters.
+    pub ratio: (String, String),
 }
 
 /// A graph's reference to a catalog pass, or a pass declared inline.
@@ -142,11 +158,31 @@ pub struct StreamDecl {
     pub to: String,
     /// The most items one call of a producing pass emits (sizes split-layout queues).
     #[serde(default = "one")]
-    pub per_call: u32,
+    pub per_call: PerCall,
 }
 
-fn one() -> u32 {
-    1
+fn one() -> PerCall {
+    PerCall::Number(1)
+}
+
+/// A stream's `per_call`: a number, or a count expression over the constants (e.g.
+/// `"MAX_PATH_LENGTH + 1"`), evaluated when the program is compiled.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum PerCall {
+    /// A fixed count.
+    Number(u32),
+    /// A count expression.
+    Expr(String),
+}
+
+impl std::fmt::Display for PerCall {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PerCall::Number(n) => write!(f, "{n}"),
+            PerCall::Expr(e) => write!(f, "{e}"),
+        }
+    }
 }
 
 /// A constant's value, emitted as a WGSL `const`.

@@ -6,7 +6,7 @@ use crate::codegen::{BufferRef, CodegenContext, ControlMap};
 use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::graph::ChainEntry;
-use crate::ir::{ConstValue, Role, Scope};
+use crate::ir::{ConstValue, PerCall, Role, Scope};
 use crate::plan::{Plan, Root};
 use crate::reflect::{self, Word};
 use crate::wgsl::{ModuleSource, preprocess};
@@ -263,6 +263,20 @@ impl Program {
             );
         }
 
+        // Each stream's per_call, evaluated with the constants.
+        let mut per_call = BTreeMap::new();
+        for (name, s) in &g.streams {
+            let n = match &s.per_call {
+                PerCall::Number(n) => *n as u64,
+                PerCall::Expr(e) => Expr::parse(e)
+                    .and_then(|e| e.count(&vars))
+                    .map_err(|why| g.error_at(e, format!("stream '{name}': per_call: {why}")))?,
+            };
+            if n == 0 {
+                return Err(g.error_at(name, format!("stream '{name}': per_call {} is 0", s.per_call)));
+            }
+            per_call.insert(name.clone(), n);
+        }
         // Queue items per invocation of a phase's root kernels (fan-out), producers first.
         let mut fanout: BTreeMap<String, u64> = BTreeMap::new();
         for _ in 0..=plan.kernels.len() {
@@ -274,7 +288,7 @@ impl Program {
                     },
                     _ => 1,
                 };
-                for (q, mult) in emits_per_invocation(plan, k) {
+                for (q, mult) in emits_per_invocation(plan, k, &per_call) {
                     let e = fanout.entry(q).or_insert(0);
                     *e = (*e).max(per_invocation * mult);
                 }
@@ -446,7 +460,7 @@ impl Program {
 
 /// For kernel `k`, the queued streams it emits into and how many items one invocation can
 /// emit into each (per_call times the calls of producing passes per invocation).
-fn emits_per_invocation(plan: &Plan, k: usize) -> Vec<(String, u64)> {
+fn emits_per_invocation(plan: &Plan, k: usize, per_call: &BTreeMap<String, u64>) -> Vec<(String, u64)> {
     let g = &plan.graph;
     let kp = &plan.kernels[k];
     // Calls of each chain per invocation: the root chain once; fused chains per emit.
@@ -463,7 +477,7 @@ fn emits_per_invocation(plan: &Plan, k: usize) -> Vec<(String, u64)> {
         };
         for &p in &g.chains[c].passes[range] {
             for s in &g.passes[p].decl.emits {
-                let per = g.streams[s].per_call as u64 * n;
+                let per = per_call[s] * n;
                 if plan.queued_streams.contains(s) {
                     *out.entry(s.clone()).or_insert(0) += per;
                 } else if let Some(&fc) = kp

@@ -162,3 +162,50 @@ fn illegal_layouts_are_refused_with_names() {
         "{e}"
     );
 }
+
+/// The Collatz graph with the stream's `per_call` written as `per_call`.
+fn graph_with_per_call(per_call: &str) -> Graph {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let text = std::fs::read_to_string(dir.join("collatz.ron"))
+        .unwrap()
+        .replace("per_call: 1)", &format!("per_call: {per_call})"));
+    Graph::from_text(&Vfs::new(vec![Layer::Dir(dir)]), "collatz.ron", &text).expect("the graph loads")
+}
+
+#[test]
+fn per_call_expressions_size_queues_from_constants() {
+    let compile = |per_call: &str, bins: u32| {
+        let g = graph_with_per_call(per_call);
+        let plan = Plan::new(&g, "split_chunked").unwrap();
+        let spec = Specialization {
+            constants: [("BINS".to_string(), ConstValue::U32(bins))].into_iter().collect(),
+            ..Default::default()
+        };
+        Program::compile(&plan, &spec, &gpu().target())
+    };
+    // 100 items per chunk, each emitting at most per_call walks into the queue.
+    let number = compile("1", 64).unwrap();
+    assert_eq!(number.queue_capacity["done"], 100);
+    let expr = compile("\"BINS / 32 + 1\"", 64).unwrap();
+    assert_eq!(expr.queue_capacity["done"], 300);
+    let e = compile("\"BINS - 64\"", 64)
+        .expect_err("per_call 0 is refused")
+        .to_string();
+    assert!(e.contains("stream 'done': per_call BINS - 64 is 0"), "{e}");
+    let e = compile("\"BINS - UNKNOWN\"", 64)
+        .expect_err("unknown constant")
+        .to_string();
+    assert!(e.contains("per_call: unknown constant 'UNKNOWN'"), "{e}");
+    let e = Graph::from_text(
+        &Vfs::new(vec![Layer::Dir(
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data"),
+        )]),
+        "collatz.ron",
+        &std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/collatz.ron"))
+            .unwrap()
+            .replace("per_call: 1)", "per_call: \"BINS +\")"),
+    )
+    .expect_err("a malformed per_call is refused")
+    .to_string();
+    assert!(e.contains("stream 'done': per_call:"), "{e}");
+}

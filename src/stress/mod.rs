@@ -20,11 +20,24 @@ use std::time::Instant;
 /// Built-in graphs that do not estimate radiance, so have no stress invariant to keep.
 pub const NOT_RADIANCE: [&str; 1] = ["ao"];
 
+/// Built-in radiance estimators left out of the stress suite, with the reason: light tracing
+/// misses lights seen directly and whatever is seen through a specular surface, so it cannot
+/// keep the invariants; NaiveBPT keeps a sample's light vertices in its item, 48 bytes for
+/// each of MAX_PATH_LENGTH - 2 slots, too large for the emissive boxes' hundreds of bounces.
+pub const INCOMPLETE: [(&str, &str); 3] = [
+    ("bpt-lvc", "new: not yet run through the stress suite"),
+    (
+        "bpt-naive",
+        "items hold MAX_PATH_LENGTH - 2 light vertices: too large for hundreds of bounces",
+    ),
+    ("lt", "light tracing misses directly visible lights and specular paths"),
+];
+
 /// The built-in graphs that estimate radiance: the estimators every stress scene runs with.
 pub fn estimators() -> Vec<String> {
     crate::assets::graph_names()
         .into_iter()
-        .filter(|g| !NOT_RADIANCE.contains(&g.as_str()))
+        .filter(|g| !NOT_RADIANCE.contains(&g.as_str()) && !INCOMPLETE.iter().any(|(name, _)| name == g))
         .collect()
 }
 

@@ -1,0 +1,24 @@
+// Pass `light_bounce` (Loop): at the light sub-path's new vertex, the t = 1 connection to the
+// camera (a shadow ray that splats into the pixel it projects to) and the next direction.
+
+fn light_bounce(p: ptr<function, LightPath>) -> bool {
+    if ((*p).hit_t < 0.0) {
+        return false;
+    }
+    let s = light_path_surface(*p);
+    let bsdf = light_path_bsdf(*p, s);
+    if (!bsdf.valid) {
+        return false;
+    }
+    light_path_arrive(p, bsdf);
+    if (!bsdf.is_delta && (*p).length + 1u <= MAX_PATH_LENGTH) {
+        let ray = light_vertex_to_camera(light_vertex_at(*p, s), bsdf);
+        if (!is_black(ray.contribution)) {
+            emit_shadow(ray);
+        }
+    }
+    if ((*p).length + 2u > MAX_PATH_LENGTH) {
+        return false;
+    }
+    return light_path_scatter(p, s, bsdf, 1.0);
+}

@@ -1,0 +1,254 @@
+// Light sub-paths and the recursive MIS of bidirectional path tracing (Georgiev et al. 2012,
+// "Implementing vertex connection and merging", in the dVCM / dVC form; balance heuristic,
+// or the power heuristic with MIS_POWER). No merging here, so dVM is not carried. The
+// quantities are kept below MIS_LIMIT so that long glossy chains cannot overflow them into
+// infinities and NaNs; a weight whose sum overflows anyway is 1 / (1 + inf) = 0.
+//
+// Path lengths count segments. Light sub-paths start on a light picked by `light_pick`;
+// LIGHT_PATHS_PER_FRAME = PIXELS light sub-paths stand against one camera sample per pixel
+// (SmallVCM's light sub-path count), so a camera connection is divided by PIXELS.
+// Needs the constant LIGHT_TRACE_ONLY (true: the t = 1 strategy alone, weight 1).
+
+const MIS_LIMIT: f32 = 1e30;
+
+// MIS exponent applied to a density ratio.
+fn mis_pow(x: f32) -> f32 {
+    return select(x, x * x, MIS_POWER);
+}
+
+// Keeps a recursive MIS quantity finite.
+fn mis_clamp(x: f32) -> f32 {
+    return min(x, MIS_LIMIT);
+}
+
+// A light sub-path between passes: the ray to trace next, the hit found for it, and the MIS
+// quantities of its last vertex.
+struct LightPath {
+    origin: vec3<f32>,
+    length: u32,            // segments traced so far
+    direction: vec3<f32>,
+    rng: u32,
+    throughput: vec3<f32>,
+    d_vcm: f32,
+    d_vc: f32,
+    is_finite: u32,         // 0: the light is at infinity (directional, background)
+    hit_t: f32,             // negative: the last ray escaped
+    hit_primitive: u32,
+    hit_uv: vec2<f32>,
+}
+
+// A stored light sub-path vertex (48 bytes): position moved off the surface to the side the
+// sub-path arrived from (the only side a connection can reach), throughput, MIS quantities,
+// the geometric normal and the direction towards the previous vertex octahedrally packed,
+// material index (24 bits) with the sub-path length (8 bits), and the texture coordinates
+// wrapped to [0, 1) in 16 bits each (repeating textures look the same).
+struct LightVertex {
+    position: vec3<f32>,
+    d_vcm: f32,
+    throughput: vec3<f32>,
+    d_vc: f32,
+    normal: u32,
+    fix: u32,
+    material_length: u32,
+    tex: u32,
+}
+
+// Octahedral packing of a unit vector into two 16-bit signed normalized values.
+fn oct_pack(v: vec3<f32>) -> u32 {
+    let p = v.xy / (abs(v.x) + abs(v.y) + abs(v.z));
+    var q = p;
+    if (v.z < 0.0) {
+        q = (vec2<f32>(1.0) - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+    }
+    return pack2x16snorm(q);
+}
+
+fn oct_unpack(w: u32) -> vec3<f32> {
+    let q = unpack2x16snorm(w);
+    var v = vec3<f32>(q, 1.0 - abs(q.x) - abs(q.y));
+    let t = max(-v.z, 0.0);
+    v.x += select(t, -t, v.x >= 0.0);
+    v.y += select(t, -t, v.y >= 0.0);
+    return normalize(v);
+}
+
+// The side of a surface that `towards` points to.
+fn side_normal(n: vec3<f32>, towards: vec3<f32>) -> vec3<f32> {
+    return select(-n, n, dot(n, towards) > 0.0);
+}
+
+// Starts a light sub-path with the path's random numbers; false when the emission is void.
+fn light_path_start(p: ptr<function, LightPath>, rng: ptr<function, u32>) -> bool {
+    let pick = light_pick(rng_f32(rng));
+    let u_point = rng_vec2(rng);
+    let u_direction = rng_vec2(rng);
+    let e = emit_light(pick.index, u_point, u_direction);
+    if (is_black(e.radiance)) {
+        return false;
+    }
+    let emission_pdf = e.emission_pdf * pick.pmf;
+    let direct_pdf = e.direct_pdf * pick.pmf;
+    (*p).origin = e.origin;
+    (*p).direction = e.direction;
+    (*p).length = 0u;
+    (*p).throughput = e.radiance * (e.cos_light / emission_pdf);
+    (*p).d_vcm = mis_clamp(mis_pow(direct_pdf / emission_pdf));
+    (*p).d_vc = 0.0;
+    if (!e.is_delta) {
+        (*p).d_vc = mis_clamp(mis_pow(e.cos_light / emission_pdf));
+    }
+    (*p).is_finite = select(0u, 1u, e.is_finite);
+    return true;
+}
+
+// Traces the sub-path's next ray.
+fn light_path_trace(p: ptr<function, LightPath>) {
+    count(COUNTER_RAYS_LIGHT, 1u);
+    let hit = trace_closest((*p).origin, (*p).direction, INFINITE_DISTANCE);
+    (*p).hit_t = select(-1.0, hit.t, hit.found);
+    (*p).hit_primitive = hit.primitive;
+    (*p).hit_uv = hit.uv;
+    (*p).length += 1u;
+}
+
+// The surface the sub-path's last ray hit.
+fn light_path_surface(p: LightPath) -> Surface {
+    return surface_at(Hit(p.hit_t, p.hit_primitive, p.hit_uv, true), p.origin, p.direction);
+}
+
+// The BSDF at the hit, for importance transport.
+fn light_path_bsdf(p: LightPath, s: Surface) -> Bsdf {
+    var bsdf = bsdf_setup(material_at(s.material, s.tex), s.normal, -p.direction);
+    bsdf.adjoint = true;
+    return bsdf;
+}
+
+// Brings the MIS quantities to the new vertex: area densities at the hit (distance squared,
+// except after a light at infinity, whose first segment has no finite length; the cosine).
+fn light_path_arrive(p: ptr<function, LightPath>, bsdf: Bsdf) {
+    let t = (*p).hit_t;
+    if ((*p).length > 1u || (*p).is_finite != 0u) {
+        (*p).d_vcm = mis_clamp((*p).d_vcm * mis_pow(t * t));
+    }
+    let c = mis_pow(abs(bsdf.fix.z));
+    (*p).d_vcm = mis_clamp((*p).d_vcm / c);
+    (*p).d_vc = mis_clamp((*p).d_vc / c);
+}
+
+// The vertex to store for a sub-path at surface `s` (after `light_path_arrive`).
+fn light_vertex_at(p: LightPath, s: Surface) -> LightVertex {
+    let towards = -p.direction;
+    let position = offset_ray_origin(s.position, side_normal(s.normal, towards), s.extent);
+    return LightVertex(
+        position, p.d_vcm, p.throughput, p.d_vc, oct_pack(s.normal), oct_pack(towards),
+        min(s.material, 0xffffffu) | (min(p.length, 255u) << 24u), pack2x16unorm(fract(s.tex)),
+    );
+}
+
+// A stored vertex's length (segments from the light).
+fn light_vertex_length(v: LightVertex) -> u32 {
+    return v.material_length >> 24u;
+}
+
+// The BSDF at a stored vertex.
+fn light_vertex_bsdf(v: LightVertex) -> Bsdf {
+    let m = material_at(v.material_length & 0xffffffu, unpack2x16unorm(v.tex));
+    var bsdf = bsdf_setup(m, oct_unpack(v.normal), oct_unpack(v.fix));
+    bsdf.adjoint = true;
+    return bsdf;
+}
+
+// The t = 1 strategy: connects a light vertex to the camera. Returns the shadow ray towards
+// the camera with the contribution to its pixel; a zero contribution when the camera cannot
+// see the vertex.
+fn light_vertex_to_camera(v: LightVertex, bsdf: Bsdf) -> ShadowRay {
+    var ray = ShadowRay(v.position, 0u, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
+    let raster = camera_raster(v.position);
+    if (raster.z <= 0.0 || !bsdf.valid) {
+        return ray;
+    }
+    let to_camera = camera.position - v.position;
+    let distance2 = dot(to_camera, to_camera);
+    let distance = sqrt(distance2);
+    let direction = to_camera / distance;
+    let e = bsdf_eval(bsdf, direction);
+    if (is_black(e.f)) {
+        return ray;
+    }
+    // The density with which the camera picks this vertex, per unit area at the vertex.
+    let camera_pdf_a = camera_pdf_w(raster.z) * e.cos_gen / distance2;
+    let n_light = f32(PIXELS);
+    var weight = 1.0;
+    if (!LIGHT_TRACE_ONLY) {
+        let reverse = e.pdf_reverse * bsdf.continuation;
+        let w_light = mis_pow(camera_pdf_a / n_light) * (v.d_vcm + v.d_vc * mis_pow(reverse));
+        weight = 1.0 / (1.0 + w_light);
+    }
+    let pixel = min(u32(raster.y), u32(camera.height) - 1u) * WIDTH + min(u32(raster.x), WIDTH - 1u);
+    ray.pixel = pixel;
+    ray.direction = direction;
+    ray.distance = distance;
+    ray.contribution = v.throughput * e.f * (weight * camera_pdf_a / n_light);
+    return ray;
+}
+
+// Samples the next direction with Russian roulette (continuation probability from the
+// albedo) and updates throughput and MIS quantities; false when the sub-path ends. Used by
+// light and camera sub-paths alike (`bsdf.adjoint` tells them apart). `eta` is the count of
+// the vertex-connection strategies (s >= 2, t >= 2) against the others in the balance
+// heuristic (sum of n_i p_i): 1 in NaiveBPT, connections per camera vertex over the average
+// cached vertices per light sub-path in LVC-BPT. d_vcm of the next vertex stands for the
+// strategy connecting the current vertex to it, always a vertex connection.
+struct Scatter {
+    origin: vec3<f32>,
+    direction: vec3<f32>,
+    throughput: vec3<f32>,
+    d_vcm: f32,
+    d_vc: f32,
+    alive: bool,
+}
+
+fn scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vcm: f32, d_vc: f32, eta: f32, rng: ptr<function, u32>) -> Scatter {
+    var r = Scatter(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
+    let u = vec3<f32>(rng_vec2(rng), rng_f32(rng));
+    let roulette_u = rng_f32(rng);
+    if (!bsdf.valid) {
+        return r;
+    }
+    let smp = bsdf_sample(bsdf, u);
+    if (is_black(smp.f) || roulette_u >= bsdf.continuation) {
+        return r;
+    }
+    let q = bsdf.continuation;
+    let pdf = smp.pdf * q;
+    if (smp.specular) {
+        r.d_vcm = 0.0;
+        r.d_vc = mis_clamp(d_vc * mis_pow(smp.cos_gen));
+    } else {
+        let reverse = bsdf_eval(bsdf, smp.direction).pdf_reverse * q;
+        r.d_vc = mis_clamp(mis_pow(smp.cos_gen / pdf) * (d_vc * mis_pow(reverse) + d_vcm));
+        r.d_vcm = mis_clamp(mis_pow(eta / pdf));
+    }
+    r.throughput = throughput * smp.f * (smp.cos_gen / pdf);
+    r.origin = offset_ray_origin(s.position, side_normal(s.normal, smp.direction), s.extent);
+    r.direction = smp.direction;
+    r.alive = true;
+    return r;
+}
+
+// Continues a light sub-path from its current vertex (connections counting `eta`, see
+// `scatter`); false when it ends.
+fn light_path_scatter(p: ptr<function, LightPath>, s: Surface, bsdf: Bsdf, eta: f32) -> bool {
+    var rng = (*p).rng;
+    let r = scatter(bsdf, s, (*p).throughput, (*p).d_vcm, (*p).d_vc, eta, &rng);
+    (*p).rng = rng;
+    if (!r.alive) {
+        return false;
+    }
+    (*p).origin = r.origin;
+    (*p).direction = r.direction;
+    (*p).throughput = r.throughput;
+    (*p).d_vcm = r.d_vcm;
+    (*p).d_vc = r.d_vc;
+    return true;
+}
