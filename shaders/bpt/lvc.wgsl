@@ -123,7 +123,7 @@ fn lvc_camera_vertex(p: LvcPath) -> CameraVertex {
 fn lvc_vertex(p: ptr<function, LvcPath>) -> bool {
     let eta = lvc_eta();
     if ((*p).hit_t < 0.0) {
-        let bg = background_radiance();
+        let bg = background_radiance((*p).direction);
         if (bg.w > 0.0) {
             let pmf = light_pmf(u32(scene.background));
             let w = bpt_hit_weight(lvc_camera_vertex(*p), bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, eta);

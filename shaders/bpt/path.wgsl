@@ -70,7 +70,7 @@ fn bpt_hit_weight(p: CameraVertex, direct_pdf: f32, emission_pdf: f32, eta: f32)
 // contribution when there is none.
 fn bpt_direct(p: CameraVertex, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) -> ShadowRay {
     var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
-    let pick = light_pick(u);
+    let pick = pick_light(u);
     let ill = illuminate(pick.index, s.position, uv);
     if (is_black(ill.radiance)) {
         return ray;
@@ -82,10 +82,10 @@ fn bpt_direct(p: CameraVertex, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) ->
     let emission = emission_pdf_of(pick.index, ill);
     let q = bsdf.continuation;
     let forward = select(e.pdf_forward * q, 0.0, ill.is_delta);
-    let w_light = mis_pow(forward / (pick.pmf * ill.pdf));
+    let w_light = mis_pow(forward / (pick.probability * ill.pdf));
     let w_camera = mis_pow(emission.x * e.cos_gen / (ill.pdf * emission.y)) * (p.d_vcm + p.d_vc * mis_pow(e.pdf_reverse * q));
     let w = 1.0 / (w_light + 1.0 + w_camera);
-    ray.contribution = p.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick.pmf * ill.pdf));
+    ray.contribution = p.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick.probability * ill.pdf));
     ray.origin = offset_ray_origin(s.position, side_normal(s.normal, ill.direction), s.extent);
     ray.direction = ill.direction;
     ray.distance = INFINITE_DISTANCE;

@@ -4,7 +4,7 @@
 
 fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
     if ((*p).hit_t < 0.0) {
-        let bg = background_radiance();
+        let bg = background_radiance((*p).direction);
         if (bg.w > 0.0) {
             let pmf = light_pmf(u32(scene.background));
             let w = bpt_hit_weight(bpt_camera_vertex(*p), bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, 1.0);

@@ -2,26 +2,9 @@
 // with the densities bidirectional MIS needs (SmallVCM's Emit / Illuminate / GetRadiance
 // triple, our own code). Area lights emit cosine-weighted from a uniform point; point lights
 // uniformly over the sphere; a directional light from a disk of the scene's bounding-sphere
-// radius; the background from a uniform direction and a disk across the scene. Needs the
-// resources `lights` and `scene` (after lights.wgsl).
-
-// A light picked for a light sub-path, with the probability of picking it.
-struct LightPick {
-    index: u32,
-    pmf: f32,
-}
-
-// Picks a light with one uniform number (the one place light selection enters the light
-// sub-paths; `light_pmf` must agree with it).
-fn light_pick(u: f32) -> LightPick {
-    let index = min(u32(u * f32(scene.num_lights)), scene.num_lights - 1u);
-    return LightPick(index, light_pick_probability());
-}
-
-// The probability that `light_pick` (and next-event estimation) picks light `index`.
-fn light_pmf(index: u32) -> f32 {
-    return light_pick_probability();
-}
+// radius; the background from a uniform direction (an environment map from its own
+// distribution) and a disk across the scene. Lights are picked by `pick_light` (lights.wgsl).
+// Needs the resources of lights.wgsl.
 
 // Density over a disk of radius r perpendicular to a direction (directional and background
 // emission start on it).
@@ -85,12 +68,17 @@ fn emit_light(index: u32, u_point: vec2<f32>, u_direction: vec2<f32>) -> Emissio
                 e.radiance = vec3<f32>(0.0);
             }
         }
-        case LIGHT_POINT: {
+        case LIGHT_POINT, LIGHT_SPOT: {
             e.origin = l.position;
             e.direction = sample_uniform_sphere(u_direction);
             e.direct_pdf = 1.0;
             e.emission_pdf = UNIFORM_SPHERE_PDF;
             e.is_delta = true;
+#if LIGHT_SPOT
+            if (l.kind == LIGHT_SPOT) {
+                e.radiance *= spot_falloff(l, e.direction);
+            }
+#endif
         }
         case LIGHT_DIRECTIONAL: {
             e.direction = l.position;
@@ -102,6 +90,20 @@ fn emit_light(index: u32, u_point: vec2<f32>, u_direction: vec2<f32>) -> Emissio
             e.is_delta = true;
             e.is_finite = false;
         }
+#if LIGHT_ENVIRONMENT
+        case LIGHT_ENVIRONMENT: {
+            // A direction towards the sky from the map's distribution, light travelling back.
+            let sky = env_sample(u_direction);
+            e.direction = -sky.direction;
+            let d = sample_unit_disk(u_point);
+            let f = frame_from_z(e.direction);
+            e.origin = scene.center + scene.radius * (f.t * d.x + f.b * d.y - e.direction);
+            e.radiance = select(vec3<f32>(0.0), l.radiance * sky.radiance, sky.pdf > 0.0);
+            e.direct_pdf = sky.pdf;
+            e.emission_pdf = sky.pdf * disk_pdf(scene.radius);
+            e.is_finite = false;
+        }
+#endif
         default: {
             // The background: a uniform direction towards the sky, light travelling back.
             let towards = sample_uniform_sphere(u_direction);
@@ -127,11 +129,14 @@ fn emission_pdf_of(index: u32, ill: Illumination) -> vec2<f32> {
             let c = dot(l.normal, -ill.direction);
             return vec2<f32>(l.inv_area * max(c, 0.0) * INV_PI, c);
         }
-        case LIGHT_POINT: {
+        case LIGHT_POINT, LIGHT_SPOT: {
             return vec2<f32>(UNIFORM_SPHERE_PDF, 1.0);
         }
         case LIGHT_DIRECTIONAL: {
             return vec2<f32>(disk_pdf(scene.radius), 1.0);
+        }
+        case LIGHT_ENVIRONMENT: {
+            return vec2<f32>(ill.pdf * disk_pdf(scene.radius), 1.0);
         }
         default: {
             return vec2<f32>(UNIFORM_SPHERE_PDF * disk_pdf(scene.radius), 1.0);

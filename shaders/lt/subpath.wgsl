@@ -4,7 +4,7 @@
 // quantities are kept below MIS_LIMIT so that long glossy chains cannot overflow them into
 // infinities and NaNs; a weight whose sum overflows anyway is 1 / (1 + inf) = 0.
 //
-// Path lengths count segments. Light sub-paths start on a light picked by `light_pick`;
+// Path lengths count segments. Light sub-paths start on a light picked by `pick_light`;
 // LIGHT_PATHS_PER_FRAME = PIXELS light sub-paths stand against one camera sample per pixel
 // (SmallVCM's light sub-path count), so a camera connection is divided by PIXELS.
 // Needs the constant LIGHT_TRACE_ONLY (true: the t = 1 strategy alone, weight 1).
@@ -79,15 +79,15 @@ fn side_normal(n: vec3<f32>, towards: vec3<f32>) -> vec3<f32> {
 
 // Starts a light sub-path with the path's random numbers; false when the emission is void.
 fn light_path_start(p: ptr<function, LightPath>, rng: ptr<function, u32>) -> bool {
-    let pick = light_pick(rng_f32(rng));
+    let pick = pick_light(rng_f32(rng));
     let u_point = rng_vec2(rng);
     let u_direction = rng_vec2(rng);
     let e = emit_light(pick.index, u_point, u_direction);
     if (is_black(e.radiance)) {
         return false;
     }
-    let emission_pdf = e.emission_pdf * pick.pmf;
-    let direct_pdf = e.direct_pdf * pick.pmf;
+    let emission_pdf = e.emission_pdf * pick.probability;
+    let direct_pdf = e.direct_pdf * pick.probability;
     (*p).origin = e.origin;
     (*p).direction = e.direction;
     (*p).length = 0u;
