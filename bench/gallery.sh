@@ -13,7 +13,9 @@ mkdir -p "$out"
 work=$(mktemp -d)
 shot() {
   local name=$1; shift
-  if lg render "$@" --res 480x270 --spp 4 --time "${secs}s" --out "$work/$name.exr" >"$work/$name.log" 2>&1; then
+  local extra=()
+  case $name in sponza) extra=(--exposure 2) ;; esac
+  if lg render "$@" "${extra[@]}" --res 480x270 --spp 4 --time "${secs}s" --out "$work/$name.exr" >"$work/$name.log" 2>&1; then
     cp "$work/$name.png" "$out/$name.png"
     echo "ok   $name: $(grep ' spp in ' "$work/$name.log" | cut -d: -f1)"
   else
@@ -21,6 +23,7 @@ shot() {
   fi
 }
 for f in scenes/cornell/*.ron scenes/gltf/*.ron; do
+  [ -e "$out/$(basename "$f" .ron).png" ] && continue
   shot "$(basename "$f" .ron)" --scene "$(basename "$f" .ron)"
 done
 for f in $(find .gpu/scenes -name '*.gltf' -o -name '*.glb' | sort); do

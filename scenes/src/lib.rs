@@ -463,9 +463,21 @@ impl CompiledScene {
                     normals,
                 } => {
                     let m = material_index[material.as_str()];
+                    let emissive_texture = scene.materials[material.as_str()]
+                        .pbr
+                        .as_ref()
+                        .and_then(|p| p.textures.emissive);
                     for t in indices {
                         let v = t.map(|i| v3(positions[i as usize]));
-                        push_triangle(v, m, *emission, &mut prims, &mut lights);
+                        // An emissive texture scales the light by its mean over the triangle.
+                        let emission = match (emission, emissive_texture, uvs) {
+                            (Some(e), Some(r), Some(uv)) => {
+                                let mean = r.mean_over_triangle(&scene.textures, t.map(|i| uv[i as usize]), true);
+                                Some(std::array::from_fn(|c| e[c] * mean[c]))
+                            }
+                            _ => *emission,
+                        };
+                        push_triangle(v, m, emission, &mut prims, &mut lights);
                         if with_attributes {
                             attrs.push(triangle_attributes(*t, uvs.as_deref(), normals.as_deref()));
                         }

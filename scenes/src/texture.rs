@@ -30,6 +30,21 @@ pub enum Wrap {
 }
 
 impl Wrap {
+    /// The texel index along an axis of `n` texels for coordinate `x` (texel units).
+    fn index(self, x: f32, n: u32) -> u32 {
+        let n_i = n as i64;
+        let i = x.floor() as i64;
+        let i = match self {
+            Wrap::Repeat => i.rem_euclid(n_i),
+            Wrap::ClampToEdge => i.clamp(0, n_i - 1),
+            Wrap::MirroredRepeat => {
+                let k = i.rem_euclid(2 * n_i);
+                if k < n_i { k } else { 2 * n_i - 1 - k }
+            }
+        };
+        i as u32
+    }
+
     /// The mode as `TextureInfo::flags` stores it (two bits).
     fn bits(self) -> u32 {
         match self {
@@ -63,6 +78,54 @@ impl TextureRef {
             transform: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             tex_coord: 0,
         }
+    }
+}
+
+impl TextureRef {
+    /// The mean linear colour of the texture over the triangle with texture coordinates
+    /// `uv` (decoded from sRGB when `srgb`): the nearest texels at 15 points spread evenly
+    /// over the triangle. Used to give an emissive triangle with an emissive texture one
+    /// radiance as an area light.
+    pub fn mean_over_triangle(&self, textures: &[Texture], uv: [[f32; 2]; 3], srgb: bool) -> [f32; 3] {
+        let Some(t) = textures
+            .get(self.texture as usize)
+            .filter(|t| t.width > 0 && t.height > 0)
+        else {
+            return [1.0; 3];
+        };
+        const N: u32 = 5;
+        let mut sum = [0f64; 3];
+        let mut count = 0;
+        for i in 0..N {
+            for j in 0..N - i {
+                let (b1, b2) = ((i as f32 + 1.0 / 3.0) / N as f32, (j as f32 + 1.0 / 3.0) / N as f32);
+                let p: [f32; 2] =
+                    std::array::from_fn(|k| uv[0][k] + b1 * (uv[1][k] - uv[0][k]) + b2 * (uv[2][k] - uv[0][k]));
+                let m = &self.transform;
+                let (u, v) = (
+                    m[0][0] * p[0] + m[0][1] * p[1] + m[0][2],
+                    m[1][0] * p[0] + m[1][1] * p[1] + m[1][2],
+                );
+                let x = self.wrap[0].index(u * t.width as f32, t.width);
+                let y = self.wrap[1].index(v * t.height as f32, t.height);
+                let texel = t.texels[(y * t.width + x) as usize];
+                for (c, s) in sum.iter_mut().enumerate() {
+                    let byte = ((texel >> (8 * c)) & 0xff) as f32 / 255.0;
+                    *s += if srgb { srgb_to_linear(byte) } else { byte } as f64;
+                }
+                count += 1;
+            }
+        }
+        sum.map(|s| (s / count as f64) as f32)
+    }
+}
+
+/// The linear value of an sRGB-encoded one in [0, 1].
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
     }
 }
 
@@ -118,5 +181,36 @@ impl PackedTextures {
             pad: [0; 2],
         });
         self.infos.len() as i32 - 1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 2 x 1 image: a black texel on the left, a white one on the right.
+    fn black_white() -> Vec<Texture> {
+        vec![Texture {
+            name: "bw".into(),
+            width: 2,
+            height: 1,
+            texels: vec![0xff00_0000, 0xffff_ffff],
+        }]
+    }
+
+    #[test]
+    fn triangle_means_see_the_texels_the_triangle_covers() {
+        let r = TextureRef::new(0);
+        let right = [[0.55, 0.1], [0.95, 0.1], [0.55, 0.9]];
+        assert_eq!(r.mean_over_triangle(&black_white(), right, true), [1.0; 3]);
+        let left = [[0.05, 0.1], [0.45, 0.1], [0.05, 0.9]];
+        assert_eq!(r.mean_over_triangle(&black_white(), left, true), [0.0; 3]);
+        // Across both texels: some points on each side, so strictly between.
+        let both = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        let m = r.mean_over_triangle(&black_white(), both, true)[0];
+        assert!(m > 0.0 && m < 1.0, "mean {m}");
+        // Repeat wrapping: u + 1 is the same texel.
+        let shifted = right.map(|p| [p[0] + 1.0, p[1]]);
+        assert_eq!(r.mean_over_triangle(&black_white(), shifted, true), [1.0; 3]);
     }
 }

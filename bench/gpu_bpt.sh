@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Error against time of the bidirectional estimators (docs/performance.md, "Bidirectional
+# path tracing"): a long LVC-BPT reference, then `lightgraph compare` of NaiveBPT, LVC-BPTsk,
+# LVC-BPTmk and PT, on the glossy Cornell box with a point light (cornell-glossy-point) and on
+# Crytek Sponza; run on the GPU machine from the repo root with carry [".gpu"] after
+# `../shared/tools/gpu-bundle.sh --scene CrytekSponza --scene envmaps`. Results are packed into
+# OUT_DIR/bpt.tgz.
+#   bash bench/gpu_bpt.sh OUT_DIR [SECONDS]
+set -uo pipefail
+out=${1:?usage: bash bench/gpu_bpt.sh OUT_DIR [SECONDS]}
+secs=${2:-8}
+lg() { bash .gpu/run.sh lightgraph "$@"; }
+work=$(mktemp -d)
+for scene in cornell-glossy-point:512x512:4 sponza:1280x720:1; do
+  IFS=: read -r name res spp <<<"$scene"
+  echo "== $name reference"
+  lg reference --graph bpt-lvc --layout LVC-BPTmk --scene "$name" --res "$res" --spp "$spp" --time "$((secs * 5))s" \
+    --out "$work/$name/ref.exr" 2>&1 | tail -1
+  echo "== $name compare"
+  lg compare --scene "$name" --res "$res" --spp "$spp" --reference "$work/$name/ref.exr" --time "${secs}s" \
+    --baseline bpt-naive:NaiveBPT \
+    --runs bpt-naive:NaiveBPT,bpt-lvc:LVC-BPTsk,bpt-lvc:LVC-BPTmk,pt:StreamingPTmk2 --out "$work/$name/compare" 2>&1 | grep -E "^\||overflow"
+  lg explain --graph bpt-lvc --scene "$name" --res "$res" --spp "$spp" 2>/dev/null | grep -E "^layout|MiB|lvc_cache" | head -12
+done
+rm -f "$work"/*/ref.exr "$work"/*/compare/*.exr
+tar czf "$out/bpt.tgz" -C "$work" .
