@@ -3,7 +3,7 @@
 use super::args::*;
 use anyhow::{Context, Result};
 use clap::Args;
-use lightgraph::render::{load_graph, load_scene_with};
+use lightgraph::render::{Session, load_graph, load_scene_with};
 use lightgraph_engine::{Gpu, Plan, Program};
 use std::path::PathBuf;
 
@@ -33,9 +33,8 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
         Some(l) => vec![l.clone()],
         None => graph.layouts.keys().cloned().collect(),
     };
-    let device = Gpu::new(c.adapter.as_deref())
-        .ok()
-        .map(|g| (lightgraph::render::device_flags(&g), g.target()));
+    let gpu = Gpu::new(c.adapter.as_deref()).ok();
+    let device = gpu.as_ref().map(|g| (lightgraph::render::device_flags(g), g.target()));
     let (device, target) = device.unwrap_or_default();
     let flags = lightgraph::render::kernel_flags(device, &scene, c.all_features);
     print_features(&flags);
@@ -49,7 +48,26 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
     );
     for layout in layouts {
         let plan = Plan::new(&graph, &layout)?;
-        let program = Program::compile(&plan, &spec, &target)?;
+        // A graph with measured constants (LVC-BPT's average light sub-path length) is
+        // measured by a session first, so that the sizes shown are those a render allocates.
+        let session = match &gpu {
+            Some(g) if !graph.measured.is_empty() => Some(Session::new(g, &graph, &layout, &scene, opts.clone())?),
+            _ => None,
+        };
+        let compiled;
+        let program = match &session {
+            Some(s) => s.program(),
+            None => {
+                compiled = Program::compile(&plan, &spec, &target)?;
+                &compiled
+            }
+        };
+        for name in graph.measured.keys() {
+            match (&session, program.constants.get(name)) {
+                (Some(_), Some(v)) => println!("measured {name} = {v:?}"),
+                _ => println!("{name} not measured (no GPU): sizes that depend on it are shown for its default"),
+            }
+        }
         println!(
             "{}",
             lightgraph_engine::explain::report(&program, &|name| externals.get(name).map(|b| b.len() as u64))
