@@ -70,7 +70,7 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
         }
         println!(
             "{}",
-            lightgraph_engine::explain::report(&program, &|name| externals.get(name).map(|b| b.len() as u64))
+            lightgraph_engine::explain::report(program, &|name| externals.get(name).map(|b| b.len() as u64))
         );
         if let Some(dir) = &args.wgsl {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
