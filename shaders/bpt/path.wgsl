@@ -37,6 +37,56 @@ fn bpt_camera_vertex(p: BptPath) -> CameraVertex {
     return CameraVertex(p.throughput, p.pixel, p.d_vcm, p.d_vc, p.length);
 }
 
+// Where a camera sub-path's last ray arrived: the surface and its BSDF, the MIS quantities
+// updated for the segment, and whether the path can go on from there.
+struct CameraArrival {
+    s: Surface,
+    bsdf: Bsdf,
+    d_vcm: f32,
+    d_vc: f32,
+    alive: bool,
+}
+
+// The camera sub-path of vertex `v` traced `direction` from `origin` and found `hit` (t < 0:
+// it escaped). Adds the emission found there (s = 0: the background or an area light),
+// MIS-weighted with connections counting `eta` (1 for NaiveBPT, LVC-BPT's ratio otherwise),
+// to the film; returns the surface with the MIS quantities updated for the segment.
+fn camera_arrive(v: CameraVertex, origin: vec3<f32>, direction: vec3<f32>, hit: Hit, eta: f32) -> CameraArrival {
+    var a: CameraArrival;
+    a.alive = false;
+    if (hit.t < 0.0) {
+        let bg = background_radiance(direction);
+        if (bg.w > 0.0) {
+            let pmf = light_pmf(u32(scene.background));
+            let w = bpt_hit_weight(v, bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, eta);
+            film_add(v.pixel, v.throughput * w * bg.xyz);
+        }
+        return a;
+    }
+    a.s = surface_at(hit, origin, direction);
+    a.bsdf = bsdf_setup(material_at(a.s.material, a.s.tex), a.s.normal, -direction);
+    if (!a.bsdf.valid) {
+        return a;
+    }
+    let c = mis_pow(abs(a.bsdf.fix.z));
+    var u = v;
+    u.d_vcm = mis_clamp(v.d_vcm * mis_pow(hit.t * hit.t) / c);
+    u.d_vc = mis_clamp(v.d_vc / c);
+    a.d_vcm = u.d_vcm;
+    a.d_vc = u.d_vc;
+    if (a.s.light >= 0) {
+        let le = area_light_radiance(u32(a.s.light), direction);
+        if (le.w > 0.0) {
+            let pmf = light_pmf(u32(a.s.light));
+            let cos_light = dot(lights[u32(a.s.light)].normal, -direction);
+            let w = bpt_hit_weight(u, le.w * pmf, le.w * cos_light * INV_PI * pmf, eta);
+            film_add(v.pixel, v.throughput * w * le.xyz);
+        }
+    }
+    a.alive = true;
+    return a;
+}
+
 // The camera ray of sample `index` (pixel index % PIXELS, jittered) with its MIS quantity.
 fn bpt_camera_start(p: ptr<function, BptPath>, index: u32, rng: ptr<function, u32>) {
     let pixel = index % PIXELS;

@@ -3,33 +3,14 @@
 // sample's light sub-path (s >= 2), each MIS-weighted; then the next direction.
 
 fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
-    if ((*p).hit_t < 0.0) {
-        let bg = background_radiance((*p).direction);
-        if (bg.w > 0.0) {
-            let pmf = light_pmf(u32(scene.background));
-            let w = bpt_hit_weight(bpt_camera_vertex(*p), bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, 1.0);
-            film_add((*p).pixel, (*p).throughput * w * bg.xyz);
-        }
+    let a = camera_arrive(bpt_camera_vertex(*p), (*p).origin, (*p).direction, Hit((*p).hit_t, (*p).hit_primitive, (*p).hit_uv, true), 1.0);
+    if (!a.alive) {
         return false;
     }
-    let s = surface_at(Hit((*p).hit_t, (*p).hit_primitive, (*p).hit_uv, true), (*p).origin, (*p).direction);
-    let bsdf = bsdf_setup(material_at(s.material, s.tex), s.normal, -(*p).direction);
-    if (!bsdf.valid) {
-        return false;
-    }
-    let t = (*p).hit_t;
-    let c = mis_pow(abs(bsdf.fix.z));
-    (*p).d_vcm = mis_clamp((*p).d_vcm * mis_pow(t * t) / c);
-    (*p).d_vc = mis_clamp((*p).d_vc / c);
-    if (s.light >= 0) {
-        let le = area_light_radiance(u32(s.light), (*p).direction);
-        if (le.w > 0.0) {
-            let pmf = light_pmf(u32(s.light));
-            let cos_light = dot(lights[u32(s.light)].normal, -(*p).direction);
-            let w = bpt_hit_weight(bpt_camera_vertex(*p), le.w * pmf, le.w * cos_light * INV_PI * pmf, 1.0);
-            film_add((*p).pixel, (*p).throughput * w * le.xyz);
-        }
-    }
+    (*p).d_vcm = a.d_vcm;
+    (*p).d_vc = a.d_vc;
+    let s = a.s;
+    let bsdf = a.bsdf;
     var rng = (*p).rng;
     let light_u = rng_f32(&rng);
     let light_uv = rng_vec2(&rng);
