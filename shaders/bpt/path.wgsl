@@ -138,15 +138,7 @@ fn bpt_direct(p: CameraVertex, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) ->
     ray.contribution = p.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick.probability * ill.pdf));
     ray.origin = offset_ray_origin(s.position, side_normal(s.normal, ill.direction), s.extent);
     ray.direction = ill.direction;
-    ray.distance = INFINITE_DISTANCE;
-    if (ill.distance < INFINITE_DISTANCE) {
-        var aim = s.position + ill.direction * ill.distance;
-        let l = lights[pick.index];
-        if (l.kind == LIGHT_AREA) {
-            aim = offset_ray_origin(ill.point, ill.normal, triangle_extent(l.position, l.e1, l.e2));
-        }
-        ray.distance = length(aim - ray.origin);
-    }
+    ray.distance = light_shadow_distance(s.position, ray.origin, ill);
     return ray;
 }
 
@@ -182,6 +174,6 @@ fn bpt_connect(p: CameraVertex, s: Surface, bsdf: Bsdf, v: LightVertex, eta: f32
     ray.contribution = p.throughput * v.throughput * ec.f * el.f * (w * ec.cos_gen * el.cos_gen / distance2);
     ray.origin = offset_ray_origin(s.position, side_normal(s.normal, direction), s.extent);
     ray.direction = direction;
-    ray.distance = length(v.position - ray.origin);
+    ray.distance = shadow_distance(ray.origin, v.position);
     return ray;
 }

@@ -121,6 +121,15 @@ fn illuminate(index: u32, p: vec3<f32>, u: vec2<f32>) -> Illumination {
     return r;
 }
 
+// The length of the shadow ray from `origin` (offset from the shading point `p`) towards the
+// light sample `ill` taken at `p`: to the sampled point, or unbounded for lights at infinity.
+fn light_shadow_distance(p: vec3<f32>, origin: vec3<f32>, ill: Illumination) -> f32 {
+    if (ill.distance >= INFINITE_DISTANCE) {
+        return INFINITE_DISTANCE;
+    }
+    return shadow_distance(origin, p + ill.direction * ill.distance);
+}
+
 // Radiance leaving area light `index` towards -direction, and the area density with which
 // `illuminate` picks the point (0 radiance on the back side).
 fn area_light_radiance(index: u32, direction: vec3<f32>) -> vec4<f32> {

@@ -25,15 +25,7 @@ fn material(path: ptr<function, CameraPath>) -> bool {
                 let contribution = (*path).throughput * ill.radiance * e.f * (w * e.cos_gen / (pick * ill.pdf));
                 let side = select(-s.normal, s.normal, dot(s.normal, ill.direction) > 0.0);
                 let origin = offset_ray_origin(s.position, side, s.extent);
-                var distance = INFINITE_DISTANCE;
-                if (ill.distance < INFINITE_DISTANCE) {
-                    var aim = s.position + ill.direction * ill.distance;
-                    if (lights[index].kind == LIGHT_AREA) {
-                        let l = lights[index];
-                        aim = offset_ray_origin(ill.point, ill.normal, triangle_extent(l.position, l.e1, l.e2));
-                    }
-                    distance = length(aim - origin);
-                }
+                let distance = light_shadow_distance(s.position, origin, ill);
                 emit_shadow(ShadowRay(origin, (*path).pixel, ill.direction, distance, contribution));
             }
         }
