@@ -4,6 +4,7 @@
 // table `textures` (lavapipe has no binding arrays) and filtered bilinearly, sRGB-encoded
 // colour decoded before filtering. Needs the resources `materials`, `textures` and `texels`.
 
+#if TEXTURES
 // sRGB-encoded colour to linear.
 fn texture_srgb_decode(c: vec3<f32>) -> vec3<f32> {
     return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
@@ -52,6 +53,7 @@ fn texture_sample(index: u32, uv: vec2<f32>) -> vec4<f32> {
     let bottom = mix(texture_texel(t, x0, y1), texture_texel(t, x1, y1), f.x);
     return mix(top, bottom, f.y);
 }
+#endif
 
 // Material `index` resolved at texture coordinates `tex`.
 fn material_at(index: u32, tex: vec2<f32>) -> Material {
@@ -78,8 +80,10 @@ fn material_at(index: u32, tex: vec2<f32>) -> Material {
 // The alpha of material `m` at texture coordinates `tex` (its factor times the base colour
 // texture's alpha).
 fn material_alpha(m: Material, tex: vec2<f32>) -> f32 {
-    if (m.base_color_texture < 0) {
-        return m.alpha;
+#if TEXTURES
+    if (m.base_color_texture >= 0) {
+        return m.alpha * texture_sample(u32(m.base_color_texture), tex).a;
     }
-    return m.alpha * texture_sample(u32(m.base_color_texture), tex).a;
+#endif
+    return m.alpha;
 }

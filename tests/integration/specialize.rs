@@ -31,9 +31,11 @@ fn kernel_source(scene: &LoadedScene, all_features: bool) -> String {
         .join("\n")
 }
 
-/// Functions of features no Cornell box uses: the microfacet BSDF, environment maps, spot
-/// lights.
+/// Functions of features no Cornell box uses: textures, alpha masks, the microfacet BSDF,
+/// environment maps, spot lights.
 const NOT_IN_CORNELL: &[&str] = &[
+    "fn texture_sample",
+    "fn alpha_solid",
     "fn ggx_d",
     "fn pbr_setup",
     "fn pbr_sample",
