@@ -4,7 +4,7 @@
 
 fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
     var rng = rng_seed(frame.seed, frame.index, index);
-    bpt_camera_start(p, index, &rng);
+    (*p).camera = camera_subpath_start(index, &rng);
     (*p).light_count = 0u;
     (*p).pad = 0u;
     var lp: LightPath;
@@ -12,15 +12,12 @@ fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
         lp.rng = rng;
         loop {
             light_path_trace(&lp);
-            if (lp.hit_t < 0.0) {
+            let a = light_path_land(&lp);
+            if (!a.alive) {
                 break;
             }
-            let s = light_path_surface(lp);
-            let bsdf = light_path_bsdf(lp, s);
-            if (!bsdf.valid) {
-                break;
-            }
-            light_path_arrive(&lp, bsdf);
+            let s = a.s;
+            let bsdf = a.bsdf;
             if (!bsdf.is_delta) {
                 let v = light_vertex_at(lp, s);
                 let ray = light_vertex_to_camera(v, bsdf);
@@ -38,6 +35,6 @@ fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
         }
         rng = lp.rng;
     }
-    (*p).rng = rng;
+    (*p).camera.rng = rng;
     return true;
 }

@@ -7,7 +7,8 @@
 
 const LIGHT_VERTEX_SLOTS: u32 = max(MAX_PATH_LENGTH, 3u) - 2u;
 
-struct BptPath {
+// A camera sub-path between passes: LVC-BPT's item, and the camera half of NaiveBPT's.
+struct CameraSubpath {
     origin: vec3<f32>,
     pixel: u32,
     direction: vec3<f32>,
@@ -19,87 +20,88 @@ struct BptPath {
     hit_t: f32,                 // negative: the last ray escaped
     hit_primitive: u32,
     hit_uv: vec2<f32>,
+}
+
+// NaiveBPT's item: a camera sub-path and the stored vertices of its sample's light sub-path.
+struct BptPath {
+    camera: CameraSubpath,
     light_count: u32,           // stored light vertices
     pad: u32,
     light: array<LightVertex, LIGHT_VERTEX_SLOTS>,
 }
 
-// What the strategies at a camera vertex need of the camera sub-path (NaiveBPT and LVC-BPT).
-struct CameraVertex {
-    throughput: vec3<f32>,
-    pixel: u32,
-    d_vcm: f32,
-    d_vc: f32,
-    length: u32,                // camera segments traced so far
+// The camera ray of sample `index` (pixel index % PIXELS, jittered) with its MIS quantity;
+// `rng` goes on in the sub-path.
+fn camera_subpath_start(index: u32, rng: ptr<function, u32>) -> CameraSubpath {
+    let pixel = index % PIXELS;
+    let jitter = rng_vec2(rng);
+    let direction = camera_direction(f32(pixel % WIDTH) + jitter.x, f32(pixel / WIDTH) + jitter.y);
+    let d_vcm = mis_clamp(mis_pow(f32(PIXELS) / camera_pdf_w(dot(direction, camera.forward))));
+    return CameraSubpath(camera.position, pixel, direction, 0u, vec3<f32>(1.0), *rng, d_vcm, 0.0, 0.0, 0u, vec2<f32>(0.0));
 }
 
-fn bpt_camera_vertex(p: BptPath) -> CameraVertex {
-    return CameraVertex(p.throughput, p.pixel, p.d_vcm, p.d_vc, p.length);
+// The trace passes of camera sub-paths: the closest hit of the sub-path's ray.
+fn camera_subpath_trace(c: ptr<function, CameraSubpath>) {
+    count(select(COUNTER_RAYS_EXTENSION, COUNTER_RAYS_PRIMARY, (*c).length == 0u), 1u);
+    let hit = trace_closest((*c).origin, (*c).direction, INFINITE_DISTANCE);
+    (*c).hit_t = select(-1.0, hit.t, hit.found);
+    (*c).hit_primitive = hit.primitive;
+    (*c).hit_uv = hit.uv;
+    (*c).length += 1u;
 }
 
-// Where a camera sub-path's last ray arrived: the surface and its BSDF, the MIS quantities
-// updated for the segment, and whether the path can go on from there.
-struct CameraArrival {
-    s: Surface,
-    bsdf: Bsdf,
-    d_vcm: f32,
-    d_vc: f32,
-    alive: bool,
-}
-
-// The camera sub-path of vertex `v` traced `direction` from `origin` and found `hit` (t < 0:
-// it escaped). Adds the emission found there (s = 0: the background or an area light),
-// MIS-weighted with connections counting `eta` (1 for NaiveBPT, LVC-BPT's ratio otherwise),
-// to the film; returns the surface with the MIS quantities updated for the segment.
-fn camera_arrive(v: CameraVertex, origin: vec3<f32>, direction: vec3<f32>, hit: Hit, eta: f32) -> CameraArrival {
-    var a: CameraArrival;
+// Camera sub-path `c` arrives where its last ray went (hit_t < 0: it escaped). Adds the
+// emission found there (s = 0: the background or an area light), MIS-weighted with
+// connections counting `eta` (1 for NaiveBPT, LVC-BPT's ratio otherwise), to the film, and
+// at a surface brings the MIS quantities to the new vertex.
+fn camera_arrive(c: ptr<function, CameraSubpath>, eta: f32) -> Arrival {
+    var a: Arrival;
     a.alive = false;
-    if (hit.t < 0.0) {
+    let direction = (*c).direction;
+    if ((*c).hit_t < 0.0) {
         let bg = background_radiance(direction);
         if (bg.w > 0.0) {
             let pmf = light_pmf(u32(scene.background));
-            let w = bpt_hit_weight(v, bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, eta);
-            film_add(v.pixel, v.throughput * w * bg.xyz);
+            let w = bpt_hit_weight(*c, bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, eta);
+            film_add((*c).pixel, (*c).throughput * w * bg.xyz);
         }
         return a;
     }
-    a.s = surface_at(hit, origin, direction);
+    let t = (*c).hit_t;
+    a.s = surface_at(Hit(t, (*c).hit_primitive, (*c).hit_uv, true), (*c).origin, direction);
     a.bsdf = bsdf_setup(material_at(a.s.material, a.s.tex), a.s.normal, -direction);
     if (!a.bsdf.valid) {
         return a;
     }
-    let c = mis_pow(abs(a.bsdf.fix.z));
-    var u = v;
-    u.d_vcm = mis_clamp(v.d_vcm * mis_pow(hit.t * hit.t) / c);
-    u.d_vc = mis_clamp(v.d_vc / c);
-    a.d_vcm = u.d_vcm;
-    a.d_vc = u.d_vc;
+    let cos_fix = mis_pow(abs(a.bsdf.fix.z));
+    (*c).d_vcm = mis_clamp((*c).d_vcm * mis_pow(t * t) / cos_fix);
+    (*c).d_vc = mis_clamp((*c).d_vc / cos_fix);
     if (a.s.light >= 0) {
         let le = area_light_radiance(u32(a.s.light), direction);
         if (le.w > 0.0) {
             let pmf = light_pmf(u32(a.s.light));
             let cos_light = dot(lights[u32(a.s.light)].normal, -direction);
-            let w = bpt_hit_weight(u, le.w * pmf, le.w * cos_light * INV_PI * pmf, eta);
-            film_add(v.pixel, v.throughput * w * le.xyz);
+            let w = bpt_hit_weight(*c, le.w * pmf, le.w * cos_light * INV_PI * pmf, eta);
+            film_add((*c).pixel, (*c).throughput * w * le.xyz);
         }
     }
     a.alive = true;
     return a;
 }
 
-// The camera ray of sample `index` (pixel index % PIXELS, jittered) with its MIS quantity.
-fn bpt_camera_start(p: ptr<function, BptPath>, index: u32, rng: ptr<function, u32>) {
-    let pixel = index % PIXELS;
-    let jitter = rng_vec2(rng);
-    let direction = camera_direction(f32(pixel % WIDTH) + jitter.x, f32(pixel / WIDTH) + jitter.y);
-    (*p).origin = camera.position;
-    (*p).direction = direction;
-    (*p).pixel = pixel;
-    (*p).length = 0u;
-    (*p).throughput = vec3<f32>(1.0);
-    let camera_pdf = camera_pdf_w(dot(direction, camera.forward));
-    (*p).d_vcm = mis_clamp(mis_pow(f32(PIXELS) / camera_pdf));
-    (*p).d_vc = 0.0;
+// Continues camera sub-path `c` from where it arrived (connections counting `eta`, see
+// `scatter`); false when it ends.
+fn camera_scatter(c: ptr<function, CameraSubpath>, a: Arrival, eta: f32, rng: ptr<function, u32>) -> bool {
+    let r = scatter(a.bsdf, a.s, (*c).throughput, (*c).d_vcm, (*c).d_vc, eta, rng);
+    if (!r.alive) {
+        return false;
+    }
+    (*c).origin = r.origin;
+    (*c).direction = r.direction;
+    (*c).throughput = r.throughput;
+    (*c).d_vcm = r.d_vcm;
+    (*c).d_vc = r.d_vc;
+    return true;
 }
 
 // MIS weight of the s = 0 strategy (the camera sub-path hits a light) with emission
@@ -108,7 +110,7 @@ fn bpt_camera_start(p: ptr<function, BptPath>, index: u32, rng: ptr<function, u3
 // vertex relative to the other strategies (1 in NaiveBPT; see `scatter`): the light vertex
 // here was reached by a camera scatter, whose d_vcm counts eta, but the strategy that picks
 // the light point directly (s = 1) counts once.
-fn bpt_hit_weight(p: CameraVertex, direct_pdf: f32, emission_pdf: f32, eta: f32) -> f32 {
+fn bpt_hit_weight(p: CameraSubpath, direct_pdf: f32, emission_pdf: f32, eta: f32) -> f32 {
     if (p.length == 1u) {
         return 1.0;
     }
@@ -118,7 +120,7 @@ fn bpt_hit_weight(p: CameraVertex, direct_pdf: f32, emission_pdf: f32, eta: f32)
 
 // The s = 1 strategy: a shadow ray towards a light sampled from the camera vertex; a zero
 // contribution when there is none.
-fn bpt_direct(p: CameraVertex, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) -> ShadowRay {
+fn bpt_direct(p: CameraSubpath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) -> ShadowRay {
     var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
     let pick = pick_light(u);
     let ill = illuminate(pick.index, s.position, uv);
@@ -144,7 +146,7 @@ fn bpt_direct(p: CameraVertex, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) ->
 
 // The s >= 2 strategies: connects the camera vertex to a stored light vertex; the strategy
 // counts `eta` times against the others (see `bpt_hit_weight`).
-fn bpt_connect(p: CameraVertex, s: Surface, bsdf: Bsdf, v: LightVertex, eta: f32) -> ShadowRay {
+fn bpt_connect(p: CameraSubpath, s: Surface, bsdf: Bsdf, v: LightVertex, eta: f32) -> ShadowRay {
     var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
     let to_light = v.position - s.position;
     let distance2 = dot(to_light, to_light);

@@ -2,15 +2,12 @@
 // camera (a shadow ray that splats into the pixel it projects to) and the next direction.
 
 fn light_bounce(p: ptr<function, LightPath>) -> bool {
-    if ((*p).hit_t < 0.0) {
+    let a = light_path_land(p);
+    if (!a.alive) {
         return false;
     }
-    let s = light_path_surface(*p);
-    let bsdf = light_path_bsdf(*p, s);
-    if (!bsdf.valid) {
-        return false;
-    }
-    light_path_arrive(p, bsdf);
+    let s = a.s;
+    let bsdf = a.bsdf;
     if (!bsdf.is_delta && (*p).length + 1u <= MAX_PATH_LENGTH) {
         let ray = light_vertex_to_camera(light_vertex_at(*p, s), bsdf);
         if (!is_black(ray.contribution)) {

@@ -135,6 +135,32 @@ fn light_path_arrive(p: ptr<function, LightPath>, bsdf: Bsdf) {
     (*p).d_vc = mis_clamp((*p).d_vc / c);
 }
 
+// Where a sub-path's last ray arrived: the surface, its BSDF, and whether the sub-path has a
+// vertex there (false when the ray escaped or the BSDF is invalid).
+struct Arrival {
+    s: Surface,
+    bsdf: Bsdf,
+    alive: bool,
+}
+
+// Light sub-path `p` arrives where its last ray went: its surface and BSDF, with the MIS
+// quantities brought there (`light_path_arrive`).
+fn light_path_land(p: ptr<function, LightPath>) -> Arrival {
+    var a: Arrival;
+    a.alive = false;
+    if ((*p).hit_t < 0.0) {
+        return a;
+    }
+    a.s = light_path_surface(*p);
+    a.bsdf = light_path_bsdf(*p, a.s);
+    if (!a.bsdf.valid) {
+        return a;
+    }
+    light_path_arrive(p, a.bsdf);
+    a.alive = true;
+    return a;
+}
+
 // The vertex to store for a sub-path at surface `s` (after `light_path_arrive`).
 fn light_vertex_at(p: LightPath, s: Surface) -> LightVertex {
     let towards = -p.direction;
