@@ -10,7 +10,7 @@
 /// Frames per render: independent estimates for the standard errors.
 const FRAMES: u32 = 48;
 
-use crate::common::{assert_finite, gpu, render};
+use crate::common::{assert_finite, gpu, largest_relative_difference, render};
 use lightgraph::render::{Image, LoadedScene, Session, SessionOptions, load_graph, load_scene};
 use lightgraph_engine::ConstValue;
 
@@ -237,13 +237,7 @@ fn layouts_match(graph: &str, reference_layout: &str) {
                 reference.counters, other.counters,
                 "{graph} {name}, {layout}: different rays"
             );
-            let mut worst = 0f64;
-            for (p, q) in reference.image.mean.iter().zip(&other.image.mean) {
-                for c in 0..3 {
-                    let (x, y) = (p[c] as f64, q[c] as f64);
-                    worst = worst.max((x - y).abs() / x.abs().max(y.abs()).max(1e-3));
-                }
-            }
+            let worst = largest_relative_difference(&reference.image, &other.image);
             eprintln!("{graph} {name}, {layout}: largest relative difference {worst:.2e}");
             assert!(worst < 1e-5, "{graph} {name}, {layout}: differs by {worst:.2e}");
         }

@@ -337,14 +337,8 @@ fn white_furnace() {
 
 /// Random unit directions (SplitMix64), each with z of the sign `side` gives (0 any).
 fn directions(n: usize, seed: u64, side: f32) -> Vec<[f32; 4]> {
-    let mut state = seed;
-    let mut next = move || {
-        state = state.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = crate::common::SplitMix64(seed);
+    let mut next = move || rng.next_f64();
     (0..n)
         .map(|_| {
             let z = 1.0 - 2.0 * next();

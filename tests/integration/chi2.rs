@@ -388,14 +388,8 @@ mod tests {
     /// Uniform directions on the sphere from a seeded generator (SplitMix64: consecutive
     /// outputs of a plain 64-bit LCG are too correlated for pairs of numbers).
     fn uniform_samples(n: usize, seed: u64, tilt: f64) -> Vec<[f32; 4]> {
-        let mut state = seed;
-        let mut next = move || {
-            state = state.wrapping_add(0x9E3779B97F4A7C15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::common::SplitMix64(seed);
+        let mut next = move || rng.next_f64();
         (0..n)
             .map(|_| {
                 // `tilt` > 0 puts too many samples near the poles: a wrong sampler.

@@ -123,3 +123,31 @@ pub fn assert_finite(image: &Image, what: &str) {
         );
     }
 }
+
+/// The largest difference between two images' pixels, relative to the larger of the two
+/// values (at least 1e-3), over all channels.
+pub fn largest_relative_difference(a: &Image, b: &Image) -> f64 {
+    let mut worst = 0f64;
+    for (p, q) in a.mean.iter().zip(&b.mean) {
+        for c in 0..3 {
+            let (x, y) = (p[c] as f64, q[c] as f64);
+            worst = worst.max((x - y).abs() / x.abs().max(y.abs()).max(1e-3));
+        }
+    }
+    worst
+}
+
+/// A seeded SplitMix64 generator of uniform numbers in [0, 1) (consecutive outputs of a plain
+/// 64-bit LCG are too correlated for pairs of numbers).
+pub struct SplitMix64(pub u64);
+
+impl SplitMix64 {
+    /// The next number in [0, 1).
+    pub fn next_f64(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}

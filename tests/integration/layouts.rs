@@ -2,7 +2,7 @@
 //! the layouts run the same pass functions on the same random streams, and only the order of
 //! the film's atomic additions differs. They also trace exactly the same rays.
 
-use crate::common::render;
+use crate::common::{largest_relative_difference, render};
 use lightgraph::render::{load_graph, load_scene};
 
 #[test]
@@ -22,14 +22,7 @@ fn every_pt_layout_matches_naive_pt_sk() {
                 reference.counters, other.counters,
                 "{name}, {layout}: the layouts trace different rays"
             );
-            let mut worst = 0f64;
-            for (p, q) in reference.image.mean.iter().zip(&other.image.mean) {
-                for c in 0..3 {
-                    let (x, y) = (p[c] as f64, q[c] as f64);
-                    // Sums of a few dozen f32 terms in another order: a few ulps of the magnitude.
-                    worst = worst.max((x - y).abs() / x.abs().max(y.abs()).max(1e-3));
-                }
-            }
+            let worst = largest_relative_difference(&reference.image, &other.image);
             eprintln!("{name}, {layout}: largest relative difference {worst:.2e}");
             assert!(
                 worst < 1e-5,
@@ -71,13 +64,7 @@ fn pooled_layouts_regenerate_across_many_iterations() {
     ] {
         let other = crate::common::render_with(&scene, "pt", layout, (24, 24), 2, 1, 5, Some(97));
         assert_eq!(reference.counters, other.counters, "{layout} with a pool of 97 threads");
-        let worst = reference
-            .image
-            .mean
-            .iter()
-            .zip(&other.image.mean)
-            .flat_map(|(p, q)| (0..3).map(move |c| ((p[c] - q[c]).abs() / p[c].abs().max(q[c].abs()).max(1e-3)) as f64))
-            .fold(0.0, f64::max);
+        let worst = largest_relative_difference(&reference.image, &other.image);
         assert!(
             worst < 1e-5,
             "{layout} with a pool of 97 threads differs by {worst:.2e}"
@@ -149,12 +136,7 @@ fn frames_recorded_in_one_batch_match_frames_run_one_by_one() {
         );
         let (a, b) = (one.image().unwrap(), batch.image().unwrap());
         assert_eq!(a.frames, 5);
-        let worst = a
-            .mean
-            .iter()
-            .zip(&b.mean)
-            .flat_map(|(p, q)| (0..3).map(move |c| ((p[c] - q[c]).abs() / p[c].abs().max(q[c].abs()).max(1e-3)) as f64))
-            .fold(0.0, f64::max);
+        let worst = largest_relative_difference(&a, &b);
         assert!(worst < 1e-5, "{layout}: batched frames differ by {worst:.2e}");
     }
 }

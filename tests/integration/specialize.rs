@@ -1,7 +1,7 @@
 //! Scene-specialised kernels: the scene's features decide which WGSL code is generated, and a
 //! specialised kernel renders the same image as one with every feature compiled in.
 
-use crate::common::gpu;
+use crate::common::{gpu, largest_relative_difference};
 use lightgraph::render::{
     LayoutOverrides, LoadedScene, Session, SessionOptions, device_flags, kernel_flags, load_graph, load_scene,
     specialization,
@@ -95,15 +95,7 @@ fn specialised_and_all_features_kernels_render_the_same_image() {
         let (a, ca) = image(false);
         let (b, cb) = image(true);
         assert_eq!(ca, cb, "{name}: the kernels trace different rays");
-        let mut worst = 0f64;
-        for (p, q) in a.mean.iter().zip(&b.mean) {
-            for c in 0..3 {
-                let (x, y) = (p[c] as f64, q[c] as f64);
-                // The same arithmetic on the same random numbers; only the order of the film's
-                // atomic additions may differ: a few ulps of the magnitude.
-                worst = worst.max((x - y).abs() / x.abs().max(y.abs()).max(1e-3));
-            }
-        }
+        let worst = largest_relative_difference(&a, &b);
         assert!(
             worst < 1e-5,
             "{name}: specialised and all-features images differ by {worst:.2e}"
