@@ -51,6 +51,9 @@ pub struct ControlMap {
     pub alive: BTreeMap<usize, u32>,
     /// The next item index of a regenerating chain.
     pub next: BTreeMap<usize, u32>,
+    /// Items of a chain regenerating behind a `regenerate_at` gate alive after the iteration
+    /// before: the alive count, moved here when an iteration begins.
+    pub held: BTreeMap<usize, u32>,
     /// In-kernel loops stopped by the iteration cap.
     pub loop_capped: u32,
     /// Number of words.
@@ -440,6 +443,15 @@ impl CodegenContext<'_> {
                 } else {
                     s.push_str("    let queued = atomicLoad(&lg_out.count);\n    if (lg_i >= LG_POOL - min(queued, LG_POOL)) { return; }\n    {\n");
                 }
+                if let (Some(&held), Some(at)) = (self.control.held.get(&c), self.plan.layout.regenerate_at) {
+                    // Refill only once enough of the pool is idle.
+                    let pool = self.pools[&c];
+                    let idle = ((at as f64 * pool as f64).ceil() as u64).clamp(1, pool);
+                    let _ = writeln!(
+                        s,
+                        "    if (LG_POOL - min(atomicLoad(&lg_control[{held}]), LG_POOL) < {idle}u) {{ return; }}"
+                    );
+                }
                 s.push_str(&claim("return;"));
                 let _ = writeln!(s, "    if (!{start}(&it, frame.base + index)) {{ return; }}");
                 s.push_str(&self.guarded_calls(c, 1..steps_end, "return;"));
@@ -608,6 +620,19 @@ pub fn zero_kernel(name: &str, control_binding: u32, word: u32) -> String {
 @compute @workgroup_size(1)
 fn {name}() {{
     lg_control[{word}] = 0u;
+}}
+"
+    )
+}
+
+/// A kernel that moves control word `from` into `to` and clears `from`.
+pub fn roll_kernel(name: &str, control_binding: u32, from: u32, to: u32) -> String {
+    format!(
+        "@group(0) @binding({control_binding}) var<storage, read_write> lg_control: array<u32>;
+@compute @workgroup_size(1)
+fn {name}() {{
+    lg_control[{to}] = lg_control[{from}];
+    lg_control[{from}] = 0u;
 }}
 "
     )

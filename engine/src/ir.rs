@@ -275,6 +275,11 @@ pub struct LayoutDecl {
     /// for Naive, a device-sized pool otherwise.
     #[serde(default)]
     pub threads: Option<u64>,
+    /// Host loops with policy Regeneration: idle slots are refilled only once at least this
+    /// fraction of the pool was idle after the last iteration (van Antwerpen's streaming
+    /// threshold); every iteration when absent.
+    #[serde(default)]
+    pub regenerate_at: Option<f32>,
 }
 
 /// How a chain with a loop keeps its threads busy (the paper's regeneration policies).
@@ -317,6 +322,7 @@ impl Default for LayoutDecl {
             loops: LoopMode::default(),
             policy: Policy::default(),
             threads: None,
+            regenerate_at: None,
         }
     }
 }

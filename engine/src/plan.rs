@@ -148,6 +148,18 @@ impl Plan {
                 format!("layout '{layout_name}': a pool of 0 threads"),
             ));
         }
+        if let Some(at) = layout.regenerate_at {
+            let why = if !(at > 0.0 && at <= 1.0) {
+                Some(format!("regenerate_at {at} is not in (0, 1]"))
+            } else if layout.policy != Policy::Regeneration || layout.loops != LoopMode::Host {
+                Some("regenerate_at needs policy: Regeneration with loops: Host".to_string())
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(graph.error_in_layout(layout_name, layout_name, format!("layout '{layout_name}': {why}")));
+            }
+        }
         let groups = resolve_groups(graph, layout_name, &layout)?;
         let mut kernels = Vec::new();
         for (k, group) in groups.iter().enumerate() {

@@ -208,6 +208,16 @@ impl Program {
             control.next.insert(k.chain, next);
             next += 1;
         }
+        if plan.layout.regenerate_at.is_some() {
+            for k in plan
+                .kernels
+                .iter()
+                .filter(|k| k.regenerates && plan.stored_chains.contains(&k.chain))
+            {
+                control.held.insert(k.chain, next);
+                next += 1;
+            }
+        }
         control.loop_capped = next;
         control.len = next + 1;
 

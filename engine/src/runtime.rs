@@ -414,11 +414,19 @@ impl<'g> Instance<'g> {
         let words = program.control.alive.values().chain(program.control.next.values());
         for &word in words {
             let name = format!("lg_zero_{word}");
-            let (module, uses) = compile_internal(
-                &crate::codegen::zero_kernel(&name, program.bindings[&BufferRef::Control], word),
-                &name,
-                &program,
-            )?;
+            let control = program.bindings[&BufferRef::Control];
+            // An alive count a regeneration gate reads moves to its held word instead.
+            let held = program
+                .control
+                .alive
+                .iter()
+                .find(|&(_, &w)| w == word)
+                .and_then(|(c, _)| program.control.held.get(c));
+            let wgsl = match held {
+                Some(&to) => crate::codegen::roll_kernel(&name, control, word, to),
+                None => crate::codegen::zero_kernel(&name, control, word),
+            };
+            let (module, uses) = compile_internal(&wgsl, &name, &program)?;
             zeros.insert(word, build(&name, module, &uses, &[&identity]));
         }
         let (fold_module, fold_uses) = compile_internal(&program.fold_kernel, "lg_fold", &program)?;

@@ -2,7 +2,7 @@
 //! must produce exactly the numbers the CPU computes, and illegal layouts must be refused
 //! with messages that name the passes and resources involved.
 
-use lightgraph_engine::ir::LayoutDecl;
+use lightgraph_engine::ir::{LayoutDecl, LoopMode, Policy};
 use lightgraph_engine::{ConstValue, Gpu, Graph, Instance, Layer, Plan, Program, Specialization, Vfs};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -208,4 +208,63 @@ fn per_call_expressions_size_queues_from_constants() {
     .expect_err("a malformed per_call is refused")
     .to_string();
     assert!(e.contains("stream 'done': per_call:"), "{e}");
+}
+
+/// `regenerate_at` holds idle slots back until enough of the pool is idle: every host-loop
+/// regeneration layout still walks every number exactly once, with a pool of 37 slots (so
+/// refills come in waves), and the field is refused where there is no such pool.
+#[test]
+fn regeneration_behind_a_gate_walks_every_number_once() {
+    let g = graph();
+    let n = 300;
+    let expected = cpu_steps(n);
+    let mut gated = 0;
+    for (name, decl) in lightgraph_engine::auto::legal_layouts(&g, &Default::default()) {
+        if decl.policy != Policy::Regeneration || decl.loops != LoopMode::Host {
+            let e = Plan::with_decl(
+                &g,
+                &name,
+                LayoutDecl {
+                    regenerate_at: Some(0.6),
+                    ..decl
+                },
+            )
+            .expect_err("regenerate_at without a host-loop regeneration pool is refused")
+            .to_string();
+            assert!(e.contains("regenerate_at needs policy: Regeneration"), "{e}");
+            continue;
+        }
+        for at in [0.6, 1.0] {
+            let decl = LayoutDecl {
+                threads: Some(37),
+                regenerate_at: Some(at),
+                ..decl.clone()
+            };
+            let plan = Plan::with_decl(&g, &name, decl).unwrap();
+            let spec = Specialization {
+                constants: [("N".to_string(), ConstValue::U32(n))].into_iter().collect(),
+                ..Default::default()
+            };
+            let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+            let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
+            let stats = instance.run_frame(0, 0).unwrap();
+            let steps: Vec<u32> = bytemuck::pod_collect_to_vec(&instance.read("steps").unwrap());
+            assert_eq!(steps, expected, "layout {name}, regenerate_at {at}");
+            assert_eq!(stats.counters["walks"], n as u64, "layout {name}, regenerate_at {at}");
+        }
+        gated += 1;
+    }
+    assert!(gated > 0, "no host-loop regeneration layout to gate");
+    let fused = Plan::new(&g, "fused").unwrap().layout;
+    let e = Plan::with_decl(
+        &g,
+        "fused",
+        LayoutDecl {
+            regenerate_at: Some(1.5),
+            ..fused
+        },
+    )
+    .expect_err("a fraction above 1 is refused")
+    .to_string();
+    assert!(e.contains("regenerate_at 1.5 is not in (0, 1]"), "{e}");
 }

@@ -16,20 +16,12 @@ fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
             if (!a.alive) {
                 break;
             }
-            let s = a.s;
-            let bsdf = a.bsdf;
-            if (!bsdf.is_delta) {
-                let v = light_vertex_at(lp, s);
-                let ray = light_vertex_to_camera(v, bsdf);
-                if (!is_black(ray.contribution)) {
-                    emit_shadow(ray);
-                }
-                if (lp.length + 2u <= MAX_PATH_LENGTH) {
-                    (*p).light[(*p).light_count] = v;
-                    (*p).light_count += 1u;
-                }
+            let visit = bpt_light_visit(&lp, a);
+            if (visit.store) {
+                (*p).light[(*p).light_count] = visit.vertex;
+                (*p).light_count += 1u;
             }
-            if (lp.length + 2u > MAX_PATH_LENGTH || !light_path_scatter(&lp, s, bsdf, 1.0)) {
+            if (!visit.go_on) {
                 break;
             }
         }

@@ -30,6 +30,30 @@ struct BptPath {
     light: array<LightVertex, LIGHT_VERTEX_SLOTS>,
 }
 
+// What a light sub-path of NaiveBPT or StreamingBPT did at a vertex (`bpt_light_visit`).
+struct LightVisit {
+    vertex: LightVertex,
+    store: bool,                // whether a connection can use the vertex
+    go_on: bool,                // whether the sub-path continues
+}
+
+// Light sub-path `lp` of NaiveBPT or StreamingBPT at the vertex it arrived at: the t = 1
+// splat (through the `shadow` stream), the vertex to store, and the next direction.
+fn bpt_light_visit(lp: ptr<function, LightPath>, a: Arrival) -> LightVisit {
+    var r: LightVisit;
+    r.store = false;
+    if (!a.bsdf.is_delta) {
+        r.vertex = light_vertex_at(*lp, a.s);
+        let ray = light_vertex_to_camera(r.vertex, a.bsdf);
+        if (!is_black(ray.contribution)) {
+            emit_shadow(ray);
+        }
+        r.store = (*lp).length + 2u <= MAX_PATH_LENGTH;
+    }
+    r.go_on = (*lp).length + 2u <= MAX_PATH_LENGTH && light_path_scatter(lp, a.s, a.bsdf, 1.0);
+    return r;
+}
+
 // The camera ray of sample `index` (pixel index % PIXELS, jittered) with its MIS quantity;
 // `rng` goes on in the sub-path.
 fn camera_subpath_start(index: u32, rng: ptr<function, u32>) -> CameraSubpath {

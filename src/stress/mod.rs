@@ -23,12 +23,17 @@ pub const NOT_RADIANCE: [&str; 1] = ["ao"];
 /// Built-in radiance estimators left out of the stress suite, with the reason: light tracing
 /// misses lights seen directly and whatever is seen through a specular surface, so it cannot
 /// keep the invariants; NaiveBPT keeps a sample's light vertices in its item, 48 bytes for
-/// each of MAX_PATH_LENGTH - 2 slots, too large for the emissive boxes' hundreds of bounces.
-pub const INCOMPLETE: [(&str, &str); 3] = [
+/// each of MAX_PATH_LENGTH - 2 slots, too large for the emissive boxes' hundreds of bounces
+/// (StreamingBPT keeps both sub-paths' vertices).
+pub const INCOMPLETE: [(&str, &str); 4] = [
     ("bpt-lvc", "new: not yet run through the stress suite"),
     (
         "bpt-naive",
         "items hold MAX_PATH_LENGTH - 2 light vertices: too large for hundreds of bounces",
+    ),
+    (
+        "bpt-streaming",
+        "items hold both sub-paths' vertices: too large for hundreds of bounces",
     ),
     ("lt", "light tracing misses directly visible lights and specular paths"),
 ];

@@ -1,0 +1,172 @@
+// StreamingBPT (van Antwerpen 2011): a pool of samples, each tracing its light sub-path and
+// then its camera sub-path one ray per iteration, keeping every vertex a connection can use
+// (up to MAX_PATH_LENGTH - 2 per sub-path) in its own slot. A finished sample hands each
+// (camera vertex, light vertex) pair to the connection stage, one thread per pair; the t = 1
+// splats and the s = 1 light samples go out as shadow rays on the way. The estimator, random
+// numbers included, is NaiveBPT's, so the two give the same image for the same seed.
+
+// A camera sub-path vertex kept for the connection stage: what `bpt_connect` needs of the
+// sub-path, the surface and the BSDF there.
+struct CameraVertex {
+    position: vec3<f32>,
+    extent: f32,
+    throughput: vec3<f32>,
+    d_vcm: f32,
+    normal: vec3<f32>,
+    d_vc: f32,
+    towards: vec3<f32>,         // towards the previous vertex
+    material: u32,
+    tex: vec2<f32>,
+    pixel: u32,
+    length: u32,
+}
+
+// StreamingBPT's item: both sub-paths in flight and their stored vertices.
+struct StreamingSample {
+    camera: CameraSubpath,
+    light_path: LightPath,
+    on_light: u32,              // 1 while the light sub-path is traced
+    light_count: u32,
+    camera_count: u32,
+    pad: u32,
+    light: array<LightVertex, LIGHT_VERTEX_SLOTS>,
+    cameras: array<CameraVertex, LIGHT_VERTEX_SLOTS>,
+}
+
+// One connection of the connection stage.
+struct VertexPair {
+    camera: CameraVertex,
+    light: LightVertex,
+}
+
+// Pass `sbpt_generate` (Start over PATHS): sample `index` starts its light sub-path (or its
+// camera sub-path when there is no light to start from), with NaiveBPT's random numbers.
+fn sbpt_generate(p: ptr<function, StreamingSample>, index: u32) -> bool {
+    var rng = rng_seed(frame.seed, frame.index, index);
+    (*p).camera = camera_subpath_start(index, &rng);
+    (*p).light_count = 0u;
+    (*p).camera_count = 0u;
+    (*p).pad = 0u;
+    (*p).on_light = 0u;
+    var lp: LightPath;
+    if (scene.num_lights > 0u && light_path_start(&lp, &rng)) {
+        lp.rng = rng;
+        (*p).on_light = 1u;
+    }
+    (*p).light_path = lp;
+    (*p).camera.rng = rng;
+    return true;
+}
+
+// Pass `sbpt_trace` (Loop): the closest hit of the ray of the sub-path being traced.
+fn sbpt_trace(p: ptr<function, StreamingSample>) -> bool {
+    if ((*p).on_light != 0u) {
+        var lp = (*p).light_path;
+        light_path_trace(&lp);
+        (*p).light_path = lp;
+    } else {
+        var camera = (*p).camera;
+        camera_subpath_trace(&camera);
+        (*p).camera = camera;
+    }
+    return true;
+}
+
+// Pass `sbpt_extend` (Loop): at the new vertex of the light sub-path, the t = 1 splat, the
+// vertex stored and the next direction (the camera sub-path takes over when it ends); at the
+// new vertex of the camera sub-path, emission found (s = 0), a light sampled (s = 1), the
+// vertex stored and the next direction. A sample whose camera sub-path ends emits its pairs.
+fn sbpt_extend(p: ptr<function, StreamingSample>) -> bool {
+    if ((*p).on_light != 0u) {
+        var lp = (*p).light_path;
+        let a = light_path_land(&lp);
+        var go_on = false;
+        if (a.alive) {
+            let visit = bpt_light_visit(&lp, a);
+            if (visit.store) {
+                (*p).light[(*p).light_count] = visit.vertex;
+                (*p).light_count += 1u;
+            }
+            go_on = visit.go_on;
+        }
+        (*p).light_path = lp;
+        if (!go_on) {
+            (*p).on_light = 0u;
+            (*p).camera.rng = lp.rng;
+        }
+        return true;
+    }
+    var camera = (*p).camera;
+    let alive = sbpt_camera_vertex(p, &camera);
+    (*p).camera = camera;
+    if (!alive) {
+        sbpt_emit_pairs(p);
+    }
+    return alive;
+}
+
+// The camera half of `sbpt_extend` (NaiveBPT's `bpt_vertex` with the connections deferred);
+// false when the camera sub-path ends.
+fn sbpt_camera_vertex(p: ptr<function, StreamingSample>, c: ptr<function, CameraSubpath>) -> bool {
+    let a = camera_arrive(c, 1.0);
+    if (!a.alive) {
+        return false;
+    }
+    let s = a.s;
+    let bsdf = a.bsdf;
+    var rng = (*c).rng;
+    let light_u = rng_f32(&rng);
+    let light_uv = rng_vec2(&rng);
+    if ((*c).length >= MAX_PATH_LENGTH) {
+        return false;
+    }
+    if (!bsdf.is_delta) {
+        if (scene.num_lights > 0u) {
+            let ray = bpt_direct(*c, s, bsdf, light_u, light_uv);
+            if (!is_black(ray.contribution)) {
+                emit_shadow(ray);
+            }
+        }
+        if ((*c).length + 2u <= MAX_PATH_LENGTH && (*p).light_count > 0u) {
+            (*p).cameras[(*p).camera_count] = CameraVertex(
+                s.position, s.extent, (*c).throughput, (*c).d_vcm, s.normal, (*c).d_vc,
+                -(*c).direction, s.material, s.tex, (*c).pixel, (*c).length,
+            );
+            (*p).camera_count += 1u;
+        }
+    }
+    let alive = camera_scatter(c, a, 1.0, &rng);
+    (*c).rng = rng;
+    return alive;
+}
+
+// Every pair of stored vertices that makes a path of at most MAX_PATH_LENGTH segments, into
+// the connection stage's queue.
+fn sbpt_emit_pairs(p: ptr<function, StreamingSample>) {
+    for (var i = 0u; i < (*p).camera_count; i += 1u) {
+        let cv = (*p).cameras[i];
+        for (var j = 0u; j < (*p).light_count; j += 1u) {
+            let lv = (*p).light[j];
+            if (light_vertex_length(lv) + 1u + cv.length > MAX_PATH_LENGTH) {
+                break;
+            }
+            emit_connect(VertexPair(cv, lv));
+        }
+    }
+}
+
+// Pass `sbpt_connect` (Step over VertexPair): the connection of one pair, as a shadow ray.
+fn sbpt_connect(pair: ptr<function, VertexPair>) -> bool {
+    let cv = (*pair).camera;
+    let s = Surface(cv.position, cv.normal, cv.material, -1, cv.extent, cv.tex, cv.normal);
+    let bsdf = bsdf_setup(material_at(cv.material, cv.tex), cv.normal, cv.towards);
+    let c = CameraSubpath(
+        cv.position, cv.pixel, -cv.towards, cv.length, cv.throughput, 0u, cv.d_vcm, cv.d_vc,
+        0.0, 0u, vec2<f32>(0.0),
+    );
+    let ray = bpt_connect(c, s, bsdf, (*pair).light, 1.0);
+    if (!is_black(ray.contribution)) {
+        emit_shadow(ray);
+    }
+    return false;
+}
