@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Error against time of the bidirectional estimators (docs/performance.md, "Bidirectional
-# path tracing"): a long LVC-BPT reference, then `lightgraph compare` of NaiveBPT, LVC-BPTsk,
-# LVC-BPTmk and PT, on the glossy Cornell box with a point light (cornell-glossy-point) and on
+# path tracing"): a long LVC-BPT reference, then `lightgraph compare` of StreamingBPT (the
+# baseline, as in the paper's Table III), NaiveBPT, LVC-BPTsk, LVC-BPTmk and PT, on the glossy Cornell box with a point light (cornell-glossy-point) and on
 # Crytek Sponza; run on the GPU machine from the repo root with carry [".gpu"] after
 # `../shared/tools/gpu-bundle.sh --scene CrytekSponza --scene envmaps`. Results are packed into
 # OUT_DIR/bpt.tgz.
@@ -18,9 +18,11 @@ for scene in cornell-glossy-point:512x512:4 sponza:1280x720:1; do
     --out "$work/$name/ref.exr" 2>&1 | tail -1
   echo "== $name compare"
   lg compare --scene "$name" --res "$res" --spp "$spp" --reference "$work/$name/ref.exr" --time "${secs}s" \
-    --baseline bpt-naive:NaiveBPT \
-    --runs bpt-naive:NaiveBPT,bpt-lvc:LVC-BPTsk,bpt-lvc:LVC-BPTmk,pt:StreamingPTmk2 --out "$work/$name/compare" 2>&1 | grep -E "^\||overflow"
-  lg explain --graph bpt-lvc --scene "$name" --res "$res" --spp "$spp" 2>/dev/null | grep -E "^layout|MiB|lvc_cache" | head -12
+    --baseline bpt-streaming:StreamingBPT \
+    --runs bpt-streaming:StreamingBPT,bpt-naive:NaiveBPT,bpt-lvc:LVC-BPTsk,bpt-lvc:LVC-BPTmk,pt:StreamingPTmk2 --out "$work/$name/compare" 2>&1 | grep -E "^\||overflow"
+  for g in bpt-streaming bpt-naive bpt-lvc; do
+    lg explain --graph $g --scene "$name" --res "$res" --spp "$spp" 2>/dev/null | grep -E "^layout|GPU memory|queue|state of|lvc_cache|lvc_staging"
+  done
 done
 rm -f "$work"/*/ref.exr "$work"/*/compare/*.exr
 tar czf "$out/bpt.tgz" -C "$work" .

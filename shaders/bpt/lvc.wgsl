@@ -5,6 +5,8 @@
 // n times, estimates one light sub-path's connections with weight M / (n PATHS); in the MIS
 // the connections count n / LVC_AVERAGE_LENGTH (the measured M / PATHS) against the other
 // strategies. With LVC_MEASURING the light phase only counts the vertices it would store.
+// The cache is put in sub-path order after the light phase (shaders/bpt/lvc_order.wgsl), so
+// every layout picks the same vertices for the same seed.
 
 // Connections per camera vertex: ceil of the measured average (at least 1).
 fn lvc_connections() -> u32 {
@@ -31,11 +33,16 @@ fn lvc_reset(item: ptr<function, LvcOnce>, index: u32) -> bool {
 // measured average, then starts it as light tracing does.
 fn lvc_light_generate(p: ptr<function, LightPath>, index: u32) -> bool {
     count(COUNTER_LVC_PATHS, 1u);
+    if (!LVC_MEASURING) {
+        lvc_path_count[index] = 0u;
+    }
     return light_generate(p, index);
 }
 
 // Pass `lvc_bounce` (Loop): at the light sub-path's new vertex, the t = 1 splat, the vertex
-// into the cache (counted as overflow when the cache is full), and the next direction.
+// into the cache in arrival order, `lvc_staging` (counted as overflow when the cache is
+// full), with its sub-path and rank there for `lvc_place` (shaders/bpt/lvc_order.wgsl), and
+// the next direction.
 fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
     let a = light_path_land(p);
     if (!a.alive) {
@@ -49,8 +56,11 @@ fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
             count(COUNTER_LVC_STORED, 1u);
             if (!LVC_MEASURING) {
                 let i = atomicAdd(&lvc_count, 1u);
-                if (i < arrayLength(&lvc_cache)) {
-                    lvc_cache[i] = v;
+                if (i < arrayLength(&lvc_staging)) {
+                    let rank = lvc_path_count[(*p).index];
+                    lvc_path_count[(*p).index] = rank + 1u;
+                    lvc_staging[i] = v;
+                    lvc_keys[i] = vec2<u32>((*p).index, rank);
                 } else {
                     count(COUNTER_LVC_OVERFLOW, 1u);
                 }

@@ -8,5 +8,6 @@ fn light_generate(p: ptr<function, LightPath>, index: u32) -> bool {
     var rng = rng_seed(frame.seed, frame.index, index);
     let started = light_path_start(p, &rng);
     (*p).rng = rng;
+    (*p).index = index;
     return started;
 }

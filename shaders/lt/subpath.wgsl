@@ -35,6 +35,7 @@ struct LightPath {
     hit_t: f32,             // negative: the last ray escaped
     hit_primitive: u32,
     hit_uv: vec2<f32>,
+    index: u32,             // the sub-path's index in the frame
 }
 
 // A stored light sub-path vertex (48 bytes): position moved off the surface to the side the
