@@ -35,7 +35,14 @@ type Outputs = (Vec<u32>, Vec<u32>, BTreeMap<String, u64>);
 
 fn run(layout: &str, n: u32) -> Outputs {
     let g = graph();
-    let plan = Plan::new(&g, layout).unwrap();
+    let decl = g.layouts[layout].clone();
+    run_decl(&g, layout, decl, n)
+}
+
+/// Runs one frame of layout `decl` (named `name`) over the numbers 1..=n: the steps of each
+/// walk, the histogram and the counters.
+fn run_decl(g: &Graph, name: &str, decl: LayoutDecl, n: u32) -> Outputs {
+    let plan = Plan::with_decl(g, name, decl).unwrap();
     let spec = Specialization {
         constants: [("N".to_string(), ConstValue::U32(n))].into_iter().collect(),
         ..Default::default()
@@ -88,25 +95,13 @@ fn every_enumerated_layout_computes_the_same_walks() {
     let expected = cpu_steps(n);
     for (name, decl) in layouts {
         eprintln!("layout {name}");
-        let plan = Plan::with_decl(
-            &g,
-            &name,
-            LayoutDecl {
-                threads: Some(37),
-                ..decl
-            },
-        )
-        .unwrap();
-        let spec = Specialization {
-            constants: [("N".to_string(), ConstValue::U32(n))].into_iter().collect(),
-            ..Default::default()
+        let decl = LayoutDecl {
+            threads: Some(37),
+            ..decl
         };
-        let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
-        let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
-        let stats = instance.run_frame(0, 0).unwrap();
-        let steps: Vec<u32> = bytemuck::pod_collect_to_vec(&instance.read("steps").unwrap());
+        let (steps, _, counters) = run_decl(&g, &name, decl, n);
         assert_eq!(steps, expected, "layout {name}");
-        assert_eq!(stats.counters["walks"], n as u64, "layout {name}");
+        assert_eq!(counters["walks"], n as u64, "layout {name}");
     }
 }
 
@@ -240,17 +235,9 @@ fn regeneration_behind_a_gate_walks_every_number_once() {
                 regenerate_at: Some(at),
                 ..decl.clone()
             };
-            let plan = Plan::with_decl(&g, &name, decl).unwrap();
-            let spec = Specialization {
-                constants: [("N".to_string(), ConstValue::U32(n))].into_iter().collect(),
-                ..Default::default()
-            };
-            let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
-            let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
-            let stats = instance.run_frame(0, 0).unwrap();
-            let steps: Vec<u32> = bytemuck::pod_collect_to_vec(&instance.read("steps").unwrap());
+            let (steps, _, counters) = run_decl(&g, &name, decl, n);
             assert_eq!(steps, expected, "layout {name}, regenerate_at {at}");
-            assert_eq!(stats.counters["walks"], n as u64, "layout {name}, regenerate_at {at}");
+            assert_eq!(counters["walks"], n as u64, "layout {name}, regenerate_at {at}");
         }
         gated += 1;
     }

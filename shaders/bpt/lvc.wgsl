@@ -101,25 +101,14 @@ fn lvc_trace(p: ptr<function, CameraSubpath>) -> bool {
 // each MIS-weighted; then the next direction.
 fn lvc_vertex(p: ptr<function, CameraSubpath>) -> bool {
     let eta = lvc_eta();
-    let a = camera_arrive(p, eta);
-    if (!a.alive) {
+    let visit = camera_visit(p, eta);
+    if (!visit.alive) {
         return false;
     }
-    let s = a.s;
-    let bsdf = a.bsdf;
-    var rng = (*p).rng;
-    let light_u = rng_f32(&rng);
-    let light_uv = rng_vec2(&rng);
-    if ((*p).length >= MAX_PATH_LENGTH) {
-        return false;
-    }
+    let s = visit.a.s;
+    let bsdf = visit.a.bsdf;
+    var rng = visit.rng;
     if (!bsdf.is_delta) {
-        if (scene.num_lights > 0u) {
-            let ray = bpt_direct(*p, s, bsdf, light_u, light_uv);
-            if (!is_black(ray.contribution)) {
-                emit_shadow(ray);
-            }
-        }
         let m = min(atomicLoad(&lvc_count), arrayLength(&lvc_cache));
         let n = lvc_connections();
         let scale = f32(m) / (f32(n) * f32(PATHS));
@@ -139,7 +128,7 @@ fn lvc_vertex(p: ptr<function, CameraSubpath>) -> bool {
             }
         }
     }
-    let alive = camera_scatter(p, a, eta, &rng);
+    let alive = camera_scatter(p, visit.a, eta, &rng);
     (*p).rng = rng;
     return alive;
 }

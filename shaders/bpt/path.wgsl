@@ -113,6 +113,41 @@ fn camera_arrive(c: ptr<function, CameraSubpath>, eta: f32) -> Arrival {
     return a;
 }
 
+// What a camera sub-path found at the vertex it arrived at (`camera_visit`).
+struct CameraVisit {
+    a: Arrival,
+    alive: bool,                // false: the sub-path ends here
+    rng: u32,                   // random numbers for the connections and the scatter
+}
+
+// Camera sub-path `c` arrives at its next vertex (`camera_arrive`, connections counting
+// `eta`) and, at a non-delta vertex, samples a light (s = 1) through the `shadow` stream.
+// The light's random numbers are drawn even where unused, so every estimator built on this
+// consumes the same numbers per vertex.
+fn camera_visit(c: ptr<function, CameraSubpath>, eta: f32) -> CameraVisit {
+    var v: CameraVisit;
+    v.a = camera_arrive(c, eta);
+    v.alive = false;
+    if (!v.a.alive) {
+        return v;
+    }
+    var rng = (*c).rng;
+    let light_u = rng_f32(&rng);
+    let light_uv = rng_vec2(&rng);
+    v.rng = rng;
+    if ((*c).length >= MAX_PATH_LENGTH) {
+        return v;
+    }
+    if (!v.a.bsdf.is_delta && scene.num_lights > 0u) {
+        let ray = bpt_direct(*c, v.a.s, v.a.bsdf, light_u, light_uv);
+        if (!is_black(ray.contribution)) {
+            emit_shadow(ray);
+        }
+    }
+    v.alive = true;
+    return v;
+}
+
 // Continues camera sub-path `c` from where it arrived (connections counting `eta`, see
 // `scatter`); false when it ends.
 fn camera_scatter(c: ptr<function, CameraSubpath>, a: Arrival, eta: f32, rng: ptr<function, u32>) -> bool {

@@ -108,34 +108,20 @@ fn sbpt_extend(p: ptr<function, StreamingSample>) -> bool {
 // The camera half of `sbpt_extend` (NaiveBPT's `bpt_vertex` with the connections deferred);
 // false when the camera sub-path ends.
 fn sbpt_camera_vertex(p: ptr<function, StreamingSample>, c: ptr<function, CameraSubpath>) -> bool {
-    let a = camera_arrive(c, 1.0);
-    if (!a.alive) {
+    let v = camera_visit(c, 1.0);
+    if (!v.alive) {
         return false;
     }
-    let s = a.s;
-    let bsdf = a.bsdf;
-    var rng = (*c).rng;
-    let light_u = rng_f32(&rng);
-    let light_uv = rng_vec2(&rng);
-    if ((*c).length >= MAX_PATH_LENGTH) {
-        return false;
+    let s = v.a.s;
+    if (!v.a.bsdf.is_delta && (*c).length + 2u <= MAX_PATH_LENGTH && (*p).light_count > 0u) {
+        (*p).cameras[(*p).camera_count] = CameraVertex(
+            s.position, s.extent, (*c).throughput, (*c).d_vcm, s.normal, (*c).d_vc,
+            -(*c).direction, s.material, s.tex, (*c).pixel, (*c).length,
+        );
+        (*p).camera_count += 1u;
     }
-    if (!bsdf.is_delta) {
-        if (scene.num_lights > 0u) {
-            let ray = bpt_direct(*c, s, bsdf, light_u, light_uv);
-            if (!is_black(ray.contribution)) {
-                emit_shadow(ray);
-            }
-        }
-        if ((*c).length + 2u <= MAX_PATH_LENGTH && (*p).light_count > 0u) {
-            (*p).cameras[(*p).camera_count] = CameraVertex(
-                s.position, s.extent, (*c).throughput, (*c).d_vcm, s.normal, (*c).d_vc,
-                -(*c).direction, s.material, s.tex, (*c).pixel, (*c).length,
-            );
-            (*p).camera_count += 1u;
-        }
-    }
-    let alive = camera_scatter(c, a, 1.0, &rng);
+    var rng = v.rng;
+    let alive = camera_scatter(c, v.a, 1.0, &rng);
     (*c).rng = rng;
     return alive;
 }

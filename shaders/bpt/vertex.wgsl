@@ -5,37 +5,24 @@
 fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
     var camera = (*p).camera;
     let c = &camera;
-    let a = camera_arrive(c, 1.0);
-    if (!a.alive) {
+    let v = camera_visit(c, 1.0);
+    if (!v.alive) {
         return false;
     }
-    let s = a.s;
-    let bsdf = a.bsdf;
-    var rng = (*c).rng;
-    let light_u = rng_f32(&rng);
-    let light_uv = rng_vec2(&rng);
-    if ((*c).length >= MAX_PATH_LENGTH) {
-        return false;
-    }
-    if (!bsdf.is_delta) {
-        if (scene.num_lights > 0u) {
-            let ray = bpt_direct(*c, s, bsdf, light_u, light_uv);
-            if (!is_black(ray.contribution)) {
-                emit_shadow(ray);
-            }
-        }
+    if (!v.a.bsdf.is_delta) {
         for (var i = 0u; i < (*p).light_count; i += 1u) {
-            let v = (*p).light[i];
-            if (light_vertex_length(v) + 1u + (*c).length > MAX_PATH_LENGTH) {
+            let lv = (*p).light[i];
+            if (light_vertex_length(lv) + 1u + (*c).length > MAX_PATH_LENGTH) {
                 break;
             }
-            let ray = bpt_connect(*c, s, bsdf, v, 1.0);
+            let ray = bpt_connect(*c, v.a.s, v.a.bsdf, lv, 1.0);
             if (!is_black(ray.contribution)) {
                 emit_shadow(ray);
             }
         }
     }
-    let alive = camera_scatter(c, a, 1.0, &rng);
+    var rng = v.rng;
+    let alive = camera_scatter(c, v.a, 1.0, &rng);
     (*c).rng = rng;
     (*p).camera = camera;
     return alive;
