@@ -457,3 +457,65 @@ fn light_tracing_misses_what_is_seen_in_a_mirror() {
     assert!(z > 6.0, "no block where light tracing misses light (best z {z:.1})");
     assert!(m_pt > 1.1 * m_lt, "block {block}: little missing ({m_pt} vs {m_lt})");
 }
+
+/// BPT's structural gap shown on purpose: a point light inside a glass ball lights a floor
+/// only through the glass (caustics, which BPT samples by connecting camera vertices to light
+/// vertices on the floor), and a mirror shows that floor. The floor seen in the mirror is
+/// reached only by specular-diffuse-specular paths (camera, mirror, floor, glass, light),
+/// which no BPT strategy samples: a perfect mirror shows the lit floor, yet BPT renders it
+/// black.
+const POINT_LIGHT_IN_GLASS_AND_A_MIRROR: &str = r#"Scene(
+    camera: (position: (0.0, -3.0, 1.6), look: Target((0.0, 1.0, 0.3)), up: (0.0, 0.0, 1.0), fov_degrees: 50.0),
+    materials: {
+        "floor": (diffuse: (0.8, 0.8, 0.8)),
+        "glass": (mirror: (1.0, 1.0, 1.0), ior: 1.5),
+        "mirror": (mirror: (1.0, 1.0, 1.0), ior: -1.0),
+    },
+    shapes: [
+        Quad(corners: ((-4.0, -4.0, 0.0), (4.0, -4.0, 0.0), (4.0, 4.0, 0.0), (-4.0, 4.0, 0.0)), material: "floor"),
+        Quad(corners: ((-1.5, 2.0, 0.05), (1.5, 2.0, 0.05), (1.5, 2.0, 2.0), (-1.5, 2.0, 2.0)), material: "mirror"),
+        Sphere(center: (0.0, 0.0, 0.8), radius: 0.3, material: "glass"),
+    ],
+    lights: [
+        Point(position: (0.0, 0.0, 0.8), intensity: (3.0, 3.0, 3.0)),
+    ],
+    integrator: (max_path_length: 6),
+)"#;
+
+#[test]
+fn bpt_misses_specular_diffuse_specular_paths() {
+    let parse = |text: &str| LoadedScene::parse("sds.ron", text, lightgraph_scenes::bvh::BvhKind::Bvh2, None).unwrap();
+    let scene = parse(POINT_LIGHT_IN_GLASS_AND_A_MIRROR);
+    // The pixels that see only the mirror (none of its edges): the mirror made a unit emitter,
+    // seen by paths of one segment with 16 jittered samples per pixel.
+    let glowing = POINT_LIGHT_IN_GLASS_AND_A_MIRROR.replace(
+        r#"material: "mirror")"#,
+        r#"material: "floor", emission: (1.0, 1.0, 1.0))"#,
+    );
+    let one_segment = [("MAX_PATH_LENGTH", ConstValue::U32(1))];
+    let mask = render(&parse(&glowing), "pt", "NaivePTsk", (32, 32), 16, 1, 1, &one_segment);
+    let bpt = render(&scene, "bpt-naive", "NaiveBPT", (32, 32), 4, 4, 67, &[]);
+    let (mut mirror, mut floor) = ((0.0f64, 0usize), (0.0f64, 0usize));
+    for (m, p) in mask.image.mean.iter().zip(&bpt.image.mean) {
+        let target = match m[1] {
+            v if v > 0.999 => &mut mirror,
+            0.0 => &mut floor,
+            _ => continue,
+        };
+        target.0 += p[1] as f64;
+        target.1 += 1;
+    }
+    assert!(
+        mirror.1 > 50 && floor.1 > 50,
+        "the view shows too little mirror ({}) or floor ({})",
+        mirror.1,
+        floor.1
+    );
+    let (m_mirror, m_floor) = (mirror.0 / mirror.1 as f64, floor.0 / floor.1 as f64);
+    eprintln!("bpt: floor {m_floor:.4}, floor seen in the mirror {m_mirror:.6}");
+    assert!(m_floor > 1e-3, "the floor is not lit ({m_floor})");
+    assert!(
+        m_mirror < 1e-3 * m_floor,
+        "BPT sampled specular-diffuse-specular light ({m_mirror} vs {m_floor})"
+    );
+}
