@@ -130,6 +130,16 @@ struct TriangleAttributes {
 
 const ATTRIBUTE_NORMALS: u32 = 1u;
 
+// The octahedral code of a unit vector: snorm16 x, y (Meyer et al. 2010).
+fn encode_octahedral(v: vec3<f32>) -> u32 {
+    let p = v.xy / (abs(v.x) + abs(v.y) + abs(v.z));
+    var e = p;
+    if (v.z < 0.0) {
+        e = (vec2<f32>(1.0) - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+    }
+    return pack2x16snorm(e);
+}
+
 // The unit vector an octahedral code stands for (Meyer et al. 2010).
 fn decode_octahedral(code: u32) -> vec3<f32> {
     let e = unpack2x16snorm(code);

@@ -54,25 +54,6 @@ struct LightVertex {
     tex: u32,
 }
 
-// Octahedral packing of a unit vector into two 16-bit signed normalized values.
-fn oct_pack(v: vec3<f32>) -> u32 {
-    let p = v.xy / (abs(v.x) + abs(v.y) + abs(v.z));
-    var q = p;
-    if (v.z < 0.0) {
-        q = (vec2<f32>(1.0) - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
-    }
-    return pack2x16snorm(q);
-}
-
-fn oct_unpack(w: u32) -> vec3<f32> {
-    let q = unpack2x16snorm(w);
-    var v = vec3<f32>(q, 1.0 - abs(q.x) - abs(q.y));
-    let t = max(-v.z, 0.0);
-    v.x += select(t, -t, v.x >= 0.0);
-    v.y += select(t, -t, v.y >= 0.0);
-    return normalize(v);
-}
-
 // The side of a surface that `towards` points to.
 fn side_normal(n: vec3<f32>, towards: vec3<f32>) -> vec3<f32> {
     return select(-n, n, dot(n, towards) > 0.0);
@@ -167,7 +148,7 @@ fn light_vertex_at(p: LightPath, s: Surface) -> LightVertex {
     let towards = -p.direction;
     let position = offset_ray_origin(s.position, side_normal(s.normal, towards), s.extent);
     return LightVertex(
-        position, p.d_vcm, p.throughput, p.d_vc, oct_pack(s.normal), oct_pack(towards),
+        position, p.d_vcm, p.throughput, p.d_vc, encode_octahedral(s.normal), encode_octahedral(towards),
         min(s.material, 0xffffffu) | (min(p.length, 255u) << 24u), pack2x16unorm(fract(s.tex)),
     );
 }
@@ -180,7 +161,7 @@ fn light_vertex_length(v: LightVertex) -> u32 {
 // The BSDF at a stored vertex.
 fn light_vertex_bsdf(v: LightVertex) -> Bsdf {
     let m = material_at(v.material_length & 0xffffffu, unpack2x16unorm(v.tex));
-    var bsdf = bsdf_setup(m, oct_unpack(v.normal), oct_unpack(v.fix));
+    var bsdf = bsdf_setup(m, decode_octahedral(v.normal), decode_octahedral(v.fix));
     bsdf.adjoint = true;
     return bsdf;
 }

@@ -214,13 +214,7 @@ fn environment_sampling_reproduces_the_maps_luminance() {
     let expected: Vec<f64> = (0..w * h)
         .map(|k| lum[k] * texel_solid_angle(k / w, w, h) / total * n)
         .collect();
-    let (statistic, dof, p_value, failure) = pearson(&observed, &expected);
-    let alpha = significance(CHI2_TESTS);
-    eprintln!("environment: chi2 = {statistic:.1} with {dof} dof, p = {p_value:.3e}");
-    assert!(
-        failure.is_none() && p_value > alpha,
-        "environment sampling: chi2 = {statistic} with {dof} dof, p = {p_value:e} (alpha {alpha:e}), {failure:?}"
-    );
+    assert_counts_fit(&observed, &expected, "environment sampling");
 }
 
 #[test]
@@ -275,12 +269,18 @@ fn gpu_light_picks_follow_the_alias_table() {
     assert_eq!(c.light_power[18], 0.0);
     assert_eq!(observed[18], 0.0, "a black light is never picked");
     let expected: Vec<f64> = expected_p.iter().map(|p| p * picks.len() as f64).collect();
-    let (statistic, dof, p_value, failure) = pearson(&observed, &expected);
+    assert_counts_fit(&observed, &expected, "light picks");
+}
+
+/// Pearson's test of `observed` cell counts against `expected` ones, at this file's
+/// significance (CHI2_TESTS tests share the false-failure budget).
+fn assert_counts_fit(observed: &[f64], expected: &[f64], what: &str) {
+    let (statistic, dof, p_value, failure) = pearson(observed, expected);
     let alpha = significance(CHI2_TESTS);
-    eprintln!("light picks: chi2 = {statistic:.1} with {dof} dof, p = {p_value:.3e}");
+    eprintln!("{what}: chi2 = {statistic:.1} with {dof} dof, p = {p_value:.3e}");
     assert!(
         failure.is_none() && p_value > alpha,
-        "picks: chi2 = {statistic} with {dof} dof, p = {p_value:e} (alpha {alpha:e}), {failure:?}"
+        "{what}: chi2 = {statistic} with {dof} dof, p = {p_value:e} (alpha {alpha:e}), {failure:?}"
     );
 }
 
