@@ -371,10 +371,12 @@ impl<'g> Session<'g> {
         self.render_frames(count.min(max).max(1))
     }
 
-    /// GPU memory of the session: the buffers the layout allocates and the scene data.
+    /// GPU memory of the session: the buffers the layout allocates (transient ones sharing
+    /// memory) and the scene data.
     pub fn memory_bytes(&self) -> u64 {
         let program = self.instance.program();
         let external: u64 = program
+            .resolved
             .sizes
             .iter()
             .filter_map(|(name, size)| {
@@ -383,7 +385,7 @@ impl<'g> Session<'g> {
                     .map(|n| n * size.element_bytes as u64)
             })
             .sum();
-        program.allocated_bytes().values().sum::<u64>() + external
+        program.peak_bytes() + external
     }
 
     /// Rays traced so far (primary, extension and shadow counters of the graph).

@@ -42,7 +42,8 @@ fn partitions<T: Clone>(items: &[T]) -> Vec<Vec<Vec<T>>> {
 /// matter.
 pub fn describe(plan: &Plan) -> String {
     let g = &plan.graph;
-    let kernels: Vec<String> = (0..plan.kernels.len())
+    let kernels: Vec<String> = plan
+        .kernel_ids()
         .map(|k| {
             plan.kernel_passes(k)
                 .iter()

@@ -1,88 +1,34 @@
-//! WGSL generation: the prelude every kernel shares (frame uniform, constants, counters,
-//! resource bindings) and each kernel's own part (emit functions, item load/store, the
-//! wrapper that calls the pass functions, the entry point).
+//! WGSL generation of the pass kernels: the prelude every kernel shares (frame record with
+//! the parameters, constants, counters, resource bindings) and each kernel's own part (emit
+//! functions, item load/store, the wrapper that calls the pass functions, the entry point).
 
 use crate::graph::Graph;
-use crate::ir::{ConstValue, StateStorage};
+use crate::ids::{ChainId, KernelId};
+use crate::ir::{ConstValue, Scope, StateStorage};
 use crate::plan::{Plan, Root};
-use crate::reflect::Word;
-use std::collections::BTreeMap;
+use crate::resolve::{BufferRef, Resolved};
 use std::fmt::Write;
-
-/// The buffers a kernel can bind.
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
-pub enum BufferRef {
-    /// The per-chunk frame record (uniform, dynamic offset).
-    Frame,
-    /// Per-chunk counter sums.
-    Counters,
-    /// Control words: queue counts and overflows, alive counts, loop caps.
-    Control,
-    /// 64-bit counter totals (fold kernel only).
-    Totals,
-    /// Indirect dispatch arguments (argument kernels only).
-    Args,
-    /// A graph resource.
-    Resource(String),
-    /// The state buffer of a stored chain.
-    State(usize),
-    /// The alive flags of a stored chain.
-    Alive(usize),
-    /// The queue of a stream.
-    Queue(String),
-    /// The compaction boundary a kernel reads (bound to one of the physical buffers).
-    BoundaryIn,
-    /// The compaction boundary a kernel appends to.
-    BoundaryOut,
-    /// A physical boundary buffer: boundary index and which of its two buffers.
-    Boundary(usize, usize),
-}
-
-/// Where each control word lives in the control buffer.
-#[derive(Debug, Clone, Default)]
-pub struct ControlMap {
-    /// Items in a stream's queue.
-    pub queue_count: BTreeMap<String, u32>,
-    /// Items emitted into a stream's queue since its last commit.
-    pub queue_append: BTreeMap<String, u32>,
-    /// Items a stream's queue had no room for.
-    pub queue_overflow: BTreeMap<String, u32>,
-    /// Items of a stored chain alive after the last loop iteration.
-    pub alive: BTreeMap<usize, u32>,
-    /// The next item index of a regenerating chain.
-    pub next: BTreeMap<usize, u32>,
-    /// Items of a chain regenerating behind a `regenerate_at` gate alive after the iteration
-    /// before: the alive count, moved here when an iteration begins.
-    pub held: BTreeMap<usize, u32>,
-    /// In-kernel loops stopped by the iteration cap.
-    pub loop_capped: u32,
-    /// Number of words.
-    pub len: u32,
-}
 
 /// Everything code generation needs beyond the plan.
 #[derive(Clone)]
 pub struct CodegenContext<'a> {
-    /// The resolved layout.
+    /// The planned layout.
     pub plan: &'a Plan,
-    /// Constants emitted as WGSL `const`s.
-    pub constants: &'a BTreeMap<String, ConstValue>,
-    /// Binding numbers.
-    pub bindings: &'a BTreeMap<BufferRef, u32>,
-    /// Words of each stored item type.
-    pub words: &'a BTreeMap<String, Vec<Word>>,
-    /// Slots of each stored chain.
-    pub state_capacity: &'a BTreeMap<usize, u64>,
-    /// Thread pool of each regenerating chain.
-    pub pools: &'a BTreeMap<usize, u64>,
-    /// Capacity of each queue.
-    pub queue_capacity: &'a BTreeMap<String, u64>,
-    /// Control word indices.
-    pub control: &'a ControlMap,
-    /// Resources written by some pass or holding atomics.
-    pub writable: &'a dyn Fn(&str) -> bool,
+    /// Its sizes, capacities, bindings and control words.
+    pub resolved: &'a Resolved,
     /// Cap on iterations of an in-kernel loop.
     pub max_loop_iterations: u32,
+}
+
+/// The frame record's declaration: group 1, bound with a dynamic offset per chunk.
+pub const FRAME_BINDING: &str = "@group(1) @binding(0) var<uniform> frame: Frame;\n";
+
+/// The WGSL type a parameter's field of the frame record has (a `bool` is held as `u32`).
+fn parameter_field_type(v: &ConstValue) -> &'static str {
+    match v {
+        ConstValue::Bool(_) => "u32",
+        other => other.wgsl_type(),
+    }
 }
 
 impl CodegenContext<'_> {
@@ -91,7 +37,38 @@ impl CodegenContext<'_> {
     }
 
     fn binding(&self, b: &BufferRef) -> u32 {
-        self.bindings[b]
+        self.resolved.bindings[b]
+    }
+
+    /// Whether kernels declare resource `name` writable: a pass or operator writes it, it
+    /// holds atomics, or it is transient (its memory is shared, so every binding of it is
+    /// read-write).
+    fn writable(&self, name: &str) -> bool {
+        let r = &self.graph().resources[name];
+        r.scope == Scope::Transient || r.ty.contains("atomic") || self.graph().written_resources().contains(name)
+    }
+
+    /// The frame record: index, seed, first item and item count of the chunk, then the
+    /// parameters; each parameter is also a private variable, set by the entry point.
+    fn frame_record(&self) -> String {
+        let mut s = String::from("struct Frame {\n    index: u32,\n    seed: u32,\n    base: u32,\n    count: u32,\n");
+        for (name, v) in &self.resolved.parameters {
+            let _ = writeln!(s, "    lg_{name}: {},", parameter_field_type(v));
+        }
+        s.push_str("}\n");
+        for (name, v) in &self.resolved.parameters {
+            let _ = writeln!(s, "var<private> {name}: {};", v.wgsl_type());
+        }
+        s.push_str("fn lg_parameters() {\n");
+        for (name, v) in &self.resolved.parameters {
+            let read = match v {
+                ConstValue::Bool(_) => format!("frame.lg_{name} != 0u"),
+                _ => format!("frame.lg_{name}"),
+            };
+            let _ = writeln!(s, "    {name} = {read};");
+        }
+        s.push_str("}\n");
+        s
     }
 
     /// Shared declarations: frame record, constants, counters, engine buffers, resources.
@@ -103,12 +80,8 @@ impl CodegenContext<'_> {
             "// Generated by lightgraph-engine: graph '{}', layout '{}'.",
             g.name, self.plan.layout_name
         );
-        s.push_str("struct Frame { index: u32, seed: u32, base: u32, count: u32 }\n");
-        let _ = writeln!(
-            s,
-            "@group(0) @binding({}) var<uniform> frame: Frame;",
-            self.binding(&BufferRef::Frame)
-        );
+        s.push_str(&self.frame_record());
+        s.push_str(FRAME_BINDING);
         let _ = writeln!(
             s,
             "@group(0) @binding({}) var<storage, read_write> lg_counters: array<atomic<u32>>;",
@@ -119,7 +92,7 @@ impl CodegenContext<'_> {
             "@group(0) @binding({}) var<storage, read_write> lg_control: array<atomic<u32>>;",
             self.binding(&BufferRef::Control)
         );
-        for (name, v) in self.constants {
+        for (name, v) in &self.resolved.constants {
             let _ = writeln!(s, "const {name}: {} = {};", v.wgsl_type(), v.wgsl_literal());
         }
         for (i, c) in g.counters.iter().enumerate() {
@@ -132,7 +105,7 @@ impl CodegenContext<'_> {
         }
         s.push_str("        default: {}\n    }\n}\n");
         for (name, r) in &g.resources {
-            let access = if (self.writable)(name) { "read_write" } else { "read" };
+            let access = if self.writable(name) { "read_write" } else { "read" };
             let ty = if r.count.is_some() {
                 format!("array<{}>", r.ty)
             } else {
@@ -164,7 +137,7 @@ impl CodegenContext<'_> {
     }
 
     fn load_store(&self, suffix: &str, buffer: &str, item: &str, cap: &str) -> String {
-        let words = &self.words[item];
+        let words = &self.resolved.words[item];
         let storage = self.plan.layout.state;
         let mut s = String::new();
         let _ = writeln!(s, "fn lg_load_{suffix}(slot: u32) -> {item} {{\n    var v: {item};");
@@ -184,7 +157,13 @@ impl CodegenContext<'_> {
 
     /// WGSL statements that run passes `passes` of a chain on `it` (a function variable):
     /// steps return from the enclosing function on `false`, loop passes repeat (capped).
-    fn run_passes(&self, chain: usize, range: std::ops::Range<usize>, in_kernel_loop: bool, on_finish: &str) -> String {
+    fn run_passes(
+        &self,
+        chain: ChainId,
+        range: std::ops::Range<usize>,
+        in_kernel_loop: bool,
+        on_finish: &str,
+    ) -> String {
         let g = self.graph();
         let c = &g.chains[chain];
         let mut s = String::new();
@@ -203,7 +182,7 @@ impl CodegenContext<'_> {
                 let _ = writeln!(
                     s,
                     "        if (lg_iterations >= {}u) {{ atomicAdd(&lg_control[{}], 1u); break; }}\n        lg_iterations += 1u;",
-                    self.max_loop_iterations, self.control.loop_capped
+                    self.max_loop_iterations, self.resolved.control.loop_capped
                 );
                 for f in body {
                     let _ = writeln!(s, "        if (!{f}(&it)) {{ break; }}");
@@ -219,7 +198,7 @@ impl CodegenContext<'_> {
     }
 
     /// `if (!f(&it)) { <fail> }` for the passes at `positions` of chain `c`.
-    fn guarded_calls(&self, c: usize, positions: std::ops::Range<usize>, fail: &str) -> String {
+    fn guarded_calls(&self, c: ChainId, positions: std::ops::Range<usize>, fail: &str) -> String {
         let g = self.graph();
         let mut s = String::new();
         for pos in positions {
@@ -230,7 +209,7 @@ impl CodegenContext<'_> {
     }
 
     /// The kernel-specific part of kernel `k`'s module.
-    pub fn kernel(&self, k: usize) -> String {
+    pub fn kernel(&self, k: KernelId) -> String {
         let g = self.graph();
         let kp = &self.plan.kernels[k];
         let chain = &g.chains[kp.chain];
@@ -253,7 +232,7 @@ impl CodegenContext<'_> {
         for q in &queues {
             let item = &g.streams[q].item;
             let cap = format!("LG_CAP_{}", q.to_uppercase());
-            let _ = writeln!(s, "const {cap}: u32 = {}u;", self.queue_capacity[q]);
+            let _ = writeln!(s, "const {cap}: u32 = {}u;", self.resolved.queue_capacity[q]);
             let _ = writeln!(
                 s,
                 "@group(0) @binding({}) var<storage, read_write> lg_queue_{q}: array<u32>;",
@@ -277,9 +256,9 @@ impl CodegenContext<'_> {
                     s,
                     "fn emit_{name}(item: {}) {{\n    let i = atomicAdd(&lg_control[{}], 1u);\n    if (i < LG_CAP_{}) {{ lg_store_queue_{name}(i, item); }} else {{ atomicAdd(&lg_control[{}], 1u); }}\n}}",
                     st.item,
-                    self.control.queue_append[name],
+                    self.resolved.control.queue_append[name],
                     name.to_uppercase(),
-                    self.control.queue_overflow[name]
+                    self.resolved.control.queue_overflow[name]
                 );
             } else {
                 let _ = writeln!(s, "fn emit_{name}(item: {}) {{}}", st.item);
@@ -289,7 +268,7 @@ impl CodegenContext<'_> {
         let stored = self.plan.stored_chains.contains(&c);
         if stored {
             let cap = format!("LG_SLOTS_{c}");
-            let _ = writeln!(s, "const {cap}: u32 = {}u;", self.state_capacity[&c]);
+            let _ = writeln!(s, "const {cap}: u32 = {}u;", self.resolved.state_capacity[&c]);
             let _ = writeln!(
                 s,
                 "@group(0) @binding({}) var<storage, read_write> lg_state_{c}: array<u32>;",
@@ -302,7 +281,7 @@ impl CodegenContext<'_> {
             );
             s.push_str(&self.load_store(&format!("state_{c}"), &format!("lg_state_{c}"), &chain.item, &cap));
         }
-        if let Some(pool) = self.pools.get(&c) {
+        if let Some(pool) = self.resolved.pools.get(&c) {
             let _ = writeln!(s, "const LG_POOL: u32 = {pool}u;");
         }
         if kp.input.is_some() || kp.output.is_some() {
@@ -347,14 +326,16 @@ impl CodegenContext<'_> {
         } else {
             String::new()
         };
+        // Items of the chunk: the record's count, or the GPU count of a counted phase.
+        let items = self.resolved.domain_count_wgsl(kp.phase);
         let claim = |fail: &str| {
             format!(
-                "    let index = atomicAdd(&lg_control[{}], 1u);\n    if (index >= frame.count) {{ {fail} }}\n",
-                self.control.next.get(&c).copied().unwrap_or(0)
+                "    let index = atomicAdd(&lg_control[{}], 1u);\n    if (index >= {items}) {{ {fail} }}\n",
+                self.resolved.control.next.get(&c).copied().unwrap_or(0)
             )
         };
         let count_alive = if kp.ends_iteration && stored {
-            format!("    atomicAdd(&lg_control[{}], 1u);\n", self.control.alive[&c])
+            format!("    atomicAdd(&lg_control[{}], 1u);\n", self.resolved.control.alive[&c])
         } else {
             String::new()
         };
@@ -404,8 +385,8 @@ impl CodegenContext<'_> {
                 );
                 let _ = writeln!(
                     s,
-                    "            let index = atomicAdd(&lg_control[{}], 1u);\n            if (index >= frame.count) {{ break; }}",
-                    self.control.next[&c]
+                    "            let index = atomicAdd(&lg_control[{}], 1u);\n            if (index >= {items}) {{ break; }}",
+                    self.resolved.control.next[&c]
                 );
                 let _ = writeln!(s, "            alive = {start}(&it, frame.base + index);");
                 for pos in 1..steps_end {
@@ -419,7 +400,7 @@ impl CodegenContext<'_> {
                     s,
                     "            lg_iterations = 0u;\n            continue;\n        }}\n        if (lg_iterations >= {}u) {{ atomicAdd(&lg_control[{}], 1u); alive = false; continue; }}\n        lg_iterations += 1u;\n        alive = {};\n    }}",
                     self.max_loop_iterations,
-                    self.control.loop_capped,
+                    self.resolved.control.loop_capped,
                     body.join(" && ")
                 );
             }
@@ -443,9 +424,9 @@ impl CodegenContext<'_> {
                 } else {
                     s.push_str("    let queued = atomicLoad(&lg_out.count);\n    if (lg_i >= LG_POOL - min(queued, LG_POOL)) { return; }\n    {\n");
                 }
-                if let (Some(&held), Some(at)) = (self.control.held.get(&c), self.plan.layout.regenerate_at) {
+                if let (Some(&held), Some(at)) = (self.resolved.control.held.get(&c), self.plan.layout.regenerate_at) {
                     // Refill only once enough of the pool is idle.
-                    let pool = self.pools[&c];
+                    let pool = self.resolved.pools[&c];
                     let idle = ((at as f64 * pool as f64).ceil() as u64).clamp(1, pool);
                     let _ = writeln!(
                         s,
@@ -482,16 +463,21 @@ impl CodegenContext<'_> {
                 "    workgroupBarrier();\n    for (var c = lid; c < {n}u; c += {wg}u) {{\n        let v = atomicLoad(&lg_wg_counts[c]);\n        if (v != 0u) {{ atomicAdd(&lg_counters[c], v); }}\n    }}\n}}"
             );
         }
-        let pooled = self.pools.contains_key(&c);
+        let pooled = self.resolved.pools.contains_key(&c);
         let limit = match &kp.root {
-            Root::Queue(q) => format!("atomicLoad(&lg_control[{}])", self.control.queue_count[q]),
+            Root::Queue(q) => format!("atomicLoad(&lg_control[{}])", self.resolved.control.queue_count[q]),
             Root::Boundary => "atomicLoad(&lg_in.count)".to_string(),
             _ if pooled => "LG_POOL".to_string(),
-            _ => "frame.count".to_string(),
+            _ => items.clone(),
+        };
+        let parameters = if self.resolved.parameters.is_empty() {
+            ""
+        } else {
+            "    lg_parameters();\n"
         };
         let _ = writeln!(
             s,
-            "@compute @workgroup_size({wg})\nfn {}(@builtin(workgroup_id) lg_wid: vec3<u32>, @builtin(num_workgroups) lg_nwg: vec3<u32>, @builtin(local_invocation_index) lg_lid: u32) {{\n    let lg_i = (lg_wid.y * lg_nwg.x + lg_wid.x) * {wg}u + lg_lid;\n    if (lg_i < {limit}) {{ lg_run(lg_i); }}",
+            "@compute @workgroup_size({wg})\nfn {}(@builtin(workgroup_id) lg_wid: vec3<u32>, @builtin(num_workgroups) lg_nwg: vec3<u32>, @builtin(local_invocation_index) lg_lid: u32) {{\n{parameters}    let lg_i = (lg_wid.y * lg_nwg.x + lg_wid.x) * {wg}u + lg_lid;\n    if (lg_i < {limit}) {{ lg_run(lg_i); }}",
             kp.name
         );
         if n > 0 {
@@ -500,159 +486,4 @@ impl CodegenContext<'_> {
         s.push_str("}\n");
         s
     }
-}
-
-/// The kernel that commits a queue (the items emitted since the last commit become the
-/// consumer's count, clamped to the capacity) and turns the count into indirect dispatch
-/// arguments.
-pub struct ArgsKernel<'a> {
-    /// Entry point name.
-    pub name: &'a str,
-    /// Binding of the control words.
-    pub control_binding: u32,
-    /// Binding of the indirect arguments.
-    pub args_binding: u32,
-    /// Control word the consumer reads its count from.
-    pub count_word: u32,
-    /// Control word the producers append to.
-    pub append_word: u32,
-    /// Queue capacity.
-    pub capacity: u64,
-    /// First of the three argument words.
-    pub args_offset: u32,
-    /// Workgroup size of the consumer kernel.
-    pub workgroup: u32,
-    /// Most workgroups per dispatch dimension.
-    pub max_groups: u32,
-}
-
-impl ArgsKernel<'_> {
-    /// The WGSL module.
-    pub fn wgsl(&self) -> String {
-        let ArgsKernel {
-            name,
-            control_binding,
-            args_binding,
-            count_word,
-            append_word,
-            capacity,
-            args_offset,
-            workgroup,
-            max_groups,
-        } = self;
-        format!(
-            "@group(0) @binding({control_binding}) var<storage, read_write> lg_control: array<u32>;
-@group(0) @binding({args_binding}) var<storage, read_write> lg_args: array<u32>;
-@compute @workgroup_size(1)
-fn {name}() {{
-    let n = min(lg_control[{append_word}], {capacity}u);
-    lg_control[{count_word}] = n;
-    lg_control[{append_word}] = 0u;
-    let groups = (n + {workgroup}u - 1u) / {workgroup}u;
-    let x = min(groups, {max_groups}u);
-    lg_args[{args_offset}] = x;
-    lg_args[{args_offset} + 1u] = select(1u, (groups + x - 1u) / x, x > 0u);
-    lg_args[{args_offset} + 2u] = 1u;
-}}
-"
-        )
-    }
-}
-
-/// The kernel that commits a compaction boundary (the items appended since its last commit
-/// join its count) and turns the count into indirect dispatch arguments.
-pub struct CommitKernel<'a> {
-    /// Entry point name.
-    pub name: &'a str,
-    /// Binding of the boundary buffer.
-    pub boundary_binding: u32,
-    /// Binding of the indirect arguments.
-    pub args_binding: u32,
-    /// First of the three argument words.
-    pub args_offset: u32,
-    /// Workgroup size of the consumer kernel.
-    pub workgroup: u32,
-    /// Most workgroups per dispatch dimension.
-    pub max_groups: u32,
-    /// Whether the appended items join items still counted (after a regeneration step)
-    /// rather than replace a count already consumed.
-    pub add: bool,
-}
-
-impl CommitKernel<'_> {
-    /// The WGSL module.
-    pub fn wgsl(&self) -> String {
-        let CommitKernel {
-            name,
-            boundary_binding,
-            args_binding,
-            args_offset,
-            workgroup,
-            max_groups,
-            add,
-        } = self;
-        let kept = if *add { "atomicLoad(&lg_in.count) + " } else { "" };
-        format!(
-            "struct LgBoundary {{ count: atomic<u32>, append: atomic<u32>, pad0: u32, pad1: u32, words: array<u32> }}
-@group(0) @binding({boundary_binding}) var<storage, read_write> lg_in: LgBoundary;
-@group(0) @binding({args_binding}) var<storage, read_write> lg_args: array<u32>;
-@compute @workgroup_size(1)
-fn {name}() {{
-    let n = {kept}atomicLoad(&lg_in.append);
-    atomicStore(&lg_in.count, n);
-    atomicStore(&lg_in.append, 0u);
-    let groups = (n + {workgroup}u - 1u) / {workgroup}u;
-    let x = min(groups, {max_groups}u);
-    lg_args[{args_offset}] = x;
-    lg_args[{args_offset} + 1u] = select(1u, (groups + x - 1u) / x, x > 0u);
-    lg_args[{args_offset} + 2u] = 1u;
-}}
-"
-        )
-    }
-}
-
-/// A one-thread kernel that sets control word `word` to zero (a reset that needs no break
-/// in the compute pass).
-pub fn zero_kernel(name: &str, control_binding: u32, word: u32) -> String {
-    format!(
-        "@group(0) @binding({control_binding}) var<storage, read_write> lg_control: array<u32>;
-@compute @workgroup_size(1)
-fn {name}() {{
-    lg_control[{word}] = 0u;
-}}
-"
-    )
-}
-
-/// A kernel that moves control word `from` into `to` and clears `from`.
-pub fn roll_kernel(name: &str, control_binding: u32, from: u32, to: u32) -> String {
-    format!(
-        "@group(0) @binding({control_binding}) var<storage, read_write> lg_control: array<u32>;
-@compute @workgroup_size(1)
-fn {name}() {{
-    lg_control[{to}] = lg_control[{from}];
-    lg_control[{from}] = 0u;
-}}
-"
-    )
-}
-
-/// The kernel that adds the per-chunk counters into 64-bit totals and clears them.
-pub fn fold_kernel(counters_binding: u32, totals_binding: u32, n: usize) -> String {
-    format!(
-        "@group(0) @binding({counters_binding}) var<storage, read_write> lg_counters: array<u32>;
-@group(0) @binding({totals_binding}) var<storage, read_write> lg_totals: array<u32>;
-@compute @workgroup_size(1)
-fn lg_fold() {{
-    for (var c = 0u; c < {n}u; c += 1u) {{
-        let v = lg_counters[c];
-        let lo = lg_totals[2u * c] + v;
-        lg_totals[2u * c + 1u] += select(0u, 1u, lo < v);
-        lg_totals[2u * c] = lo;
-        lg_counters[c] = 0u;
-    }}
-}}
-"
-    )
 }

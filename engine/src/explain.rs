@@ -1,10 +1,13 @@
-//! Human-readable reports of a compiled program: phases, kernels, schedule, resources and
-//! memory.
+//! Human-readable reports of a compiled program: what was culled and why, the frame's steps,
+//! phases, kernels, the schedule, resources with their lifetimes, which buffers share memory,
+//! and peak memory.
 
-use crate::codegen::BufferRef;
+use crate::graph::FrameStep;
+use crate::ids::PhaseId;
 use crate::ir::Scope;
 use crate::plan::{Root, Step};
 use crate::program::Program;
+use crate::resolve::BufferRef;
 use std::fmt::Write;
 
 fn mib(bytes: u64) -> String {
@@ -42,13 +45,31 @@ fn steps_text(program: &Program, steps: &[Step], indent: usize, out: &mut String
     }
 }
 
+/// A frame step in words.
+fn step_name(program: &Program, s: usize) -> String {
+    let g = &program.plan.graph;
+    match g.steps[s] {
+        FrameStep::Phase(ph) => format!("phase {ph}"),
+        FrameStep::Op(o) => format!("operator '{}'", g.ops[o].name),
+    }
+}
+
 /// The report `lightgraph explain` prints for one layout. `externals` gives the byte size
 /// of external resources when a scene is known.
 pub fn report(program: &Program, externals: &dyn Fn(&str) -> Option<u64>) -> String {
+    let mut out = String::new();
+    header(program, &mut out);
+    frame(program, &mut out);
+    kernels(program, &mut out);
+    resources(program, externals, &mut out);
+    memory(program, &mut out);
+    out
+}
+
+fn header(program: &Program, out: &mut String) {
     let plan = &program.plan;
     let g = &plan.graph;
     let l = &plan.layout;
-    let mut out = String::new();
     let _ = writeln!(out, "graph '{}': {}", g.name, g.description);
     let _ = writeln!(out, "layout '{}': {}", plan.layout_name, l.description);
     let _ = writeln!(
@@ -60,61 +81,103 @@ pub fn report(program: &Program, externals: &dyn Fn(&str) -> Option<u64>) -> Str
         l.max_items_in_flight.map_or("auto".to_string(), |v| v.to_string())
     );
     if !g.culled.is_empty() {
-        let _ = writeln!(
-            out,
-            "culled passes (nothing reads their output): {}",
-            g.culled
-                .iter()
-                .map(|p| p.decl.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
+        let _ = writeln!(out, "culled:");
+        for c in &g.culled {
+            let _ = writeln!(out, "  {}: {}", c.name, c.reason);
+        }
     }
-    let _ = writeln!(out, "\nphases:");
-    for (ph, phase) in g.phases.iter().enumerate() {
-        let chains: Vec<String> = phase
-            .chains
+    if !g.parameters.is_empty() {
+        let list: Vec<String> = g
+            .parameters
             .iter()
-            .map(|&c| {
-                let names: Vec<&str> = g.chains[c]
-                    .passes
-                    .iter()
-                    .map(|&p| g.passes[p].decl.name.as_str())
-                    .collect();
-                format!("{} [{}]", g.chains[c].item, names.join(" -> "))
-            })
+            .map(|(k, v)| format!("{k}: {} = {}", v.wgsl_type(), v.wgsl_literal()))
             .collect();
-        let _ = writeln!(
-            out,
-            "  {ph}: {} items in chunks of {}: {}",
-            program.domains[ph],
-            program.chunks[ph],
-            chains.join("; ")
-        );
+        let _ = writeln!(out, "per-frame parameters: {}", list.join(", "));
     }
+}
+
+fn frame(program: &Program, out: &mut String) {
+    let g = &program.plan.graph;
+    let _ = writeln!(out, "\nframe steps:");
+    for (s, step) in g.steps.iter().enumerate() {
+        match *step {
+            FrameStep::Phase(ph) => {
+                let chains: Vec<String> = g.phases[ph]
+                    .chains
+                    .iter()
+                    .map(|&c| {
+                        let names: Vec<&str> = g.chains[c]
+                            .passes
+                            .iter()
+                            .map(|&p| g.passes[p].decl.name.as_str())
+                            .collect();
+                        format!("{} [{}]", g.chains[c].item, names.join(" -> "))
+                    })
+                    .collect();
+                let d = &program.resolved.domains[ph.0];
+                let counted = d
+                    .counted
+                    .as_ref()
+                    .map_or(String::new(), |c| format!(" (counted on the GPU by '{c}')"));
+                let _ = writeln!(
+                    out,
+                    "  {s}: phase {ph}: {}{counted} items in chunks of {}: {}",
+                    if d.counted.is_some() {
+                        format!("at most {}", d.default)
+                    } else {
+                        d.default.to_string()
+                    },
+                    d.chunk,
+                    chains.join("; ")
+                );
+            }
+            FrameStep::Op(o) => {
+                let op = &g.ops[o];
+                let n = program.resolved.op_elements[&o];
+                let counted = op
+                    .domain
+                    .as_ref()
+                    .and_then(|d| d.counted.as_ref())
+                    .map_or(String::new(), |c| format!(" (at most; counted on the GPU by '{c}')"));
+                let kernels: Vec<&str> = program.ops[o.0].kernels.iter().map(|(k, _)| k.name.as_str()).collect();
+                let _ = writeln!(
+                    out,
+                    "  {s}: operator '{}': {} over {n} elements{counted}, kernels {}",
+                    op.name,
+                    op.describe(),
+                    kernels.join(", ")
+                );
+            }
+        }
+    }
+}
+
+fn kernels(program: &Program, out: &mut String) {
+    let plan = &program.plan;
+    let g = &plan.graph;
     let _ = writeln!(out, "\nkernels:");
-    for (k, kp) in plan.kernels.iter().enumerate() {
+    for k in plan.kernel_ids() {
+        let kp = &plan.kernels[k];
         let passes: Vec<&str> = plan
             .kernel_passes(k)
             .iter()
             .map(|&p| g.passes[p].decl.name.as_str())
             .collect();
         let root = match &kp.root {
+            Root::Start if program.domains.contains_key(&kp.phase) => {
+                "start (one thread per item, indirect from the GPU count)".to_string()
+            }
             Root::Start => "start (one thread per item)".to_string(),
             Root::State => "state buffer (one thread per slot)".to_string(),
             Root::Queue(q) => format!("queue '{q}' (indirect)"),
-            Root::Boundary => format!("boundary {} (indirect, compacted)", kp.input.map_or(0, |p| p.boundary)),
+            Root::Boundary => format!(
+                "boundary {} (indirect, compacted)",
+                kp.input.map_or(0, |p| p.boundary.0)
+            ),
         };
-        let module = &program.kernels[k];
+        let module = &program.kernels[k.0];
         let text = module.source.text();
-        let bindings: Vec<String> = module
-            .uses
-            .iter()
-            .map(|u| match &u.buffer {
-                BufferRef::Resource(r) => r.clone(),
-                other => format!("{other:?}").to_lowercase(),
-            })
-            .collect();
+        let bindings: Vec<String> = module.uses.iter().map(|u| u.buffer.describe(plan)).collect();
         let _ = writeln!(
             out,
             "  {}: passes [{}], fed by {root}{}, {} WGSL lines ({} bytes)\n    binds: {}",
@@ -125,57 +188,104 @@ pub fn report(program: &Program, externals: &dyn Fn(&str) -> Option<u64>) -> Str
             } else {
                 ""
             },
-            text.lines().count(),
+            text.lines().filter(|l| !l.trim().is_empty()).count(),
             text.len(),
             bindings.join(", ")
         );
     }
     let _ = writeln!(out, "\nschedule per chunk:");
     for (ph, steps) in plan.schedule.iter().enumerate() {
-        let _ = writeln!(out, "  phase {ph}:");
-        steps_text(program, steps, 4, &mut out);
+        let _ = writeln!(out, "  phase {}:", PhaseId(ph));
+        steps_text(program, steps, 4, out);
     }
+}
+
+fn resources(program: &Program, externals: &dyn Fn(&str) -> Option<u64>, out: &mut String) {
+    let plan = &program.plan;
+    let g = &plan.graph;
+    let r = &program.resolved;
     let _ = writeln!(out, "\nresources:");
-    let mut total = 0u64;
-    for (name, r) in &g.resources {
-        let size = &program.sizes[name];
+    for (name, decl) in &g.resources {
+        let size = &r.sizes[name];
         let (count, bytes) = match size.count {
             Some(c) => (c.to_string(), Some(c * size.element_bytes as u64)),
             None => ("from scene".to_string(), externals(name)),
         };
-        if let Some(b) = bytes {
-            total += b;
-        }
-        let scope = match r.scope {
-            Scope::Persistent => "persistent",
-            Scope::Transient => "transient",
-            Scope::External => "external",
+        let scope = match decl.scope {
+            Scope::Persistent => "persistent".to_string(),
+            Scope::Transient => {
+                let life = r
+                    .memory
+                    .lifetimes
+                    .get(&BufferRef::Resource(name.clone()))
+                    .map_or("unused".to_string(), |l| {
+                        format!("{} .. {}", step_name(program, l.first), step_name(program, l.last))
+                    });
+                format!(
+                    "transient, live {life}{}",
+                    if decl.clear { ", cleared first" } else { "" }
+                )
+            }
+            Scope::External => "external".to_string(),
+        };
+        let unused = if r.used.contains(name) {
+            ""
+        } else {
+            " (unused: not allocated)"
         };
         let _ = writeln!(
             out,
-            "  {name}: {} x {count} ({} B each) = {}, {scope}",
-            r.ty,
+            "  {name}: {} x {count} ({} B each) = {}, {scope}{unused}",
+            decl.ty,
             size.element_bytes,
             bytes.map_or("?".into(), mib)
         );
     }
-    let allocated = program.allocated_bytes();
-    for (name, bytes) in &allocated {
-        if !g.resources.contains_key(name) {
-            let _ = writeln!(out, "  {name}: {}", mib(*bytes));
-            total += bytes;
+}
+
+fn memory(program: &Program, out: &mut String) {
+    let plan = &program.plan;
+    let m = &program.resolved.memory;
+    let _ = writeln!(out, "\nengine buffers (item state, queues, scratch):");
+    for (b, p) in &m.placements {
+        if matches!(b, BufferRef::Resource(_)) {
+            continue;
+        }
+        let life = m
+            .lifetimes
+            .get(b)
+            .map_or(String::new(), |l| format!(", live {}", step_name(program, l.first)));
+        let _ = writeln!(out, "  {}: {}{life}", b.describe(plan), mib(p.bytes));
+    }
+    if !m.arenas.is_empty() {
+        let _ = writeln!(out, "\nshared memory:");
+        for (a, &size) in m.arenas.iter().enumerate() {
+            let _ = writeln!(out, "  arena {a}: {}", mib(size));
+            let mut members: Vec<(&BufferRef, &crate::memory::Placement)> =
+                m.placements.iter().filter(|(_, p)| p.arena == Some(a)).collect();
+            members.sort_by_key(|(_, p)| p.offset);
+            for (b, p) in members {
+                let l = m.lifetimes[b];
+                let _ = writeln!(
+                    out,
+                    "    {}..{}: {} (steps {}..{})",
+                    mib(p.offset),
+                    mib(p.offset + p.bytes),
+                    b.describe(plan),
+                    l.first,
+                    l.last
+                );
+            }
+        }
+        for (a, b) in m.sharing() {
+            let _ = writeln!(out, "  {} shares memory with {}", a.describe(plan), b.describe(plan));
         }
     }
-    let layout_bytes: u64 = allocated
-        .iter()
-        .filter(|(n, _)| !g.resources.contains_key(*n))
-        .map(|(_, b)| b)
-        .sum();
+    let externals_note = "besides external scene data";
     let _ = writeln!(
         out,
-        "\nGPU memory: {} in all, of which {} for this layout's item state and queues",
-        mib(total),
-        mib(layout_bytes)
+        "\nGPU memory {externals_note}: peak {} (without sharing {})",
+        mib(m.peak_bytes()),
+        mib(m.unshared_bytes())
     );
-    out
 }

@@ -1,28 +1,100 @@
-//! Count expressions of resources and start passes, e.g. `WIDTH * HEIGHT` or
-//! `LIGHT_PATHS * AVG_LIGHT_LENGTH * 1.1`.
+//! Count expressions of resources, start passes and operators, e.g. `WIDTH * HEIGHT` or
+//! `LIGHT_PATHS * AVG_LIGHT_LENGTH * 1.1`, and the constant conditions of `enabled`, e.g.
+//! `MERGE && MAX_PATH_LENGTH > 2`.
 //!
-//! Expressions are evaluated in `f64` over named constants and rounded up to a whole count.
+//! Expressions are evaluated in `f64` over named constants (a `bool` is 0 or 1; comparisons
+//! and `!`, `&&`, `||` give 0 or 1); counts are rounded up to a whole number.
 
 use std::collections::BTreeMap;
 
-/// The most tokens a count expression may have (which bounds how deep it nests).
+/// The most tokens an expression may have (which bounds how deep it nests).
 const MAX_TOKENS: usize = 256;
 
-/// A parsed count expression.
+/// A binary operator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BinOp {
+    /// `+`
+    Add,
+    /// `-`
+    Sub,
+    /// `*`
+    Mul,
+    /// `/`
+    Div,
+    /// `<`
+    Lt,
+    /// `<=`
+    Le,
+    /// `>`
+    Gt,
+    /// `>=`
+    Ge,
+    /// `==`
+    Eq,
+    /// `!=`
+    Ne,
+    /// `&&`
+    And,
+    /// `||`
+    Or,
+}
+
+impl BinOp {
+    fn symbol(self) -> &'static str {
+        match self {
+            BinOp::Add => "+",
+            BinOp::Sub => "-",
+            BinOp::Mul => "*",
+            BinOp::Div => "/",
+            BinOp::Lt => "<",
+            BinOp::Le => "<=",
+            BinOp::Gt => ">",
+            BinOp::Ge => ">=",
+            BinOp::Eq => "==",
+            BinOp::Ne => "!=",
+            BinOp::And => "&&",
+            BinOp::Or => "||",
+        }
+    }
+
+    fn apply(self, a: f64, b: f64) -> f64 {
+        let truth = |c: bool| c as u8 as f64;
+        match self {
+            BinOp::Add => a + b,
+            BinOp::Sub => a - b,
+            BinOp::Mul => a * b,
+            BinOp::Div => a / b,
+            BinOp::Lt => truth(a < b),
+            BinOp::Le => truth(a <= b),
+            BinOp::Gt => truth(a > b),
+            BinOp::Ge => truth(a >= b),
+            BinOp::Eq => truth(a == b),
+            BinOp::Ne => truth(a != b),
+            BinOp::And => truth(a != 0.0 && b != 0.0),
+            BinOp::Or => truth(a != 0.0 || b != 0.0),
+        }
+    }
+}
+
+/// A parsed expression.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Expr {
     /// A number literal.
     Number(f64),
     /// A named constant.
     Name(String),
-    /// A binary operation: one of `+ - * /`.
-    Binary(Box<Expr>, char, Box<Expr>),
-    /// A call of `min`, `max`, `ceil` or `floor`.
+    /// `-x`
+    Neg(Box<Expr>),
+    /// `!x`: 1 when x is 0, else 0.
+    Not(Box<Expr>),
+    /// A binary operation.
+    Binary(Box<Expr>, BinOp, Box<Expr>),
+    /// A call of `min`, `max`, `ceil`, `floor` or `pow`.
     Call(String, Vec<Expr>),
 }
 
 impl Expr {
-    /// Parses `text`; the error names the column and what was expected.
+    /// Parses `text`; the error names what was expected.
     pub fn parse(text: &str) -> Result<Expr, String> {
         let tokens = tokenize(text)?;
         // The parser, evaluation and drop recurse as deep as the expression nests.
@@ -33,7 +105,7 @@ impl Expr {
             ));
         }
         let mut parser = Parser { tokens, pos: 0 };
-        let expr = parser.sum()?;
+        let expr = parser.or()?;
         if parser.pos != parser.tokens.len() {
             return Err(format!(
                 "unexpected '{}' in count expression '{text}'",
@@ -54,6 +126,7 @@ impl Expr {
         match self {
             Expr::Number(_) => {}
             Expr::Name(n) => out.push(n.clone()),
+            Expr::Neg(a) | Expr::Not(a) => a.collect_names(out),
             Expr::Binary(a, _, b) => {
                 a.collect_names(out);
                 b.collect_names(out);
@@ -73,15 +146,9 @@ impl Expr {
                     known.join(", ")
                 )
             })?,
-            Expr::Binary(a, op, b) => {
-                let (a, b) = (a.eval(vars)?, b.eval(vars)?);
-                match op {
-                    '+' => a + b,
-                    '-' => a - b,
-                    '*' => a * b,
-                    _ => a / b,
-                }
-            }
+            Expr::Neg(a) => -a.eval(vars)?,
+            Expr::Not(a) => (a.eval(vars)? == 0.0) as u8 as f64,
+            Expr::Binary(a, op, b) => op.apply(a.eval(vars)?, b.eval(vars)?),
             Expr::Call(f, args) => {
                 let v: Vec<f64> = args.iter().map(|a| a.eval(vars)).collect::<Result<_, _>>()?;
                 match (f.as_str(), v.as_slice()) {
@@ -89,9 +156,10 @@ impl Expr {
                     ("max", [a, b]) => a.max(*b),
                     ("ceil", [a]) => a.ceil(),
                     ("floor", [a]) => a.floor(),
+                    ("pow", [a, b]) => a.powf(*b),
                     _ => {
                         return Err(format!(
-                            "unknown function {f}/{} (min/2, max/2, ceil/1, floor/1)",
+                            "unknown function {f}/{} (min/2, max/2, ceil/1, floor/1, pow/2)",
                             v.len()
                         ));
                     }
@@ -110,11 +178,27 @@ impl Expr {
     }
 }
 
+impl std::fmt::Display for Expr {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Expr::Number(v) => write!(f, "{v}"),
+            Expr::Name(n) => write!(f, "{n}"),
+            Expr::Neg(a) => write!(f, "-({a})"),
+            Expr::Not(a) => write!(f, "!({a})"),
+            Expr::Binary(a, op, b) => write!(f, "({a} {} {b})", op.symbol()),
+            Expr::Call(name, args) => {
+                let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+                write!(f, "{name}({})", args.join(", "))
+            }
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 enum Token {
     Num(f64),
     Ident(String),
-    Sym(char),
+    Sym(&'static str),
 }
 
 impl Token {
@@ -126,6 +210,11 @@ impl Token {
         }
     }
 }
+
+/// Symbols, two-character ones first.
+const SYMBOLS: [&str; 16] = [
+    "<=", ">=", "==", "!=", "&&", "||", "+", "-", "*", "/", "(", ")", ",", "<", ">", "!",
+];
 
 fn tokenize(text: &str) -> Result<Vec<Token>, String> {
     let chars: Vec<char> = text.chars().collect();
@@ -151,11 +240,14 @@ fn tokenize(text: &str) -> Result<Vec<Token>, String> {
                 i += 1;
             }
             out.push(Token::Ident(chars[start..i].iter().collect()));
-        } else if "+-*/(),".contains(c) {
-            out.push(Token::Sym(c));
-            i += 1;
         } else {
-            return Err(format!("unexpected character '{c}' in count expression '{text}'"));
+            let rest: String = chars[i..chars.len().min(i + 2)].iter().collect();
+            let sym = SYMBOLS
+                .iter()
+                .find(|s| rest.starts_with(**s))
+                .ok_or_else(|| format!("unexpected character '{c}' in count expression '{text}'"))?;
+            out.push(Token::Sym(sym));
+            i += sym.len();
         }
     }
     Ok(out)
@@ -167,14 +259,14 @@ struct Parser {
 }
 
 impl Parser {
-    fn peek_sym(&self) -> Option<char> {
+    fn peek_sym(&self) -> Option<&'static str> {
         match self.tokens.get(self.pos) {
-            Some(Token::Sym(c)) => Some(*c),
+            Some(Token::Sym(c)) => Some(c),
             _ => None,
         }
     }
 
-    fn expect(&mut self, c: char) -> Result<(), String> {
+    fn expect(&mut self, c: &str) -> Result<(), String> {
         if self.peek_sym() == Some(c) {
             self.pos += 1;
             Ok(())
@@ -183,22 +275,58 @@ impl Parser {
         }
     }
 
-    fn sum(&mut self) -> Result<Expr, String> {
-        let mut lhs = self.product()?;
-        while let Some(op @ ('+' | '-')) = self.peek_sym() {
+    /// One level of left-associative binary operators, over operands parsed by `next`.
+    fn level(&mut self, ops: &[(&str, BinOp)], next: fn(&mut Parser) -> Result<Expr, String>) -> Result<Expr, String> {
+        let mut lhs = next(self)?;
+        while let Some(&(_, op)) = self.peek_sym().and_then(|s| ops.iter().find(|(t, _)| *t == s)) {
             self.pos += 1;
-            lhs = Expr::Binary(Box::new(lhs), op, Box::new(self.product()?));
+            lhs = Expr::Binary(Box::new(lhs), op, Box::new(next(self)?));
         }
         Ok(lhs)
     }
 
+    fn or(&mut self) -> Result<Expr, String> {
+        self.level(&[("||", BinOp::Or)], Parser::and)
+    }
+
+    fn and(&mut self) -> Result<Expr, String> {
+        self.level(&[("&&", BinOp::And)], Parser::comparison)
+    }
+
+    fn comparison(&mut self) -> Result<Expr, String> {
+        self.level(
+            &[
+                ("<", BinOp::Lt),
+                ("<=", BinOp::Le),
+                (">", BinOp::Gt),
+                (">=", BinOp::Ge),
+                ("==", BinOp::Eq),
+                ("!=", BinOp::Ne),
+            ],
+            Parser::sum,
+        )
+    }
+
+    fn sum(&mut self) -> Result<Expr, String> {
+        self.level(&[("+", BinOp::Add), ("-", BinOp::Sub)], Parser::product)
+    }
+
     fn product(&mut self) -> Result<Expr, String> {
-        let mut lhs = self.atom()?;
-        while let Some(op @ ('*' | '/')) = self.peek_sym() {
-            self.pos += 1;
-            lhs = Expr::Binary(Box::new(lhs), op, Box::new(self.atom()?));
+        self.level(&[("*", BinOp::Mul), ("/", BinOp::Div)], Parser::unary)
+    }
+
+    fn unary(&mut self) -> Result<Expr, String> {
+        match self.peek_sym() {
+            Some("-") => {
+                self.pos += 1;
+                Ok(Expr::Neg(Box::new(self.unary()?)))
+            }
+            Some("!") => {
+                self.pos += 1;
+                Ok(Expr::Not(Box::new(self.unary()?)))
+            }
+            _ => self.atom(),
         }
-        Ok(lhs)
     }
 
     fn atom(&mut self) -> Result<Expr, String> {
@@ -210,20 +338,20 @@ impl Parser {
         self.pos += 1;
         match token {
             Token::Num(v) => Ok(Expr::Number(v)),
-            Token::Ident(name) if self.peek_sym() == Some('(') => {
+            Token::Ident(name) if self.peek_sym() == Some("(") => {
                 self.pos += 1;
-                let mut args = vec![self.sum()?];
-                while self.peek_sym() == Some(',') {
+                let mut args = vec![self.or()?];
+                while self.peek_sym() == Some(",") {
                     self.pos += 1;
-                    args.push(self.sum()?);
+                    args.push(self.or()?);
                 }
-                self.expect(')')?;
+                self.expect(")")?;
                 Ok(Expr::Call(name, args))
             }
             Token::Ident(name) => Ok(Expr::Name(name)),
-            Token::Sym('(') => {
-                let e = self.sum()?;
-                self.expect(')')?;
+            Token::Sym("(") => {
+                let e = self.or()?;
+                self.expect(")")?;
                 Ok(e)
             }
             Token::Sym(c) => Err(format!("unexpected '{c}' in count expression")),
@@ -254,6 +382,25 @@ mod tests {
             801
         );
         assert_eq!(Expr::parse("WIDTH*HEIGHT").unwrap().names(), vec!["WIDTH", "HEIGHT"]);
+        assert_eq!(Expr::parse("-2 * -WIDTH").unwrap().eval(&vars()).unwrap(), 1280.0);
+        assert_eq!(Expr::parse("pow(2, 10)").unwrap().eval(&vars()).unwrap(), 1024.0);
+    }
+
+    #[test]
+    fn evaluates_conditions() {
+        let cases = [
+            ("WIDTH > HEIGHT", 1.0),
+            ("WIDTH <= HEIGHT", 0.0),
+            ("!(WIDTH == 640) || HEIGHT != 480", 0.0),
+            ("WIDTH >= 640 && HEIGHT < 481", 1.0),
+            ("!0 + 1 > 1", 1.0),
+            ("1 + 1 == 2 && 0 || 1", 1.0),
+        ];
+        for (text, want) in cases {
+            assert_eq!(Expr::parse(text).unwrap().eval(&vars()).unwrap(), want, "{text}");
+        }
+        assert!(Expr::parse("WIDTH >").is_err());
+        assert!(Expr::parse("WIDTH & HEIGHT").is_err());
     }
 
     #[test]

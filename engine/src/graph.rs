@@ -1,16 +1,17 @@
-//! Loading and validating a frame graph: catalogs, names, streams, item chains, phases and
-//! culling. Every error names the file and position of the offending name.
+//! A loaded frame graph: its declarations, and the live view the current constants leave of
+//! it (see [`crate::specialize`]): item chains, phases, and the frame's steps (phases and
+//! operators in order). Every error names the file and position of the offending name.
 
-use crate::error::{Error, Location, Result};
-use crate::expr::Expr;
-use crate::ir::{
-    CatalogFile, ConstValue, GraphFile, LayoutDecl, MeasuredDecl, PassDecl, PassEntry, PerCall, ResourceDecl, Role,
-    StreamDecl,
-};
+use crate::error::{Error, Result};
+use crate::ids::{ChainId, OpId, PassId, PhaseId};
+use crate::ir::{ConstValue, LayoutDecl, MeasuredDecl, PassDecl, ResourceDecl, Role, StreamDecl};
+use crate::load::{Declared, declare};
+use crate::operator::{Domain, Operator};
 use crate::vfs::Vfs;
 use petgraph::graph::{DiGraph, NodeIndex};
-use petgraph::visit::{Bfs, Reversed};
 use std::collections::{BTreeMap, BTreeSet};
+
+pub use crate::load::parse_ron;
 
 /// A pass of a loaded graph, with the file it was declared in.
 #[derive(Debug, Clone)]
@@ -31,8 +32,8 @@ impl Pass {
 /// How a chain receives its items.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ChainEntry {
-    /// Its first pass is a start pass creating `over` items.
-    Start(Expr),
+    /// Its first pass is a start pass creating items over a domain.
+    Start(Domain),
     /// Its first pass consumes the named stream.
     Stream(String),
 }
@@ -43,8 +44,8 @@ pub enum ChainEntry {
 pub struct Chain {
     /// The WGSL struct of the item.
     pub item: String,
-    /// Indices into [`Graph::passes`], entry first.
-    pub passes: Vec<usize>,
+    /// Its passes, entry first.
+    pub passes: Vec<PassId>,
     /// How items enter the chain.
     pub entry: ChainEntry,
     /// Position in `passes` where the loop group begins, if the chain has one.
@@ -56,31 +57,54 @@ pub struct Chain {
 #[derive(Debug, Clone)]
 pub struct Phase {
     /// The chains of the phase, the start chain first.
-    pub chains: Vec<usize>,
+    pub chains: Vec<ChainId>,
 }
 
-/// A loaded, validated frame graph.
+/// One step of a frame: a phase of passes, or a collective operator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameStep {
+    /// A phase.
+    Phase(PhaseId),
+    /// An operator.
+    Op(OpId),
+}
+
+/// A pass or operator left out of the live graph, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Culled {
+    /// Its name.
+    pub name: String,
+    /// Why it was culled.
+    pub reason: String,
+}
+
+/// A loaded, validated frame graph with the live view of its constants.
 #[derive(Debug, Clone)]
 pub struct Graph {
     /// The graph's name.
     pub name: String,
     /// What it computes.
     pub description: String,
-    /// The graph file (virtual path) and its text, for error locations.
+    /// The graph file (virtual path).
     pub file: String,
-    text: String,
+    /// Everything declared, culled or not.
+    pub declared: Declared,
     /// WGSL library files.
     pub library: Vec<String>,
-    /// All live passes, catalog passes resolved.
+    /// Live passes.
     pub passes: Vec<Pass>,
+    /// Live operators.
+    pub ops: Vec<Operator>,
     /// Resources by name.
     pub resources: BTreeMap<String, ResourceDecl>,
     /// Streams by name.
     pub streams: BTreeMap<String, StreamDecl>,
     /// Counter names.
     pub counters: Vec<String>,
-    /// Constants with default values.
+    /// Constants: the graph's defaults, overridden and extended by the specialisation.
     pub constants: BTreeMap<String, ConstValue>,
+    /// Per-frame parameters with their defaults.
+    pub parameters: BTreeMap<String, ConstValue>,
     /// Resources read by the host.
     pub outputs: Vec<String>,
     /// Constants the host measures before rendering.
@@ -89,39 +113,18 @@ pub struct Graph {
     pub layouts: BTreeMap<String, LayoutDecl>,
     /// The default layout.
     pub default_layout: String,
-    /// Item chains.
+    /// Item chains of the live passes.
     pub chains: Vec<Chain>,
     /// Phases in execution order.
     pub phases: Vec<Phase>,
-    /// Passes removed because nothing reads what they produce.
-    pub culled: Vec<Pass>,
+    /// The frame: phases and operators in order.
+    pub steps: Vec<FrameStep>,
+    /// Passes and operators left out, with the reason.
+    pub culled: Vec<Culled>,
     /// Streams whose consumer was culled (emits into them do nothing).
     pub dead_streams: Vec<String>,
     /// The file system the graph's sources come from.
     pub vfs: Vfs,
-}
-
-/// Parses RON text of `file` into `T`, with the parser's position on error.
-pub fn parse_ron<T: serde::de::DeserializeOwned>(file: &str, text: &str) -> Result<T> {
-    ron::Options::default()
-        .with_default_extension(
-            ron::extensions::Extensions::IMPLICIT_SOME | ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES,
-        )
-        .from_str(text)
-        .map_err(|e| Error::Parse {
-            at: Location {
-                file: file.to_string(),
-                line: e.span.start.line,
-                column: e.span.start.col,
-            },
-            message: e.code.to_string(),
-        })
-}
-
-fn is_identifier(name: &str) -> bool {
-    let mut chars = name.chars();
-    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 impl Graph {
@@ -131,308 +134,207 @@ impl Graph {
         Self::from_text(vfs, file, &text)
     }
 
-    /// Loads a graph from its text (`file` names it in errors).
+    /// Loads a graph from its text (`file` names it in errors). The live view is that of the
+    /// default constants; [`Graph::specialize`] gives the view of others.
     pub fn from_text(vfs: &Vfs, file: &str, text: &str) -> Result<Graph> {
-        let g: GraphFile = parse_ron(file, text)?;
-        let err = |name: &str, message: String| Error::invalid_at_name(file, text, name, message);
-        let err_key = |name: &str, message: String| Error::invalid_at_key(file, text, name, message);
-
-        // Catalog passes.
-        let mut catalog: BTreeMap<String, Pass> = BTreeMap::new();
-        for cat in &g.catalogs {
-            let cat_text = vfs
-                .read(cat)
-                .map_err(|e| err(cat, format!("cannot read pass catalog: {e}")))?;
-            let parsed: CatalogFile = parse_ron(cat, &cat_text)?;
-            for decl in parsed.passes {
-                catalog.insert(
-                    decl.name.clone(),
-                    Pass {
-                        decl,
-                        origin: cat.clone(),
-                    },
-                );
-            }
-        }
-        let mut passes: Vec<Pass> = Vec::new();
-        for entry in &g.passes {
-            let pass = match entry {
-                PassEntry::Use(name) => catalog.get(name).cloned().ok_or_else(|| {
-                    let known: Vec<&str> = catalog.keys().map(|s| s.as_str()).collect();
-                    err(
-                        name,
-                        format!(
-                            "unknown pass '{name}' (the catalogs {:?} offer: {})",
-                            g.catalogs,
-                            known.join(", ")
-                        ),
-                    )
-                })?,
-                PassEntry::Pass(decl) => Pass {
-                    decl: decl.clone(),
-                    origin: file.to_string(),
-                },
-            };
-            if passes.iter().any(|p| p.decl.name == pass.decl.name) {
-                return Err(err(&pass.decl.name, format!("pass '{}' appears twice", pass.decl.name)));
-            }
-            passes.push(pass);
-        }
-
-        // Names.
-        for name in g
-            .resources
-            .keys()
-            .chain(g.streams.keys())
-            .chain(g.counters.iter())
-            .chain(g.constants.keys())
-        {
-            if !is_identifier(name) || name.starts_with("lg_") {
-                return Err(err_key(
-                    name,
-                    format!("'{name}' is not a valid name (a WGSL identifier not starting with 'lg_')"),
-                ));
-            }
-        }
-        let pass_text = |p: &Pass| -> String {
-            if p.origin == file {
-                text.to_string()
-            } else {
-                vfs.read(&p.origin).unwrap_or_default()
-            }
-        };
-        for p in &passes {
-            let d = &p.decl;
-            if !is_identifier(p.function()) {
-                return Err(err(&d.name, format!("pass name '{}' is not a WGSL identifier", d.name)));
-            }
-            for r in d.reads.iter().chain(d.writes.iter()) {
-                if !g.resources.contains_key(r) {
-                    let known: Vec<&str> = g.resources.keys().map(|s| s.as_str()).collect();
-                    return Err(Error::invalid_at_name(
-                        &p.origin,
-                        &pass_text(p),
-                        r,
-                        format!(
-                            "unknown resource '{r}' used by pass '{}' (graph '{}' declares: {})",
-                            d.name,
-                            g.name,
-                            known.join(", ")
-                        ),
-                    ));
-                }
-            }
-            for s in &d.emits {
-                if !g.streams.contains_key(s) {
-                    return Err(Error::invalid_at_name(
-                        &p.origin,
-                        &pass_text(p),
-                        s,
-                        format!("pass '{}' emits into unknown stream '{s}'", d.name),
-                    ));
-                }
-            }
-            if let Role::Start { over } = &d.role {
-                Expr::parse(over).map_err(|e| Error::invalid_at_name(&p.origin, &pass_text(p), over, e))?;
-            }
-        }
-        for (name, r) in &g.resources {
-            if r.scope == crate::ir::Scope::External && r.count.is_some() {
-                return Err(err_key(
-                    name,
-                    format!(
-                        "external resource '{name}' has a count; its data sizes it, so write its WGSL type (e.g. array<{}>)",
-                        r.ty
-                    ),
-                ));
-            }
-            if let Some(count) = &r.count {
-                Expr::parse(count).map_err(|e| err(count, format!("resource '{name}': {e}")))?;
-            }
-        }
-        for o in &g.outputs {
-            if !g.resources.contains_key(o) {
-                return Err(err(o, format!("output '{o}' is not a resource")));
-            }
-        }
-        for (name, s) in &g.streams {
-            let consumer = passes
-                .iter()
-                .find(|p| p.decl.name == s.to)
-                .ok_or_else(|| err(&s.to, format!("stream '{name}' feeds unknown pass '{}'", s.to)))?;
-            if consumer.decl.item != s.item {
-                return Err(err_key(
-                    name,
-                    format!(
-                        "stream type mismatch: stream '{name}' carries '{}' but its consumer '{}' runs over '{}'",
-                        s.item, s.to, consumer.decl.item
-                    ),
-                ));
-            }
-            if matches!(consumer.decl.role, Role::Start { .. }) {
-                return Err(err(
-                    &s.to,
-                    format!(
-                        "stream '{name}' feeds '{}', a Start pass; streams feed Step or Loop passes",
-                        s.to
-                    ),
-                ));
-            }
-            match &s.per_call {
-                PerCall::Number(0) => {
-                    return Err(err_key(name, format!("stream '{name}' has per_call 0")));
-                }
-                PerCall::Expr(e) => {
-                    if let Err(why) = crate::expr::Expr::parse(e) {
-                        return Err(err_key(name, format!("stream '{name}': per_call: {why}")));
-                    }
-                }
-                PerCall::Number(_) => {}
-            }
-        }
-        for (name, m) in &g.measured {
-            if !matches!(g.constants.get(name), Some(ConstValue::F32(_))) {
-                return Err(err_key(
-                    name,
-                    format!("measured constant '{name}' must be declared as an F32 constant"),
-                ));
-            }
-            for c in [&m.ratio.0, &m.ratio.1] {
-                if !g.counters.contains(c) {
-                    return Err(err_key(name, format!("measured constant '{name}': no counter '{c}'")));
-                }
-            }
-            for (c, v) in &m.set {
-                match g.constants.get(c) {
-                    Some(d) if d.wgsl_type() == v.wgsl_type() => {}
-                    _ => {
-                        return Err(err_key(
-                            name,
-                            format!("measured constant '{name}': sets '{c}', which is no constant of that type"),
-                        ));
-                    }
-                }
-            }
-        }
-        if !g.layouts.contains_key(&g.default_layout) {
-            return Err(err(
-                &g.default_layout,
-                format!("default layout '{}' is not one of the layouts", g.default_layout),
-            ));
-        }
-
+        let declared = declare(vfs, file, text)?;
+        let g = &declared.file;
         let mut graph = Graph {
             name: g.name.clone(),
             description: g.description.clone(),
             file: file.to_string(),
-            text: text.to_string(),
-            library: g.library.clone(),
-            passes,
-            resources: g.resources.clone(),
+            library: declared.library.clone(),
+            passes: declared.passes.clone(),
+            ops: declared.ops.clone(),
+            resources: declared.resources.clone(),
             streams: g.streams.clone(),
-            counters: g.counters.clone(),
-            constants: g.constants.clone(),
+            counters: declared.counters.clone(),
+            constants: declared.constants.clone(),
+            parameters: g.parameters.clone(),
             outputs: g.outputs.clone(),
             measured: g.measured.clone(),
             layouts: g.layouts.clone(),
             default_layout: g.default_layout.clone(),
             chains: Vec::new(),
             phases: Vec::new(),
+            steps: Vec::new(),
             culled: Vec::new(),
             dead_streams: Vec::new(),
             vfs: vfs.clone(),
+            declared,
         };
-        graph.cull();
-        graph.build_chains()?;
-        graph.build_phases()?;
-        Ok(graph)
+        // The structure is checked on every declared pass, whatever the constants cull.
+        graph.chains = graph.build_chains()?;
+        graph.phases = graph.build_phases()?;
+        graph.specialize_view(&BTreeMap::new(), false)
     }
 
     /// An error located at the first occurrence of `name` in the graph file.
     pub fn error_at(&self, name: &str, message: impl Into<String>) -> Error {
-        Error::invalid_at_name(&self.file, &self.text, name, message)
+        self.declared.sources.at_name(&self.file, name, message)
     }
 
-    /// Whether the pass called `name` was culled.
+    /// An error located at the declaration of the resource, counter or constant `name`.
+    pub fn error_at_decl(&self, name: &str, message: impl Into<String>) -> Error {
+        self.declared.error_at_decl(&self.file, name, message)
+    }
+
+    /// An error located at the first occurrence of `name` in the file of pass `p`.
+    pub fn error_in_pass(&self, p: &Pass, name: &str, message: impl Into<String>) -> Error {
+        self.declared.sources.at_name(&p.origin, name, message)
+    }
+
+    /// Whether the pass or operator called `name` was culled.
     pub fn is_culled(&self, name: &str) -> bool {
-        self.culled.iter().any(|p| p.decl.name == name)
+        self.culled.iter().any(|c| c.name == name)
     }
 
-    /// Resources some pass declares it writes, culled passes included (their WGSL is still
-    /// part of every module).
+    /// Resources some declared pass or operator writes, culled ones included (the sources
+    /// of culled passes still take part in compiling, so their stores must be legal).
     pub fn written_resources(&self) -> BTreeSet<String> {
-        self.passes
+        let mut out: BTreeSet<String> = self
+            .declared
+            .passes
             .iter()
-            .chain(&self.culled)
             .flat_map(|p| p.decl.writes.iter().cloned())
-            .collect()
+            .collect();
+        for op in &self.declared.ops {
+            out.extend(op.writes().iter().map(|s| s.to_string()));
+        }
+        out
     }
 
     /// An error located at the first occurrence of `name` within the declaration of
     /// `layout` (or at the layout's declaration).
     pub fn error_in_layout(&self, layout: &str, name: &str, message: impl Into<String>) -> Error {
         Error::Invalid {
-            at: crate::error::Location::of_name_under_key(&self.file, &self.text, layout, name),
+            at: crate::error::Location::of_name_under_key(
+                &self.file,
+                self.declared.sources.text(&self.file),
+                layout,
+                name,
+            ),
             message: message.into(),
         }
     }
 
-    /// Index of the pass called `name`.
-    pub fn pass_index(&self, name: &str) -> Option<usize> {
-        self.passes.iter().position(|p| p.decl.name == name)
+    /// The live pass called `name`.
+    pub fn pass_index(&self, name: &str) -> Option<PassId> {
+        self.passes.iter().position(|p| p.decl.name == name).map(PassId)
     }
 
     /// The chain containing pass `p`, and its position there.
-    pub fn chain_of(&self, p: usize) -> (usize, usize) {
+    pub fn chain_of(&self, p: PassId) -> (ChainId, usize) {
         self.chains
             .iter()
             .enumerate()
-            .find_map(|(c, chain)| chain.passes.iter().position(|&q| q == p).map(|pos| (c, pos)))
+            .find_map(|(c, chain)| chain.passes.iter().position(|&q| q == p).map(|pos| (ChainId(c), pos)))
             .expect("every live pass is in a chain")
     }
 
     /// The phase containing chain `c`.
-    pub fn phase_of_chain(&self, c: usize) -> usize {
-        self.phases
+    pub fn phase_of_chain(&self, c: ChainId) -> PhaseId {
+        PhaseId(
+            self.phases
+                .iter()
+                .position(|ph| ph.chains.contains(&c))
+                .expect("every chain is in a phase"),
+        )
+    }
+
+    /// The frame step of phase `ph`.
+    pub fn step_of_phase(&self, ph: PhaseId) -> usize {
+        self.steps
             .iter()
-            .position(|ph| ph.chains.contains(&c))
-            .expect("every chain is in a phase")
+            .position(|s| *s == FrameStep::Phase(ph))
+            .expect("every phase is a step")
     }
 
-    /// The dependency graph: passes and resources as nodes; edges for writes, reads, item flow
-    /// along chains and stream emits.
-    pub fn dependency_graph(&self) -> (DiGraph<String, String>, BTreeMap<String, NodeIndex>) {
-        dependency_graph(&self.passes, &self.resources, &self.streams)
+    /// The passes of phase `ph`.
+    pub fn phase_passes(&self, ph: PhaseId) -> Vec<PassId> {
+        self.phases[ph]
+            .chains
+            .iter()
+            .flat_map(|&c| self.chains[c].passes.iter().copied())
+            .collect()
     }
 
-    fn cull(&mut self) {
-        if self.outputs.is_empty() {
-            return;
+    /// The domain of phase `ph`: its start chain's.
+    pub fn phase_domain(&self, ph: PhaseId) -> &Domain {
+        match &self.chains[self.phases[ph].chains[0]].entry {
+            ChainEntry::Start(d) => d,
+            ChainEntry::Stream(_) => unreachable!("phases begin with a start chain"),
         }
-        let (dg, nodes) = self.dependency_graph();
-        let mut live: BTreeSet<NodeIndex> = BTreeSet::new();
-        let rev = Reversed(&dg);
-        for o in &self.outputs {
-            let mut bfs = Bfs::new(rev, nodes[&format!("resource:{o}")]);
-            while let Some(n) = bfs.next(rev) {
-                live.insert(n);
+    }
+
+    /// Resources the nodes of frame step `s` read or write (counters of GPU-counted domains
+    /// included).
+    pub fn step_resources(&self, s: usize) -> BTreeSet<String> {
+        let mut out = BTreeSet::new();
+        match self.steps[s] {
+            FrameStep::Phase(ph) => {
+                for p in self.phase_passes(ph) {
+                    let d = &self.passes[p].decl;
+                    out.extend(d.reads.iter().chain(&d.writes).cloned());
+                }
+                out.extend(self.phase_domain(ph).counted.iter().cloned());
+            }
+            FrameStep::Op(o) => {
+                let op = &self.ops[o];
+                out.extend(op.reads().iter().chain(op.writes().iter()).map(|s| s.to_string()));
             }
         }
-        let (keep, dropped): (Vec<Pass>, Vec<Pass>) = self
-            .passes
-            .drain(..)
-            .partition(|p| live.contains(&nodes[&format!("pass:{}", p.decl.name)]));
-        self.passes = keep;
-        self.culled = dropped;
-        self.dead_streams = self
-            .streams
-            .iter()
-            .filter(|(_, s)| self.is_culled(&s.to))
-            .map(|(n, _)| n.clone())
-            .collect();
+        out
     }
 
-    fn build_chains(&mut self) -> Result<()> {
+    /// A resource written in phase `a` and read in phase `b`, if any (the reason a barrier
+    /// separates them).
+    pub fn barrier_resource(&self, a: PhaseId, b: PhaseId) -> Option<String> {
+        let (pa, pb) = (self.phase_passes(a), self.phase_passes(b));
+        for &x in &pa {
+            for &y in &pb {
+                let (x, y) = (&self.passes[x].decl, &self.passes[y].decl);
+                if let Some(r) = x.writes.iter().find(|r| y.reads.contains(r) || y.writes.contains(r)) {
+                    return Some(r.clone());
+                }
+                if let Some(r) = y.writes.iter().find(|r| x.reads.contains(r)) {
+                    return Some(r.clone());
+                }
+            }
+        }
+        None
+    }
+
+    /// Why phases `a` and `b` cannot share a kernel, in words.
+    pub fn barrier_reason(&self, a: PhaseId, b: PhaseId) -> String {
+        let (a, b) = (a.min(b), a.max(b));
+        let (sa, sb) = (self.step_of_phase(a), self.step_of_phase(b));
+        if let Some(r) = self.barrier_resource(a, b) {
+            return format!("the later phase needs all of '{r}' from the earlier one (a global barrier)");
+        }
+        match self.steps[sa..sb].iter().find_map(|s| match s {
+            FrameStep::Op(o) => Some(&self.ops[*o].name),
+            FrameStep::Phase(_) => None,
+        }) {
+            Some(op) => format!("operator '{op}' runs between them (a global barrier)"),
+            None => "they belong to independent phases".to_string(),
+        }
+    }
+
+    /// The dependency graph of the live passes and operators: passes, operators and
+    /// resources as nodes; edges for writes, reads, item flow along chains and stream emits.
+    pub fn dependency_graph(&self) -> (DiGraph<String, String>, BTreeMap<String, NodeIndex>) {
+        dependency_graph(&self.passes, &self.ops, &self.chains, &self.resources, &self.streams)
+    }
+
+    /// Graphviz DOT text of the dependency graph.
+    pub fn to_dot(&self) -> String {
+        let (dg, _) = self.dependency_graph();
+        format!("{}", petgraph::dot::Dot::with_config(&dg, &[]))
+    }
+
+    /// The chains of the live passes, in order of their entries.
+    pub(crate) fn build_chains(&self) -> Result<Vec<Chain>> {
         let stream_into: BTreeMap<&str, &str> = self.streams.iter().map(|(n, s)| (s.to.as_str(), n.as_str())).collect();
         let mut chains: Vec<Chain> = Vec::new();
         for (i, p) in self.passes.iter().enumerate() {
@@ -445,9 +347,10 @@ impl Graph {
                 ));
             }
             let new_entry = match &d.role {
-                Role::Start { over } => Some(ChainEntry::Start(
-                    Expr::parse(over).map_err(|e| self.error_at(over, e))?,
-                )),
+                Role::Start { over, counted } => Some(ChainEntry::Start(Domain {
+                    over: crate::expr::Expr::parse(over).map_err(|e| self.error_in_pass(p, over, e))?,
+                    counted: counted.clone(),
+                })),
                 _ => stream_into
                     .get(d.name.as_str())
                     .map(|s| ChainEntry::Stream(s.to_string())),
@@ -456,7 +359,7 @@ impl Graph {
                 let loop_start = (d.role == Role::Loop).then_some(0);
                 chains.push(Chain {
                     item: d.item.clone(),
-                    passes: vec![i],
+                    passes: vec![PassId(i)],
                     entry,
                     loop_start,
                 });
@@ -482,22 +385,23 @@ impl Graph {
             } else if d.role == Role::Loop {
                 chain.loop_start = Some(chain.passes.len());
             }
-            chain.passes.push(i);
+            chain.passes.push(PassId(i));
         }
-        self.chains = chains;
-        Ok(())
+        Ok(chains)
     }
 
-    fn build_phases(&mut self) -> Result<()> {
-        // Chains reached from chain c through streams.
-        let consumer_chain = |stream: &str| -> Option<usize> {
+    /// The phases of the chains: each start chain with the chains its streams reach.
+    pub(crate) fn build_phases(&self) -> Result<Vec<Phase>> {
+        let consumer_chain = |stream: &str| -> Option<ChainId> {
             self.chains
                 .iter()
                 .position(|c| c.entry == ChainEntry::Stream(stream.to_string()))
+                .map(ChainId)
         };
-        let mut owner: BTreeMap<usize, usize> = BTreeMap::new();
+        let mut owner: BTreeMap<ChainId, usize> = BTreeMap::new();
         let mut phases: Vec<Phase> = Vec::new();
         for (c, chain) in self.chains.iter().enumerate() {
+            let c = ChainId(c);
             if !matches!(chain.entry, ChainEntry::Start(_)) {
                 continue;
             }
@@ -538,87 +442,71 @@ impl Graph {
         }
         for (c, chain) in self.chains.iter().enumerate() {
             if let ChainEntry::Stream(s) = &chain.entry
-                && !phases.iter().any(|ph| ph.chains.contains(&c))
+                && !phases.iter().any(|ph| ph.chains.contains(&ChainId(c)))
             {
                 return Err(self.error_at(s, format!("stream '{s}' is emitted by no pass")));
             }
         }
-        self.phases = phases;
-        Ok(())
-    }
-
-    /// A resource written in phase `a` and read in phase `b`, if any (the reason a barrier
-    /// separates them).
-    pub fn barrier_resource(&self, a: usize, b: usize) -> Option<String> {
-        let phase_passes = |ph: usize| -> Vec<&Pass> {
-            self.phases[ph]
-                .chains
-                .iter()
-                .flat_map(|&c| self.chains[c].passes.iter().map(|&p| &self.passes[p]))
-                .collect()
-        };
-        let (pa, pb) = (phase_passes(a), phase_passes(b));
-        for x in &pa {
-            for y in &pb {
-                if let Some(r) = x
-                    .decl
-                    .writes
-                    .iter()
-                    .find(|r| y.decl.reads.contains(r) || y.decl.writes.contains(r))
-                {
-                    return Some(r.clone());
-                }
-                if let Some(r) = y.decl.writes.iter().find(|r| x.decl.reads.contains(r)) {
-                    return Some(r.clone());
-                }
-            }
-        }
-        None
-    }
-
-    /// Graphviz DOT text of the dependency graph.
-    pub fn to_dot(&self) -> String {
-        let (dg, _) = self.dependency_graph();
-        format!("{}", petgraph::dot::Dot::with_config(&dg, &[]))
+        Ok(phases)
     }
 }
 
 fn dependency_graph(
     passes: &[Pass],
+    ops: &[Operator],
+    chains: &[Chain],
     resources: &BTreeMap<String, ResourceDecl>,
     streams: &BTreeMap<String, StreamDecl>,
 ) -> (DiGraph<String, String>, BTreeMap<String, NodeIndex>) {
     let mut dg: DiGraph<String, String> = DiGraph::new();
     let mut nodes = BTreeMap::new();
+    let mut node = |dg: &mut DiGraph<String, String>, key: String| {
+        let n = dg.add_node(key.clone());
+        nodes.insert(key, n);
+    };
     for r in resources.keys() {
-        nodes.insert(format!("resource:{r}"), dg.add_node(format!("resource:{r}")));
+        node(&mut dg, format!("resource:{r}"));
     }
     for p in passes {
-        nodes.insert(
-            format!("pass:{}", p.decl.name),
-            dg.add_node(format!("pass:{}", p.decl.name)),
-        );
+        node(&mut dg, format!("pass:{}", p.decl.name));
     }
-    let mut last_of_item: BTreeMap<&str, NodeIndex> = BTreeMap::new();
+    for o in ops {
+        node(&mut dg, format!("op:{}", o.name));
+    }
+    let reads_writes = |dg: &mut DiGraph<String, String>, n: NodeIndex, reads: Vec<&str>, writes: Vec<&str>| {
+        for r in writes {
+            dg.add_edge(n, nodes[&format!("resource:{r}")], "writes".into());
+        }
+        for r in reads {
+            dg.add_edge(nodes[&format!("resource:{r}")], n, "reads".into());
+        }
+    };
     for p in passes {
         let d = &p.decl;
         let n = nodes[&format!("pass:{}", d.name)];
-        for r in &d.writes {
-            dg.add_edge(n, nodes[&format!("resource:{r}")], "writes".into());
+        let mut reads: Vec<&str> = d.reads.iter().map(|s| s.as_str()).collect();
+        if let Role::Start { counted: Some(c), .. } = &d.role {
+            reads.push(c);
         }
-        for r in &d.reads {
-            dg.add_edge(nodes[&format!("resource:{r}")], n, "reads".into());
-        }
+        reads_writes(&mut dg, n, reads, d.writes.iter().map(|s| s.as_str()).collect());
         for s in &d.emits {
             if let Some(to) = nodes.get(&format!("pass:{}", streams[s].to)) {
                 dg.add_edge(n, *to, format!("emits {s}"));
             }
         }
-        let starts_chain = matches!(d.role, Role::Start { .. }) || streams.values().any(|s| s.to == d.name);
-        if !starts_chain && let Some(prev) = last_of_item.get(d.item.as_str()) {
-            dg.add_edge(*prev, n, d.item.clone());
+    }
+    for o in ops {
+        reads_writes(&mut dg, nodes[&format!("op:{}", o.name)], o.reads(), o.writes());
+    }
+    for chain in chains {
+        for pair in chain.passes.windows(2) {
+            let (a, b) = (&passes[pair[0].0].decl.name, &passes[pair[1].0].decl.name);
+            dg.add_edge(
+                nodes[&format!("pass:{a}")],
+                nodes[&format!("pass:{b}")],
+                chain.item.clone(),
+            );
         }
-        last_of_item.insert(&d.item, n);
     }
     (dg, nodes)
 }

@@ -16,14 +16,19 @@ pub struct GraphFile {
     /// One line on what the estimator computes.
     #[serde(default)]
     pub description: String,
+    /// Declaration files (virtual paths, in the catalog format) whose library, resources,
+    /// counters and constants all join the graph, and whose passes `Use` can name.
+    #[serde(default)]
+    pub include: Vec<String>,
     /// WGSL library files (virtual paths), included in every kernel.
     #[serde(default)]
     pub library: Vec<String>,
-    /// Pass catalog files (virtual paths) that `Use` entries are looked up in.
+    /// Pass catalog files (virtual paths) that `Use` entries are looked up in; a used pass
+    /// brings what it needs from its catalog (see [`CatalogFile`]).
     #[serde(default)]
     pub catalogs: Vec<String>,
-    /// The passes in order: item chains follow this order, and phases run in the order of
-    /// their start passes.
+    /// The passes and operators in order: item chains follow this order, and phases and
+    /// operators run in the order of their start passes and their own.
     pub passes: Vec<PassEntry>,
     /// Buffers the passes read and write.
     #[serde(default)]
@@ -37,6 +42,10 @@ pub struct GraphFile {
     /// WGSL constants with their default values; the host may override them.
     #[serde(default)]
     pub constants: BTreeMap<String, ConstValue>,
+    /// Per-frame parameters with their default values: set by the host before any frame
+    /// without recompiling, read in WGSL by name like constants.
+    #[serde(default)]
+    pub parameters: BTreeMap<String, ConstValue>,
     /// Resources the host reads after frames (passes that contribute to none are culled).
     #[serde(default)]
     pub outputs: Vec<String>,
@@ -62,21 +71,147 @@ pub struct MeasuredDecl {
     pub ratio: (String, String),
 }
 
-/// A graph's reference to a catalog pass, or a pass declared inline.
+/// An entry of a graph's `passes`: a catalog pass, a pass declared inline, or one of the
+/// engine's collective operators.
 #[derive(Debug, Clone, Deserialize)]
 pub enum PassEntry {
     /// A pass from one of the graph's catalogs.
     Use(String),
     /// A pass declared in the graph itself.
     Pass(PassDecl),
+    /// Fills a buffer (or a range of it) with a value.
+    Clear(ClearDecl),
+    /// Exclusive prefix sum of `u32`s.
+    Scan(ScanDecl),
+    /// The count step of a counting sort: each element's key bumps its bucket's counter,
+    /// and the element keeps the counter's old value as its slot in the bucket.
+    Count(CountDecl),
+    /// The scatter step of a counting sort: each element to `offsets[key] + slot`.
+    Scatter(ScatterDecl),
 }
 
-/// A pass catalog file (`passes/*.ron`).
-#[derive(Debug, Clone, Deserialize)]
+/// A pass catalog file (`passes/*.ron`), also the format of included declaration files.
+///
+/// A graph that uses one of the catalog's passes gets the catalog's `library`, `counters` and
+/// `constants`, and those of its `resources` that the pass reads or writes; an included file
+/// gives all of them at once.
+#[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CatalogFile {
+    /// WGSL library files the catalog's passes need.
+    #[serde(default)]
+    pub library: Vec<String>,
+    /// Resources the catalog's passes use.
+    #[serde(default)]
+    pub resources: BTreeMap<String, ResourceDecl>,
+    /// Counters the catalog's passes count.
+    #[serde(default)]
+    pub counters: Vec<String>,
+    /// Constants the catalog's passes read, with defaults.
+    #[serde(default)]
+    pub constants: BTreeMap<String, ConstValue>,
     /// The passes this catalog offers.
+    #[serde(default)]
     pub passes: Vec<PassDecl>,
+}
+
+/// `Clear(name, buffer, value, first, count)`: fills elements `first .. first + count` of a
+/// buffer (all of it by default) with `value`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClearDecl {
+    /// Operator name.
+    pub name: String,
+    /// The buffer.
+    pub buffer: String,
+    /// The value, written into each 32-bit word (zero by default).
+    #[serde(default = "zero")]
+    pub value: ConstValue,
+    /// Count expression of the first element.
+    #[serde(default)]
+    pub first: Option<String>,
+    /// Count expression of the elements to fill.
+    #[serde(default)]
+    pub count: Option<String>,
+    /// Constant expression; the operator is culled when it is 0.
+    #[serde(default)]
+    pub enabled: Option<String>,
+}
+
+fn zero() -> ConstValue {
+    ConstValue::U32(0)
+}
+
+/// `Scan(name, input, output, over, counted)`: `output[i] = input[0] + ... + input[i - 1]`
+/// (wrapping `u32` sums); in place when `output` is absent.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScanDecl {
+    /// Operator name.
+    pub name: String,
+    /// The `u32` elements to sum.
+    pub input: String,
+    /// Where the sums go (the input itself when absent).
+    #[serde(default)]
+    pub output: Option<String>,
+    /// Elements to scan.
+    pub over: String,
+    /// A GPU counter of the elements (at most `over`).
+    #[serde(default)]
+    pub counted: Option<String>,
+    /// Constant expression; the operator is culled when it is 0.
+    #[serde(default)]
+    pub enabled: Option<String>,
+}
+
+/// `Count(name, keys, counts, slots, over, counted)`: for each element `i`,
+/// `slots[i] = counts[keys[i]]++` (atomically).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CountDecl {
+    /// Operator name.
+    pub name: String,
+    /// Each element's bucket (`u32`).
+    pub keys: String,
+    /// The buckets' counters (`u32` or `atomic<u32>`; clear them first).
+    pub counts: String,
+    /// Each element's slot in its bucket (`u32`).
+    pub slots: String,
+    /// Elements.
+    pub over: String,
+    /// A GPU counter of the elements (at most `over`).
+    #[serde(default)]
+    pub counted: Option<String>,
+    /// Constant expression; the operator is culled when it is 0.
+    #[serde(default)]
+    pub enabled: Option<String>,
+}
+
+/// `Scatter(name, keys, slots, offsets, input, output, over, counted)`: for each element `i`,
+/// `output[offsets[keys[i]] + slots[i]] = input[i]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScatterDecl {
+    /// Operator name.
+    pub name: String,
+    /// Each element's bucket (`u32`).
+    pub keys: String,
+    /// Each element's slot in its bucket (`u32`).
+    pub slots: String,
+    /// Each bucket's first place (`u32`, e.g. the exclusive scan of the counts).
+    pub offsets: String,
+    /// The elements (any type).
+    pub input: String,
+    /// Where they go (the same element type).
+    pub output: String,
+    /// Elements.
+    pub over: String,
+    /// A GPU counter of the elements (at most `over`).
+    #[serde(default)]
+    pub counted: Option<String>,
+    /// Constant expression; the operator is culled when it is 0.
+    #[serde(default)]
+    pub enabled: Option<String>,
 }
 
 /// A pass: one WGSL function over one item.
@@ -103,16 +238,33 @@ pub struct PassDecl {
     /// Streams the pass emits items into.
     #[serde(default)]
     pub emits: Vec<String>,
+    /// Constant expression; the pass is culled when it is 0 (e.g. `"MERGE"` or
+    /// `"MAX_PATH_LENGTH > 1"`).
+    #[serde(default)]
+    pub enabled: Option<String>,
+    /// WGSL library files the pass needs besides its source.
+    #[serde(default)]
+    pub library: Vec<String>,
+    /// Counters the pass counts.
+    #[serde(default)]
+    pub counters: Vec<String>,
+    /// Constants the pass reads, with defaults.
+    #[serde(default)]
+    pub constants: BTreeMap<String, ConstValue>,
 }
 
 /// The part a pass plays in its item's chain.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 pub enum Role {
     /// Creates items: `fn f(item: ptr<function, T>, index: u32) -> bool`, called for every
-    /// index below the count expression `over`; `false` means no item for that index.
+    /// index below the count expression `over` (or below the GPU counter `counted`, at most
+    /// `over`); `false` means no item for that index.
     Start {
         /// Count expression of the items, e.g. `PATHS`.
         over: String,
+        /// A `u32` or `atomic<u32>` resource holding the item count, read on the GPU.
+        #[serde(default)]
+        counted: Option<String>,
     },
     /// Runs once: `fn f(item: ptr<function, T>) -> bool`; `false` finishes the item.
     Step,
@@ -121,7 +273,7 @@ pub enum Role {
 }
 
 /// A typed GPU buffer.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ResourceDecl {
     /// WGSL type: the element type of an engine-allocated array (with `count`), or the whole
@@ -134,6 +286,9 @@ pub struct ResourceDecl {
     /// Lifetime and ownership.
     #[serde(default)]
     pub scope: Scope,
+    /// `Transient` only: set to zero at the start of its lifetime in every frame.
+    #[serde(default)]
+    pub clear: bool,
 }
 
 /// Who owns a resource and how long it lives.
@@ -142,7 +297,8 @@ pub enum Scope {
     /// Allocated by the engine, kept across frames (film, accumulation).
     #[default]
     Persistent,
-    /// Allocated by the engine, valid within one frame only.
+    /// Allocated by the engine, valid from its first to its last use within one frame: its
+    /// memory is shared with transient buffers whose lifetimes do not overlap.
     Transient,
     /// Supplied by the host at instantiation (scene data); its bytes decide its size.
     External,
@@ -185,7 +341,7 @@ impl std::fmt::Display for PerCall {
     }
 }
 
-/// A constant's value, emitted as a WGSL `const`.
+/// A constant's value, emitted as a WGSL `const` (or a parameter's value).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 pub enum ConstValue {
     /// `u32`
@@ -223,6 +379,26 @@ impl ConstValue {
                 }
             }
             ConstValue::Bool(v) => v.to_string(),
+        }
+    }
+
+    /// The value's 32 bits, as a uniform or storage buffer holds it (`bool` as 0 or 1).
+    pub fn bits(&self) -> u32 {
+        match self {
+            ConstValue::U32(v) => *v,
+            ConstValue::I32(v) => *v as u32,
+            ConstValue::F32(v) => v.to_bits(),
+            ConstValue::Bool(v) => *v as u32,
+        }
+    }
+
+    /// `v` converted to this value's type (rounded towards zero for integers).
+    pub fn with_number(&self, v: f64) -> ConstValue {
+        match self {
+            ConstValue::U32(_) => ConstValue::U32(v as u32),
+            ConstValue::I32(_) => ConstValue::I32(v as i32),
+            ConstValue::F32(_) => ConstValue::F32(v as f32),
+            ConstValue::Bool(_) => ConstValue::Bool(v != 0.0),
         }
     }
 

@@ -5,21 +5,32 @@
 //! fused into which kernel), generates one WGSL module per kernel, validates it with naga,
 //! and runs frames through wgpu. It knows nothing about light transport.
 //!
-//! The stages, in order: [`Graph::load`] → [`Plan::new`] → [`Program::compile`] →
-//! [`Instance::new`] → [`Instance::run_frame`].
+//! The stages, in order: parse and load ([`Graph::load`], [`load`]) → specialise and cull
+//! ([`Graph::specialize`]) → plan a layout ([`Plan::new`]) → resolve sizes, lifetimes and
+//! shared memory ([`resolve`]) → generate and validate WGSL ([`Program::compile`],
+//! [`codegen`], [`collective`]) → execute ([`Instance::new`], [`Instance::run_frame`]).
 
 pub mod auto;
 pub mod codegen;
+pub mod collective;
 pub mod error;
 pub mod explain;
 pub mod expr;
 pub mod gpu;
 pub mod graph;
+pub mod ids;
+pub mod internal;
 pub mod ir;
+pub mod load;
+pub mod memory;
+pub mod operator;
 pub mod plan;
 pub mod program;
 pub mod reflect;
+pub mod resolve;
 pub mod runtime;
+pub mod selfcheck;
+pub mod specialize;
 pub mod vfs;
 pub mod wgsl;
 

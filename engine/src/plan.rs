@@ -3,6 +3,7 @@
 
 use crate::error::Result;
 use crate::graph::{ChainEntry, Graph};
+use crate::ids::{BoundaryId, ChainId, KernelId, PassId, PhaseId};
 use crate::ir::{LayoutDecl, LoopMode, Policy};
 use std::collections::BTreeSet;
 use std::ops::Range;
@@ -32,8 +33,8 @@ pub enum Side {
 /// A kernel's end of a compaction boundary.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Port {
-    /// Index into [`Plan::boundaries`].
-    pub boundary: usize,
+    /// The boundary.
+    pub boundary: BoundaryId,
     /// Which buffer of a ping-pong boundary.
     pub side: Side,
 }
@@ -42,7 +43,7 @@ pub struct Port {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Boundary {
     /// The chain whose items it holds.
-    pub chain: usize,
+    pub chain: ChainId,
     /// Whether one kernel both reads and refills it, so it needs two buffers in turn.
     pub pingpong: bool,
 }
@@ -53,15 +54,15 @@ pub struct KernelPlan {
     /// Entry point name.
     pub name: String,
     /// The phase it belongs to.
-    pub phase: usize,
+    pub phase: PhaseId,
     /// The chain whose segment the kernel runs.
-    pub chain: usize,
+    pub chain: ChainId,
     /// The segment: positions in the chain's pass list.
     pub segment: Range<usize>,
     /// What feeds it.
     pub root: Root,
     /// Stream-fed chains called directly from this kernel (fused consumers).
-    pub fused_chains: Vec<usize>,
+    pub fused_chains: Vec<ChainId>,
     /// Whether the segment's loop passes repeat inside the kernel.
     pub loop_in_kernel: bool,
     /// Whether this kernel ends one host-driven loop iteration (it counts surviving items).
@@ -79,13 +80,13 @@ pub struct KernelPlan {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Step {
     /// Run a kernel over the chunk's items or slots.
-    Run(usize),
+    Run(KernelId),
     /// Run the consumer kernel of a queued stream over its queue, then empty the queue.
     Drain(String),
     /// Repeat the body while items of the chain are alive.
     Loop {
         /// The chain whose items are counted.
-        chain: usize,
+        chain: ChainId,
         /// The body of one iteration.
         body: Vec<Step>,
     },
@@ -105,7 +106,7 @@ pub struct Plan {
     /// Per phase, the steps to run for each chunk.
     pub schedule: Vec<Vec<Step>>,
     /// Chains whose items are stored in state buffers between kernels.
-    pub stored_chains: BTreeSet<usize>,
+    pub stored_chains: BTreeSet<ChainId>,
     /// Streams carried by queues (their consumers run in kernels of their own).
     pub queued_streams: BTreeSet<String>,
     /// Compaction boundaries.
@@ -179,7 +180,7 @@ impl Plan {
             .collect();
         // Chains kept in slots between dispatches: split under Naive or Regeneration, or one
         // regenerating kernel that runs one loop iteration per dispatch.
-        let stored_chains: BTreeSet<usize> = kernels
+        let stored_chains: BTreeSet<ChainId> = kernels
             .iter()
             .filter(|k| {
                 k.root == Root::State || (k.regenerates && !k.loop_in_kernel && k.input.is_none() && k.output.is_none())
@@ -197,15 +198,17 @@ impl Plan {
             boundaries,
         };
         plan.check_streams(layout_name)?;
-        plan.schedule = (0..graph.phases.len()).map(|ph| plan.phase_schedule(ph)).collect();
+        plan.schedule = (0..graph.phases.len())
+            .map(|ph| plan.phase_schedule(PhaseId(ph)))
+            .collect();
         Ok(plan)
     }
 
-    /// The passes of kernel `k`, including fused consumer chains, as pass indices.
-    pub fn kernel_passes(&self, k: usize) -> Vec<usize> {
+    /// The passes of kernel `k`, including fused consumer chains.
+    pub fn kernel_passes(&self, k: KernelId) -> Vec<PassId> {
         let kp = &self.kernels[k];
         let chains = &self.graph.chains;
-        let mut out: Vec<usize> = chains[kp.chain].passes[kp.segment.clone()].to_vec();
+        let mut out: Vec<PassId> = chains[kp.chain].passes[kp.segment.clone()].to_vec();
         for &c in &kp.fused_chains {
             out.extend(chains[c].passes.iter().copied());
         }
@@ -213,7 +216,7 @@ impl Plan {
     }
 
     /// Streams emitted by the passes of kernel `k` that travel through queues.
-    pub fn queued_emits(&self, k: usize) -> Vec<String> {
+    pub fn queued_emits(&self, k: KernelId) -> Vec<String> {
         let mut out: Vec<String> = Vec::new();
         for p in self.kernel_passes(k) {
             for s in &self.graph.passes[p].decl.emits {
@@ -226,15 +229,23 @@ impl Plan {
     }
 
     /// The kernel consuming the queue of `stream`.
-    pub fn consumer_kernel(&self, stream: &str) -> usize {
-        self.kernels
-            .iter()
-            .position(|k| k.root == Root::Queue(stream.to_string()))
-            .expect("queued streams have a consumer kernel")
+    pub fn consumer_kernel(&self, stream: &str) -> KernelId {
+        KernelId(
+            self.kernels
+                .iter()
+                .position(|k| k.root == Root::Queue(stream.to_string()))
+                .expect("queued streams have a consumer kernel"),
+        )
+    }
+
+    /// Ids of the kernels, in order.
+    pub fn kernel_ids(&self) -> impl Iterator<Item = KernelId> + use<> {
+        (0..self.kernels.len()).map(KernelId)
     }
 
     fn check_streams(&self, layout_name: &str) -> Result<()> {
         for (k, kp) in self.kernels.iter().enumerate() {
+            let k = KernelId(k);
             if !kp.loop_in_kernel {
                 continue;
             }
@@ -260,9 +271,10 @@ impl Plan {
         Ok(())
     }
 
-    fn phase_schedule(&self, ph: usize) -> Vec<Step> {
+    fn phase_schedule(&self, ph: PhaseId) -> Vec<Step> {
         let root_chain = self.graph.phases[ph].chains[0];
-        let mut ks: Vec<usize> = (0..self.kernels.len())
+        let mut ks: Vec<KernelId> = self
+            .kernel_ids()
             .filter(|&k| self.kernels[k].chain == root_chain && !matches!(self.kernels[k].root, Root::Queue(_)))
             .collect();
         ks.sort_by_key(|&k| self.kernels[k].segment.start);
@@ -292,7 +304,7 @@ impl Plan {
         steps
     }
 
-    fn drains_after(&self, k: usize) -> Vec<Step> {
+    fn drains_after(&self, k: KernelId) -> Vec<Step> {
         let mut out = Vec::new();
         for s in self.queued_emits(k) {
             out.push(Step::Drain(s.clone()));
@@ -302,14 +314,21 @@ impl Plan {
     }
 }
 
-fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Result<Vec<Vec<usize>>> {
-    let mut seen: BTreeSet<usize> = BTreeSet::new();
+fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Result<Vec<Vec<PassId>>> {
+    let mut seen: BTreeSet<PassId> = BTreeSet::new();
     let mut groups = Vec::new();
     for names in &layout.kernels {
         let mut group = Vec::new();
         for name in names {
             if graph.is_culled(name) {
                 continue;
+            }
+            if graph.ops.iter().chain(&graph.declared.ops).any(|o| o.name == *name) {
+                return Err(graph.error_in_layout(
+                    layout_name,
+                    name,
+                    format!("layout '{layout_name}' names operator '{name}'; operators run on their own and are not listed in layouts"),
+                ));
             }
             let p = graph.pass_index(name).ok_or_else(|| {
                 let known: Vec<&str> = graph.passes.iter().map(|p| p.decl.name.as_str()).collect();
@@ -335,7 +354,7 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
             groups.push(group);
         }
     }
-    if let Some(missing) = (0..graph.passes.len()).find(|p| !seen.contains(p)) {
+    if let Some(missing) = (0..graph.passes.len()).map(PassId).find(|p| !seen.contains(p)) {
         let name = &graph.passes[missing].decl.name;
         return Err(graph.error_in_layout(
             layout_name,
@@ -346,19 +365,22 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
     Ok(groups)
 }
 
-fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, group: &[usize]) -> Result<KernelPlan> {
+fn plan_kernel(
+    graph: &Graph,
+    layout_name: &str,
+    layout: &LayoutDecl,
+    k: usize,
+    group: &[PassId],
+) -> Result<KernelPlan> {
     let names: Vec<&str> = group.iter().map(|&p| graph.passes[p].decl.name.as_str()).collect();
     let describe = format!("layout '{layout_name}': kernel [{}]", names.join(", "));
     // One phase per kernel.
-    let phase_of = |p: usize| graph.phase_of_chain(graph.chain_of(p).0);
+    let phase_of = |p: PassId| graph.phase_of_chain(graph.chain_of(p).0);
     let first_phase = phase_of(group[0]);
     if let Some(&other) = group.iter().find(|&&p| phase_of(p) != first_phase) {
         let (a, b) = (&graph.passes[group[0]].decl.name, &graph.passes[other].decl.name);
         let (pa, pb) = (first_phase, phase_of(other));
-        let reason = match graph.barrier_resource(pa.min(pb), pa.max(pb)) {
-            Some(r) => format!("the later phase needs all of '{r}' from the earlier one (a global barrier)"),
-            None => "they belong to independent phases".to_string(),
-        };
+        let reason = graph.barrier_reason(pa, pb);
         return Err(graph.error_in_layout(
             layout_name,
             b,
@@ -366,8 +388,8 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
         ));
     }
     // Segments per chain.
-    let mut segments: Vec<(usize, Range<usize>)> = Vec::new();
-    let mut chains_in: Vec<usize> = group.iter().map(|&p| graph.chain_of(p).0).collect();
+    let mut segments: Vec<(ChainId, Range<usize>)> = Vec::new();
+    let mut chains_in: Vec<ChainId> = group.iter().map(|&p| graph.chain_of(p).0).collect();
     chains_in.sort();
     chains_in.dedup();
     for &c in &chains_in {
@@ -395,14 +417,15 @@ fn plan_kernel(graph: &Graph, layout_name: &str, layout: &LayoutDecl, k: usize, 
         segments.push((c, range));
     }
     // Stream-fed chains whose producer is in the kernel are fused (called directly).
-    let in_group = |p: usize| group.contains(&p);
+    let in_group = |p: PassId| group.contains(&p);
     let mut fused = Vec::new();
     let mut roots = Vec::new();
     for (c, range) in &segments {
         let chain = &graph.chains[*c];
         let fused_here = match &chain.entry {
             ChainEntry::Stream(s) => {
-                let producers: Vec<usize> = (0..graph.passes.len())
+                let producers: Vec<PassId> = (0..graph.passes.len())
+                    .map(PassId)
                     .filter(|&p| graph.passes[p].decl.emits.contains(s))
                     .collect();
                 let inside = producers.iter().filter(|&&p| in_group(p)).count();
@@ -560,11 +583,11 @@ fn apply_policy(
         }
         for (j, &k) in loop_kernels.iter().enumerate() {
             kernels[k].input = Some(Port {
-                boundary: first + j,
+                boundary: BoundaryId(first + j),
                 side: Side::Current,
             });
             kernels[k].output = Some(Port {
-                boundary: first + (j + 1) % m,
+                boundary: BoundaryId(first + (j + 1) % m),
                 side: if m == 1 { Side::Next } else { Side::Current },
             });
             if kernels[k].root == Root::State {
@@ -573,7 +596,7 @@ fn apply_policy(
         }
         if !loop_kernels.contains(&start) {
             kernels[start].output = Some(Port {
-                boundary: first,
+                boundary: BoundaryId(first),
                 side: Side::Current,
             });
         }

@@ -100,6 +100,37 @@ impl ModuleSource {
         }
     }
 
+    /// The module without the functions its entry points never call: culled passes and
+    /// library functions no live pass uses leave the text (as blank lines, so lines keep
+    /// their numbers). Fails as [`ModuleSource::compile`] does when the text does not parse.
+    pub fn shaken(&self) -> Result<ModuleSource> {
+        let module = naga::front::wgsl::parse_str(&self.text).map_err(|e| self.parse_error(&e))?;
+        let mut reachable = BTreeSet::new();
+        for ep in &module.entry_points {
+            let mut roots = Vec::new();
+            direct_calls(&ep.function.body, &mut roots);
+            reachable.extend(callees(&module, roots));
+        }
+        let mut bytes = self.text.clone().into_bytes();
+        for (h, _) in module.functions.iter() {
+            if reachable.contains(&h) {
+                continue;
+            }
+            if let Some(range) = module.functions.get_span(h).to_range() {
+                for b in &mut bytes[range] {
+                    if *b != b'\n' {
+                        *b = b' ';
+                    }
+                }
+            }
+        }
+        Ok(ModuleSource {
+            text: String::from_utf8(bytes).expect("blanking keeps UTF-8 (whole functions of ASCII boundaries)"),
+            chunks: self.chunks.clone(),
+            lines: self.lines,
+        })
+    }
+
     /// The files the module is assembled from, naming errors that naga cannot place.
     fn files(&self) -> String {
         let files: Vec<&str> = self.chunks.iter().map(|(f, _)| f.as_str()).collect();
@@ -114,28 +145,31 @@ impl ModuleSource {
         Some(self.locate(loc.line_number as usize, loc.line_position as usize))
     }
 
+    /// A parse error placed in the original files.
+    fn parse_error(&self, e: &naga::front::wgsl::ParseError) -> Error {
+        let mut msg = String::new();
+        let labels: Vec<_> = e.labels().collect();
+        let primary = labels.first().and_then(|(span, _)| self.locate_span(*span));
+        match primary {
+            Some(at) => msg.push_str(&format!("{at}: error: {}", e.message())),
+            None => msg.push_str(&format!("{}: error: {}", self.files(), e.message())),
+        }
+        for (span, label) in labels.iter() {
+            if let Some(at) = self.locate_span(*span)
+                && !label.is_empty()
+            {
+                msg.push_str(&format!("\n  {at}: {label}"));
+            }
+        }
+        for note in e.notes() {
+            msg.push_str(&format!("\n  note: {note}"));
+        }
+        Error::Shader(msg)
+    }
+
     /// Parses and validates the module with naga.
     pub fn compile(&self, capabilities: naga::valid::Capabilities) -> Result<(naga::Module, naga::valid::ModuleInfo)> {
-        let module = naga::front::wgsl::parse_str(&self.text).map_err(|e| {
-            let mut msg = String::new();
-            let labels: Vec<_> = e.labels().collect();
-            let primary = labels.first().and_then(|(span, _)| self.locate_span(*span));
-            match primary {
-                Some(at) => msg.push_str(&format!("{at}: error: {}", e.message())),
-                None => msg.push_str(&format!("{}: error: {}", self.files(), e.message())),
-            }
-            for (span, label) in labels.iter() {
-                if let Some(at) = self.locate_span(*span)
-                    && !label.is_empty()
-                {
-                    msg.push_str(&format!("\n  {at}: {label}"));
-                }
-            }
-            for note in e.notes() {
-                msg.push_str(&format!("\n  note: {note}"));
-            }
-            Error::Shader(msg)
-        })?;
+        let module = naga::front::wgsl::parse_str(&self.text).map_err(|e| self.parse_error(&e))?;
         let mut validator = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), capabilities);
         let info = validator.validate(&module).map_err(|e| {
             let mut spans = e.spans();
@@ -158,6 +192,41 @@ impl ModuleSource {
         })?;
         Ok((module, info))
     }
+}
+
+/// Functions `block` calls directly.
+fn direct_calls(block: &naga::Block, out: &mut Vec<naga::Handle<naga::Function>>) {
+    for st in block.iter() {
+        match st {
+            naga::Statement::Call { function, .. } => out.push(*function),
+            naga::Statement::Block(b) => direct_calls(b, out),
+            naga::Statement::If { accept, reject, .. } => {
+                direct_calls(accept, out);
+                direct_calls(reject, out);
+            }
+            naga::Statement::Switch { cases, .. } => cases.iter().for_each(|c| direct_calls(&c.body, out)),
+            naga::Statement::Loop { body, continuing, .. } => {
+                direct_calls(body, out);
+                direct_calls(continuing, out);
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Functions called (transitively) from `roots`, the roots included.
+pub fn callees(
+    module: &naga::Module,
+    roots: Vec<naga::Handle<naga::Function>>,
+) -> BTreeSet<naga::Handle<naga::Function>> {
+    let mut seen = BTreeSet::new();
+    let mut stack = roots;
+    while let Some(h) = stack.pop() {
+        if seen.insert(h) {
+            direct_calls(&module.functions[h].body, &mut stack);
+        }
+    }
+    seen
 }
 
 #[cfg(test)]
@@ -199,6 +268,24 @@ mod tests {
         m.push("shaders/x.wgsl", "fn f() -> u32 {\n  return A + undefined_name;\n}\n");
         let err = m.compile(naga::valid::Capabilities::default()).unwrap_err().to_string();
         assert!(err.contains("shaders/x.wgsl:2:"), "{err}");
+    }
+
+    #[test]
+    fn shaking_removes_uncalled_functions_and_keeps_lines() {
+        let mut m = ModuleSource::default();
+        m.push(
+            "lib.wgsl",
+            "fn used() -> u32 { return helper(); }\nfn helper() -> u32 {\n    return 1u;\n}\nfn unused() -> u32 {\n    return 2u;\n}\n",
+        );
+        m.push("gen", "@compute @workgroup_size(1)\nfn main() { let x = used(); }\n");
+        let shaken = m.shaken().unwrap();
+        let text = shaken.text();
+        assert!(
+            text.contains("fn used") && text.contains("fn helper") && !text.contains("unused"),
+            "{text}"
+        );
+        assert_eq!(text.lines().count(), m.text().lines().count());
+        assert!(shaken.compile(naga::valid::Capabilities::default()).is_ok());
     }
 
     #[test]

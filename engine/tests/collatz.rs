@@ -109,7 +109,7 @@ fn every_enumerated_layout_computes_the_same_walks() {
 fn passes_nobody_reads_are_culled() {
     let g = graph();
     assert_eq!(
-        g.culled.iter().map(|p| p.decl.name.as_str()).collect::<Vec<_>>(),
+        g.culled.iter().map(|c| c.name.as_str()).collect::<Vec<_>>(),
         vec!["unused"]
     );
     assert_eq!(g.phases.len(), 2, "the culled pass's phase is gone");
@@ -120,9 +120,12 @@ fn chunked_layouts_run_in_several_chunks() {
     let g = graph();
     let plan = Plan::new(&g, "split_chunked").unwrap();
     let program = Program::compile(&plan, &Specialization::default(), &gpu().target()).unwrap();
-    assert_eq!(program.chunks[0], 100);
-    assert_eq!(program.domains[0], 1000);
-    assert_eq!(program.state_capacity.values().copied().collect::<Vec<_>>(), vec![100]);
+    assert_eq!(program.resolved.domains[0].chunk, 100);
+    assert_eq!(program.resolved.domains[0].default, 1000);
+    assert_eq!(
+        program.resolved.state_capacity.values().copied().collect::<Vec<_>>(),
+        vec![100]
+    );
 }
 
 fn plan_error(layout: &str) -> String {
@@ -180,9 +183,9 @@ fn per_call_expressions_size_queues_from_constants() {
     };
     // 100 items per chunk, each emitting at most per_call walks into the queue.
     let number = compile("1", 64).unwrap();
-    assert_eq!(number.queue_capacity["done"], 100);
+    assert_eq!(number.resolved.queue_capacity["done"], 100);
     let expr = compile("\"BINS / 32 + 1\"", 64).unwrap();
-    assert_eq!(expr.queue_capacity["done"], 300);
+    assert_eq!(expr.resolved.queue_capacity["done"], 300);
     let e = compile("\"BINS - 64\"", 64)
         .expect_err("per_call 0 is refused")
         .to_string();

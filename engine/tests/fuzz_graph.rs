@@ -57,8 +57,9 @@ fn seeds() -> &'static [Seed] {
             let loaded = Graph::from_text(&vfs, graph, &text).unwrap();
             let mut paths = vec![graph.to_string()];
             paths.extend(file.catalogs.iter().cloned());
+            paths.extend(file.include.iter().cloned());
             paths.extend(loaded.library.iter().cloned());
-            for p in loaded.passes.iter().chain(&loaded.culled) {
+            for p in &loaded.declared.passes {
                 if !paths.contains(&p.decl.source) {
                     paths.push(p.decl.source.clone());
                 }
@@ -265,12 +266,14 @@ fn layout() -> impl Strategy<Value = (usize, LayoutDecl)> {
                 return (seed, options);
             };
             let file: GraphFile = lightgraph_engine::graph::parse_ron("g", &seeds()[seed].files[0].1).unwrap();
+            // Operators are not listed in layouts.
             let mut names: Vec<String> = file
                 .passes
                 .iter()
-                .map(|p| match p {
-                    PassEntry::Use(name) => name.clone(),
-                    PassEntry::Pass(decl) => decl.name.clone(),
+                .filter_map(|p| match p {
+                    PassEntry::Use(name) => Some(name.clone()),
+                    PassEntry::Pass(decl) => Some(decl.name.clone()),
+                    _ => None,
                 })
                 .collect();
             let mut kernels: Vec<Vec<String>> = vec![Vec::new(); 4];

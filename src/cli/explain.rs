@@ -63,7 +63,7 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
             }
         };
         for name in graph.measured.keys() {
-            match (&session, program.constants.get(name)) {
+            match (&session, program.constants().get(name)) {
                 (Some(_), Some(v)) => println!("measured {name} = {v:?}"),
                 _ => println!("{name} not measured (no GPU): sizes that depend on it are shown for its default"),
             }
@@ -74,7 +74,8 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
         );
         if let Some(dir) = &args.wgsl {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-            for k in &program.kernels {
+            let operator_kernels = program.ops.iter().flat_map(|op| op.kernels.iter().map(|(k, _)| k));
+            for k in program.kernels.iter().chain(operator_kernels) {
                 let path = dir.join(format!("{}-{}-{}.wgsl", graph.name, layout, k.name));
                 std::fs::write(&path, k.source.text()).with_context(|| format!("writing {}", path.display()))?;
             }

@@ -1,0 +1,429 @@
+//! The kernels of the collective operators, written once and generated for each use: fill,
+//! exclusive scan (reduce-then-scan: tile sums, a scan of the sums, tiles rescanned with
+//! their offsets, as many levels as the length needs) and the count and scatter steps of a
+//! counting sort. Reduce-then-scan needs no forward-progress guarantee between workgroups, so
+//! it runs on any adapter. Where the adapter has subgroups the tile scans use subgroup
+//! operations, of whatever size the adapter runs, when every subgroup of the workgroup is full
+//! (checked in the kernel); otherwise, and without subgroups, a scan in workgroup memory.
+
+use crate::ids::OpId;
+use crate::operator::{OpKind, Operator};
+use crate::resolve::{BufferRef, Resolved};
+use std::fmt::Write;
+
+/// Threads per workgroup of the operator kernels.
+pub const WORKGROUP: u32 = 256;
+/// Elements each thread of a scan handles by default (a tile of 4096 elements).
+pub const SCAN_ITEMS: u32 = 16;
+
+/// Sizes of the levels of partial sums a scan of `n` elements in tiles of `tile` needs: one
+/// sum per tile, again while more than one tile remains.
+pub fn scan_levels(n: u64, tile: u64) -> Vec<u64> {
+    let mut out = Vec::new();
+    let mut n = n;
+    while n > tile {
+        n = n.div_ceil(tile);
+        out.push(n);
+    }
+    out
+}
+
+/// How many workgroups a dispatch of an operator kernel needs for `n` elements of the
+/// operator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Groups {
+    /// Elements per workgroup at the kernel's level (a scan's tile).
+    pub per_group: u64,
+    /// Scan level (0: the elements themselves); each level holds one sum per group of the
+    /// level below.
+    pub level: usize,
+}
+
+impl Groups {
+    /// Workgroups for `n` elements of the operator.
+    pub fn count(&self, n: u64) -> u64 {
+        let mut n = n;
+        for _ in 0..self.level {
+            n = n.div_ceil(self.per_group);
+        }
+        n.div_ceil(self.per_group).max(1)
+    }
+}
+
+/// One kernel of an operator.
+#[derive(Debug, Clone)]
+pub struct OpKernel {
+    /// Entry point name.
+    pub name: String,
+    /// The WGSL module.
+    pub wgsl: String,
+    /// Buffers by binding number in group 0 (the frame record is group 1).
+    pub bindings: Vec<(u32, BufferRef)>,
+    /// Its workgroups.
+    pub groups: Groups,
+}
+
+/// A module being written: a header with the frame record and control words, then the
+/// operator's buffers.
+struct Module {
+    text: String,
+    bindings: Vec<(u32, BufferRef)>,
+}
+
+impl Module {
+    fn new(control: bool) -> Module {
+        let mut m = Module {
+            text: format!(
+                "struct Frame {{ index: u32, seed: u32, base: u32, count: u32 }}\n{}",
+                crate::codegen::FRAME_BINDING
+            ),
+            bindings: Vec::new(),
+        };
+        if control {
+            m.bind("lg_control", "array<atomic<u32>>", BufferRef::Control);
+        }
+        m
+    }
+
+    fn bind(&mut self, name: &str, ty: &str, buffer: BufferRef) {
+        let n = self.bindings.len() as u32;
+        let _ = writeln!(
+            self.text,
+            "@group(0) @binding({n}) var<storage, read_write> {name}: {ty};"
+        );
+        self.bindings.push((n, buffer));
+    }
+
+    /// `fn lg_n() -> u32`: the operator's elements, from the record or its GPU counter.
+    fn element_count(&mut self, counted: Option<&str>) {
+        match counted {
+            Some(c) => {
+                self.bind("lg_counter", "array<u32>", BufferRef::Resource(c.to_string()));
+                self.text
+                    .push_str("fn lg_n() -> u32 { return min(lg_counter[0], frame.count); }\n");
+            }
+            None => self.text.push_str("fn lg_n() -> u32 { return frame.count; }\n"),
+        }
+    }
+
+    fn finish(self, name: String, groups: Groups) -> OpKernel {
+        OpKernel {
+            name,
+            wgsl: self.text,
+            bindings: self.bindings,
+            groups,
+        }
+    }
+}
+
+/// The entry point header of an element-wise kernel: `i`, the element of the thread.
+fn element_entry(name: &str) -> String {
+    format!(
+        "@compute @workgroup_size({WORKGROUP})\nfn {name}(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {{\n    let i = (wid.y * nwg.x + wid.x) * {WORKGROUP}u + lid;\n"
+    )
+}
+
+/// The kernels of operator `o`, in the order they run: `subgroups` where the adapter has them,
+/// scans in tiles of `WORKGROUP * items` elements.
+pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, items: u32) -> Vec<OpKernel> {
+    let counted = op.domain.as_ref().and_then(|d| d.counted.as_deref());
+    let words = |r: &str| resolved.sizes[r].element_bytes / 4;
+    let element = Groups {
+        per_group: WORKGROUP as u64,
+        level: 0,
+    };
+    let prefix = format!("lg_op{}", o.0);
+    match &op.kind {
+        OpKind::Clear { buffer, value, .. } => {
+            let mut m = Module::new(false);
+            m.bind("lg_buffer", "array<u32>", BufferRef::Resource(buffer.clone()));
+            let name = format!("{prefix}_fill");
+            // The record's base and count are the first word and the words to fill.
+            let _ = write!(
+                m.text,
+                "{}    if (i < frame.count) {{ lg_buffer[frame.base + i] = {}u; }}\n}}\n",
+                element_entry(&name),
+                value.bits()
+            );
+            vec![m.finish(name, element)]
+        }
+        OpKind::Count { keys, counts, slots } => {
+            let mut m = Module::new(true);
+            m.bind("lg_keys", "array<u32>", BufferRef::Resource(keys.clone()));
+            m.bind("lg_counts", "array<atomic<u32>>", BufferRef::Resource(counts.clone()));
+            m.bind("lg_slots", "array<u32>", BufferRef::Resource(slots.clone()));
+            m.element_count(counted);
+            let name = format!("{prefix}_count");
+            let overflow = resolved.control.op_overflow[&o];
+            let _ = write!(
+                m.text,
+                "{}    if (i >= lg_n()) {{ return; }}\n    let k = lg_keys[i];\n    if (k < arrayLength(&lg_counts)) {{\n        lg_slots[i] = atomicAdd(&lg_counts[k], 1u);\n    }} else {{\n        atomicAdd(&lg_control[{overflow}], 1u);\n    }}\n}}\n",
+                element_entry(&name)
+            );
+            vec![m.finish(name, element)]
+        }
+        OpKind::Scatter {
+            keys,
+            slots,
+            offsets,
+            input,
+            output,
+        } => {
+            let mut m = Module::new(true);
+            m.bind("lg_keys", "array<u32>", BufferRef::Resource(keys.clone()));
+            m.bind("lg_slots", "array<u32>", BufferRef::Resource(slots.clone()));
+            m.bind("lg_offsets", "array<u32>", BufferRef::Resource(offsets.clone()));
+            m.bind("lg_input", "array<u32>", BufferRef::Resource(input.clone()));
+            m.bind("lg_output", "array<u32>", BufferRef::Resource(output.clone()));
+            m.element_count(counted);
+            let name = format!("{prefix}_scatter");
+            let overflow = resolved.control.op_overflow[&o];
+            let w = words(input);
+            let mut copy = String::new();
+            for k in 0..w {
+                let _ = writeln!(copy, "    lg_output[d * {w}u + {k}u] = lg_input[i * {w}u + {k}u];");
+            }
+            let _ = write!(
+                m.text,
+                "{}    if (i >= lg_n()) {{ return; }}\n    let k = lg_keys[i];\n    var d = 0xffffffffu;\n    if (k < arrayLength(&lg_offsets)) {{ d = lg_offsets[k] + lg_slots[i]; }}\n    if (d >= arrayLength(&lg_output) / {w}u) {{\n        atomicAdd(&lg_control[{overflow}], 1u);\n        return;\n    }}\n{copy}}}\n",
+                element_entry(&name)
+            );
+            vec![m.finish(name, element)]
+        }
+        OpKind::Scan { input, output } => {
+            let scan = Scan {
+                o,
+                input,
+                output,
+                counted,
+                subgroups,
+                items,
+            };
+            scan.kernels(&prefix, resolved)
+        }
+    }
+}
+
+/// A scan to generate.
+struct Scan<'a> {
+    o: OpId,
+    input: &'a str,
+    output: &'a str,
+    counted: Option<&'a str>,
+    subgroups: bool,
+    items: u32,
+}
+
+impl Scan<'_> {
+    fn tile(&self) -> u64 {
+        (WORKGROUP * self.items) as u64
+    }
+
+    /// Level l's elements: the input at level 0, scratch l - 1 above.
+    fn level_buffer(&self, l: usize) -> BufferRef {
+        if l == 0 {
+            BufferRef::Resource(self.input.to_string())
+        } else {
+            BufferRef::Scratch(self.o, l - 1)
+        }
+    }
+
+    /// The kernels: per level below the top, the tile sums; the top level scanned by one
+    /// workgroup; then per level, top down, the tiles rescanned with their offsets.
+    fn kernels(&self, prefix: &str, resolved: &Resolved) -> Vec<OpKernel> {
+        let levels = resolved.scan_levels[&self.o].len();
+        let per_group = self.tile();
+        let mut out = Vec::new();
+        for l in 0..levels {
+            let mut m = self.module(l);
+            m.bind("lg_src", "array<u32>", self.level_buffer(l));
+            m.bind("lg_dst", "array<u32>", BufferRef::Scratch(self.o, l));
+            let name = format!("{prefix}_reduce{l}");
+            m.text.push_str(&scan_reduce_entry(&name, self.subgroups));
+            out.push(m.finish(name, Groups { per_group, level: l }));
+        }
+        for l in (0..=levels).rev() {
+            let mut m = self.module(l);
+            let dst = if l == 0 {
+                BufferRef::Resource(self.output.to_string())
+            } else {
+                self.level_buffer(l)
+            };
+            let in_place = dst == self.level_buffer(l);
+            m.bind("lg_src", "array<u32>", self.level_buffer(l));
+            if !in_place {
+                m.bind("lg_dst", "array<u32>", dst);
+            }
+            let offsets = l < levels;
+            if offsets {
+                m.bind("lg_offsets", "array<u32>", BufferRef::Scratch(self.o, l));
+            }
+            let name = format!("{prefix}_down{l}");
+            m.text
+                .push_str(&scan_down_entry(&name, in_place, offsets, self.subgroups));
+            out.push(m.finish(name, Groups { per_group, level: l }));
+        }
+        out
+    }
+
+    /// A scan module's shared part: sizes, workgroup memory, the level's element count and
+    /// the workgroup-wide sums.
+    fn module(&self, level: usize) -> Module {
+        let mut m = Module::new(false);
+        m.element_count(self.counted);
+        let tile = self.tile();
+        let _ = write!(
+            m.text,
+            "const LG_WG: u32 = {WORKGROUP}u;\nconst LG_ITEMS: u32 = {}u;\nconst LG_TILE: u32 = {tile}u;\n\
+             // The tile in workgroup memory, one padding word per 32 so that threads reading their\n\
+             // own consecutive elements hit distinct banks.\n\
+             var<workgroup> lg_tile: array<u32, {}>;\n\
+             // Elements at this level: each level above holds one sum per tile of the one below.\n\
+             fn lg_level_n() -> u32 {{\n    var n = lg_n();\n    for (var l = 0u; l < {level}u; l += 1u) {{ n = (n + LG_TILE - 1u) / LG_TILE; }}\n    return n;\n}}\n",
+            self.items,
+            tile + tile / 32 + 1
+        );
+        m.text.push_str(SCAN_SHARED);
+        if self.subgroups {
+            m.text.push_str(SCAN_SUBGROUP);
+        }
+        m
+    }
+}
+
+/// Workgroup memory and the subgroup-free workgroup sums of the scan kernels. Barriers stand
+/// only in control flow uniform over the workgroup (naga checks it).
+const SCAN_SHARED: &str = "
+var<workgroup> lg_sums: array<u32, 256>;
+var<workgroup> lg_total: atomic<u32>;
+var<workgroup> lg_full: u32;
+fn lg_pad(i: u32) -> u32 { return i + (i >> 5u); }
+
+// Sum of `v` over the workgroup, in workgroup memory.
+fn lg_tree_sum(v: u32, lid: u32) -> u32 {
+    lg_sums[lid] = v;
+    for (var off = LG_WG / 2u; off > 0u; off >>= 1u) {
+        workgroupBarrier();
+        if (lid < off) { lg_sums[lid] += lg_sums[lid + off]; }
+    }
+    workgroupBarrier();
+    return lg_sums[0];
+}
+
+// Sum of the values before `v` (in the order of `rank`) over the workgroup, in workgroup
+// memory.
+fn lg_tree_exclusive(v: u32, rank: u32) -> u32 {
+    lg_sums[rank] = v;
+    workgroupBarrier();
+    for (var off = 1u; off < LG_WG; off <<= 1u) {
+        var before = 0u;
+        if (rank >= off) { before = lg_sums[rank - off]; }
+        workgroupBarrier();
+        lg_sums[rank] += before;
+        workgroupBarrier();
+    }
+    return lg_sums[rank] - v;
+}
+";
+
+/// Workgroup sums with subgroup operations, for workgroups of full subgroups (`rank` is then
+/// `subgroup * size + lane`, which numbers the threads 0 .. LG_WG in subgroup order).
+const SCAN_SUBGROUP: &str = "
+// Sum of `v` over the workgroup (lg_total starts at 0).
+fn lg_sg_sum(v: u32, lane: u32) -> u32 {
+    let s = subgroupAdd(v);
+    if (lane == 0u) { atomicAdd(&lg_total, s); }
+    workgroupBarrier();
+    return atomicLoad(&lg_total);
+}
+
+// Sum of the values before `v` in the order of `rank`.
+fn lg_sg_exclusive(v: u32, rank: u32, sg: u32, count: u32, size: u32, lane: u32) -> u32 {
+    let x = subgroupExclusiveAdd(v);
+    if (lane == size - 1u) { lg_sums[sg] = x + v; }
+    workgroupBarrier();
+    if (rank == 0u) {
+        var run = 0u;
+        for (var s = 0u; s < count; s += 1u) {
+            let t = lg_sums[s];
+            lg_sums[s] = run;
+            run += t;
+        }
+    }
+    workgroupBarrier();
+    return lg_sums[sg] + x;
+}
+";
+
+/// The entry point's start: the tile, the level's elements, and the thread's rank (in
+/// subgroup order where every subgroup is full, decided uniformly for the workgroup).
+fn scan_entry_head(name: &str, subgroups: bool) -> String {
+    let (args, rank) = if subgroups {
+        (
+            ", @builtin(subgroup_id) sg: u32, @builtin(num_subgroups) sg_count: u32, @builtin(subgroup_size) sg_size: u32, @builtin(subgroup_invocation_id) lane: u32",
+            "    if (lid == 0u) {
+        lg_full = select(0u, 1u, sg_count * sg_size == LG_WG);
+        atomicStore(&lg_total, 0u);
+    }
+    let full = workgroupUniformLoad(&lg_full) != 0u;
+    let rank = select(lid, sg * sg_size + lane, full);
+",
+        )
+    } else {
+        ("", "    let rank = lid;\n")
+    };
+    format!(
+        "@compute @workgroup_size({WORKGROUP})\nfn {name}(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32{args}) {{\n    let tile = wid.y * nwg.x + wid.x;\n    let n = lg_level_n();\n    let base = tile * LG_TILE;\n{rank}"
+    )
+}
+
+/// Sums of each tile of the level into the level above.
+fn scan_reduce_entry(name: &str, subgroups: bool) -> String {
+    let total = if subgroups {
+        "    var total: u32;\n    if (full) { total = lg_sg_sum(s, lane); } else { total = lg_tree_sum(s, lid); }\n"
+    } else {
+        "    let total = lg_tree_sum(s, lid);\n"
+    };
+    format!(
+        "{}    var s = 0u;\n    for (var j = 0u; j < LG_ITEMS; j += 1u) {{\n        let i = base + j * LG_WG + lid;\n        if (i < n) {{ s += lg_src[i]; }}\n    }}\n{total}    if (lid == 0u && tile < arrayLength(&lg_dst)) {{ lg_dst[tile] = total; }}\n}}\n",
+        scan_entry_head(name, subgroups)
+    )
+}
+
+/// Each tile's exclusive scan plus its offset from the level above (0 at the top level).
+fn scan_down_entry(name: &str, in_place: bool, offsets: bool, subgroups: bool) -> String {
+    let dst = if in_place { "lg_src" } else { "lg_dst" };
+    let offset = if offsets { "lg_offsets[tile]" } else { "0u" };
+    let exclusive = if subgroups {
+        "    var run: u32;\n    if (full) { run = lg_sg_exclusive(t, rank, sg, sg_count, sg_size, lane); } else { run = lg_tree_exclusive(t, rank); }\n"
+    } else {
+        "    var run = lg_tree_exclusive(t, rank);\n"
+    };
+    format!(
+        "{head}    for (var j = 0u; j < LG_ITEMS; j += 1u) {{
+        let i = base + j * LG_WG + lid;
+        var v = 0u;
+        if (i < n) {{ v = lg_src[i]; }}
+        lg_tile[lg_pad(j * LG_WG + lid)] = v;
+    }}
+    workgroupBarrier();
+    let first = rank * LG_ITEMS;
+    var t = 0u;
+    for (var k = 0u; k < LG_ITEMS; k += 1u) {{ t += lg_tile[lg_pad(first + k)]; }}
+{exclusive}    if (base < n) {{ run += {offset}; }}
+    for (var k = 0u; k < LG_ITEMS; k += 1u) {{
+        let at = lg_pad(first + k);
+        let v = lg_tile[at];
+        lg_tile[at] = run;
+        run += v;
+    }}
+    workgroupBarrier();
+    for (var j = 0u; j < LG_ITEMS; j += 1u) {{
+        let i = base + j * LG_WG + lid;
+        if (i < n) {{ {dst}[i] = lg_tile[lg_pad(j * LG_WG + lid)]; }}
+    }}
+}}
+",
+        head = scan_entry_head(name, subgroups)
+    )
+}

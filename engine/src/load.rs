@@ -1,0 +1,579 @@
+//! Reading a graph file with its catalogs and included declaration files: what each used pass
+//! brings along, merged with the graph's own declarations, and every name checked. Errors
+//! name the file, line and column of the offending name.
+
+use crate::error::{Error, Location, Result};
+use crate::expr::Expr;
+use crate::graph::Pass;
+use crate::ir::{CatalogFile, ConstValue, GraphFile, PassDecl, PassEntry, PerCall, ResourceDecl, Role, Scope};
+use crate::operator::{Operator, is_u32_word};
+use crate::vfs::Vfs;
+use std::collections::BTreeMap;
+
+/// Parses RON text of `file` into `T`, with the parser's position on error.
+pub fn parse_ron<T: serde::de::DeserializeOwned>(file: &str, text: &str) -> Result<T> {
+    ron::Options::default()
+        .with_default_extension(
+            ron::extensions::Extensions::IMPLICIT_SOME | ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES,
+        )
+        .from_str(text)
+        .map_err(|e| Error::Parse {
+            at: Location {
+                file: file.to_string(),
+                line: e.span.start.line,
+                column: e.span.start.col,
+            },
+            message: e.code.to_string(),
+        })
+}
+
+/// Whether `name` is a WGSL identifier.
+pub fn is_identifier(name: &str) -> bool {
+    let mut chars = name.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// The texts of the files a graph was read from, to place errors.
+#[derive(Debug, Clone, Default)]
+pub struct Sources {
+    texts: BTreeMap<String, String>,
+}
+
+impl Sources {
+    /// Remembers `text` as the contents of `file`.
+    pub fn add(&mut self, file: &str, text: &str) {
+        self.texts.insert(file.to_string(), text.to_string());
+    }
+
+    /// The text of `file` (empty when unknown).
+    pub fn text(&self, file: &str) -> &str {
+        self.texts.get(file).map_or("", |t| t.as_str())
+    }
+
+    /// An error at the first quoted `name` in `file`.
+    pub fn at_name(&self, file: &str, name: &str, message: impl Into<String>) -> Error {
+        Error::invalid_at_name(file, self.text(file), name, message)
+    }
+
+    /// An error at the declaration `"name":` in `file`.
+    pub fn at_key(&self, file: &str, name: &str, message: impl Into<String>) -> Error {
+        Error::invalid_at_key(file, self.text(file), name, message)
+    }
+}
+
+/// An entry of the graph's `passes` list, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Entry {
+    /// Index into [`Declared::passes`].
+    Pass(usize),
+    /// Index into [`Declared::ops`].
+    Op(usize),
+}
+
+/// Everything a graph declares, its catalogs' contributions merged in.
+#[derive(Debug, Clone)]
+pub struct Declared {
+    /// The graph file's parsed form (layouts, outputs, ...).
+    pub file: GraphFile,
+    /// WGSL library files, in order, without repeats.
+    pub library: Vec<String>,
+    /// Passes, in the graph's order.
+    pub passes: Vec<Pass>,
+    /// Operators, in the graph's order.
+    pub ops: Vec<Operator>,
+    /// The graph's `passes` entries in order.
+    pub entries: Vec<Entry>,
+    /// Resources by name.
+    pub resources: BTreeMap<String, ResourceDecl>,
+    /// Counters, in order.
+    pub counters: Vec<String>,
+    /// Constants with their defaults.
+    pub constants: BTreeMap<String, ConstValue>,
+    /// The file declaring each resource, counter and constant.
+    pub origins: BTreeMap<String, String>,
+    /// The texts of the graph, catalog and include files.
+    pub sources: Sources,
+}
+
+/// How strongly a declaration holds: the graph's own over an included file's over a
+/// catalog's over a pass's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Rank {
+    Pass,
+    Catalog,
+    Include,
+    Graph,
+}
+
+/// Declarations collected from several files, each with where it came from.
+struct Merged<T> {
+    items: BTreeMap<String, (T, Rank, String)>,
+}
+
+impl<T: PartialEq + Clone + std::fmt::Debug> Merged<T> {
+    fn new() -> Self {
+        Merged { items: BTreeMap::new() }
+    }
+
+    /// Adds `name` from `file`: a stronger rank replaces, the same rank must agree.
+    fn add(&mut self, sources: &Sources, what: &str, name: &str, value: &T, rank: Rank, file: &str) -> Result<()> {
+        match self.items.get(name) {
+            Some((_, r, _)) if *r > rank => Ok(()),
+            Some((old, r, old_file)) if *r == rank && old != value && old_file != file => Err(sources.at_key(
+                file,
+                name,
+                format!("{what} '{name}' is declared as {value:?} here and as {old:?} in {old_file}; declare it once in the graph"),
+            )),
+            _ => {
+                self.items.insert(name.to_string(), (value.clone(), rank, file.to_string()));
+                Ok(())
+            }
+        }
+    }
+
+    fn into_parts(self, origins: &mut BTreeMap<String, String>) -> BTreeMap<String, T> {
+        self.items
+            .into_iter()
+            .map(|(name, (value, _, file))| {
+                origins.insert(name.clone(), file);
+                (name, value)
+            })
+            .collect()
+    }
+}
+
+fn push_unique(list: &mut Vec<String>, items: &[String]) {
+    for i in items {
+        if !list.contains(i) {
+            list.push(i.clone());
+        }
+    }
+}
+
+/// Reads and merges the graph `file` (text `text`) with its catalogs and includes.
+pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
+    let g: GraphFile = parse_ron(file, text)?;
+    let mut sources = Sources::default();
+    sources.add(file, text);
+    let read = |sources: &mut Sources, path: &str| -> Result<CatalogFile> {
+        let t = vfs
+            .read(path)
+            .map_err(|e| sources.at_name(file, path, format!("cannot read pass catalog: {e}")))?;
+        sources.add(path, &t);
+        parse_ron(path, &t)
+    };
+    let mut catalogs: Vec<(String, CatalogFile)> = Vec::new();
+    for path in &g.catalogs {
+        catalogs.push((path.clone(), read(&mut sources, path)?));
+    }
+    let mut includes: Vec<(String, CatalogFile)> = Vec::new();
+    for path in &g.include {
+        includes.push((path.clone(), read(&mut sources, path)?));
+    }
+    // Passes `Use` can name: the later file wins.
+    let mut offered: BTreeMap<String, (PassDecl, String)> = BTreeMap::new();
+    for (path, cat) in includes.iter().chain(&catalogs) {
+        for d in &cat.passes {
+            offered.insert(d.name.clone(), (d.clone(), path.clone()));
+        }
+    }
+
+    let mut passes: Vec<Pass> = Vec::new();
+    let mut ops: Vec<Operator> = Vec::new();
+    let mut entries = Vec::new();
+    for entry in &g.passes {
+        if let Some(op) = Operator::from_entry(entry, file) {
+            let op = op.map_err(|(what, why)| sources.at_name(file, &what, why))?;
+            entries.push(Entry::Op(ops.len()));
+            ops.push(op);
+            continue;
+        }
+        let pass = match entry {
+            PassEntry::Use(name) => {
+                let (decl, origin) = offered.get(name).cloned().ok_or_else(|| {
+                    let known: Vec<&str> = offered.keys().map(|s| s.as_str()).collect();
+                    sources.at_name(
+                        file,
+                        name,
+                        format!(
+                            "unknown pass '{name}' (the catalogs {:?} offer: {})",
+                            g.catalogs,
+                            known.join(", ")
+                        ),
+                    )
+                })?;
+                Pass { decl, origin }
+            }
+            PassEntry::Pass(decl) => Pass {
+                decl: decl.clone(),
+                origin: file.to_string(),
+            },
+            _ => unreachable!("operators are taken above"),
+        };
+        entries.push(Entry::Pass(passes.len()));
+        passes.push(pass);
+    }
+    let mut names: Vec<&str> = passes.iter().map(|p| p.decl.name.as_str()).collect();
+    names.extend(ops.iter().map(|o| o.name.as_str()));
+    for (i, n) in names.iter().enumerate() {
+        if names[..i].contains(n) {
+            return Err(sources.at_name(file, n, format!("pass '{n}' appears twice")));
+        }
+    }
+
+    // What each part brings: library, counters, constants, resources.
+    let mut library = g.library.clone();
+    let mut counters = g.counters.clone();
+    let mut constants = Merged::new();
+    let mut resources = Merged::new();
+    for (name, v) in &g.constants {
+        constants.add(&sources, "constant", name, v, Rank::Graph, file)?;
+    }
+    for (name, r) in &g.resources {
+        resources.add(&sources, "resource", name, r, Rank::Graph, file)?;
+    }
+    for (path, inc) in &includes {
+        push_unique(&mut library, &inc.library);
+        push_unique(&mut counters, &inc.counters);
+        for (name, v) in &inc.constants {
+            constants.add(&sources, "constant", name, v, Rank::Include, path)?;
+        }
+        for (name, r) in &inc.resources {
+            resources.add(&sources, "resource", name, r, Rank::Include, path)?;
+        }
+    }
+    for p in &passes {
+        let d = &p.decl;
+        if let Some((_, cat)) = catalogs.iter().chain(&includes).find(|(path, _)| *path == p.origin) {
+            push_unique(&mut library, &cat.library);
+            push_unique(&mut counters, &cat.counters);
+            for (name, v) in &cat.constants {
+                constants.add(&sources, "constant", name, v, Rank::Catalog, &p.origin)?;
+            }
+            for (name, r) in &cat.resources {
+                if d.reads.contains(name) || d.writes.contains(name) {
+                    resources.add(&sources, "resource", name, r, Rank::Catalog, &p.origin)?;
+                }
+            }
+        }
+        push_unique(&mut library, &d.library);
+        push_unique(&mut counters, &d.counters);
+        for (name, v) in &d.constants {
+            constants.add(&sources, "constant", name, v, Rank::Pass, &p.origin)?;
+        }
+    }
+    let mut origins = BTreeMap::new();
+    for c in &counters {
+        origins.insert(c.clone(), file.to_string());
+    }
+    let constants = constants.into_parts(&mut origins);
+    let resources = resources.into_parts(&mut origins);
+    let declared = Declared {
+        library,
+        passes,
+        ops,
+        entries,
+        resources,
+        counters,
+        constants,
+        origins,
+        sources,
+        file: g,
+    };
+    declared.check(file)?;
+    Ok(declared)
+}
+
+impl Declared {
+    /// An error at the declaration of `name` (a resource, counter or constant) in the file
+    /// that declares it, or at its first mention in the graph file.
+    pub fn error_at_decl(&self, graph_file: &str, name: &str, message: impl Into<String>) -> Error {
+        let file = self.origins.get(name).map_or(graph_file, |f| f.as_str());
+        self.sources.at_key(file, name, message)
+    }
+
+    /// Every check of names and references.
+    fn check(&self, file: &str) -> Result<()> {
+        self.check_names(file)?;
+        self.check_passes()?;
+        self.check_ops()?;
+        self.check_resources(file)?;
+        self.check_streams(file)?;
+        self.check_measured(file)?;
+        self.check_parameters(file)?;
+        let g = &self.file;
+        if !g.layouts.contains_key(&g.default_layout) {
+            return Err(self.sources.at_name(
+                file,
+                &g.default_layout,
+                format!("default layout '{}' is not one of the layouts", g.default_layout),
+            ));
+        }
+        Ok(())
+    }
+
+    fn check_names(&self, file: &str) -> Result<()> {
+        let g = &self.file;
+        for name in self
+            .resources
+            .keys()
+            .chain(g.streams.keys())
+            .chain(self.counters.iter())
+            .chain(self.constants.keys())
+            .chain(g.parameters.keys())
+        {
+            if !is_identifier(name) || name.starts_with("lg_") {
+                return Err(self.error_at_decl(
+                    file,
+                    name,
+                    format!("'{name}' is not a valid name (a WGSL identifier not starting with 'lg_')"),
+                ));
+            }
+        }
+        for name in g.parameters.keys() {
+            if self.constants.contains_key(name) {
+                return Err(self
+                    .sources
+                    .at_key(file, name, format!("'{name}' is both a constant and a parameter")));
+            }
+        }
+        Ok(())
+    }
+
+    fn check_passes(&self) -> Result<()> {
+        let g = &self.file;
+        for p in &self.passes {
+            let d = &p.decl;
+            let here = |name: &str, message: String| self.sources.at_name(&p.origin, name, message);
+            if !is_identifier(p.function()) {
+                return Err(here(
+                    &d.name,
+                    format!("pass name '{}' is not a WGSL identifier", d.name),
+                ));
+            }
+            for r in d.reads.iter().chain(d.writes.iter()) {
+                if !self.resources.contains_key(r) {
+                    let known: Vec<&str> = self.resources.keys().map(|s| s.as_str()).collect();
+                    return Err(here(
+                        r,
+                        format!(
+                            "unknown resource '{r}' used by pass '{}' (graph '{}' declares: {})",
+                            d.name,
+                            g.name,
+                            known.join(", ")
+                        ),
+                    ));
+                }
+            }
+            for s in &d.emits {
+                if !g.streams.contains_key(s) {
+                    return Err(here(s, format!("pass '{}' emits into unknown stream '{s}'", d.name)));
+                }
+            }
+            if let Role::Start { over, counted } = &d.role {
+                Expr::parse(over).map_err(|e| here(over, e))?;
+                if let Some(c) = counted {
+                    self.check_counter(&p.origin, &d.name, c)?;
+                }
+            }
+            if let Some(e) = &d.enabled {
+                Expr::parse(e).map_err(|why| here(e, format!("pass '{}': enabled: {why}", d.name)))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// A GPU counter must be a `u32` resource.
+    fn check_counter(&self, file: &str, user: &str, counter: &str) -> Result<()> {
+        match self.resources.get(counter) {
+            Some(r) if is_u32_word(&r.ty) => Ok(()),
+            Some(r) => Err(self.sources.at_name(
+                file,
+                counter,
+                format!(
+                    "'{user}' is counted by '{counter}', whose elements are '{}'; a counter is a u32 or atomic<u32>",
+                    r.ty
+                ),
+            )),
+            None => Err(self.sources.at_name(
+                file,
+                counter,
+                format!("'{user}' is counted by unknown resource '{counter}'"),
+            )),
+        }
+    }
+
+    fn check_ops(&self) -> Result<()> {
+        for op in &self.ops {
+            let here = |name: &str, message: String| self.sources.at_name(&op.origin, name, message);
+            for (buffer, want) in op.buffers() {
+                let r = self.resources.get(buffer).ok_or_else(|| {
+                    here(
+                        buffer,
+                        format!("operator '{}' uses unknown resource '{buffer}'", op.name),
+                    )
+                })?;
+                if want.is_some() && !is_u32_word(&r.ty) {
+                    return Err(here(
+                        buffer,
+                        format!(
+                            "operator '{}' ({}) needs u32 elements in '{buffer}', which holds '{}'",
+                            op.name,
+                            op.describe(),
+                            r.ty
+                        ),
+                    ));
+                }
+                if r.scope == Scope::External && op.writes().contains(&buffer) {
+                    return Err(here(
+                        buffer,
+                        format!(
+                            "operator '{}' writes '{buffer}', which the host supplies (External)",
+                            op.name
+                        ),
+                    ));
+                }
+            }
+            if let crate::operator::OpKind::Scatter { input, output, .. } = &op.kind {
+                let (a, b) = (&self.resources[input].ty, &self.resources[output].ty);
+                if a != b {
+                    return Err(here(
+                        output,
+                        format!(
+                            "operator '{}' scatters '{input}' ({a}) into '{output}' ({b}); both must hold the same type",
+                            op.name
+                        ),
+                    ));
+                }
+            }
+            if let Some(c) = op.domain.as_ref().and_then(|d| d.counted.as_deref()) {
+                self.check_counter(&op.origin, &op.name, c)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn check_resources(&self, file: &str) -> Result<()> {
+        for (name, r) in &self.resources {
+            let err = |message: String| self.error_at_decl(file, name, message);
+            if r.scope == Scope::External && r.count.is_some() {
+                return Err(err(format!(
+                    "external resource '{name}' has a count; its data sizes it, so write its WGSL type (e.g. array<{}>)",
+                    r.ty
+                )));
+            }
+            if r.clear && r.scope != Scope::Transient {
+                return Err(err(format!(
+                    "resource '{name}' has clear: true but is not Transient (persistent resources are zeroed once, when created)"
+                )));
+            }
+            if let Some(count) = &r.count {
+                let e = Expr::parse(count).map_err(|e| {
+                    let origin = self.origins.get(name).map_or(file, |f| f.as_str());
+                    self.sources.at_name(origin, count, format!("resource '{name}': {e}"))
+                })?;
+                if let Some(p) = e.names().iter().find(|n| self.file.parameters.contains_key(*n)) {
+                    return Err(err(format!(
+                        "resource '{name}' is sized by parameter '{p}', which changes every frame; sizes are fixed when the program is compiled, so use a constant"
+                    )));
+                }
+            }
+        }
+        for o in &self.file.outputs {
+            match self.resources.get(o) {
+                None => return Err(self.sources.at_name(file, o, format!("output '{o}' is not a resource"))),
+                Some(r) if r.scope == Scope::Transient => {
+                    return Err(self.sources.at_name(
+                        file,
+                        o,
+                        format!(
+                            "output '{o}' is Transient, so its memory is reused within a frame; make it Persistent"
+                        ),
+                    ));
+                }
+                Some(_) => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn check_streams(&self, file: &str) -> Result<()> {
+        for (name, s) in &self.file.streams {
+            let err = |at: &str, message: String| self.sources.at_name(file, at, message);
+            let err_key = |message: String| self.sources.at_key(file, name, message);
+            let consumer = self
+                .passes
+                .iter()
+                .find(|p| p.decl.name == s.to)
+                .ok_or_else(|| err(&s.to, format!("stream '{name}' feeds unknown pass '{}'", s.to)))?;
+            if consumer.decl.item != s.item {
+                return Err(err_key(format!(
+                    "stream type mismatch: stream '{name}' carries '{}' but its consumer '{}' runs over '{}'",
+                    s.item, s.to, consumer.decl.item
+                )));
+            }
+            if matches!(consumer.decl.role, Role::Start { .. }) {
+                return Err(err(
+                    &s.to,
+                    format!(
+                        "stream '{name}' feeds '{}', a Start pass; streams feed Step or Loop passes",
+                        s.to
+                    ),
+                ));
+            }
+            match &s.per_call {
+                PerCall::Number(0) => return Err(err_key(format!("stream '{name}' has per_call 0"))),
+                PerCall::Expr(e) => {
+                    if let Err(why) = Expr::parse(e) {
+                        return Err(err_key(format!("stream '{name}': per_call: {why}")));
+                    }
+                }
+                PerCall::Number(_) => {}
+            }
+        }
+        Ok(())
+    }
+
+    fn check_measured(&self, file: &str) -> Result<()> {
+        for (name, m) in &self.file.measured {
+            let err = |message: String| self.sources.at_key(file, name, message);
+            if !matches!(self.constants.get(name), Some(ConstValue::F32(_))) {
+                return Err(err(format!(
+                    "measured constant '{name}' must be declared as an F32 constant"
+                )));
+            }
+            for c in [&m.ratio.0, &m.ratio.1] {
+                if !self.counters.contains(c) {
+                    return Err(err(format!("measured constant '{name}': no counter '{c}'")));
+                }
+            }
+            for (c, v) in &m.set {
+                match self.constants.get(c) {
+                    Some(d) if d.wgsl_type() == v.wgsl_type() => {}
+                    _ => {
+                        return Err(err(format!(
+                            "measured constant '{name}': sets '{c}', which is no constant of that type"
+                        )));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn check_parameters(&self, file: &str) -> Result<()> {
+        let most = crate::resolve::MAX_PARAMETERS;
+        if self.file.parameters.len() > most {
+            return Err(self.sources.at_name(
+                file,
+                "parameters",
+                format!(
+                    "{} parameters; a frame record holds at most {most}",
+                    self.file.parameters.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+}

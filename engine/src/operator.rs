@@ -1,0 +1,216 @@
+//! The engine's collective operators as graph nodes: `Clear`, `Scan` (exclusive prefix sum),
+//! and the `Count` and `Scatter` steps of a counting sort. Each runs over a whole buffer, so
+//! it is a barrier: it never shares a kernel with a pass, and it runs between the phases
+//! declared before and after it. Their kernels are written once in the engine
+//! ([`crate::collective`]).
+
+use crate::expr::Expr;
+use crate::ir::{ConstValue, PassEntry};
+
+/// Where a start pass or an operator runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Domain {
+    /// The elements, or with `counted` the most there can be (evaluated on the host, per
+    /// frame when it names parameters).
+    pub over: Expr,
+    /// A resource whose first `u32` holds the element count, read on the GPU.
+    pub counted: Option<String>,
+}
+
+/// What an operator does, with the buffers it touches.
+#[derive(Debug, Clone, PartialEq)]
+pub enum OpKind {
+    /// Fills elements `first .. first + over` of `buffer` with `value`.
+    Clear {
+        /// The buffer.
+        buffer: String,
+        /// The 32-bit word written.
+        value: ConstValue,
+        /// First element.
+        first: Option<Expr>,
+    },
+    /// `output[i] = input[0] + ... + input[i - 1]`.
+    Scan {
+        /// The summed `u32`s.
+        input: String,
+        /// The sums (may be `input`).
+        output: String,
+    },
+    /// `slots[i] = counts[keys[i]]++`.
+    Count {
+        /// Buckets.
+        keys: String,
+        /// Bucket counters.
+        counts: String,
+        /// Slots in the buckets.
+        slots: String,
+    },
+    /// `output[offsets[keys[i]] + slots[i]] = input[i]`.
+    Scatter {
+        /// Buckets.
+        keys: String,
+        /// Slots in the buckets.
+        slots: String,
+        /// First place of each bucket.
+        offsets: String,
+        /// Elements.
+        input: String,
+        /// Sorted elements.
+        output: String,
+    },
+}
+
+/// A collective operator of a graph.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Operator {
+    /// Its name (unique among passes and operators).
+    pub name: String,
+    /// What it does.
+    pub kind: OpKind,
+    /// Its elements; `None` for a `Clear` of the whole buffer.
+    pub domain: Option<Domain>,
+    /// Constant condition; culled when 0.
+    pub enabled: Option<Expr>,
+    /// The file that declares it.
+    pub origin: String,
+}
+
+impl Operator {
+    /// The operator of a graph entry, or `None` for a pass entry. An error gives the text
+    /// that does not parse and why.
+    pub fn from_entry(entry: &PassEntry, origin: &str) -> Option<Result<Operator, (String, String)>> {
+        if matches!(entry, PassEntry::Use(_) | PassEntry::Pass(_)) {
+            return None;
+        }
+        Some(Self::build(entry, origin))
+    }
+
+    fn build(entry: &PassEntry, origin: &str) -> Result<Operator, (String, String)> {
+        let parse = |text: &str| Expr::parse(text).map_err(|e| (text.to_string(), e));
+        let domain = |over: &str, counted: &Option<String>| -> Result<Domain, (String, String)> {
+            Ok(Domain {
+                over: parse(over)?,
+                counted: counted.clone(),
+            })
+        };
+        let (name, kind, domain, enabled) = match entry {
+            PassEntry::Use(_) | PassEntry::Pass(_) => unreachable!("operators only"),
+            PassEntry::Clear(d) => {
+                let kind = OpKind::Clear {
+                    buffer: d.buffer.clone(),
+                    value: d.value,
+                    first: d.first.as_deref().map(parse).transpose()?,
+                };
+                let domain = d.count.as_deref().map(|c| domain(c, &None)).transpose()?;
+                (&d.name, kind, domain, &d.enabled)
+            }
+            PassEntry::Scan(d) => {
+                let kind = OpKind::Scan {
+                    input: d.input.clone(),
+                    output: d.output.clone().unwrap_or_else(|| d.input.clone()),
+                };
+                (&d.name, kind, Some(domain(&d.over, &d.counted)?), &d.enabled)
+            }
+            PassEntry::Count(d) => {
+                let kind = OpKind::Count {
+                    keys: d.keys.clone(),
+                    counts: d.counts.clone(),
+                    slots: d.slots.clone(),
+                };
+                (&d.name, kind, Some(domain(&d.over, &d.counted)?), &d.enabled)
+            }
+            PassEntry::Scatter(d) => {
+                let kind = OpKind::Scatter {
+                    keys: d.keys.clone(),
+                    slots: d.slots.clone(),
+                    offsets: d.offsets.clone(),
+                    input: d.input.clone(),
+                    output: d.output.clone(),
+                };
+                (&d.name, kind, Some(domain(&d.over, &d.counted)?), &d.enabled)
+            }
+        };
+        Ok(Operator {
+            name: name.clone(),
+            kind,
+            domain,
+            enabled: enabled.as_deref().map(parse).transpose()?,
+            origin: origin.to_string(),
+        })
+    }
+
+    /// What the operator is, in words.
+    pub fn describe(&self) -> &'static str {
+        match self.kind {
+            OpKind::Clear { .. } => "clear",
+            OpKind::Scan { .. } => "exclusive scan",
+            OpKind::Count { .. } => "count (counting sort)",
+            OpKind::Scatter { .. } => "scatter (counting sort)",
+        }
+    }
+
+    /// Resources it reads (its GPU counter included).
+    pub fn reads(&self) -> Vec<&str> {
+        let mut out: Vec<&str> = match &self.kind {
+            OpKind::Clear { .. } => vec![],
+            OpKind::Scan { input, .. } => vec![input],
+            OpKind::Count { keys, counts, .. } => vec![keys, counts],
+            OpKind::Scatter {
+                keys,
+                slots,
+                offsets,
+                input,
+                ..
+            } => vec![keys, slots, offsets, input],
+        };
+        if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
+            out.push(c);
+        }
+        out
+    }
+
+    /// Resources it writes.
+    pub fn writes(&self) -> Vec<&str> {
+        match &self.kind {
+            OpKind::Clear { buffer, .. } => vec![buffer],
+            OpKind::Scan { output, .. } => vec![output],
+            OpKind::Count { counts, slots, .. } => vec![counts, slots],
+            OpKind::Scatter { output, .. } => vec![output],
+        }
+    }
+
+    /// Every resource it touches, with what the element type must be: `Some("u32")` for the
+    /// `u32` words of scans, keys, slots and counts, `None` for any type.
+    pub fn buffers(&self) -> Vec<(&str, Option<&'static str>)> {
+        let mut out: Vec<(&str, Option<&'static str>)> = match &self.kind {
+            OpKind::Clear { buffer, .. } => vec![(buffer, None)],
+            OpKind::Scan { input, output } => vec![(input, Some("u32")), (output, Some("u32"))],
+            OpKind::Count { keys, counts, slots } => {
+                vec![(keys, Some("u32")), (counts, Some("u32")), (slots, Some("u32"))]
+            }
+            OpKind::Scatter {
+                keys,
+                slots,
+                offsets,
+                input,
+                output,
+            } => vec![
+                (keys, Some("u32")),
+                (slots, Some("u32")),
+                (offsets, Some("u32")),
+                (input, None),
+                (output, None),
+            ],
+        };
+        if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
+            out.push((c, Some("u32")));
+        }
+        out
+    }
+}
+
+/// Whether a resource's element type `ty` is a 32-bit unsigned word (`u32`, or `atomic<u32>`).
+pub fn is_u32_word(ty: &str) -> bool {
+    let t: String = ty.chars().filter(|c| !c.is_whitespace()).collect();
+    t == "u32" || t == "atomic<u32>"
+}

@@ -1,0 +1,581 @@
+//! Running batches of frames: the frame records (chunk and parameters), the frame's steps
+//! (phases chunk by chunk, operators), host-driven loops, and the read-back of control
+//! words, counters and timestamps.
+
+use super::Instance;
+use super::pipelines::{Kernel, RECORD_STRIDE, kernel_seconds, physical};
+use super::recorder::{MAX_QUERIES, MAX_TIMED, Recorder};
+use super::{FrameStats, MAX_BATCH};
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::graph::FrameStep;
+use crate::ids::{ChainId, KernelId, OpId, PhaseId};
+use crate::operator::OpKind;
+use crate::plan::{Port, Root, Step};
+use crate::program::Program;
+use crate::resolve::{BOUNDARY_HEADER, BufferRef};
+use std::collections::BTreeMap;
+
+/// Host loop iterations after which a loop is declared stuck.
+const MAX_HOST_ITERATIONS: u32 = 1 << 20;
+
+/// The per-instance state of running frames.
+pub struct FrameState {
+    /// Frame records, one per chunk of a phase and per operator of each frame of a batch.
+    records_buffer: wgpu::Buffer,
+    /// The frame record's bind group (group 1).
+    frame_group: wgpu::BindGroup,
+    /// The records of the batch being run: index, seed, base, count, parameters.
+    records: Vec<Vec<u32>>,
+    queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    readback: wgpu::Buffer,
+    /// Counter totals since the instance was created.
+    pub totals: Vec<u64>,
+    /// Host loop iterations the previous frame needed, per loop (the next frame's first batch).
+    last_iterations: BTreeMap<usize, u32>,
+}
+
+/// What one record of a batch runs.
+#[derive(Debug, Clone, Copy)]
+enum Run {
+    /// A chunk of a phase; `first` for the phase's first chunk of the frame.
+    Chunk { phase: PhaseId, step: usize, first: bool },
+    /// An operator over `n` elements.
+    Op { op: OpId, step: usize, n: u64 },
+}
+
+/// How many workgroups a dispatch runs.
+#[derive(Clone, Copy)]
+enum Dispatch {
+    /// Enough workgroups of the layout's size for this many items.
+    Items(u64),
+    /// This many workgroups.
+    Groups(u64),
+    /// From the indirect arguments at this byte offset.
+    Indirect(u64),
+    /// One workgroup.
+    Single,
+}
+
+impl FrameState {
+    pub fn new(gpu: &Gpu, program: &Program, layout: &wgpu::BindGroupLayout) -> FrameState {
+        let device = &gpu.device;
+        let records_buffer = records_buffer(device, 64);
+        let frame_group = frame_group(device, layout, &records_buffer);
+        let timing = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES;
+        let queries = gpu.features.contains(timing).then(|| {
+            let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("kernel timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: MAX_QUERIES,
+            });
+            let resolve = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamp resolve"),
+                size: 16 * MAX_TIMED as u64,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (set, resolve)
+        });
+        let ncounters = program.plan.graph.counters.len() as u64;
+        let readback_words = program.resolved.control.len as u64 + 4 * program.plan.boundaries.len() as u64 * 2;
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: (4 * readback_words + 8 * ncounters + 16 * MAX_TIMED as u64 + 8).next_multiple_of(8),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        FrameState {
+            records_buffer,
+            frame_group,
+            records: Vec::new(),
+            queries,
+            readback,
+            totals: vec![0; ncounters as usize],
+            last_iterations: BTreeMap::new(),
+        }
+    }
+}
+
+fn records_buffer(device: &wgpu::Device, records: usize) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("frame records"),
+        size: records as u64 * RECORD_STRIDE,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+fn frame_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, records: &wgpu::Buffer) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("frame record"),
+        layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: records,
+                offset: 0,
+                size: wgpu::BufferSize::new(RECORD_STRIDE),
+            }),
+        }],
+    })
+}
+
+impl Instance<'_> {
+    /// Runs frame `index` with `seed`: every step of the frame.
+    pub fn run_frame(&mut self, index: u32, seed: u32) -> Result<FrameStats> {
+        self.run_frames(index, 1, seed)
+    }
+
+    /// Runs frames `first .. first + count` (at most [`MAX_BATCH`]) with `seed`, recorded
+    /// together and read back once: the statistics are the batch's.
+    pub fn run_frames(&mut self, first: u32, count: u32, seed: u32) -> Result<FrameStats> {
+        if count == 0 || count > MAX_BATCH {
+            return Err(Error::Runtime(format!(
+                "a batch runs 1 to {MAX_BATCH} frames, not {count}"
+            )));
+        }
+        let runs = self.write_records(first, count, seed)?;
+        let scope = self.gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut rec = Recorder::new(&self.gpu.device);
+        let control = self.buffers.slot(&BufferRef::Control);
+        rec.clear(self.buffers.buffer(control), control.offset, control.size);
+        for (record, run) in runs.into_iter().enumerate() {
+            match run {
+                Run::Chunk { phase, step, first } => {
+                    if first {
+                        self.clear_transients(&mut rec, step);
+                    }
+                    self.run_chunk(&mut rec, phase, record)?;
+                }
+                Run::Op { op, step, n } => {
+                    self.clear_transients(&mut rec, step);
+                    self.run_operator(&mut rec, op, n, record);
+                }
+            }
+        }
+        rec.resolve(&self.frames.queries);
+        let stats = self.read_back(rec, scope)?;
+        Ok(stats)
+    }
+
+    /// The records of the batch (written to the GPU) and what each runs.
+    fn write_records(&mut self, first: u32, count: u32, seed: u32) -> Result<Vec<Run>> {
+        let g = &self.program.plan.graph;
+        let resolved = &self.program.resolved;
+        let mut records: Vec<Vec<u32>> = Vec::new();
+        let mut runs = Vec::new();
+        for index in first..first + count {
+            let parameters = self.parameters_of_frame(index);
+            let mut vars: BTreeMap<String, f64> = resolved
+                .constants
+                .iter()
+                .map(|(k, v)| (k.clone(), v.as_f64()))
+                .collect();
+            vars.extend(parameters.iter().map(|(k, v)| (k.clone(), v.as_f64())));
+            let words = |base: u64, n: u64| {
+                let mut r = vec![index, seed, base as u32, n as u32];
+                r.extend(parameters.iter().map(|(_, v)| v.bits()));
+                r
+            };
+            for (step, s) in g.steps.iter().enumerate() {
+                match *s {
+                    FrameStep::Phase(ph) => {
+                        let d = &resolved.domains[ph.0];
+                        let total = d
+                            .over
+                            .count(&vars)
+                            .map_err(|e| Error::Runtime(format!("frame {index}: the items of phase {ph}: {e}")))?;
+                        let mut base = 0u64;
+                        loop {
+                            let n = d.chunk.min(total - base);
+                            runs.push(Run::Chunk {
+                                phase: ph,
+                                step,
+                                first: base == 0,
+                            });
+                            records.push(words(base, n));
+                            base += n;
+                            if base >= total {
+                                break;
+                            }
+                        }
+                    }
+                    FrameStep::Op(o) => {
+                        let (base, n, words_n) = self.operator_range(o, &vars)?;
+                        runs.push(Run::Op { op: o, step, n });
+                        records.push(words(base, words_n));
+                    }
+                }
+            }
+        }
+        if records.len() * RECORD_STRIDE as usize > self.frames.records_buffer.size() as usize {
+            let device = &self.gpu.device;
+            self.frames.records_buffer = records_buffer(device, records.len().next_power_of_two());
+            self.frames.frame_group = frame_group(device, &self.kernels.frame_layout, &self.frames.records_buffer);
+        }
+        let mut bytes = vec![0u8; records.len() * RECORD_STRIDE as usize];
+        for (i, r) in records.iter().enumerate() {
+            bytes[i * RECORD_STRIDE as usize..][..4 * r.len()].copy_from_slice(bytemuck::cast_slice(r));
+        }
+        self.gpu.queue.write_buffer(&self.frames.records_buffer, 0, &bytes);
+        self.frames.records = records;
+        Ok(runs)
+    }
+
+    /// An operator's record this frame: base, elements, and the count its record holds
+    /// (a fill's record holds its first word and words).
+    fn operator_range(&self, o: OpId, vars: &BTreeMap<String, f64>) -> Result<(u64, u64, u64)> {
+        let op = &self.program.plan.graph.ops[o];
+        let resolved = &self.program.resolved;
+        let sized = resolved.op_elements[&o];
+        let fail = |e: String| Error::Runtime(format!("operator '{}': {e}", op.name));
+        let n = match &op.domain {
+            Some(d) if d.counted.is_none() => d.over.count(vars).map_err(fail)?,
+            _ => sized,
+        };
+        if n > sized {
+            return Err(fail(format!(
+                "{n} elements this frame, but its buffers were sized for {sized}"
+            )));
+        }
+        Ok(match &op.kind {
+            OpKind::Clear { buffer, first, .. } => {
+                let w = resolved.sizes[buffer].element_bytes as u64 / 4;
+                let first = first.as_ref().map_or(Ok(0), |e| e.count(vars)).map_err(fail)?;
+                (first * w, n, n * w)
+            }
+            _ => (0, n, n),
+        })
+    }
+
+    /// Zeroes the transient resources declared `clear: true` whose lifetime starts at `step`.
+    fn clear_transients(&self, rec: &mut Recorder, step: usize) {
+        for name in self.program.resolved.clears.get(&step).into_iter().flatten() {
+            let slot = self.buffers.slot(&BufferRef::Resource(name.clone()));
+            rec.clear(self.buffers.buffer(slot), slot.offset, slot.size);
+        }
+    }
+
+    /// One chunk of a phase: its alive flags and boundary headers cleared (their memory may
+    /// be shared), regeneration counters zeroed, a counted domain counted, the schedule run,
+    /// the counters folded.
+    fn run_chunk(&mut self, rec: &mut Recorder, ph: PhaseId, record: usize) -> Result<()> {
+        let plan = &self.program.plan;
+        let chains = &plan.graph.phases[ph].chains;
+        for &c in chains.iter().filter(|c| plan.stored_chains.contains(c)) {
+            let slot = self.buffers.slot(&BufferRef::Alive(c));
+            rec.clear(self.buffers.buffer(slot), slot.offset, slot.size);
+        }
+        for (b, boundary) in plan.boundaries.iter().enumerate() {
+            if chains.contains(&boundary.chain) {
+                for side in 0..1 + boundary.pingpong as usize {
+                    let slot = self.buffers.slot(&BufferRef::Boundary(crate::ids::BoundaryId(b), side));
+                    rec.clear(self.buffers.buffer(slot), slot.offset, BOUNDARY_HEADER);
+                }
+            }
+        }
+        for k in plan.kernels.iter().filter(|k| k.phase == ph && k.regenerates) {
+            let word = self.program.resolved.control.next[&k.chain];
+            self.dispatch(rec, &self.kernels.zeros[&word], record, Dispatch::Single);
+        }
+        if let Some((kernel, _)) = self.kernels.domains.get(&ph) {
+            self.dispatch(rec, kernel, record, Dispatch::Single);
+        }
+        let steps = plan.schedule[ph.0].clone();
+        self.run_steps(rec, &steps, record)?;
+        self.dispatch(rec, &self.kernels.fold, record, Dispatch::Single);
+        Ok(())
+    }
+
+    /// An operator's kernels over `n` elements (the most there can be, when counted).
+    fn run_operator(&self, rec: &mut Recorder, o: OpId, n: u64, record: usize) {
+        for (kernel, groups) in &self.kernels.ops[o.0] {
+            self.dispatch(rec, kernel, record, Dispatch::Groups(groups.count(n)));
+        }
+    }
+
+    fn dispatch(&self, rec: &mut Recorder, k: &Kernel, record: usize, groups: Dispatch) {
+        let query = k.timing.and_then(|slot| rec.next_query(&self.frames.queries, slot));
+        let offset = [(record as u64 * RECORD_STRIDE) as u32];
+        let bind_group = &k.bind_groups[rec.parity % k.bind_groups.len()];
+        let set = self.frames.queries.as_ref().map(|(set, _)| set);
+        let max = self.program.target.max_workgroups_per_dimension as u64;
+        let args = self.buffers.buffer(self.buffers.slot(&BufferRef::Args));
+        let frame_group = &self.frames.frame_group;
+        let pass = rec.pass();
+        if let (Some(i), Some(set)) = (query, set) {
+            pass.write_timestamp(set, i);
+        }
+        pass.set_pipeline(&k.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        if k.uses_frame {
+            pass.set_bind_group(1, frame_group, &offset[..]);
+        }
+        let workgroups = match groups {
+            Dispatch::Items(n) => Some(n.div_ceil(self.program.plan.layout.workgroup_size as u64)),
+            Dispatch::Groups(g) => Some(g),
+            Dispatch::Single => Some(1),
+            Dispatch::Indirect(offset) => {
+                pass.dispatch_workgroups_indirect(args, offset);
+                None
+            }
+        };
+        if let Some(g) = workgroups.filter(|&g| g > 0) {
+            let x = g.min(max);
+            pass.dispatch_workgroups(x as u32, g.div_ceil(x) as u32, 1);
+        }
+        if let (Some(i), Some(set)) = (query, set) {
+            pass.write_timestamp(set, i + 1);
+        }
+    }
+
+    /// Commits a boundary buffer (its appended items become, or with `add` join, its count)
+    /// and prepares the indirect arguments for its consumer; returns their offset.
+    fn commit(&self, rec: &mut Recorder, port: Port, record: usize, add: bool) -> u64 {
+        let (kernels, offset) = &self.kernels.commits[port.boundary.0];
+        let side = match physical(&self.program, port, rec.parity) {
+            BufferRef::Boundary(_, side) => side,
+            _ => unreachable!("boundary ports map to boundary buffers"),
+        };
+        let saved = rec.parity;
+        rec.parity = side;
+        self.dispatch(rec, &kernels[add as usize], record, Dispatch::Single);
+        rec.parity = saved;
+        *offset
+    }
+
+    fn run_kernel(&self, rec: &mut Recorder, k: KernelId, record: usize) {
+        let plan = &self.program.plan;
+        let kp = &plan.kernels[k];
+        let items = match (self.program.resolved.pools.get(&kp.chain), &kp.root) {
+            (Some(&pool), _) => Dispatch::Items(pool),
+            (None, Root::Start) => match self.kernels.domains.get(&kp.phase) {
+                Some((_, offset)) => Dispatch::Indirect(*offset),
+                None => Dispatch::Items(self.frames.records[record][3] as u64),
+            },
+            (None, _) => Dispatch::Items(self.frames.records[record][3] as u64),
+        };
+        let kernel = &self.kernels.passes[k.0];
+        match (kp.input, kp.output) {
+            (Some(input), _) => {
+                // Items a pure regeneration kernel just appended join the survivors counted
+                // before it; otherwise the last count was consumed and is replaced.
+                let after_regeneration = plan.kernels.iter().any(|r| {
+                    r.input.is_none() && r.output.map(|o| o.boundary) == Some(input.boundary) && r.root == Root::Start
+                });
+                let offset = self.commit(rec, input, record, after_regeneration);
+                let groups = if kp.root == Root::Boundary {
+                    Dispatch::Indirect(offset)
+                } else {
+                    items
+                };
+                self.dispatch(rec, kernel, record, groups);
+            }
+            (None, Some(output)) => {
+                self.commit(rec, output, record, false);
+                self.dispatch(rec, kernel, record, items);
+            }
+            (None, None) => self.dispatch(rec, kernel, record, items),
+        }
+    }
+
+    fn run_steps(&mut self, rec: &mut Recorder, steps: &[Step], record: usize) -> Result<()> {
+        for (i, step) in steps.iter().enumerate() {
+            match step {
+                Step::Run(k) => self.run_kernel(rec, *k, record),
+                Step::Drain(q) => {
+                    let (args, offset) = &self.kernels.args[q];
+                    self.dispatch(rec, args, record, Dispatch::Single);
+                    let k = self.program.plan.consumer_kernel(q);
+                    self.dispatch(rec, &self.kernels.passes[k.0], record, Dispatch::Indirect(*offset));
+                }
+                Step::Loop { chain, body } => self.run_loop(rec, *chain, body, record, i)?,
+            }
+        }
+        Ok(())
+    }
+
+    /// A host-driven loop: the body in growing batches of iterations, until no item of the
+    /// chain is alive.
+    fn run_loop(&mut self, rec: &mut Recorder, chain: ChainId, body: &[Step], record: usize, i: usize) -> Result<()> {
+        // The same loop of every frame of a batch learns from the last one.
+        let records = &self.frames.records;
+        let per_frame = records.iter().filter(|r| r[0] == records[0][0]).count();
+        let key = (record % per_frame.max(1)) * 64 + i;
+        let mut batch = self.frames.last_iterations.get(&key).copied().unwrap_or(2).max(1);
+        let mut done = 0u32;
+        rec.parity = 0;
+        loop {
+            for _ in 0..batch {
+                if let Some(word) = self.program.resolved.control.alive.get(&chain) {
+                    self.dispatch(rec, &self.kernels.zeros[word], record, Dispatch::Single);
+                }
+                self.run_steps(rec, body, record)?;
+                rec.parity ^= 1;
+            }
+            done += batch;
+            rec.host_iterations += batch;
+            if !self.loop_goes_on(rec, chain, record)? {
+                break;
+            }
+            if done >= MAX_HOST_ITERATIONS {
+                let item = &self.program.plan.graph.chains[chain].item;
+                return Err(Error::Runtime(format!(
+                    "items of '{item}' still alive after {done} loop iterations: a loop pass never finishes its item"
+                )));
+            }
+            batch = (batch * 2).min(64);
+        }
+        self.frames.last_iterations.insert(key, done);
+        Ok(())
+    }
+
+    /// Submits what is recorded and reads back whether the loop over `chain` has work left:
+    /// items alive in slots, items appended to its boundaries, or indices not yet taken.
+    fn loop_goes_on(&self, rec: &mut Recorder, chain: ChainId, record: usize) -> Result<bool> {
+        rec.end_pass();
+        let control = self.buffers.slot(&BufferRef::Control);
+        let control_bytes = control.size;
+        rec.encoder.copy_buffer_to_buffer(
+            self.buffers.buffer(control),
+            control.offset,
+            &self.frames.readback,
+            0,
+            control_bytes,
+        );
+        let mut at = control_bytes;
+        let mut headers = Vec::new();
+        for (b, boundary) in self.program.plan.boundaries.iter().enumerate() {
+            if boundary.chain != chain {
+                continue;
+            }
+            for side in 0..1 + boundary.pingpong as usize {
+                let slot = self.buffers.slot(&BufferRef::Boundary(crate::ids::BoundaryId(b), side));
+                rec.encoder
+                    .copy_buffer_to_buffer(self.buffers.buffer(slot), slot.offset, &self.frames.readback, at, 8);
+                headers.push(at);
+                at += 8;
+            }
+        }
+        let encoder = std::mem::replace(
+            &mut rec.encoder,
+            self.gpu.device.create_command_encoder(&Default::default()),
+        );
+        self.gpu.queue.submit([encoder.finish()]);
+        let bytes = self.map_readback(at)?;
+        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        let control = &self.program.resolved.control;
+        let alive = control.alive.get(&chain).map_or(0, |&w| words[w as usize]);
+        // Counts of consumed boundaries are stale; waiting items are the appended ones.
+        let pending: u64 = headers.iter().map(|&h| words[h as usize / 4 + 1] as u64).sum();
+        let phase = self.program.plan.graph.phase_of_chain(chain);
+        let items = match control.domain.get(&phase) {
+            Some(&w) => words[w as usize] as u64,
+            None => self.frames.records[record][3] as u64,
+        };
+        let untaken = control
+            .next
+            .get(&chain)
+            .is_some_and(|&w| (words[w as usize] as u64) < items);
+        Ok(alive > 0 || pending > 0 || untaken)
+    }
+
+    fn map_readback(&self, size: u64) -> Result<Vec<u8>> {
+        let slice = self.frames.readback.slice(0..size.next_multiple_of(8));
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        self.gpu.wait()?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("mapping the readback buffer failed: {e}")))?
+            .to_vec();
+        self.frames.readback.unmap();
+        Ok(data)
+    }
+
+    /// Submits the batch and reads back control words, counter totals and timestamps.
+    fn read_back(&mut self, mut rec: Recorder, scope: wgpu::ErrorScopeGuard) -> Result<FrameStats> {
+        let control = self.buffers.slot(&BufferRef::Control);
+        let control_bytes = control.size;
+        let ncounters = self.frames.totals.len() as u64;
+        let totals_at = control_bytes.next_multiple_of(8);
+        let ts_at = totals_at + 8 * ncounters;
+        rec.encoder.copy_buffer_to_buffer(
+            self.buffers.buffer(control),
+            control.offset,
+            &self.frames.readback,
+            0,
+            control_bytes,
+        );
+        if ncounters > 0 {
+            let totals = self.buffers.slot(&BufferRef::Totals);
+            rec.encoder.copy_buffer_to_buffer(
+                self.buffers.buffer(totals),
+                totals.offset,
+                &self.frames.readback,
+                totals_at,
+                8 * ncounters,
+            );
+        }
+        let pairs = rec.timed.len() as u64;
+        if let (Some((_, resolve)), true) = (&self.frames.queries, pairs > 0) {
+            rec.encoder
+                .copy_buffer_to_buffer(resolve, 0, &self.frames.readback, ts_at, 16 * pairs);
+        }
+        self.gpu.queue.submit([rec.encoder.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu(format!("running a frame failed: {e}")));
+        }
+        let data = self.map_readback(ts_at + 16 * pairs)?;
+        let words: &[u32] = bytemuck::cast_slice(&data[..control_bytes as usize]);
+        self.check_overflows(words)?;
+        let mut stats = FrameStats {
+            host_iterations: rec.host_iterations,
+            loops_capped: words[self.program.resolved.control.loop_capped as usize],
+            ..Default::default()
+        };
+        let g = &self.program.plan.graph;
+        for (i, name) in g.counters.iter().enumerate() {
+            let at = (totals_at + 8 * i as u64) as usize;
+            let total = u64::from_le_bytes(data[at..at + 8].try_into().expect("8 bytes"));
+            stats.counters.insert(name.clone(), total - self.frames.totals[i]);
+            self.frames.totals[i] = total;
+        }
+        if pairs > 0 {
+            let period = self.gpu.queue.get_timestamp_period() as f64 * 1e-9;
+            let ticks: &[u64] = bytemuck::cast_slice(&data[ts_at as usize..(ts_at + 16 * pairs) as usize]);
+            stats.kernel_seconds = kernel_seconds(&self.kernels.timed_names, &rec.timed, ticks, period);
+        }
+        Ok(stats)
+    }
+
+    /// An overflowed queue or an operator that met a key out of range is an error.
+    fn check_overflows(&self, words: &[u32]) -> Result<()> {
+        let control = &self.program.resolved.control;
+        let g = &self.program.plan.graph;
+        for (q, &w) in &control.queue_overflow {
+            if words[w as usize] > 0 {
+                return Err(Error::Runtime(format!(
+                    "queue '{q}' overflowed by {} items: a pass emits more than the stream's per_call ({}) declares",
+                    words[w as usize], g.streams[q].per_call
+                )));
+            }
+        }
+        for (o, &w) in &control.op_overflow {
+            if words[w as usize] > 0 {
+                let op = &g.ops[*o];
+                let what = match op.kind {
+                    OpKind::Count { .. } => "a key beyond its counts",
+                    _ => "a key beyond its offsets or a place beyond its output",
+                };
+                return Err(Error::Runtime(format!(
+                    "operator '{}' ({}) skipped {} elements with {what}",
+                    op.name,
+                    op.describe(),
+                    words[w as usize]
+                )));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,269 @@
+//! The engine's collective operators checked against the CPU and timed: an exclusive scan of
+//! `n` words, and a counting sort (clear, count, scan of the bucket counts, scatter) of `n`
+//! 12-byte elements into `buckets` buckets, both from one graph run on any adapter. The
+//! tests run it at the sizes lavapipe allows; `lightgraph operators` runs it on a GPU.
+
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::ir::ConstValue;
+use crate::program::{Program, Specialization, Target};
+use crate::runtime::Instance;
+use crate::vfs::{Layer, Vfs};
+use crate::{Graph, Plan};
+use std::collections::BTreeMap;
+
+/// The graph: every step an operator, the data written by the host.
+const GRAPH: &str = r#"// Exclusive scan and counting sort of host-written data (the engine's self-check).
+(
+    name: "operators",
+    description: "exclusive scan of `values`; counting sort of `payload` by `keys` into `sorted`",
+    library: ["operators.wgsl"],
+    passes: [
+        Scan(name: "scan", input: "values", output: "sums", over: "N"),
+        Clear(name: "clear_counts", buffer: "counts"),
+        Count(name: "count", keys: "keys", counts: "counts", slots: "slots", over: "N"),
+        Scan(name: "bucket_starts", input: "counts", output: "starts", over: "BUCKETS"),
+        Scatter(name: "scatter", keys: "keys", slots: "slots", offsets: "starts", input: "payload", output: "sorted", over: "N"),
+    ],
+    resources: {
+        "values": (ty: "u32", count: "max(N, 1)"),
+        "sums": (ty: "u32", count: "max(N, 1)"),
+        "keys": (ty: "u32", count: "max(N, 1)"),
+        "counts": (ty: "atomic<u32>", count: "BUCKETS"),
+        "slots": (ty: "u32", count: "max(N, 1)"),
+        "starts": (ty: "u32", count: "BUCKETS"),
+        "payload": (ty: "Payload", count: "max(N, 1)"),
+        "sorted": (ty: "Payload", count: "max(N, 1)"),
+    },
+    constants: { "N": U32(1), "BUCKETS": U32(1) },
+    outputs: ["sums", "slots", "starts", "sorted"],
+    layouts: { "operators": (kernels: []) },
+    default_layout: "operators",
+)
+"#;
+
+const FILES: &[(&str, &str)] = &[
+    ("operators.ron", GRAPH),
+    (
+        "operators.wgsl",
+        "// A 12-byte element of the counting sort.\nstruct Payload { index: u32, key: u32, check: u32 }\n",
+    ),
+];
+
+/// How the inputs are drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pattern {
+    /// Random values; random keys.
+    Random,
+    /// Every value 1; every key the same (one bucket holds every element).
+    Equal,
+    /// One value holds the whole sum; every key the last bucket.
+    Concentrated,
+}
+
+impl Pattern {
+    /// Every pattern.
+    pub const ALL: [Pattern; 3] = [Pattern::Random, Pattern::Equal, Pattern::Concentrated];
+}
+
+/// What one check found.
+#[derive(Debug, Clone)]
+pub struct Report {
+    /// Elements.
+    pub n: u64,
+    /// Buckets.
+    pub buckets: u64,
+    /// The inputs.
+    pub pattern: Pattern,
+    /// The first disagreement with the CPU, if any.
+    pub mismatch: Option<String>,
+    /// GPU seconds of the scan, per run (median of the runs).
+    pub scan_seconds: Option<f64>,
+    /// GPU seconds of the counting sort (clear, count, scan, scatter), per run (median).
+    pub sort_seconds: Option<f64>,
+}
+
+/// SplitMix64: seeded, well-mixed 64-bit numbers.
+struct Numbers(u64);
+
+impl Numbers {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        z ^ (z >> 31)
+    }
+}
+
+/// The scan's input and the sort's keys for `pattern`.
+fn inputs(n: usize, buckets: u64, pattern: Pattern, seed: u64) -> (Vec<u32>, Vec<u32>) {
+    let mut rng = Numbers(seed);
+    match pattern {
+        Pattern::Random => (
+            (0..n).map(|_| rng.next() as u32).collect(),
+            (0..n).map(|_| (rng.next() % buckets) as u32).collect(),
+        ),
+        Pattern::Equal => (vec![1; n], vec![(buckets / 2) as u32; n]),
+        Pattern::Concentrated => {
+            let mut values = vec![0; n];
+            if n > 0 {
+                values[n / 2] = 0xdead_beef;
+            }
+            (values, vec![(buckets - 1) as u32; n])
+        }
+    }
+}
+
+/// Checks the GPU's outputs against the CPU: the scan's sums, the bucket starts, each
+/// element at its bucket's start plus its slot, and each bucket's slots all different.
+fn compare(values: &[u32], keys: &[u32], buckets: u64, out: &Outputs) -> Option<String> {
+    let (sums, slots, starts, sorted) = (&out.sums, &out.slots, &out.starts, &out.sorted);
+    let mut run = 0u32;
+    for (i, (&v, &s)) in values.iter().zip(sums).enumerate() {
+        if s != run {
+            return Some(format!("scan: sum before element {i} is {s}, the CPU says {run}"));
+        }
+        run = run.wrapping_add(v);
+    }
+    let mut counts = vec![0u32; buckets as usize];
+    for &k in keys {
+        counts[k as usize] += 1;
+    }
+    let mut start = 0u32;
+    for (b, (&c, &s)) in counts.iter().zip(starts).enumerate() {
+        if s != start {
+            return Some(format!("sort: bucket {b} starts at {s}, the CPU says {start}"));
+        }
+        start += c;
+    }
+    let mut taken = vec![false; keys.len()];
+    for (i, &k) in keys.iter().enumerate() {
+        let slot = slots[i];
+        if slot >= counts[k as usize] {
+            return Some(format!(
+                "sort: element {i} has slot {slot} in bucket {k} of {}",
+                counts[k as usize]
+            ));
+        }
+        let place = (starts[k as usize] + slot) as usize;
+        if std::mem::replace(&mut taken[place], true) {
+            return Some(format!("sort: two elements of bucket {k} took place {place}"));
+        }
+        let want = element(i, k);
+        if sorted[place] != want {
+            return Some(format!(
+                "sort: place {place} holds {:?}, element {i} is {want:?}",
+                sorted[place]
+            ));
+        }
+    }
+    None
+}
+
+/// Median of a list of seconds.
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    (!v.is_empty()).then(|| v[v.len() / 2])
+}
+
+/// What the GPU produced.
+pub struct Outputs {
+    /// The scan's sums.
+    pub sums: Vec<u32>,
+    /// Each element's slot in its bucket.
+    pub slots: Vec<u32>,
+    /// Each bucket's first place.
+    pub starts: Vec<u32>,
+    /// The sorted elements.
+    pub sorted: Vec<[u32; 3]>,
+    /// GPU seconds of the scan (median of the runs; `None` without timestamps).
+    pub scan_seconds: Option<f64>,
+    /// GPU seconds of the counting sort: clear, count, scan, scatter (median of the runs).
+    pub sort_seconds: Option<f64>,
+}
+
+/// Runs the scan of `values` and the counting sort of the elements with `keys` into
+/// `buckets` buckets on `gpu` (with subgroup kernels when `target` has subgroups), `runs`
+/// times.
+pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u64, runs: u32) -> Result<Outputs> {
+    let n = values.len();
+    if buckets == 0 || keys.len() != n || n as u64 > u32::MAX as u64 || buckets > u32::MAX as u64 {
+        return Err(Error::Runtime(format!(
+            "cannot sort {n} elements into {buckets} buckets"
+        )));
+    }
+    let vfs = Vfs::new(vec![Layer::Embedded(FILES)]);
+    let graph = Graph::load(&vfs, "operators.ron")?;
+    let plan = Plan::new(&graph, "operators")?;
+    let spec = Specialization {
+        constants: BTreeMap::from([
+            ("N".to_string(), ConstValue::U32(n as u32)),
+            ("BUCKETS".to_string(), ConstValue::U32(buckets as u32)),
+        ]),
+        ..Default::default()
+    };
+    let program = Program::compile(&plan, &spec, target)?;
+    let op_kernels: Vec<Vec<String>> = program
+        .ops
+        .iter()
+        .map(|op| op.kernels.iter().map(|(k, _)| k.name.clone()).collect())
+        .collect();
+    let mut instance = Instance::new(gpu, program, &BTreeMap::new())?;
+    let payload: Vec<[u32; 3]> = keys.iter().enumerate().map(|(i, &k)| element(i, k)).collect();
+    if n > 0 {
+        instance.write("values", bytemuck::cast_slice(values))?;
+        instance.write("keys", bytemuck::cast_slice(keys))?;
+        instance.write("payload", bytemuck::cast_slice(&payload))?;
+    }
+    let (mut scan, mut sort) = (Vec::new(), Vec::new());
+    for run in 0..runs.max(1) {
+        let stats = instance.run_frame(run, 0)?;
+        let seconds = |ops: &[Vec<String>]| -> Option<f64> {
+            let names: Vec<&String> = ops.iter().flatten().collect();
+            let found: Vec<f64> = names
+                .iter()
+                .filter_map(|k| stats.kernel_seconds.get(*k))
+                .copied()
+                .collect();
+            (found.len() == names.len()).then(|| found.iter().sum())
+        };
+        scan.extend(seconds(&op_kernels[..1]));
+        sort.extend(seconds(&op_kernels[1..]));
+    }
+    let read = |name: &str| -> Result<Vec<u32>> { Ok(bytemuck::pod_collect_to_vec(&instance.read(name)?)) };
+    let (mut sums, mut slots, starts) = (read("sums")?, read("slots")?, read("starts")?);
+    let mut sorted: Vec<[u32; 3]> = bytemuck::pod_collect_to_vec(&instance.read("sorted")?);
+    sums.truncate(n);
+    slots.truncate(n);
+    sorted.truncate(n);
+    Ok(Outputs {
+        sums,
+        slots,
+        starts,
+        sorted,
+        scan_seconds: median(scan),
+        sort_seconds: median(sort),
+    })
+}
+
+/// The element the sort carries for element `i` with key `k`.
+fn element(i: usize, k: u32) -> [u32; 3] {
+    [i as u32, k, (i as u32) ^ k.rotate_left(16)]
+}
+
+/// Runs the scan and the counting sort of `n` elements drawn by `pattern` into `buckets`
+/// buckets, `runs` times, and checks the last run against the CPU.
+pub fn check(gpu: &Gpu, target: &Target, n: u64, buckets: u64, pattern: Pattern, runs: u32) -> Result<Report> {
+    let (values, keys) = inputs(n as usize, buckets.max(1), pattern, n ^ 0x5eed);
+    let out = run(gpu, target, &values, &keys, buckets, runs)?;
+    let mismatch = compare(&values, &keys, buckets, &out);
+    Ok(Report {
+        n,
+        buckets,
+        pattern,
+        mismatch,
+        scan_seconds: out.scan_seconds,
+        sort_seconds: out.sort_seconds,
+    })
+}

@@ -1,0 +1,281 @@
+//! Specialisation: the constants' values, then culling that knows them. A pass or operator
+//! whose `enabled` condition is 0 leaves the graph, and with it every pass of a chain that
+//! starts with it and every chain that nothing live feeds; then whatever no output depends
+//! on leaves too. What remains is the live graph that plans, kernels and memory are made of.
+
+use crate::error::Result;
+use crate::expr::Expr;
+use crate::graph::{ChainEntry, Culled, FrameStep, Graph};
+use crate::ids::{ChainId, OpId};
+use crate::ir::ConstValue;
+use crate::load::Entry;
+use petgraph::visit::{Bfs, Reversed};
+use std::collections::{BTreeMap, BTreeSet};
+
+/// A node of the declared graph.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Node {
+    Pass(usize),
+    Op(usize),
+}
+
+impl Graph {
+    /// The live view of the graph with `constants` (the graph's defaults overridden and
+    /// extended); every `enabled` condition must evaluate.
+    pub fn specialize(&self, constants: &BTreeMap<String, ConstValue>) -> Result<Graph> {
+        self.clone().specialize_view(constants, true)
+    }
+
+    /// Recomputes the live view. When not `strict`, a condition naming a constant that is
+    /// not known yet (a host constant such as `PATHS`) keeps its pass.
+    pub(crate) fn specialize_view(mut self, given: &BTreeMap<String, ConstValue>, strict: bool) -> Result<Graph> {
+        self.constants = self.declared.constants.clone();
+        for (name, v) in given {
+            if let Some(default) = self.declared.constants.get(name)
+                && default.wgsl_type() != v.wgsl_type()
+            {
+                return Err(self.error_at_decl(
+                    name,
+                    format!(
+                        "constant '{name}' is {} in the graph but was given as {}",
+                        default.wgsl_type(),
+                        v.wgsl_type()
+                    ),
+                ));
+            }
+            self.constants.insert(name.clone(), *v);
+        }
+        let vars: BTreeMap<String, f64> = self.constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
+        // The whole declared structure, to cull on.
+        self.passes = self.declared.passes.clone();
+        self.ops = self.declared.ops.clone();
+        self.chains = self.build_chains()?;
+        let mut culled: BTreeMap<Node, String> = self.disabled(&vars, strict)?;
+        self.cull_orphans(&mut culled);
+        self.keep_live(&culled);
+        self.cull_unread(&mut culled)?;
+        self.keep_live(&culled);
+        self.culled = self
+            .declared
+            .entries
+            .iter()
+            .filter_map(|e| {
+                let node = match *e {
+                    Entry::Pass(i) => Node::Pass(i),
+                    Entry::Op(i) => Node::Op(i),
+                };
+                culled.get(&node).map(|reason| Culled {
+                    name: self.node_name(node).to_string(),
+                    reason: reason.clone(),
+                })
+            })
+            .collect();
+        self.check_live()?;
+        Ok(self)
+    }
+
+    fn node_name(&self, n: Node) -> &str {
+        match n {
+            Node::Pass(i) => &self.declared.passes[i].decl.name,
+            Node::Op(i) => &self.declared.ops[i].name,
+        }
+    }
+
+    /// Nodes whose `enabled` condition is 0, with the reason.
+    fn disabled(&self, vars: &BTreeMap<String, f64>, strict: bool) -> Result<BTreeMap<Node, String>> {
+        let mut out = BTreeMap::new();
+        let conditions = self
+            .declared
+            .passes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, p)| {
+                p.decl
+                    .enabled
+                    .as_ref()
+                    .map(|e| (Node::Pass(i), e.clone(), p.origin.clone()))
+            })
+            .chain(self.declared.ops.iter().enumerate().filter_map(|(i, o)| {
+                o.enabled
+                    .as_ref()
+                    .map(|e| (Node::Op(i), e.to_string(), o.origin.clone()))
+            }));
+        for (node, text, origin) in conditions {
+            let expr = Expr::parse(&text).map_err(|e| self.declared.sources.at_name(&origin, &text, e))?;
+            let known = expr.names().iter().all(|n| vars.contains_key(n));
+            if !known && !strict {
+                continue;
+            }
+            let value = expr.eval(vars).map_err(|e| {
+                self.declared
+                    .sources
+                    .at_name(&origin, &text, format!("'{}': enabled: {e}", self.node_name(node)))
+            })?;
+            if value == 0.0 {
+                let values: Vec<String> = expr
+                    .names()
+                    .iter()
+                    .map(|n| {
+                        format!(
+                            "{n} = {}",
+                            self.constants.get(n).map_or("?".into(), |v| v.wgsl_literal())
+                        )
+                    })
+                    .collect();
+                out.insert(node, format!("disabled: `{text}` is 0 with {}", values.join(", ")));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Adds the passes of chains whose entry is culled, and the chains nothing live feeds.
+    fn cull_orphans(&self, culled: &mut BTreeMap<Node, String>) {
+        loop {
+            let before = culled.len();
+            for chain in &self.chains {
+                let entry = chain.passes[0].0;
+                let reason = if culled.contains_key(&Node::Pass(entry)) {
+                    Some(format!(
+                        "its chain begins at '{}', which is culled",
+                        self.declared.passes[entry].decl.name
+                    ))
+                } else if let ChainEntry::Stream(s) = &chain.entry {
+                    let producers: Vec<usize> = (0..self.declared.passes.len())
+                        .filter(|&p| self.declared.passes[p].decl.emits.contains(s))
+                        .collect();
+                    producers
+                        .iter()
+                        .all(|p| culled.contains_key(&Node::Pass(*p)))
+                        .then(|| format!("every pass emitting into stream '{s}' is culled"))
+                } else {
+                    None
+                };
+                if let Some(reason) = reason {
+                    for &p in &chain.passes {
+                        culled.entry(Node::Pass(p.0)).or_insert_with(|| reason.clone());
+                    }
+                }
+            }
+            if culled.len() == before {
+                return;
+            }
+        }
+    }
+
+    /// Makes the live view the declared graph minus `culled`: passes, operators, chains,
+    /// phases, dead streams and the frame's steps.
+    fn keep_live(&mut self, culled: &BTreeMap<Node, String>) {
+        let d = &self.declared;
+        let live_pass: Vec<usize> = (0..d.passes.len())
+            .filter(|i| !culled.contains_key(&Node::Pass(*i)))
+            .collect();
+        let live_op: Vec<usize> = (0..d.ops.len())
+            .filter(|i| !culled.contains_key(&Node::Op(*i)))
+            .collect();
+        self.passes = live_pass.iter().map(|&i| d.passes[i].clone()).collect();
+        self.ops = live_op.iter().map(|&i| d.ops[i].clone()).collect();
+        self.chains = self.build_chains().expect("a subset of valid chains is valid");
+        self.phases = self.build_phases().expect("a subset of valid phases is valid");
+        let live_names: BTreeSet<&str> = self.passes.iter().map(|p| p.decl.name.as_str()).collect();
+        self.dead_streams = self
+            .streams
+            .iter()
+            .filter(|(_, s)| !live_names.contains(s.to.as_str()))
+            .map(|(n, _)| n.clone())
+            .collect();
+        let mut steps = Vec::new();
+        for e in &self.declared.entries {
+            match *e {
+                Entry::Pass(i) => {
+                    if let Some(p) = live_pass.iter().position(|&x| x == i)
+                        && let Some(c) = self.chains.iter().position(|c| c.passes[0].0 == p)
+                        && matches!(self.chains[c].entry, ChainEntry::Start(_))
+                    {
+                        steps.push(FrameStep::Phase(self.phase_of_chain(ChainId(c))));
+                    }
+                }
+                Entry::Op(i) => {
+                    if let Some(o) = live_op.iter().position(|&x| x == i) {
+                        steps.push(FrameStep::Op(OpId(o)));
+                    }
+                }
+            }
+        }
+        self.steps = steps;
+    }
+
+    /// Adds every live node no output depends on (when the graph names outputs).
+    fn cull_unread(&self, culled: &mut BTreeMap<Node, String>) -> Result<()> {
+        if self.outputs.is_empty() {
+            return Ok(());
+        }
+        let (dg, nodes) = self.dependency_graph();
+        let rev = Reversed(&dg);
+        let mut reached = BTreeSet::new();
+        for o in &self.outputs {
+            let mut bfs = Bfs::new(rev, nodes[&format!("resource:{o}")]);
+            while let Some(n) = bfs.next(rev) {
+                reached.insert(n);
+            }
+        }
+        let reason = format!("no output ({}) depends on what it produces", self.outputs.join(", "));
+        for (i, p) in self.declared.passes.iter().enumerate() {
+            if let Some(n) = nodes.get(&format!("pass:{}", p.decl.name))
+                && !reached.contains(n)
+            {
+                culled.entry(Node::Pass(i)).or_insert_with(|| reason.clone());
+            }
+        }
+        for (i, o) in self.declared.ops.iter().enumerate() {
+            if let Some(n) = nodes.get(&format!("op:{}", o.name))
+                && !reached.contains(n)
+            {
+                culled.entry(Node::Op(i)).or_insert_with(|| reason.clone());
+            }
+        }
+        Ok(())
+    }
+
+    /// An error, not a black image: a graph with nothing left, or an output nothing writes.
+    fn check_live(&self) -> Result<()> {
+        let why = |names: &mut dyn Iterator<Item = &str>| -> String {
+            let reasons: Vec<String> = names
+                .filter_map(|n| self.culled.iter().find(|c| c.name == n))
+                .map(|c| format!("'{}' {}", c.name, c.reason))
+                .collect();
+            if reasons.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", reasons.join("; "))
+            }
+        };
+        if self.passes.is_empty() && self.ops.is_empty() {
+            let mut all = self.culled.iter().map(|c| c.name.as_str());
+            return Err(self.error_at(
+                &self.name,
+                format!("every pass of graph '{}' is culled{}", self.name, why(&mut all)),
+            ));
+        }
+        for o in &self.outputs {
+            let written = self.passes.iter().any(|p| p.decl.writes.contains(o))
+                || self.ops.iter().any(|op| op.writes().contains(&o.as_str()));
+            if !written {
+                let mut writers = self
+                    .declared
+                    .passes
+                    .iter()
+                    .filter(|p| p.decl.writes.contains(o))
+                    .map(|p| p.decl.name.as_str())
+                    .chain(
+                        self.declared
+                            .ops
+                            .iter()
+                            .filter(|op| op.writes().contains(&o.as_str()))
+                            .map(|op| op.name.as_str()),
+                    );
+                return Err(self.error_at(o, format!("output '{o}' has no live writer{}", why(&mut writers))));
+            }
+        }
+        Ok(())
+    }
+}
