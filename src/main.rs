@@ -1,4 +1,5 @@
-//! The `lightgraph` command line: render, reference, compare, explain, bench, list.
+//! The `lightgraph` command line: render, reference, compare, stress, explain, bench,
+//! operators, list.
 
 mod cli;
 
@@ -6,6 +7,7 @@ use clap::{Parser, Subcommand};
 use cli::bench::BenchArgs;
 use cli::compare::CompareArgs;
 use cli::explain::ExplainArgs;
+use cli::operators::OperatorsArgs;
 use cli::reference::ReferenceArgs;
 use cli::render::RenderArgs;
 use cli::stress::StressArgs;
@@ -38,6 +40,9 @@ enum Command {
     Explain(ExplainArgs),
     /// Measure layouts over a sweep of paths per frame: Markdown table, CSV and PNG plot.
     Bench(BenchArgs),
+    /// Check the engine's collective operators (scan, counting sort) against the CPU and
+    /// time them on the GPU.
+    Operators(OperatorsArgs),
     /// List built-in graphs with their layouts, built-in scenes and GPU adapters.
     List,
 }
@@ -54,7 +59,7 @@ fn main() -> ExitCode {
         Command::Compare(a) => a.common.assets.clone(),
         Command::Explain(a) => a.common.assets.clone(),
         Command::Bench(a) => a.common.assets.clone(),
-        Command::List | Command::Stress(_) => None,
+        Command::List | Command::Stress(_) | Command::Operators(_) => None,
     };
     if let Some(dir) = assets {
         // SAFETY: set before any thread starts; scene loading reads it.
@@ -68,6 +73,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => cli::bench::bench(a),
         Command::List => cli::list::list(),
         Command::Stress(a) => cli::stress::stress(a),
+        Command::Operators(a) => cli::operators::operators(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -228,8 +228,10 @@ impl Scan<'_> {
         }
     }
 
-    /// The kernels: per level below the top, the tile sums; the top level scanned by one
-    /// workgroup; then per level, top down, the tiles rescanned with their offsets.
+    /// The kernels: per level below the top, the tile sums; then per level, top down, the
+    /// tiles rescanned with their offsets. The top level (one tile at most) is not scanned
+    /// apart: the level below sums the top's values before each of its tiles itself (or, for
+    /// a single tile, starts at 0).
     fn kernels(&self, prefix: &str, resolved: &Resolved) -> Vec<OpKernel> {
         let levels = resolved.scan_levels[&self.o].len();
         let per_group = self.tile();
@@ -242,7 +244,7 @@ impl Scan<'_> {
             m.text.push_str(&scan_reduce_entry(&name, self.subgroups));
             out.push(m.finish(name, Groups { per_group, level: l }));
         }
-        for l in (0..=levels).rev() {
+        for l in (0..levels.max(1)).rev() {
             let mut m = self.module(l);
             let dst = if l == 0 {
                 BufferRef::Resource(self.output.to_string())
@@ -254,8 +256,12 @@ impl Scan<'_> {
             if !in_place {
                 m.bind("lg_dst", "array<u32>", dst);
             }
-            let offsets = l < levels;
-            if offsets {
+            let offsets = match l + 1 {
+                top if top == levels => Offsets::Sums,
+                above if above < levels => Offsets::Scanned,
+                _ => Offsets::Zero,
+            };
+            if offsets != Offsets::Zero {
                 m.bind("lg_offsets", "array<u32>", BufferRef::Scratch(self.o, l));
             }
             let name = format!("{prefix}_down{l}");
@@ -385,32 +391,70 @@ fn scan_reduce_entry(name: &str, subgroups: bool) -> String {
         "    let total = lg_tree_sum(s, lid);\n"
     };
     format!(
-        "{}    var s = 0u;\n    for (var j = 0u; j < LG_ITEMS; j += 1u) {{\n        let i = base + j * LG_WG + lid;\n        if (i < n) {{ s += lg_src[i]; }}\n    }}\n{total}    if (lid == 0u && tile < arrayLength(&lg_dst)) {{ lg_dst[tile] = total; }}\n}}\n",
+        "{}    var s = 0u;
+    if (base + LG_TILE <= n) {{
+        for (var j = 0u; j < LG_ITEMS; j += 1u) {{ s += lg_src[base + j * LG_WG + lid]; }}
+    }} else {{
+        for (var j = 0u; j < LG_ITEMS; j += 1u) {{
+            let i = base + j * LG_WG + lid;
+            if (i < n) {{ s += lg_src[i]; }}
+        }}
+    }}
+{total}    if (lid == 0u && tile < arrayLength(&lg_dst)) {{ lg_dst[tile] = total; }}
+}}
+",
         scan_entry_head(name, subgroups)
     )
 }
 
-/// Each tile's exclusive scan plus its offset from the level above (0 at the top level).
-fn scan_down_entry(name: &str, in_place: bool, offsets: bool, subgroups: bool) -> String {
+/// Where a tile's offset comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Offsets {
+    /// The only tile: 0.
+    Zero,
+    /// The sums of the tiles before it, from the top level's unscanned values.
+    Sums,
+    /// The level above, scanned.
+    Scanned,
+}
+
+/// Each tile's exclusive scan plus its offset from the level above.
+fn scan_down_entry(name: &str, in_place: bool, offsets: Offsets, subgroups: bool) -> String {
     let dst = if in_place { "lg_src" } else { "lg_dst" };
-    let offset = if offsets { "lg_offsets[tile]" } else { "0u" };
+    let sum = if subgroups {
+        "    if (full) { offset = lg_sg_sum(before, lane); } else { offset = lg_tree_sum(before, lid); }\n"
+    } else {
+        "    offset = lg_tree_sum(before, lid);\n"
+    };
+    let offset = match offsets {
+        Offsets::Zero => "    let offset = 0u;\n".to_string(),
+        Offsets::Scanned => "    var offset = 0u;\n    if (base < n) { offset = lg_offsets[tile]; }\n".to_string(),
+        Offsets::Sums => format!(
+            "    // The sum of the tiles before this one.\n    var before = 0u;\n    for (var j = lid; j < tile; j += LG_WG) {{ before += lg_offsets[j]; }}\n    var offset: u32;\n{sum}    workgroupBarrier();\n"
+        ),
+    };
     let exclusive = if subgroups {
         "    var run: u32;\n    if (full) { run = lg_sg_exclusive(t, rank, sg, sg_count, sg_size, lane); } else { run = lg_tree_exclusive(t, rank); }\n"
     } else {
         "    var run = lg_tree_exclusive(t, rank);\n"
     };
     format!(
-        "{head}    for (var j = 0u; j < LG_ITEMS; j += 1u) {{
-        let i = base + j * LG_WG + lid;
-        var v = 0u;
-        if (i < n) {{ v = lg_src[i]; }}
-        lg_tile[lg_pad(j * LG_WG + lid)] = v;
+        "{head}{offset}    let whole = base + LG_TILE <= n;
+    if (whole) {{
+        for (var j = 0u; j < LG_ITEMS; j += 1u) {{ lg_tile[lg_pad(j * LG_WG + lid)] = lg_src[base + j * LG_WG + lid]; }}
+    }} else {{
+        for (var j = 0u; j < LG_ITEMS; j += 1u) {{
+            let i = base + j * LG_WG + lid;
+            var v = 0u;
+            if (i < n) {{ v = lg_src[i]; }}
+            lg_tile[lg_pad(j * LG_WG + lid)] = v;
+        }}
     }}
     workgroupBarrier();
     let first = rank * LG_ITEMS;
     var t = 0u;
     for (var k = 0u; k < LG_ITEMS; k += 1u) {{ t += lg_tile[lg_pad(first + k)]; }}
-{exclusive}    if (base < n) {{ run += {offset}; }}
+{exclusive}    run += offset;
     for (var k = 0u; k < LG_ITEMS; k += 1u) {{
         let at = lg_pad(first + k);
         let v = lg_tile[at];
@@ -418,9 +462,13 @@ fn scan_down_entry(name: &str, in_place: bool, offsets: bool, subgroups: bool) -
         run += v;
     }}
     workgroupBarrier();
-    for (var j = 0u; j < LG_ITEMS; j += 1u) {{
-        let i = base + j * LG_WG + lid;
-        if (i < n) {{ {dst}[i] = lg_tile[lg_pad(j * LG_WG + lid)]; }}
+    if (whole) {{
+        for (var j = 0u; j < LG_ITEMS; j += 1u) {{ {dst}[base + j * LG_WG + lid] = lg_tile[lg_pad(j * LG_WG + lid)]; }}
+    }} else {{
+        for (var j = 0u; j < LG_ITEMS; j += 1u) {{
+            let i = base + j * LG_WG + lid;
+            if (i < n) {{ {dst}[i] = lg_tile[lg_pad(j * LG_WG + lid)]; }}
+        }}
     }}
 }}
 ",

@@ -425,11 +425,11 @@ impl Declared {
                         ),
                     ));
                 }
-                if r.scope == Scope::External && op.writes().contains(&buffer) {
+                if r.scope == Scope::External {
                     return Err(here(
                         buffer,
                         format!(
-                            "operator '{}' writes '{buffer}', which the host supplies (External)",
+                            "operator '{}' uses '{buffer}', which the host supplies (External); operators work on resources the engine allocates",
                             op.name
                         ),
                     ));

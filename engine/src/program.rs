@@ -65,6 +65,12 @@ impl Target {
     pub fn subgroups(&self) -> bool {
         self.capabilities.contains(naga::valid::Capabilities::SUBGROUP)
     }
+
+    /// The same target without subgroup operations (the portable kernels).
+    pub fn without_subgroups(mut self) -> Target {
+        self.capabilities.remove(naga::valid::Capabilities::SUBGROUP);
+        self
+    }
 }
 
 /// One compiled kernel.
@@ -78,6 +84,9 @@ pub struct KernelModule {
     pub module: naga::Module,
     /// Buffers the entry point uses.
     pub uses: Vec<BindingUse>,
+    /// Whether the engine wrote it and guards every index itself, so it runs without the
+    /// bounds checks and loop bounds wgpu adds to a shader.
+    pub trusted: bool,
 }
 
 /// A buffer an entry point uses, as its WGSL declares it.
@@ -241,6 +250,7 @@ fn pass_kernels(
             source: src,
             module,
             uses,
+            trusted: false,
         });
     }
     Ok(kernels)
@@ -269,6 +279,7 @@ impl Internal<'_> {
             source,
             module,
             uses,
+            trusted: true,
         })
     }
 
@@ -401,6 +412,7 @@ impl Internal<'_> {
                     source,
                     module,
                     uses,
+                    trusted: true,
                 };
                 kernels.push((module, k.groups));
             }

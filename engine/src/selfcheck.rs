@@ -81,6 +81,8 @@ pub struct Report {
     pub scan_seconds: Option<f64>,
     /// GPU seconds of the counting sort (clear, count, scan, scatter), per run (median).
     pub sort_seconds: Option<f64>,
+    /// GPU seconds of each kernel (median of the runs), in the order they run.
+    pub kernels: Vec<(String, f64)>,
 }
 
 /// SplitMix64: seeded, well-mixed 64-bit numbers.
@@ -181,6 +183,8 @@ pub struct Outputs {
     pub scan_seconds: Option<f64>,
     /// GPU seconds of the counting sort: clear, count, scan, scatter (median of the runs).
     pub sort_seconds: Option<f64>,
+    /// GPU seconds of each kernel (median of the runs), in the order they run.
+    pub kernels: Vec<(String, f64)>,
 }
 
 /// Runs the scan of `values` and the counting sort of the elements with `keys` into
@@ -217,8 +221,12 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         instance.write("payload", bytemuck::cast_slice(&payload))?;
     }
     let (mut scan, mut sort) = (Vec::new(), Vec::new());
+    let mut per_kernel: Vec<Vec<f64>> = vec![Vec::new(); op_kernels.iter().flatten().count()];
     for run in 0..runs.max(1) {
         let stats = instance.run_frame(run, 0)?;
+        for (k, name) in op_kernels.iter().flatten().enumerate() {
+            per_kernel[k].extend(stats.kernel_seconds.get(name));
+        }
         let seconds = |ops: &[Vec<String>]| -> Option<f64> {
             let names: Vec<&String> = ops.iter().flatten().collect();
             let found: Vec<f64> = names
@@ -237,6 +245,12 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
     sums.truncate(n);
     slots.truncate(n);
     sorted.truncate(n);
+    let kernels = op_kernels
+        .iter()
+        .flatten()
+        .zip(per_kernel)
+        .filter_map(|(name, times)| median(times).map(|t| (name.clone(), t)))
+        .collect();
     Ok(Outputs {
         sums,
         slots,
@@ -244,6 +258,7 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         sorted,
         scan_seconds: median(scan),
         sort_seconds: median(sort),
+        kernels,
     })
 }
 
@@ -265,5 +280,6 @@ pub fn check(gpu: &Gpu, target: &Target, n: u64, buckets: u64, pattern: Pattern,
         mismatch,
         scan_seconds: out.scan_seconds,
         sort_seconds: out.sort_seconds,
+        kernels: out.kernels,
     })
 }

@@ -19,9 +19,7 @@ fn targets() -> Vec<(&'static str, Target)> {
     let with = gpu().target();
     let mut out = vec![("adapter", with.clone())];
     if with.subgroups() {
-        let mut without = with;
-        without.capabilities.remove(naga::valid::Capabilities::SUBGROUP);
-        out.push(("no subgroups", without));
+        out.push(("no subgroups", with.without_subgroups()));
     }
     out
 }

@@ -140,6 +140,9 @@ impl Instance<'_> {
         let mut rec = Recorder::new(&self.gpu.device);
         let control = self.buffers.slot(&BufferRef::Control);
         rec.clear(self.buffers.buffer(control), control.offset, control.size);
+        for (slot, bytes) in self.item_clears(None) {
+            rec.clear(self.buffers.buffer(slot), slot.offset, bytes);
+        }
         for (record, run) in runs.into_iter().enumerate() {
             match run {
                 Run::Chunk { phase, step, first } => {
@@ -261,20 +264,10 @@ impl Instance<'_> {
     /// be shared), regeneration counters zeroed, a counted domain counted, the schedule run,
     /// the counters folded.
     fn run_chunk(&mut self, rec: &mut Recorder, ph: PhaseId, record: usize) -> Result<()> {
+        for (slot, bytes) in self.item_clears(Some(ph)) {
+            rec.clear(self.buffers.buffer(slot), slot.offset, bytes);
+        }
         let plan = &self.program.plan;
-        let chains = &plan.graph.phases[ph].chains;
-        for &c in chains.iter().filter(|c| plan.stored_chains.contains(c)) {
-            let slot = self.buffers.slot(&BufferRef::Alive(c));
-            rec.clear(self.buffers.buffer(slot), slot.offset, slot.size);
-        }
-        for (b, boundary) in plan.boundaries.iter().enumerate() {
-            if chains.contains(&boundary.chain) {
-                for side in 0..1 + boundary.pingpong as usize {
-                    let slot = self.buffers.slot(&BufferRef::Boundary(crate::ids::BoundaryId(b), side));
-                    rec.clear(self.buffers.buffer(slot), slot.offset, BOUNDARY_HEADER);
-                }
-            }
-        }
         for k in plan.kernels.iter().filter(|k| k.phase == ph && k.regenerates) {
             let word = self.program.resolved.control.next[&k.chain];
             self.dispatch(rec, &self.kernels.zeros[&word], record, Dispatch::Single);
@@ -286,6 +279,41 @@ impl Instance<'_> {
         self.run_steps(rec, &steps, record)?;
         self.dispatch(rec, &self.kernels.fold, record, Dispatch::Single);
         Ok(())
+    }
+
+    /// The alive flags and boundary headers that must read zero when a phase starts, with
+    /// the bytes to clear: those of phase `Some(ph)` in shared memory (another buffer may have
+    /// used it since), or with `None` those in memory of their own (which the last frame left
+    /// at zero, so once per batch is enough).
+    fn item_clears(&self, ph: Option<PhaseId>) -> Vec<(super::buffers::Slot, u64)> {
+        let plan = &self.program.plan;
+        let g = &plan.graph;
+        let memory = &self.program.resolved.memory;
+        let wanted = |r: &BufferRef, chain: ChainId| {
+            let shared = memory.placements[r].arena.is_some();
+            match ph {
+                Some(ph) => shared && g.phase_of_chain(chain) == ph,
+                None => !shared,
+            }
+        };
+        let mut out = Vec::new();
+        for &c in &plan.stored_chains {
+            let r = BufferRef::Alive(c);
+            // Flags of their own are left at zero by the loops that end every chunk.
+            if ph.is_some() && wanted(&r, c) {
+                let slot = self.buffers.slot(&r);
+                out.push((slot, slot.size));
+            }
+        }
+        for (b, boundary) in plan.boundaries.iter().enumerate() {
+            for side in 0..1 + boundary.pingpong as usize {
+                let r = BufferRef::Boundary(crate::ids::BoundaryId(b), side);
+                if wanted(&r, boundary.chain) {
+                    out.push((self.buffers.slot(&r), BOUNDARY_HEADER));
+                }
+            }
+        }
+        out
     }
 
     /// An operator's kernels over `n` elements (the most there can be, when counted).

@@ -96,10 +96,21 @@ impl Builder<'_> {
             bind_group_layouts: &layouts,
             immediate_size: 0,
         });
-        let shader = self.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        let desc = wgpu::ShaderModuleDescriptor {
             label: Some(name),
             source: wgpu::ShaderSource::Naga(Cow::Owned(module.module.clone())),
-        });
+        };
+        let shader = if module.trusted {
+            // SAFETY: the engine's own kernels index only below lengths they check (their
+            // element counts are validated against the buffers when the program is resolved)
+            // and loop a bounded number of times.
+            unsafe {
+                self.device
+                    .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
+            }
+        } else {
+            self.device.create_shader_module(desc)
+        };
         let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(name),
             layout: Some(&layout),
