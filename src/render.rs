@@ -126,6 +126,19 @@ pub struct LayoutOverrides {
     /// Compile the code of every scene feature into the kernels, not only the scene's (to
     /// measure what scene-specialised kernels buy).
     pub all_features: bool,
+    /// Give every transient buffer memory of its own (no sharing between buffers whose
+    /// lifetimes do not overlap).
+    pub separate_memory: bool,
+}
+
+impl LayoutOverrides {
+    /// The compilation target of `gpu` with these overrides.
+    pub fn target(&self, gpu: &Gpu) -> lightgraph_engine::Target {
+        lightgraph_engine::Target {
+            alias_transients: !self.separate_memory,
+            ..gpu.target()
+        }
+    }
 }
 
 impl LayoutOverrides {
@@ -300,7 +313,7 @@ impl<'g> Session<'g> {
             }
             let mut measuring = spec.clone();
             measuring.constants.extend(m.set.clone());
-            let program = Program::compile(&plan, &measuring, &gpu.target())?;
+            let program = Program::compile(&plan, &measuring, &options.layout.target(gpu))?;
             let mut instance = Instance::new(gpu, program, &externals)
                 .with_context(|| format!("measuring '{name}' of graph '{}' in layout '{layout}'", graph.name))?;
             let stats = instance.run_frames(0, 1, options.seed)?;
@@ -315,7 +328,7 @@ impl<'g> Session<'g> {
             spec.constants
                 .insert(name.clone(), ConstValue::F32((a as f64 / b as f64) as f32));
         }
-        let program = Program::compile(&plan, &spec, &gpu.target())?;
+        let program = Program::compile(&plan, &spec, &options.layout.target(gpu))?;
         let instance = Instance::new(gpu, program, &externals)
             .with_context(|| format!("instantiating graph '{}' in layout '{layout}'", graph.name))?;
         Ok(Session {

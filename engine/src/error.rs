@@ -72,6 +72,19 @@ impl Location {
     }
 }
 
+impl Location {
+    /// The location of the first quoted `name` after the first `marker` (e.g. a field such
+    /// as `outputs:`), or of the first quoted `name`.
+    pub fn of_name_after(file: &str, text: &str, marker: &str, name: &str) -> Self {
+        if let Some(m) = text.find(marker)
+            && let Some(i) = text[m..].find(&format!("\"{name}\""))
+        {
+            return Self::at_offset(file, text, m + i + 1);
+        }
+        Self::of_name(file, text, name)
+    }
+}
+
 impl fmt::Display for Location {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}:{}:{}", self.file, self.line, self.column)

@@ -109,7 +109,29 @@ impl<K: Ord + Clone> MemoryPlan<K> {
                 },
             );
         }
+        plan.drop_unshared_arenas();
         plan
+    }
+
+    /// Arenas in which no two buffers share bytes save nothing: their buffers get memory of
+    /// their own (no alignment padding, no ranges to bind).
+    fn drop_unshared_arenas(&mut self) {
+        let sharing = self.sharing();
+        let mut kept = Vec::new();
+        for a in 0..self.arenas.len() {
+            let shares = sharing.iter().any(|(x, _)| self.placements[x].arena == Some(a));
+            let new = shares.then(|| {
+                kept.push(self.arenas[a]);
+                kept.len() - 1
+            });
+            for p in self.placements.values_mut().filter(|p| p.arena == Some(a)) {
+                p.arena = new;
+                if new.is_none() {
+                    p.offset = 0;
+                }
+            }
+        }
+        self.arenas = kept;
     }
 
     /// The lowest aligned offset, in the first arena where it fits, at which `bytes` overlap
@@ -224,13 +246,21 @@ mod tests {
     }
 
     #[test]
-    fn full_arenas_open_new_ones() {
-        let requests: BTreeMap<&str, Request> = [("a", req(800, Some((0, 0)))), ("b", req(800, Some((0, 0))))]
-            .into_iter()
-            .collect();
+    fn full_arenas_open_new_ones_and_arenas_sharing_nothing_go() {
+        let requests: BTreeMap<&str, Request> = [
+            ("a", req(800, Some((0, 0)))),
+            ("b", req(800, Some((0, 0)))),
+            ("c", req(800, Some((1, 1)))),
+        ]
+        .into_iter()
+        .collect();
         let plan = MemoryPlan::new(&requests, 4, 1000, true);
         check(&plan, 4);
-        assert_eq!(plan.arenas, vec![800, 800]);
+        // a fills arena 0, b needs a second, c reuses a's bytes; b's arena shares nothing.
+        assert_eq!(plan.arenas, vec![800]);
+        assert_eq!(plan.placements["b"].arena, None);
+        assert_eq!(plan.placements["c"].arena, Some(0));
+        assert_eq!(plan.peak_bytes(), 1600);
     }
 
     #[test]

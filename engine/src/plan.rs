@@ -320,15 +320,15 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
     for names in &layout.kernels {
         let mut group = Vec::new();
         for name in names {
-            if graph.is_culled(name) {
-                continue;
-            }
-            if graph.ops.iter().chain(&graph.declared.ops).any(|o| o.name == *name) {
+            if graph.declared.ops.iter().any(|o| o.name == *name) {
                 return Err(graph.error_in_layout(
                     layout_name,
                     name,
                     format!("layout '{layout_name}' names operator '{name}'; operators run on their own and are not listed in layouts"),
                 ));
+            }
+            if graph.is_culled(name) {
+                continue;
             }
             let p = graph.pass_index(name).ok_or_else(|| {
                 let known: Vec<&str> = graph.passes.iter().map(|p| p.decl.name.as_str()).collect();

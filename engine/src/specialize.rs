@@ -273,7 +273,15 @@ impl Graph {
                             .filter(|op| op.writes().contains(&o.as_str()))
                             .map(|op| op.name.as_str()),
                     );
-                return Err(self.error_at(o, format!("output '{o}' has no live writer{}", why(&mut writers))));
+                return Err(crate::error::Error::Invalid {
+                    at: crate::error::Location::of_name_after(
+                        &self.file,
+                        self.declared.sources.text(&self.file),
+                        "outputs:",
+                        o,
+                    ),
+                    message: format!("output '{o}' has no live writer{}", why(&mut writers)),
+                });
             }
         }
         Ok(())

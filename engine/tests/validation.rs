@@ -108,3 +108,146 @@ fn reserved_names_are_refused() {
     );
     assert!(e.contains("'lg_scratch'"), "{e}");
 }
+
+/// The Collatz graph with `extra` appended to its passes.
+fn with_passes(extra: &str) -> String {
+    base().replace(
+        "        Pass(name: \"unused\"",
+        &format!("        {extra}\n        Pass(name: \"unused\""),
+    )
+}
+
+#[test]
+fn a_constant_condition_culls_and_says_why() {
+    let text = base().replace(
+        "Pass(name: \"summarize\", item: \"Bin\",",
+        "Pass(name: \"summarize\", item: \"Bin\", enabled: \"BINS > 64\",",
+    );
+    let e = error_of(&text);
+    assert!(
+        e.contains("output 'summary' has no live writer")
+            && e.contains("'summarize' disabled: `BINS > 64` is 0 with BINS = 64u"),
+        "{e}"
+    );
+    let (line, _) = position(&text, "outputs: [\"steps\", \"summary\"]");
+    assert!(e.starts_with(&format!("bad.ron:{line}:")), "{e}");
+}
+
+#[test]
+fn a_graph_with_every_pass_culled_is_an_error() {
+    let text = base().replace("role: ", "enabled: \"0\", role: ");
+    let e = error_of(&text);
+    assert!(
+        e.contains("every pass of graph 'collatz' is culled") && e.contains("'seed' disabled"),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_unknown_name_in_a_condition_is_an_error_once_constants_are_known() {
+    let text = base().replace(
+        "Pass(name: \"summarize\", item: \"Bin\",",
+        "Pass(name: \"summarize\", item: \"Bin\", enabled: \"SUMMARY\",",
+    );
+    // Loading keeps the pass (the host's constants are not known yet) ...
+    let g = Graph::from_text(&vfs(), "bad.ron", &text).unwrap();
+    // ... specialising names the unknown constant where the condition stands.
+    let e = g.specialize(&Default::default()).unwrap_err().to_string();
+    let (line, _) = position(&text, "\"SUMMARY\"");
+    assert!(
+        e.starts_with(&format!("bad.ron:{line}:")) && e.contains("unknown constant 'SUMMARY'"),
+        "{e}"
+    );
+}
+
+#[test]
+fn operators_are_checked() {
+    let cases = [
+        (
+            "Scan(name: \"sums\", input: \"nowhere\", over: \"N\"),",
+            "operator 'sums' uses unknown resource 'nowhere'",
+        ),
+        (
+            "Scan(name: \"sums\", input: \"histogram\", output: \"summary\", over: \"BINS\"),",
+            "",
+        ),
+        (
+            "Count(name: \"tally\", keys: \"steps\", counts: \"histogram\", slots: \"steps\", over: \"N\", counted: \"summary\"),",
+            "",
+        ),
+        (
+            "Scatter(name: \"sort\", keys: \"steps\", slots: \"scratch\", offsets: \"summary\", input: \"steps\", output: \"floats\", over: \"N\"),",
+            "operator 'sort' scatters 'steps' (u32) into 'floats' (f32); both must hold the same type",
+        ),
+        (
+            "Scan(name: \"sums\", input: \"floats\", over: \"N\"),",
+            "operator 'sums' (exclusive scan) needs u32 elements in 'floats', which holds 'f32'",
+        ),
+        (
+            "Clear(name: \"wipe\", buffer: \"steps\"), Clear(name: \"wipe\", buffer: \"steps\"),",
+            "pass 'wipe' appears twice",
+        ),
+        (
+            "Scan(name: \"sums\", input: \"steps\", over: \"N\", counted: \"floats\"),",
+            "'sums' is counted by 'floats', whose elements are 'f32'; a counter is a u32 or atomic<u32>",
+        ),
+    ];
+    for (entry, want) in cases {
+        let text = with_passes(entry).replace(
+            "\"scratch\": (ty: \"u32\", count: \"BINS\"),",
+            "\"scratch\": (ty: \"u32\", count: \"BINS\"), \"floats\": (ty: \"f32\", count: \"N\"),",
+        );
+        match Graph::from_text(&vfs(), "bad.ron", &text) {
+            Ok(_) => assert!(want.is_empty(), "{entry}: accepted, expected '{want}'"),
+            Err(e) => {
+                let e = e.to_string();
+                assert!(!want.is_empty() && e.contains(want), "{entry}: {e}");
+                assert!(e.starts_with("bad.ron:"), "{e}");
+            }
+        }
+    }
+}
+
+#[test]
+fn layouts_do_not_list_operators() {
+    let text = with_passes("Clear(name: \"wipe\", buffer: \"scratch\"),").replace(
+        "\"fused\": (kernels: [[\"seed\", \"step\", \"record\"], [\"summarize\"]]),",
+        "\"fused\": (kernels: [[\"seed\", \"step\", \"record\"], [\"summarize\"], [\"wipe\"]]),",
+    );
+    let g = Graph::from_text(&vfs(), "bad.ron", &text).unwrap();
+    let e = lightgraph_engine::Plan::new(&g, "fused").unwrap_err().to_string();
+    assert!(e.contains("names operator 'wipe'; operators run on their own"), "{e}");
+}
+
+#[test]
+fn parameters_are_checked() {
+    let text = base().replace("constants: {", "parameters: { \"SCALE\": F32(1.0) },\n    constants: {");
+    let sized = text.replace(
+        "\"steps\": (ty: \"u32\", count: \"N\")",
+        "\"steps\": (ty: \"u32\", count: \"N * SCALE\")",
+    );
+    let e = error_of(&sized);
+    assert!(e.contains("resource 'steps' is sized by parameter 'SCALE'"), "{e}");
+    let twice = text.replace("parameters: { \"SCALE\"", "parameters: { \"N\": U32(3), \"SCALE\"");
+    let e = error_of(&twice);
+    assert!(e.contains("'N' is both a constant and a parameter"), "{e}");
+}
+
+#[test]
+fn outputs_must_outlive_the_frame() {
+    let text = base().replace(
+        "\"summary\": (ty: \"u32\", count: \"BINS\"),",
+        "\"summary\": (ty: \"u32\", count: \"BINS\", scope: Transient),",
+    );
+    let e = error_of(&text);
+    assert!(e.contains("output 'summary' is Transient"), "{e}");
+    let cleared = base().replace(
+        "\"summary\": (ty: \"u32\", count: \"BINS\"),",
+        "\"summary\": (ty: \"u32\", count: \"BINS\", clear: true),",
+    );
+    let e = error_of(&cleared);
+    assert!(
+        e.contains("resource 'summary' has clear: true but is not Transient"),
+        "{e}"
+    );
+}

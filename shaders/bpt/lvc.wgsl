@@ -5,8 +5,9 @@
 // n times, estimates one light sub-path's connections with weight M / (n PATHS); in the MIS
 // the connections count n / LVC_AVERAGE_LENGTH (the measured M / PATHS) against the other
 // strategies. With LVC_MEASURING the light phase only counts the vertices it would store.
-// The cache is put in sub-path order after the light phase (shaders/bpt/lvc_order.wgsl), so
-// every layout picks the same vertices for the same seed.
+// The cache is put in sub-path order after the light phase by the engine's operators (an
+// exclusive scan of the vertices per sub-path, then a scatter; graphs/bpt-lvc.ron), so every
+// layout picks the same vertices for the same seed.
 
 // Connections per camera vertex: ceil of the measured average (at least 1).
 fn lvc_connections() -> u32 {
@@ -18,31 +19,17 @@ fn lvc_eta() -> f32 {
     return f32(lvc_connections()) / max(LVC_AVERAGE_LENGTH, 1e-3);
 }
 
-// An item for passes that only run once per frame.
-struct LvcOnce {
-    pad: u32,
-}
-
-// Pass `lvc_reset` (Start over 1): empties the cache before the light phase.
-fn lvc_reset(item: ptr<function, LvcOnce>, index: u32) -> bool {
-    atomicStore(&lvc_count, 0u);
-    return false;
-}
-
 // Pass `lvc_light_generate` (Start over the light sub-paths): counts the sub-path for the
 // measured average, then starts it as light tracing does.
 fn lvc_light_generate(p: ptr<function, LightPath>, index: u32) -> bool {
     count(COUNTER_LVC_PATHS, 1u);
-    if (!LVC_MEASURING) {
-        lvc_path_count[index] = 0u;
-    }
     return light_generate(p, index);
 }
 
 // Pass `lvc_bounce` (Loop): at the light sub-path's new vertex, the t = 1 splat, the vertex
 // into the cache in arrival order, `lvc_staging` (counted as overflow when the cache is
-// full), with its sub-path and rank there for `lvc_place` (shaders/bpt/lvc_order.wgsl), and
-// the next direction.
+// full), with its sub-path (`lvc_owner`) and its rank along the sub-path (`lvc_rank`) for the
+// scatter that puts the cache in sub-path order, and the next direction.
 fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
     let a = light_path_land(p);
     if (!a.alive) {
@@ -60,7 +47,8 @@ fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
                     let rank = lvc_path_count[(*p).index];
                     lvc_path_count[(*p).index] = rank + 1u;
                     lvc_staging[i] = v;
-                    lvc_keys[i] = vec2<u32>((*p).index, rank);
+                    lvc_owner[i] = (*p).index;
+                    lvc_rank[i] = rank;
                 } else {
                     count(COUNTER_LVC_OVERFLOW, 1u);
                 }
@@ -79,12 +67,9 @@ fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
     return light_path_scatter(p, s, bsdf, lvc_eta());
 }
 
-// Pass `lvc_camera` (Start over PATHS): the camera ray of sample `index`; none while
-// measuring.
+// Pass `lvc_camera` (Start over PATHS): the camera ray of sample `index` (culled from the
+// measuring frame).
 fn lvc_camera(p: ptr<function, CameraSubpath>, index: u32) -> bool {
-    if (LVC_MEASURING) {
-        return false;
-    }
     var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
     *p = camera_subpath_start(index, &rng);
     return true;

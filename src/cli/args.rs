@@ -75,6 +75,10 @@ pub struct Common {
     /// instead of only those the scene uses.
     #[arg(long)]
     pub all_features: bool,
+    /// Give every transient buffer memory of its own instead of sharing memory between
+    /// buffers whose lifetimes do not overlap (to measure or rule out the sharing).
+    #[arg(long)]
+    pub separate_memory: bool,
 }
 
 impl Common {
@@ -152,6 +156,7 @@ pub fn options(
         workgroup_size: common.workgroup,
         state: common.state,
         all_features: common.all_features,
+        separate_memory: common.separate_memory,
     };
     Ok(SessionOptions {
         width,

@@ -35,7 +35,8 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
     };
     let gpu = Gpu::new(c.adapter.as_deref()).ok();
     let device = gpu.as_ref().map(|g| (lightgraph::render::device_flags(g), g.target()));
-    let (device, target) = device.unwrap_or_default();
+    let (device, mut target) = device.unwrap_or_default();
+    target.alias_transients = !c.separate_memory;
     let flags = lightgraph::render::kernel_flags(device, &scene, c.all_features);
     print_features(&flags);
     let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);

@@ -152,10 +152,11 @@ fn unknown_pass() {
 
 #[test]
 fn unknown_resource() {
+    // Without the film catalog, nothing declares the film the path-tracing passes write.
     let (_, path) = pt_variant(
         "unknown-resource",
-        "\"film\": (ty: \"FilmWord\"",
-        "\"flim\": (ty: \"FilmWord\"",
+        "catalogs: [\"passes/pt.ron\", \"passes/film.ron\"],\n    passes: [Use(\"generate\"), Use(\"trace\"), Use(\"logic\"), Use(\"material\"), Use(\"shadow\"), Use(\"accumulate\")],",
+        "catalogs: [\"passes/pt.ron\"],\n    passes: [Use(\"generate\"), Use(\"trace\"), Use(\"logic\"), Use(\"material\"), Use(\"shadow\")],",
     );
     let err = fails(&[
         "render",

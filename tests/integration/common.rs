@@ -1,6 +1,6 @@
 //! Shared helpers: one GPU per test binary, rendering a scene to an image, region statistics.
 
-use lightgraph::render::{Image, LoadedScene, Session, SessionOptions, load_graph};
+use lightgraph::render::{Image, LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph};
 use lightgraph_engine::{ConstValue, Gpu};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -52,6 +52,45 @@ pub fn render(
         image: session.image().unwrap(),
         counters: session.counters.clone(),
         loops_capped: session.loops_capped,
+    }
+}
+
+/// What a test render with layout overrides produced, with the session's GPU memory.
+pub struct RenderedWith {
+    pub image: Image,
+    pub counters: BTreeMap<String, u64>,
+    pub memory_bytes: u64,
+}
+
+/// Like [`render`] without constants, with the layout's options overridden.
+#[allow(clippy::too_many_arguments)]
+pub fn render_with_layout(
+    scene: &LoadedScene,
+    graph: &str,
+    layout: &str,
+    size: (u32, u32),
+    spp: u32,
+    frames: u32,
+    seed: u32,
+    overrides: LayoutOverrides,
+) -> RenderedWith {
+    let graph = load_graph(graph).unwrap();
+    let options = SessionOptions {
+        width: size.0,
+        height: size.1,
+        samples_per_frame: spp,
+        seed,
+        constants: Default::default(),
+        layout: overrides,
+    };
+    let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
+    for _ in 0..frames {
+        session.render_frame().unwrap();
+    }
+    RenderedWith {
+        image: session.image().unwrap(),
+        counters: session.counters.clone(),
+        memory_bytes: session.memory_bytes(),
     }
 }
 

@@ -14,6 +14,7 @@ mod layouts;
 mod lights;
 mod probe;
 mod reference;
+mod resolve;
 mod scenes;
 mod specialize;
 mod stress;
