@@ -8,6 +8,7 @@ mod bvh;
 mod chi2;
 mod cli;
 mod common;
+mod docs;
 mod composition;
 mod gltf;
 mod layouts;
