@@ -249,36 +249,25 @@ impl Resolved {
     /// Resolves `plan` (whose graph holds the specialised constants) with the types of
     /// `reflection` (every source compiled together) for `target`.
     pub fn new(plan: &Plan, reflection: &naga::Module, target: &Target) -> Result<Resolved> {
-        let g = &plan.graph;
-        let constants = g.constants.clone();
-        let parameters: Vec<(String, ConstValue)> = g.parameters.iter().map(|(k, v)| (k.clone(), *v)).collect();
-        let mut vars: BTreeMap<String, f64> = constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
-        vars.extend(parameters.iter().map(|(k, v)| (k.clone(), v.as_f64())));
-        let used = used_resources(plan);
-        let sizes = resource_sizes(plan, reflection, &vars)?;
-        let words = item_words(plan, reflection)?;
-        let mut resolved = Resolved {
-            constants,
-            parameters,
-            sizes,
-            used,
-            words,
-            domains: Vec::new(),
-            pools: BTreeMap::new(),
-            state_capacity: BTreeMap::new(),
-            queue_capacity: BTreeMap::new(),
-            op_elements: BTreeMap::new(),
-            scan_levels: BTreeMap::new(),
-            control: control_map(plan),
-            bindings: bindings(plan),
-            memory: MemoryPlan::default(),
-            clears: BTreeMap::new(),
-        };
+        let mut resolved = Resolved::for_reflection(plan, bindings(plan));
+        let vars = resolved.variables();
+        resolved.used = used_resources(plan);
+        resolved.sizes = resource_sizes(plan, reflection, &vars)?;
+        resolved.words = item_words(plan, reflection)?;
         resolved.capacities(plan, target, &vars)?;
         resolved.operators(plan, &vars, target)?;
         resolved.memory = resolved.plan_memory(plan, target)?;
         resolved.clears = resolved.transient_clears(plan);
         Ok(resolved)
+    }
+
+    /// The constants and the parameters' defaults, as numbers for count expressions.
+    pub fn variables(&self) -> BTreeMap<String, f64> {
+        self.constants
+            .iter()
+            .chain(self.parameters.iter().map(|(k, v)| (k, v)))
+            .map(|(k, v)| (k.clone(), v.as_f64()))
+            .collect()
     }
 
     /// Domains, chunks, pools, state slots and queue capacities: the item state and queues

@@ -1,7 +1,11 @@
 //! Shared helpers: one GPU per test binary, rendering a scene to an image, region statistics.
 
-use lightgraph::render::{Image, LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph};
+use lightgraph::render::{
+    Image, LayoutOverrides, LoadedScene, Session, SessionOptions, device_flags, kernel_flags, load_graph,
+    specialization,
+};
 use lightgraph_engine::{ConstValue, Gpu};
+use lightgraph_engine::{Plan, Program};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -20,10 +24,47 @@ pub struct Rendered {
     pub image: Image,
     pub counters: BTreeMap<String, u64>,
     pub loops_capped: u64,
+    /// The session's GPU memory.
+    pub memory_bytes: u64,
 }
 
-/// Renders `scene` with `graph` in `layout`: `size` pixels, `spp` samples per pixel per frame,
-/// `frames` frames, seed `seed`, constant overrides `constants`.
+/// Renders `scene` with `graph` in `layout` with the layout options `overrides`: `size`
+/// pixels, `spp` samples per pixel per frame, `frames` frames, seed `seed`, constant overrides
+/// `constants`.
+#[allow(clippy::too_many_arguments)]
+pub fn render_with_layout(
+    scene: &LoadedScene,
+    graph: &str,
+    layout: &str,
+    size: (u32, u32),
+    spp: u32,
+    frames: u32,
+    seed: u32,
+    constants: &[(&str, ConstValue)],
+    overrides: LayoutOverrides,
+) -> Rendered {
+    let graph = load_graph(graph).unwrap();
+    let options = SessionOptions {
+        width: size.0,
+        height: size.1,
+        samples_per_frame: spp,
+        seed,
+        constants: constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+        layout: overrides,
+    };
+    let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
+    for _ in 0..frames {
+        session.render_frame().unwrap();
+    }
+    Rendered {
+        image: session.image().unwrap(),
+        counters: session.counters.clone(),
+        loops_capped: session.loops_capped,
+        memory_bytes: session.memory_bytes(),
+    }
+}
+
+/// [`render_with_layout`] with the layout's own options.
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     scene: &LoadedScene,
@@ -35,66 +76,20 @@ pub fn render(
     seed: u32,
     constants: &[(&str, ConstValue)],
 ) -> Rendered {
-    let graph = load_graph(graph).unwrap();
-    let options = SessionOptions {
-        width: size.0,
-        height: size.1,
-        samples_per_frame: spp,
+    render_with_layout(
+        scene,
+        graph,
+        layout,
+        size,
+        spp,
+        frames,
         seed,
-        constants: constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        layout: Default::default(),
-    };
-    let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
-    for _ in 0..frames {
-        session.render_frame().unwrap();
-    }
-    Rendered {
-        image: session.image().unwrap(),
-        counters: session.counters.clone(),
-        loops_capped: session.loops_capped,
-    }
+        constants,
+        Default::default(),
+    )
 }
 
-/// What a test render with layout overrides produced, with the session's GPU memory.
-pub struct RenderedWith {
-    pub image: Image,
-    pub counters: BTreeMap<String, u64>,
-    pub memory_bytes: u64,
-}
-
-/// Like [`render`] without constants, with the layout's options overridden.
-#[allow(clippy::too_many_arguments)]
-pub fn render_with_layout(
-    scene: &LoadedScene,
-    graph: &str,
-    layout: &str,
-    size: (u32, u32),
-    spp: u32,
-    frames: u32,
-    seed: u32,
-    overrides: LayoutOverrides,
-) -> RenderedWith {
-    let graph = load_graph(graph).unwrap();
-    let options = SessionOptions {
-        width: size.0,
-        height: size.1,
-        samples_per_frame: spp,
-        seed,
-        constants: Default::default(),
-        layout: overrides,
-    };
-    let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
-    for _ in 0..frames {
-        session.render_frame().unwrap();
-    }
-    RenderedWith {
-        image: session.image().unwrap(),
-        counters: session.counters.clone(),
-        memory_bytes: session.memory_bytes(),
-    }
-}
-
-/// Like [`render`], with the layout's thread pool overridden.
+/// [`render_with_layout`] without constants, with the layout's thread pool overridden.
 #[allow(clippy::too_many_arguments)]
 pub fn render_with(
     scene: &LoadedScene,
@@ -106,27 +101,37 @@ pub fn render_with(
     seed: u32,
     threads: Option<u64>,
 ) -> Rendered {
+    let overrides = LayoutOverrides {
+        threads,
+        ..Default::default()
+    };
+    render_with_layout(scene, graph, layout, size, spp, frames, seed, &[], overrides)
+}
+
+/// The generated WGSL of every kernel of `graph` in `layout` for `scene` with `constants`
+/// (every scene feature compiled in with `all_features`), joined.
+pub fn kernel_sources(
+    graph: &str,
+    layout: &str,
+    scene: &LoadedScene,
+    constants: &[(&str, ConstValue)],
+    all_features: bool,
+) -> String {
     let graph = load_graph(graph).unwrap();
     let options = SessionOptions {
-        width: size.0,
-        height: size.1,
-        samples_per_frame: spp,
-        seed,
-        constants: Default::default(),
-        layout: lightgraph::render::LayoutOverrides {
-            threads,
-            ..Default::default()
-        },
+        width: 8,
+        height: 8,
+        samples_per_frame: 1,
+        seed: 1,
+        constants: constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+        layout: Default::default(),
     };
-    let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
-    for _ in 0..frames {
-        session.render_frame().unwrap();
-    }
-    Rendered {
-        image: session.image().unwrap(),
-        counters: session.counters.clone(),
-        loops_capped: session.loops_capped,
-    }
+    let flags = kernel_flags(device_flags(gpu()), scene, all_features);
+    let spec = specialization(&graph, &scene.scene, &options, flags);
+    let plan = Plan::new(&graph, layout).unwrap();
+    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let sources: Vec<&str> = program.kernels.iter().map(|k| k.source.text()).collect();
+    sources.join("\n")
 }
 
 /// Mean and standard error of the mean radiance over the pixels `select` keeps, per channel.

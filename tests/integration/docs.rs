@@ -26,7 +26,10 @@ fn write_examples() -> PathBuf {
         }
         rest = &after[body_end + 3..];
     }
-    assert_eq!(written, 4, "docs/graphs.md has two examples of a graph and its WGSL each");
+    assert_eq!(
+        written, 4,
+        "docs/graphs.md has two examples of a graph and its WGSL each"
+    );
     dir
 }
 
@@ -40,16 +43,29 @@ fn the_examples_of_the_graph_guide_render() {
         let r = render(&scene, ao.to_str().unwrap(), layout, (w, h), 2, 2, 3, &[]);
         assert_eq!(r.counters["rays_primary"], (w * h * 2 * 2) as u64, "ao {layout}");
         // Four occlusion rays per camera ray that hits (every one in the closed box).
-        assert_eq!(r.counters["rays_occlusion"], 4 * r.counters["rays_primary"], "ao {layout}");
+        assert_eq!(
+            r.counters["rays_occlusion"],
+            4 * r.counters["rays_primary"],
+            "ao {layout}"
+        );
         assert!(r.image.mean.iter().all(|p| (0.0..=1.0).contains(&p[0])), "ao {layout}");
-        assert!(r.image.mean.iter().any(|p| p[0] > 0.5), "ao {layout}: nothing unoccluded");
+        assert!(
+            r.image.mean.iter().any(|p| p[0] > 0.5),
+            "ao {layout}: nothing unoccluded"
+        );
     }
     let sorted = dir.join("lab/sorted.ron");
     let r = render(&scene, sorted.to_str().unwrap(), "sorted", (w, h), 2, 2, 3, &[]);
     assert_eq!(r.counters["rays_primary"], (w * h * 2 * 2) as u64);
     // Every camera ray of the closed box hits; each pixel's mean is its albedo at the hit
     // (the walls of scenes/cornell/cornell-diffuse.ron: at most 0.803922 in any channel).
-    assert!(r.image.mean.iter().all(|p| p.iter().all(|&c| (0.0..=0.803923).contains(&c))), "sorted");
+    assert!(
+        r.image
+            .mean
+            .iter()
+            .all(|p| p.iter().all(|&c| (0.0..=0.803923).contains(&c))),
+        "sorted"
+    );
     let lit = r.image.mean.iter().filter(|p| p[0] > 0.1).count();
     assert!(lit > (w * h) as usize / 2, "sorted: {lit} pixels with an albedo");
 }

@@ -3,33 +3,15 @@
 //! once; the same image as with memory of their own), and LVC-BPT on the engine's operators
 //! rendering what it rendered before them.
 
-use crate::common::{data, gpu, largest_relative_difference, render, render_with_layout};
+use crate::common::{data, gpu, kernel_sources, largest_relative_difference, render, render_with_layout};
 use lightgraph::render::{
     LayoutOverrides, SessionOptions, device_flags, kernel_flags, load_graph, load_scene, specialization,
 };
 use lightgraph_engine::{ConstValue, Plan, Program};
 
 /// The kernels' WGSL of `graph` in `layout` for the Cornell box with `constants`.
-fn kernel_sources(graph: &str, layout: &str, constants: &[(&str, ConstValue)]) -> String {
-    let graph = load_graph(graph).unwrap();
-    let scene = load_scene("cornell-diffuse").unwrap();
-    let options = SessionOptions {
-        width: 8,
-        height: 8,
-        samples_per_frame: 1,
-        seed: 1,
-        constants: constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        layout: Default::default(),
-    };
-    let flags = kernel_flags(device_flags(gpu()), &scene, false);
-    let spec = specialization(&graph, &scene.scene, &options, flags);
-    let program = Program::compile(&Plan::new(&graph, layout).unwrap(), &spec, &gpu().target()).unwrap();
-    program
-        .kernels
-        .iter()
-        .map(|k| k.source.text())
-        .collect::<Vec<_>>()
-        .join("\n")
+fn cornell_kernels(graph: &str, layout: &str, constants: &[(&str, ConstValue)]) -> String {
+    kernel_sources(graph, layout, &load_scene("cornell-diffuse").unwrap(), constants, false)
 }
 
 #[test]
@@ -39,10 +21,10 @@ fn a_constant_switches_a_pass_off_its_code_and_its_light() {
     let on = [("TINT", ConstValue::Bool(true))];
     for layout in ["NaivePTsk", "NaivePTmk"] {
         assert!(
-            kernel_sources(tint, layout, &on).contains("fn tint("),
+            cornell_kernels(tint, layout, &on).contains("fn tint("),
             "{layout}: TINT on"
         );
-        let off = kernel_sources(tint, layout, &[]);
+        let off = cornell_kernels(tint, layout, &[]);
         assert!(
             !off.contains("fn tint("),
             "{layout}: the culled pass's code is in a kernel"
@@ -122,13 +104,14 @@ fn lvc_bpt_mk_shares_memory_and_renders_what_it_renders_without_sharing() {
         2,
         2,
         9,
+        &[],
         LayoutOverrides::default(),
     );
     let separate = LayoutOverrides {
         separate_memory: true,
         ..Default::default()
     };
-    let own = render_with_layout(&scene, "bpt-lvc", "LVC-BPTmk", (24, 24), 2, 2, 9, separate);
+    let own = render_with_layout(&scene, "bpt-lvc", "LVC-BPTmk", (24, 24), 2, 2, 9, &[], separate);
     assert!(
         shared.memory_bytes < own.memory_bytes,
         "sharing memory saves nothing: {} vs {} bytes",

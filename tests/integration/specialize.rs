@@ -1,34 +1,12 @@
 //! Scene-specialised kernels: the scene's features decide which WGSL code is generated, and a
 //! specialised kernel renders the same image as one with every feature compiled in.
 
-use crate::common::{gpu, largest_relative_difference};
-use lightgraph::render::{
-    LayoutOverrides, LoadedScene, Session, SessionOptions, device_flags, kernel_flags, load_graph, load_scene,
-    specialization,
-};
-use lightgraph_engine::{Plan, Program};
+use crate::common::{gpu, kernel_sources, largest_relative_difference};
+use lightgraph::render::{LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
 
 /// The generated WGSL of every kernel of `pt` in NaivePTsk for `scene`.
 fn kernel_source(scene: &LoadedScene, all_features: bool) -> String {
-    let graph = load_graph("pt").unwrap();
-    let options = SessionOptions {
-        width: 8,
-        height: 8,
-        samples_per_frame: 1,
-        seed: 1,
-        constants: Default::default(),
-        layout: Default::default(),
-    };
-    let flags = kernel_flags(device_flags(gpu()), scene, all_features);
-    let spec = specialization(&graph, &scene.scene, &options, flags);
-    let plan = Plan::new(&graph, "NaivePTsk").unwrap();
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
-    program
-        .kernels
-        .iter()
-        .map(|k| k.source.text())
-        .collect::<Vec<_>>()
-        .join("\n")
+    kernel_sources("pt", "NaivePTsk", scene, &[], all_features)
 }
 
 /// Functions of features no Cornell box uses: textures, alpha masks, the microfacet BSDF,
