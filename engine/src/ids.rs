@@ -55,19 +55,3 @@ typed_id!(
     /// A compaction boundary: an index into [`crate::Plan::boundaries`].
     BoundaryId indexes crate::plan::Boundary
 );
-
-/// Ids `0 .. n` of a table.
-pub fn ids<I: From<usize>>(n: usize) -> impl Iterator<Item = I> {
-    (0..n).map(I::from)
-}
-
-macro_rules! from_usize {
-    ($($name:ident),*) => {
-        $(impl From<usize> for $name {
-            fn from(i: usize) -> Self {
-                $name(i)
-            }
-        })*
-    };
-}
-from_usize!(PassId, OpId, ChainId, PhaseId, KernelId, BoundaryId);

@@ -180,12 +180,6 @@ impl Program {
         })
     }
 
-    /// Bytes of the engine-allocated buffers by name, without sharing: the layout's GPU
-    /// memory besides external scene data.
-    pub fn allocated_bytes(&self) -> BTreeMap<String, u64> {
-        self.resolved.allocated_bytes(&self.plan)
-    }
-
     /// Bytes of the engine-allocated buffers with transient buffers sharing memory.
     pub fn peak_bytes(&self) -> u64 {
         self.resolved.memory.peak_bytes()

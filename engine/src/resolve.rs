@@ -559,16 +559,6 @@ impl Resolved {
             None => "frame.count".to_string(),
         }
     }
-
-    /// Bytes of the engine-allocated buffers by name: the layout's GPU memory besides
-    /// external scene data, without sharing.
-    pub fn allocated_bytes(&self, plan: &Plan) -> BTreeMap<String, u64> {
-        self.memory
-            .placements
-            .iter()
-            .map(|(b, p)| (b.describe(plan), p.bytes))
-            .collect()
-    }
 }
 
 /// Resources the live passes and operators touch, and the outputs.
