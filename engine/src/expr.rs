@@ -40,23 +40,6 @@ pub enum BinOp {
 }
 
 impl BinOp {
-    fn symbol(self) -> &'static str {
-        match self {
-            BinOp::Add => "+",
-            BinOp::Sub => "-",
-            BinOp::Mul => "*",
-            BinOp::Div => "/",
-            BinOp::Lt => "<",
-            BinOp::Le => "<=",
-            BinOp::Gt => ">",
-            BinOp::Ge => ">=",
-            BinOp::Eq => "==",
-            BinOp::Ne => "!=",
-            BinOp::And => "&&",
-            BinOp::Or => "||",
-        }
-    }
-
     fn apply(self, a: f64, b: f64) -> f64 {
         let truth = |c: bool| c as u8 as f64;
         match self {
@@ -175,22 +158,6 @@ impl Expr {
             return Err(format!("count expression evaluates to {v}, not a count"));
         }
         Ok(v.ceil() as u64)
-    }
-}
-
-impl std::fmt::Display for Expr {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Expr::Number(v) => write!(f, "{v}"),
-            Expr::Name(n) => write!(f, "{n}"),
-            Expr::Neg(a) => write!(f, "-({a})"),
-            Expr::Not(a) => write!(f, "!({a})"),
-            Expr::Binary(a, op, b) => write!(f, "({a} {} {b})", op.symbol()),
-            Expr::Call(name, args) => {
-                let args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
-                write!(f, "{name}({})", args.join(", "))
-            }
-        }
     }
 }
 

@@ -407,6 +407,9 @@ impl Declared {
     fn check_ops(&self) -> Result<()> {
         for op in &self.ops {
             let here = |name: &str, message: String| self.sources.at_name(&op.origin, name, message);
+            if let Some(e) = &op.enabled {
+                Expr::parse(e).map_err(|why| here(e, format!("operator '{}': enabled: {why}", op.name)))?;
+            }
             if let Some(c) = op.domain.as_ref().and_then(|d| d.counted.as_deref()) {
                 self.check_counter(&op.origin, &op.name, c)?;
             }

@@ -69,8 +69,8 @@ pub struct Operator {
     pub kind: OpKind,
     /// Its elements; `None` for a `Clear` of the whole buffer.
     pub domain: Option<Domain>,
-    /// Constant condition; culled when 0.
-    pub enabled: Option<Expr>,
+    /// Constant condition, as written; culled when it is 0.
+    pub enabled: Option<String>,
     /// The file that declares it.
     pub origin: String,
 }
@@ -134,7 +134,7 @@ impl Operator {
             name: name.clone(),
             kind,
             domain,
-            enabled: enabled.as_deref().map(parse).transpose()?,
+            enabled: enabled.clone(),
             origin: origin.to_string(),
         })
     }

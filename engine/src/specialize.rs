@@ -95,11 +95,13 @@ impl Graph {
                     .as_ref()
                     .map(|e| (Node::Pass(i), e.clone(), p.origin.clone()))
             })
-            .chain(self.declared.ops.iter().enumerate().filter_map(|(i, o)| {
-                o.enabled
-                    .as_ref()
-                    .map(|e| (Node::Op(i), e.to_string(), o.origin.clone()))
-            }));
+            .chain(
+                self.declared
+                    .ops
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, o)| o.enabled.as_ref().map(|e| (Node::Op(i), e.clone(), o.origin.clone()))),
+            );
         for (node, text, origin) in conditions {
             let expr = Expr::parse(&text).map_err(|e| self.declared.sources.at_name(&origin, &text, e))?;
             let known = expr.names().iter().all(|n| vars.contains_key(n));

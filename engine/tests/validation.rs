@@ -251,3 +251,25 @@ fn outputs_must_outlive_the_frame() {
         "{e}"
     );
 }
+
+#[test]
+fn an_operator_condition_is_located_where_it_stands() {
+    let text = with_passes("Clear(name: \"wipe\", buffer: \"scratch\", enabled: \"WIPE > 1\"),").replace(
+        "outputs: [\"steps\", \"summary\"]",
+        "outputs: [\"steps\", \"summary\", \"scratch\"]",
+    );
+    let g = Graph::from_text(&vfs(), "bad.ron", &text).unwrap();
+    let e = g.specialize(&Default::default()).unwrap_err().to_string();
+    let (line, _) = position(&text, "\"WIPE > 1\"");
+    assert!(
+        e.starts_with(&format!("bad.ron:{line}:")) && e.contains("unknown constant 'WIPE'"),
+        "{e}"
+    );
+    let bad = with_passes("Clear(name: \"wipe\", buffer: \"scratch\", enabled: \"WIPE >\"),");
+    let e = error_of(&bad);
+    let (line, _) = position(&bad, "\"WIPE >\"");
+    assert!(
+        e.starts_with(&format!("bad.ron:{line}:")) && e.contains("operator 'wipe': enabled"),
+        "{e}"
+    );
+}
