@@ -40,14 +40,6 @@ impl CodegenContext<'_> {
         self.resolved.bindings[b]
     }
 
-    /// Whether kernels declare resource `name` writable: a pass or operator writes it, it
-    /// holds atomics, or it is transient (its memory is shared, so every binding of it is
-    /// read-write).
-    fn writable(&self, name: &str) -> bool {
-        let r = &self.graph().resources[name];
-        r.scope == Scope::Transient || r.ty.contains("atomic") || self.graph().written_resources().contains(name)
-    }
-
     /// The frame record: index, seed, first item and item count of the chunk, then the
     /// parameters; each parameter is also a private variable, set by the entry point.
     fn frame_record(&self) -> String {
@@ -104,8 +96,12 @@ impl CodegenContext<'_> {
             let _ = writeln!(s, "        case {i}u: {{ lg_count_{i} += n; }}");
         }
         s.push_str("        default: {}\n    }\n}\n");
+        // Writable: a pass or operator writes it, it holds atomics, or it is transient (its
+        // memory is shared, so every binding of it is read-write).
+        let written = g.written_resources();
         for (name, r) in &g.resources {
-            let access = if self.writable(name) { "read_write" } else { "read" };
+            let writable = r.scope == Scope::Transient || r.ty.contains("atomic") || written.contains(name);
+            let access = if writable { "read_write" } else { "read" };
             let ty = if r.count.is_some() {
                 format!("array<{}>", r.ty)
             } else {

@@ -567,10 +567,12 @@ impl Declared {
 
     fn check_parameters(&self, file: &str) -> Result<()> {
         let most = crate::resolve::MAX_PARAMETERS;
-        if self.file.parameters.len() > most {
-            return Err(self.sources.at_name(
+        if let Some(first) = self.file.parameters.keys().next()
+            && self.file.parameters.len() > most
+        {
+            return Err(self.sources.at_key(
                 file,
-                "parameters",
+                first,
                 format!(
                     "{} parameters; a frame record holds at most {most}",
                     self.file.parameters.len()

@@ -143,11 +143,10 @@ impl Program {
         let plan = Plan::with_decl(&graph, &plan.layout_name, plan.layout.clone())?;
         let shared = shared_sources(&plan, &spec.flags)?;
         // Reflect: every source compiled together, with emits that do nothing.
-        let bindings = crate::resolve::bindings(&plan);
-        let reflection_resolved = Resolved::for_reflection(&plan, bindings);
+        let begun = Resolved::for_reflection(&plan);
         let ctx = CodegenContext {
             plan: &plan,
-            resolved: &reflection_resolved,
+            resolved: &begun,
             max_loop_iterations: target.max_loop_iterations,
         };
         let mut reflection = ModuleSource::default();
@@ -159,7 +158,7 @@ impl Program {
         let (rmod, rinfo) = reflection.compile(target.capabilities)?;
         check_passes(&plan, &rmod, &rinfo)?;
         // Resolve, then generate.
-        let resolved = Resolved::new(&plan, &rmod, target)?;
+        let resolved = begun.complete(&plan, &rmod, target)?;
         let kernels = pass_kernels(&plan, &resolved, &shared, target)?;
         let internal = Internal {
             plan: &plan,

@@ -160,7 +160,7 @@ pub struct Resolved {
 }
 
 /// Binding numbers: engine buffers, resources, stored chains, queues, boundaries.
-pub fn bindings(plan: &Plan) -> BTreeMap<BufferRef, u32> {
+fn bindings(plan: &Plan) -> BTreeMap<BufferRef, u32> {
     let g = &plan.graph;
     let mut refs = vec![
         BufferRef::Counters,
@@ -180,7 +180,7 @@ pub fn bindings(plan: &Plan) -> BTreeMap<BufferRef, u32> {
 }
 
 /// The control words of a plan.
-pub fn control_map(plan: &Plan) -> ControlMap {
+fn control_map(plan: &Plan) -> ControlMap {
     let g = &plan.graph;
     let mut control = ControlMap::default();
     let mut next = 0u32;
@@ -226,7 +226,7 @@ pub fn control_map(plan: &Plan) -> ControlMap {
 impl Resolved {
     /// What code generation needs to compile every source together before sizes are known:
     /// constants, parameters, bindings and control words.
-    pub fn for_reflection(plan: &Plan, bindings: BTreeMap<BufferRef, u32>) -> Resolved {
+    pub fn for_reflection(plan: &Plan) -> Resolved {
         Resolved {
             constants: plan.graph.constants.clone(),
             parameters: plan.graph.parameters.iter().map(|(k, v)| (k.clone(), *v)).collect(),
@@ -240,16 +240,17 @@ impl Resolved {
             op_elements: BTreeMap::new(),
             scan_levels: BTreeMap::new(),
             control: control_map(plan),
-            bindings,
+            bindings: bindings(plan),
             memory: MemoryPlan::default(),
             clears: BTreeMap::new(),
         }
     }
 
-    /// Resolves `plan` (whose graph holds the specialised constants) with the types of
-    /// `reflection` (every source compiled together) for `target`.
-    pub fn new(plan: &Plan, reflection: &naga::Module, target: &Target) -> Result<Resolved> {
-        let mut resolved = Resolved::for_reflection(plan, bindings(plan));
+    /// Completes the resolution of `plan` (whose graph holds the specialised constants),
+    /// begun by [`Resolved::for_reflection`], with the types of `reflection` (every source
+    /// compiled together) for `target`.
+    pub fn complete(self, plan: &Plan, reflection: &naga::Module, target: &Target) -> Result<Resolved> {
+        let mut resolved = self;
         let vars = resolved.variables();
         resolved.used = used_resources(plan);
         resolved.sizes = resource_sizes(plan, reflection, &vars)?;

@@ -28,6 +28,25 @@ pub struct Rendered {
     pub memory_bytes: u64,
 }
 
+/// Session options of `size` pixels, `spp` samples per pixel per frame, seed `seed`, with
+/// `constants` and layout options `overrides`.
+pub fn options(
+    size: (u32, u32),
+    spp: u32,
+    seed: u32,
+    constants: &[(&str, ConstValue)],
+    overrides: LayoutOverrides,
+) -> SessionOptions {
+    SessionOptions {
+        width: size.0,
+        height: size.1,
+        samples_per_frame: spp,
+        seed,
+        constants: constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+        layout: overrides,
+    }
+}
+
 /// Renders `scene` with `graph` in `layout` with the layout options `overrides`: `size`
 /// pixels, `spp` samples per pixel per frame, `frames` frames, seed `seed`, constant overrides
 /// `constants`.
@@ -44,14 +63,7 @@ pub fn render_with_layout(
     overrides: LayoutOverrides,
 ) -> Rendered {
     let graph = load_graph(graph).unwrap();
-    let options = SessionOptions {
-        width: size.0,
-        height: size.1,
-        samples_per_frame: spp,
-        seed,
-        constants: constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        layout: overrides,
-    };
+    let options = options(size, spp, seed, constants, overrides);
     let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
     for _ in 0..frames {
         session.render_frame().unwrap();
@@ -118,14 +130,7 @@ pub fn kernel_sources(
     all_features: bool,
 ) -> String {
     let graph = load_graph(graph).unwrap();
-    let options = SessionOptions {
-        width: 8,
-        height: 8,
-        samples_per_frame: 1,
-        seed: 1,
-        constants: constants.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
-        layout: Default::default(),
-    };
+    let options = options((8, 8), 1, 1, constants, Default::default());
     let flags = kernel_flags(device_flags(gpu()), scene, all_features);
     let spec = specialization(&graph, &scene.scene, &options, flags);
     let plan = Plan::new(&graph, layout).unwrap();

@@ -3,10 +3,8 @@
 //! once; the same image as with memory of their own), and LVC-BPT on the engine's operators
 //! rendering what it rendered before them.
 
-use crate::common::{data, gpu, kernel_sources, largest_relative_difference, render, render_with_layout};
-use lightgraph::render::{
-    LayoutOverrides, SessionOptions, device_flags, kernel_flags, load_graph, load_scene, specialization,
-};
+use crate::common::{data, gpu, kernel_sources, largest_relative_difference, options, render, render_with_layout};
+use lightgraph::render::{LayoutOverrides, device_flags, kernel_flags, load_graph, load_scene, specialization};
 use lightgraph_engine::{ConstValue, Plan, Program};
 
 /// The kernels' WGSL of `graph` in `layout` for the Cornell box with `constants`.
@@ -61,17 +59,14 @@ fn shared_memory_is_never_live_twice() {
     let scene = load_scene("cornell-diffuse").unwrap();
     for name in lightgraph::assets::graph_names() {
         let graph = load_graph(&name).unwrap();
-        let options = SessionOptions {
-            width: 32,
-            height: 32,
-            samples_per_frame: 1,
-            seed: 1,
-            constants: [("LVC_AVERAGE_LENGTH".to_string(), ConstValue::F32(2.0))]
-                .into_iter()
-                .filter(|(k, _)| graph.constants.contains_key(k))
-                .collect(),
-            layout: Default::default(),
+        // The LVC's size comes from its measured average: a typical one, set.
+        let lvc = [("LVC_AVERAGE_LENGTH", ConstValue::F32(2.0))];
+        let constants = if graph.constants.contains_key(lvc[0].0) {
+            &lvc[..]
+        } else {
+            &[]
         };
+        let options = options((32, 32), 1, 1, constants, Default::default());
         let spec = specialization(
             &graph,
             &scene.scene,
