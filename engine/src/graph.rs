@@ -507,6 +507,18 @@ fn dependency_graph(
                 chain.item.clone(),
             );
         }
+        // A loop pass decides whether the whole group repeats: the group's first pass
+        // depends on its last, so a pass that only ends the loop lives with the group.
+        if let (Some(ls), Some(last)) = (chain.loop_start, chain.passes.last())
+            && chain.passes.len() > ls + 1
+        {
+            let (first, last) = (&passes[chain.passes[ls].0].decl.name, &passes[last.0].decl.name);
+            dg.add_edge(
+                nodes[&format!("pass:{last}")],
+                nodes[&format!("pass:{first}")],
+                format!("{} loop", chain.item),
+            );
+        }
     }
     (dg, nodes)
 }

@@ -46,6 +46,10 @@ pub struct GraphFile {
     /// without recompiling, read in WGSL by name like constants.
     #[serde(default)]
     pub parameters: BTreeMap<String, ConstValue>,
+    /// `u32` constants computed from the others once they are known: name → count expression
+    /// (e.g. a capacity from a measured average and `PATHS`).
+    #[serde(default)]
+    pub derived: BTreeMap<String, String>,
     /// Resources the host reads after frames (passes that contribute to none are culled).
     #[serde(default)]
     pub outputs: Vec<String>,
@@ -110,6 +114,9 @@ pub struct CatalogFile {
     /// Constants the catalog's passes read, with defaults.
     #[serde(default)]
     pub constants: BTreeMap<String, ConstValue>,
+    /// `u32` constants computed from the others (as the graph's `derived`).
+    #[serde(default)]
+    pub derived: BTreeMap<String, String>,
     /// The passes this catalog offers.
     #[serde(default)]
     pub passes: Vec<PassDecl>,

@@ -90,6 +90,8 @@ pub struct Declared {
     pub counters: Vec<String>,
     /// Constants with their defaults.
     pub constants: BTreeMap<String, ConstValue>,
+    /// Derived `u32` constants: name → count expression over the other constants.
+    pub derived: BTreeMap<String, String>,
     /// The file declaring each resource, counter and constant.
     pub origins: BTreeMap<String, String>,
     /// The texts of the graph, catalog and include files.
@@ -226,9 +228,13 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
     let mut library = g.library.clone();
     let mut counters = g.counters.clone();
     let mut constants = Merged::new();
+    let mut derived = Merged::new();
     let mut resources = Merged::new();
     for (name, v) in &g.constants {
         constants.add(&sources, "constant", name, v, Rank::Graph, file)?;
+    }
+    for (name, e) in &g.derived {
+        derived.add(&sources, "derived constant", name, e, Rank::Graph, file)?;
     }
     for (name, r) in &g.resources {
         resources.add(&sources, "resource", name, r, Rank::Graph, file)?;
@@ -238,6 +244,9 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
         push_unique(&mut counters, &inc.counters);
         for (name, v) in &inc.constants {
             constants.add(&sources, "constant", name, v, Rank::Include, path)?;
+        }
+        for (name, e) in &inc.derived {
+            derived.add(&sources, "derived constant", name, e, Rank::Include, path)?;
         }
         for (name, r) in &inc.resources {
             resources.add(&sources, "resource", name, r, Rank::Include, path)?;
@@ -251,6 +260,9 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
             for (name, v) in &cat.constants {
                 constants.add(&sources, "constant", name, v, Rank::Catalog, &p.origin)?;
             }
+            for (name, e) in &cat.derived {
+                derived.add(&sources, "derived constant", name, e, Rank::Catalog, &p.origin)?;
+            }
             for (name, r) in &cat.resources {
                 if d.reads.contains(name) || d.writes.contains(name) {
                     resources.add(&sources, "resource", name, r, Rank::Catalog, &p.origin)?;
@@ -263,11 +275,24 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
             constants.add(&sources, "constant", name, v, Rank::Pass, &p.origin)?;
         }
     }
+    // A catalog's resources that operators name join as well (the first catalog declaring one).
+    for op in &ops {
+        for name in op.reads().into_iter().chain(op.writes()) {
+            if let Some((path, r)) = catalogs
+                .iter()
+                .chain(&includes)
+                .find_map(|(path, cat)| cat.resources.get(name).map(|r| (path, r)))
+            {
+                resources.add(&sources, "resource", name, r, Rank::Catalog, path)?;
+            }
+        }
+    }
     let mut origins = BTreeMap::new();
     for c in &counters {
         origins.insert(c.clone(), file.to_string());
     }
     let constants = constants.into_parts(&mut origins);
+    let derived = derived.into_parts(&mut origins);
     let resources = resources.into_parts(&mut origins);
     let declared = Declared {
         library,
@@ -277,6 +302,7 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
         resources,
         counters,
         constants,
+        derived,
         origins,
         sources,
         file: g,
@@ -321,6 +347,7 @@ impl Declared {
             .chain(g.streams.keys())
             .chain(self.counters.iter())
             .chain(self.constants.keys())
+            .chain(self.derived.keys())
             .chain(g.parameters.keys())
         {
             if !is_identifier(name) || name.starts_with("lg_") {
@@ -329,6 +356,18 @@ impl Declared {
                     name,
                     format!("'{name}' is not a valid name (a WGSL identifier not starting with 'lg_')"),
                 ));
+            }
+        }
+        for name in self.derived.keys() {
+            if self.constants.contains_key(name) || g.parameters.contains_key(name) {
+                return Err(self.error_at_decl(
+                    file,
+                    name,
+                    format!("'{name}' is derived and also declared as a constant or parameter"),
+                ));
+            }
+            if let Err(e) = Expr::parse(&self.derived[name]) {
+                return Err(self.error_at_decl(file, name, format!("derived constant '{name}': {e}")));
             }
         }
         for name in g.parameters.keys() {

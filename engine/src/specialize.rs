@@ -43,8 +43,15 @@ impl Graph {
                     ),
                 ));
             }
+            if self.declared.derived.contains_key(name) && !matches!(v, ConstValue::U32(_)) {
+                return Err(self.error_at_decl(
+                    name,
+                    format!("constant '{name}' is a derived u32 but was given as {}", v.wgsl_type()),
+                ));
+            }
             self.constants.insert(name.clone(), *v);
         }
+        self.derive_constants(given, strict)?;
         let vars: BTreeMap<String, f64> = self.constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
         // The whole declared structure, to cull on.
         self.passes = self.declared.passes.clone();
@@ -72,6 +79,40 @@ impl Graph {
             .collect();
         self.check_live()?;
         Ok(self)
+    }
+
+    /// Adds the derived constants the host did not give, each a `u32` count evaluated over
+    /// the constants (derived ones may use each other, in any order). When not `strict`, one
+    /// naming a constant not known yet is left out.
+    fn derive_constants(&mut self, given: &BTreeMap<String, ConstValue>, strict: bool) -> Result<()> {
+        let mut pending: Vec<&String> = self.declared.derived.keys().filter(|n| !given.contains_key(*n)).collect();
+        while !pending.is_empty() {
+            let vars: BTreeMap<String, f64> = self.constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
+            let before = pending.len();
+            let mut failure = None;
+            pending.retain(|name| {
+                let text = &self.declared.derived[*name];
+                let value = Expr::parse(text).and_then(|e| e.count(&vars));
+                match value.and_then(|v| u32::try_from(v).map_err(|_| format!("{v} does not fit a u32"))) {
+                    Ok(v) => {
+                        self.constants.insert((*name).clone(), ConstValue::U32(v));
+                        false
+                    }
+                    Err(e) => {
+                        failure.get_or_insert(((*name).clone(), e));
+                        true
+                    }
+                }
+            });
+            if pending.len() == before {
+                let (name, e) = failure.expect("a pending constant failed");
+                if !strict {
+                    return Ok(());
+                }
+                return Err(self.error_at_decl(&name, format!("derived constant '{name}': {e}")));
+            }
+        }
+        Ok(())
     }
 
     fn node_name(&self, n: Node) -> &str {
