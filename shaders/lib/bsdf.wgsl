@@ -5,7 +5,9 @@
 // direction towards the previous path vertex; `gen` the one generated or evaluated. Radiance
 // (camera) paths scale refraction by eta^2 = (ior on fix's side / ior on gen's side)^2;
 // importance (light) paths, `adjoint`, do not. Works on a material resolved at the surface
-// point (`material_at`).
+// point (`material_at`). `bsdf_diffuse_part` and `bsdf_glossy_part` split a BSDF into its
+// diffuse lobe and the rest (SPPM estimates photon density with the first and continues the
+// camera path with the second).
 
 const EPS_PHONG: f32 = 1e-3;
 
@@ -27,6 +29,12 @@ struct Bsdf {
     spec_prob: f32,             // probability of the rough specular lobe (reflection and refraction)
     adjoint: bool,              // importance transport: refraction without the eta^2 scaling
 }
+
+// The lobes a part leaves out (`bsdf_diffuse_part`, `bsdf_glossy_part`), as bits of its
+// material's flags above the scene's MATERIAL_* bits. The glTF model reads them; the SmallVCM
+// lobes are left out by their probabilities alone.
+const BSDF_NO_DIFFUSE: u32 = 0x40000000u;
+const BSDF_NO_GLOSSY: u32 = 0x80000000u;
 
 // Fresnel reflectance of a smooth dielectric, unpolarised, and the cosine of the refracted
 // direction (0 under total internal reflection); `ior` < 0 means a perfect mirror. Both come
@@ -82,14 +90,9 @@ fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bs
     b.cos_t = fresnel.y;
     let albedo_reflect = b.fresnel * luminance(m.mirror);
     let albedo_refract = select(0.0, 1.0 - b.fresnel, m.ior > 0.0);
-    // The specular lobes' albedo: F mirror, plus 1 - F through a dielectric, written as
-    // 1 - F (1 - mirror) so that a lossless dielectric continues with probability exactly 1.
-    let one = vec3<f32>(1.0);
-    let specular = select(b.fresnel * m.mirror, one - b.fresnel * (one - m.mirror), m.ior > 0.0);
 #else
     let albedo_reflect = 0.0;
     let albedo_refract = 0.0;
-    let specular = vec3<f32>(0.0);
 #endif
     let total = albedo_diffuse + albedo_phong + albedo_reflect + albedo_refract;
     if (total < 1e-9) {
@@ -101,9 +104,94 @@ fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bs
     b.phong_prob = albedo_phong / total;
     b.reflect_prob = albedo_reflect / total;
     b.refract_prob = albedo_refract / total;
-    b.continuation = clamp(max_component(m.diffuse + m.phong + specular), 0.0, 1.0);
+    b.continuation = clamp(max_component(m.diffuse + m.phong + bsdf_specular_albedo(b)), 0.0, 1.0);
     b.is_delta = b.diffuse_prob == 0.0 && b.phong_prob == 0.0;
     return b;
+}
+
+// The SmallVCM mirror or dielectric lobe's albedo at `fix`: F mirror, plus 1 - F through a
+// dielectric, written as 1 - F (1 - mirror) so that a lossless dielectric continues with
+// probability exactly 1.
+fn bsdf_specular_albedo(b: Bsdf) -> vec3<f32> {
+#if BSDF_SPECULAR
+    let one = vec3<f32>(1.0);
+    return select(b.fresnel * b.m.mirror, one - b.fresnel * (one - b.m.mirror), b.m.ior > 0.0);
+#else
+    return vec3<f32>(0.0);
+#endif
+}
+
+// Whether the BSDF samples a diffuse lobe at its `fix`.
+fn bsdf_has_diffuse(b: Bsdf) -> bool {
+    return b.diffuse_prob > 0.0;
+}
+
+// Whether the BSDF samples a glossy or delta lobe at its `fix` (Phong, mirror, dielectric;
+// glTF's specular reflection and transmission).
+fn bsdf_has_glossy(b: Bsdf) -> bool {
+    return b.phong_prob + b.spec_prob + b.reflect_prob + b.refract_prob > 0.0;
+}
+
+// `b` left without lobes to sample: invalid, never continued.
+fn bsdf_no_lobes(b: Bsdf) -> Bsdf {
+    var p = b;
+    p.diffuse_prob = 0.0;
+    p.phong_prob = 0.0;
+    p.spec_prob = 0.0;
+    p.reflect_prob = 0.0;
+    p.refract_prob = 0.0;
+    p.continuation = 0.0;
+    p.is_delta = false;
+    p.valid = false;
+    return p;
+}
+
+// The BSDF restricted to its diffuse lobe: `bsdf_eval` gives the diffuse term alone, with the
+// pdfs of sampling that lobe alone, and `bsdf_sample` samples it alone; continued with the
+// lobe's albedo bound. Invalid without a diffuse lobe (`bsdf_has_diffuse`).
+fn bsdf_diffuse_part(b: Bsdf) -> Bsdf {
+    var d = bsdf_no_lobes(b);
+    d.m.flags |= BSDF_NO_GLOSSY;
+    if (!bsdf_has_diffuse(b)) {
+        return d;
+    }
+    d.valid = b.valid;
+    d.diffuse_prob = 1.0;
+    var albedo = b.m.diffuse;
+#if BSDF_PBR
+    if (b.pbr) {
+        albedo *= (1.0 - b.m.metallic) * (1.0 - b.m.transmission) * (1.0 - b.fresnel);
+    }
+#endif
+    d.continuation = clamp(max_component(albedo), 0.0, 1.0);
+    return d;
+}
+
+// The BSDF without its diffuse lobe: the glossy and delta lobes, picked in proportion to their
+// probabilities in `b`; delta when only delta lobes are left; continued with their albedo
+// bound. Invalid without such lobes (`bsdf_has_glossy`). With the diffuse part, `bsdf_eval`
+// gives the whole BSDF's value: f(b) = f(diffuse part) + f(glossy part).
+fn bsdf_glossy_part(b: Bsdf) -> Bsdf {
+    var g = bsdf_no_lobes(b);
+    g.m.flags |= BSDF_NO_DIFFUSE;
+    let total = b.phong_prob + b.spec_prob + b.reflect_prob + b.refract_prob;
+    if (total <= 0.0) {
+        return g;
+    }
+    g.valid = b.valid;
+    g.phong_prob = b.phong_prob / total;
+    g.spec_prob = b.spec_prob / total;
+    g.reflect_prob = b.reflect_prob / total;
+    g.refract_prob = b.refract_prob / total;
+    g.is_delta = g.phong_prob == 0.0 && g.spec_prob == 0.0;
+    var albedo = b.m.phong + bsdf_specular_albedo(b);
+#if BSDF_PBR
+    if (b.pbr) {
+        albedo = pbr_glossy_albedo(b);
+    }
+#endif
+    g.continuation = clamp(max_component(albedo), 0.0, 1.0);
+    return g;
 }
 
 fn reflect_local(v: vec3<f32>) -> vec3<f32> {
@@ -249,7 +337,9 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
 // never underflows and no pdf is infinite. A sample first picks diffuse or specular in
 // proportion to the lobes' albedo estimates at `fix`; specular samples a visible microfacet
 // normal, then reflects or refracts in proportion to the reflected and transmitted weights at
-// that normal. The reverse pdf makes the same choices at `gen`.
+// that normal. The reverse pdf makes the same choices at `gen`. The parts split the BSDF
+// between the diffuse lobe and the specular lobes (reflection and transmission, smooth or
+// rough), each sampled as if it were the only one.
 
 const PBR_SMOOTH_ALPHA: f32 = 1e-3;
 const PBR_MIN_IOR: f32 = 1.001;
@@ -289,6 +379,19 @@ fn pbr_setup(bsdf: Bsdf) -> Bsdf {
     return b;
 }
 
+// The albedo bound of the specular lobes alone: the interface's reflection, the light it lets
+// through the surface, and the metal on the outside (`pbr_setup`'s bound less the diffuse
+// base's (1 - metallic) (1 - transmission) (1 - F) base).
+fn pbr_glossy_albedo(b: Bsdf) -> vec3<f32> {
+    let m = b.m;
+    let dielectric = (1.0 - m.metallic) * (b.fresnel + (1.0 - b.fresnel) * m.transmission * m.diffuse);
+    var bound = select(vec3<f32>(0.0), dielectric, pbr_scatters(b, b.fix.z));
+    if (b.fix.z > 0.0) {
+        bound += m.metallic * fresnel_schlick(m.diffuse, b.fix.z);
+    }
+    return bound;
+}
+
 fn pbr_transmissive(b: Bsdf) -> bool {
     return b.m.transmission > 0.0 && b.m.metallic < 1.0;
 }
@@ -317,7 +420,12 @@ fn pbr_lobe_probs(b: Bsdf, cos_w: f32) -> vec2<f32> {
     if (total <= 1e-9) {
         return vec2<f32>(0.0);
     }
-    return vec2<f32>(w.x + w.y, diffuse) / total;
+    // A part samples the lobes it keeps as if they were the only ones.
+    let kept = vec2<f32>(
+        select(w.x + w.y, 0.0, (m.flags & BSDF_NO_GLOSSY) != 0u),
+        select(diffuse, 0.0, (m.flags & BSDF_NO_DIFFUSE) != 0u),
+    );
+    return kept / max(kept.x + kept.y, 1e-30);
 }
 
 // Luminance weights of specular reflection (x) and refraction (y) at a microfacet seen at
@@ -356,17 +464,19 @@ fn pbr_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
         return e;
     }
     let m = b.m;
-    let lobes_o = pbr_lobe_probs(b, o.z);
+    // The lobe probabilities at `fix` are the set-up's (those of the rough specular lobe and
+    // the diffuse one; a part's renormalised).
+    let lobes_o = vec2<f32>(b.spec_prob, b.diffuse_prob);
     let lobes_i = pbr_lobe_probs(b, gen.z);
     let f_o = fresnel_dielectric(o.z, m.ior).x;
     let f_i = fresnel_dielectric(gen.z, m.ior).x;
-    if (outside_o && outside_i) {
+    if (outside_o && outside_i && (m.flags & BSDF_NO_DIFFUSE) == 0u) {
         let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * (1.0 - f_o) * (1.0 - f_i) * INV_PI;
         e.f += m.diffuse * diffuse;
         e.pdf_forward += lobes_o.y * gen.z * INV_PI;
         e.pdf_reverse += lobes_i.y * o.z * INV_PI;
     }
-    if (b.alpha == 0.0) {
+    if (b.alpha == 0.0 || (m.flags & BSDF_NO_GLOSSY) != 0u) {
         return e;
     }
     // The frame mirrored so that `fix` is above the surface; `eta` = ior below / ior above.

@@ -1,7 +1,8 @@
 //! The BSDFs on the GPU (`shaders/lib/bsdf.wgsl`), through the probe harness: sampled
 //! directions against the pdfs (chi-square), the pdfs' integrals and lost samples, albedo
-//! (white furnace), reciprocity, forward/reverse pdf consistency; and a PBR scene that must
-//! render its exact radiance.
+//! (white furnace), reciprocity, forward/reverse pdf consistency; the same of the BSDF's
+//! diffuse and glossy parts (`bsdf_diffuse_part`, `bsdf_glossy_part`), which must add up to
+//! the whole BSDF; and a PBR scene that must render its exact radiance.
 //!
 //! The BSDF sits on a surface with normal +z (the local frame is the world frame); `fix` is
 //! the direction towards the previous vertex.
@@ -13,7 +14,7 @@ use lightgraph::render::LoadedScene;
 use lightgraph_engine::ConstValue;
 
 /// The chi-square tests in this file, for the Šidák-corrected significance of each.
-const CHI2_TESTS: u32 = 16;
+const CHI2_TESTS: u32 = 23;
 /// Samples per chi-square test: with 24 × 48 bins, a smooth lobe expects about 200 per bin.
 /// Bins where a pdf's support ends (rough refraction's) need the fine sub-grid: at 4 × 4
 /// points the midpoint rule misses enough of their mass to fail the test.
@@ -23,21 +24,35 @@ const SAMPLES: u32 = 200_000;
 const SUB: usize = 8;
 const SUB_CAP: usize = 8;
 
+/// The BSDF a probe sets up (the constant `PART`): the whole one or one of its parts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Part {
+    Whole,
+    Diffuse,
+    Glossy,
+}
+
 const SETUP: &str = "
 fn probe_bsdf(towards_previous: vec3<f32>, adjoint: bool) -> Bsdf {
     var b = bsdf_setup(material_at(0u, vec2<f32>(0.0)), vec3<f32>(0.0, 0.0, 1.0), normalize(towards_previous));
     b.adjoint = adjoint;
+    if (PART == 1u) {
+        return bsdf_diffuse_part(b);
+    }
+    if (PART == 2u) {
+        return bsdf_glossy_part(b);
+    }
     return b;
 }
 ";
 
 /// Per index: the sampled direction with its kind in w (0 none, 1 continuous, 2 delta
 /// reflection, 3 delta refraction, -1 continuous where the pdf is 0), and the weight
-/// f cos / pdf.
+/// f cos / pdf. Each part draws numbers of its own.
 const SAMPLE: &str = "
 fn probe(item: ptr<function, ProbeItem>, index: u32) -> bool {
     let b = probe_bsdf(vec3<f32>(FIX_X, FIX_Y, FIX_Z), ADJOINT);
-    var rng = rng_seed(frame.seed, frame.index, index);
+    var rng = rng_seed(frame.seed, frame.index, index + PART * N);
     let u = vec3<f32>(rng_f32(&rng), rng_f32(&rng), rng_f32(&rng));
     let s = bsdf_sample(b, u);
     var kind = 0.0;
@@ -58,13 +73,13 @@ fn probe(item: ptr<function, ProbeItem>, index: u32) -> bool {
 
 /// Per input direction: (f, pdf_forward), (pdf_reverse, cos). The last index writes the
 /// setup: (diffuse, rough specular, delta reflection, delta refraction probabilities),
-/// (continuation, is_delta).
+/// (continuation, is_delta, valid).
 const EVAL: &str = "
 fn probe(item: ptr<function, ProbeItem>, index: u32) -> bool {
     let b = probe_bsdf(vec3<f32>(FIX_X, FIX_Y, FIX_Z), ADJOINT);
     if (index == N - 1u) {
         out[index * PER_INDEX] = vec4<f32>(b.diffuse_prob, b.spec_prob, b.reflect_prob, b.refract_prob);
-        out[index * PER_INDEX + 1u] = vec4<f32>(b.continuation, select(0.0, 1.0, b.is_delta), 0.0, 0.0);
+        out[index * PER_INDEX + 1u] = vec4<f32>(b.continuation, select(0.0, 1.0, b.is_delta), select(0.0, 1.0, b.valid), 0.0);
         return false;
     }
     let e = bsdf_eval(b, probe_in[index].xyz);
@@ -104,12 +119,13 @@ fn material_scene(material: &str) -> LoadedScene {
     ))
 }
 
-fn constants(fix: [f32; 3], adjoint: bool) -> Vec<(&'static str, ConstValue)> {
+fn constants(fix: [f32; 3], adjoint: bool, part: Part) -> Vec<(&'static str, ConstValue)> {
     vec![
         ("FIX_X", ConstValue::F32(fix[0])),
         ("FIX_Y", ConstValue::F32(fix[1])),
         ("FIX_Z", ConstValue::F32(fix[2])),
         ("ADJOINT", ConstValue::Bool(adjoint)),
+        ("PART", ConstValue::U32(part as u32)),
     ]
 }
 
@@ -120,10 +136,11 @@ struct Sampled {
     /// Diffuse, rough specular, delta reflection, delta refraction.
     lobes: [f32; 4],
     continuation: f32,
+    valid: bool,
 }
 
-fn sample(s: &LoadedScene, fix: [f32; 3], adjoint: bool, n: u32) -> Sampled {
-    let c = constants(fix, adjoint);
+fn sample(s: &LoadedScene, fix: [f32; 3], adjoint: bool, part: Part, n: u32) -> Sampled {
+    let c = constants(fix, adjoint, part);
     let out = probe(s, &format!("{SETUP}{SAMPLE}"), n, 2, &[], &c);
     let setup = probe(s, &format!("{SETUP}{EVAL}"), 1, 2, &[], &c);
     Sampled {
@@ -131,13 +148,21 @@ fn sample(s: &LoadedScene, fix: [f32; 3], adjoint: bool, n: u32) -> Sampled {
         weights: out.iter().skip(1).step_by(2).map(|w| [w[0], w[1], w[2]]).collect(),
         lobes: setup[0],
         continuation: setup[1][0],
+        valid: setup[1][2] > 0.0,
     }
 }
 
 /// f and the forward pdf at each of `directions`.
-fn eval(s: &LoadedScene, fix: [f32; 3], adjoint: bool, directions: &[[f32; 4]]) -> Vec<([f32; 3], f32)> {
+fn eval(s: &LoadedScene, fix: [f32; 3], part: Part, directions: &[[f32; 4]]) -> Vec<([f32; 3], f32)> {
     let n = directions.len() as u32 + 1;
-    let out = probe(s, &format!("{SETUP}{EVAL}"), n, 2, directions, &constants(fix, adjoint));
+    let out = probe(
+        s,
+        &format!("{SETUP}{EVAL}"),
+        n,
+        2,
+        directions,
+        &constants(fix, false, part),
+    );
     out.chunks(2)
         .take(directions.len())
         .map(|c| ([c[0][0], c[0][1], c[0][2]], c[0][3]))
@@ -151,15 +176,21 @@ fn mirror(fix: [f32; 3]) -> [f64; 3] {
 /// Chi-square test of `material` seen from `fix` over `grid`; on the whole sphere, also the
 /// pdf's integral against the samples that were lost.
 fn chi2_case(what: &str, material: &str, fix: [f32; 3], grid: SphereBins) {
+    chi2_part_case(what, material, Part::Whole, fix, grid);
+}
+
+/// [`chi2_case`] of a `part` of the BSDF, which must be valid.
+fn chi2_part_case(what: &str, material: &str, part: Part, fix: [f32; 3], grid: SphereBins) {
     let s = material_scene(material);
-    let sampled = sample(&s, fix, false, SAMPLES);
+    let sampled = sample(&s, fix, false, part, SAMPLES);
+    assert!(sampled.valid, "{what}: {part:?} is not valid");
     let unsupported = sampled.samples.iter().filter(|s| s[3] < 0.0).count();
     assert_eq!(unsupported, 0, "{what}: samples where the pdf is 0");
     let sub = if grid.is_sphere() { SUB } else { SUB_CAP };
     let fine = grid.quadrature_points(sub);
     let coarse = grid.quadrature_points(sub / 2);
     let all: Vec<[f32; 4]> = fine.iter().chain(&coarse).copied().collect();
-    let pdf: Vec<f32> = eval(&s, fix, false, &all).iter().map(|e| e.1).collect();
+    let pdf: Vec<f32> = eval(&s, fix, part, &all).iter().map(|e| e.1).collect();
     let (pdf_fine, pdf_coarse) = pdf.split_at(fine.len());
     let delta = [sampled.lobes[2] as f64, sampled.lobes[3] as f64];
     let discrete: &[f64] = if grid.is_sphere() { &delta } else { &[] };
@@ -271,6 +302,29 @@ fn chi2_pbr_mixture() {
     chi2_case("mixture outside", m, OBLIQUE, sphere());
 }
 
+/// Diffuse, Phong and glass lobes at once.
+const SMALLVCM_MIX: &str =
+    "(diffuse: (0.5, 0.4, 0.3), phong: (0.3, 0.3, 0.3), phong_exponent: 20.0, mirror: (0.8, 0.8, 0.8), ior: 1.5)";
+/// Every glTF lobe at once, rough.
+const PBR_MIX: &str = "(pbr: (base_color: (0.7, 0.8, 0.9), metallic: 0.3, roughness: 0.5, transmission: 0.5))";
+/// A smooth glTF dielectric over a diffuse base: its glossy part is delta.
+const PBR_SMOOTH_MIX: &str = "(pbr: (base_color: (0.7, 0.8, 0.9), roughness: 0.0, transmission: 0.5))";
+
+#[test]
+fn chi2_smallvcm_parts() {
+    chi2_part_case("diffuse part", SMALLVCM_MIX, Part::Diffuse, OBLIQUE, sphere());
+    chi2_part_case("glossy part", SMALLVCM_MIX, Part::Glossy, OBLIQUE, sphere());
+}
+
+#[test]
+fn chi2_pbr_parts() {
+    chi2_part_case("mixture diffuse part", PBR_MIX, Part::Diffuse, OBLIQUE, sphere());
+    chi2_part_case("mixture glossy part outside", PBR_MIX, Part::Glossy, OBLIQUE, sphere());
+    chi2_part_case("mixture glossy part inside", PBR_MIX, Part::Glossy, BELOW, sphere());
+    chi2_part_case("smooth diffuse part", PBR_SMOOTH_MIX, Part::Diffuse, OBLIQUE, sphere());
+    chi2_part_case("smooth glossy part", PBR_SMOOTH_MIX, Part::Glossy, OBLIQUE, sphere());
+}
+
 /// Mean and standard error of the albedo estimate f cos / pdf (largest channel).
 fn albedo(sampled: &Sampled) -> (f64, f64) {
     let v: Vec<f64> = sampled
@@ -282,6 +336,22 @@ fn albedo(sampled: &Sampled) -> (f64, f64) {
     let mean = v.iter().sum::<f64>() / n;
     let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
     (mean, (var / n).sqrt())
+}
+
+/// Mean and standard error of the weights f cos / pdf, per channel.
+fn mean_weight(sampled: &Sampled) -> ([f64; 3], [f64; 3]) {
+    let n = sampled.weights.len() as f64;
+    let mean: [f64; 3] = std::array::from_fn(|c| sampled.weights.iter().map(|w| w[c] as f64).sum::<f64>() / n);
+    let se = std::array::from_fn(|c| {
+        let var = sampled
+            .weights
+            .iter()
+            .map(|w| (w[c] as f64 - mean[c]).powi(2))
+            .sum::<f64>()
+            / (n - 1.0);
+        (var / n).sqrt()
+    });
+    (mean, se)
 }
 
 #[test]
@@ -313,7 +383,7 @@ fn white_furnace() {
     ];
     for &(material, fix, lower) in cases {
         let s = material_scene(material);
-        let sampled = sample(&s, fix, true, 100_000);
+        let sampled = sample(&s, fix, true, Part::Whole, 100_000);
         let (mean, se) = albedo(&sampled);
         eprintln!(
             "{material} from {fix:?}: albedo {mean:.5} +- {se:.5}, continuation {}",
@@ -332,6 +402,49 @@ fn white_furnace() {
             "{material} from {fix:?}: continuation {} below the albedo {mean}",
             sampled.continuation
         );
+    }
+}
+
+#[test]
+fn parts_share_the_albedo_and_continue_with_at_least_their_own() {
+    // f = f(diffuse part) + f(glossy part) and each part samples its own lobes without bias,
+    // so the albedos of the parts (f cos / pdf, light leaving in the sampled directions) add up
+    // to the whole's; a part's continuation bounds its albedo up to 1 (SmallVCM's glass
+    // reflects and transmits everything, so the mix with Phong reflects more than 1).
+    let grazing = [0.94, 0.0, 0.342];
+    let metal = "(pbr: (base_color: (0.9, 0.6, 0.3), metallic: 0.5, roughness: 0.3))";
+    for material in [SMALLVCM_MIX, PBR_MIX, PBR_SMOOTH_MIX, metal] {
+        let s = material_scene(material);
+        for fix in [OBLIQUE, BELOW, grazing] {
+            let n = 100_000;
+            let (whole, whole_se) = mean_weight(&sample(&s, fix, true, Part::Whole, n));
+            let mut sum = [0.0; 3];
+            let mut var = whole_se.map(|e| e * e);
+            for part in [Part::Diffuse, Part::Glossy] {
+                let sampled = sample(&s, fix, true, part, n);
+                let (mean, se) = mean_weight(&sampled);
+                let (largest, largest_se) = albedo(&sampled);
+                eprintln!(
+                    "{material} from {fix:?}, {part:?}: albedo {mean:.4?}, continuation {}",
+                    sampled.continuation
+                );
+                assert!(
+                    sampled.continuation as f64 >= (largest - 4.0 * largest_se).min(1.0) - 1e-5,
+                    "{material} from {fix:?}, {part:?}: continuation {} below the albedo {largest}",
+                    sampled.continuation
+                );
+                for c in 0..3 {
+                    sum[c] += mean[c];
+                    var[c] += se[c] * se[c];
+                }
+            }
+            for c in 0..3 {
+                assert!(
+                    (whole[c] - sum[c]).abs() <= 4.0 * var[c].sqrt() + 1e-5,
+                    "{material} from {fix:?}: the parts' albedos add up to {sum:?}, the whole's is {whole:?}"
+                );
+            }
+        }
     }
 }
 
@@ -354,14 +467,23 @@ fn close(a: f32, b: f32) -> bool {
     (a - b).abs() <= 2e-3 * a.abs().max(b.abs()) + 1e-6
 }
 
-/// Reciprocity and pdf consistency on random pairs of directions: `a` from `side_a`, `b`
-/// from `side_b`.
-fn check_pairs(material: &str, side_a: f32, side_b: f32, ior: f32) {
+/// Reciprocity and pdf consistency of `part` of the BSDF on random pairs of directions: `a`
+/// from `side_a`, `b` from `side_b`.
+fn check_pairs(material: &str, part: Part, side_a: f32, side_b: f32, ior: f32) {
+    let what = format!("{material} ({part:?})");
     let s = material_scene(material);
     let a = directions(2000, 11, side_a);
     let b = directions(2000, 12, side_b);
     let input: Vec<[f32; 4]> = a.iter().zip(&b).flat_map(|(x, y)| [*x, *y]).collect();
-    let out = probe(&s, &format!("{SETUP}{PAIRS}"), a.len() as u32, 4, &input, &[]);
+    let part_constant = [("PART", ConstValue::U32(part as u32))];
+    let out = probe(
+        &s,
+        &format!("{SETUP}{PAIRS}"),
+        a.len() as u32,
+        4,
+        &input,
+        &part_constant,
+    );
     let mut nonzero = 0;
     for (k, o) in out.chunks(4).enumerate() {
         let (ab, ba, rev, ba_adj) = (o[0], o[1], o[2], o[3]);
@@ -372,7 +494,7 @@ fn check_pairs(material: &str, side_a: f32, side_b: f32, ior: f32) {
             // the index on the side the radiance leaves to); the adjoint swaps the arguments.
             assert!(
                 close(ab[c] / (ea * ea), ba[c] / (eb * eb)),
-                "{material}: f({:?}, {:?}) = {} but f back = {}",
+                "{what}: f({:?}, {:?}) = {} but f back = {}",
                 a[k],
                 b[k],
                 ab[c],
@@ -380,7 +502,7 @@ fn check_pairs(material: &str, side_a: f32, side_b: f32, ior: f32) {
             );
             assert!(
                 close(ab[c], ba_adj[c]),
-                "{material}: f({:?}, {:?}) = {} but the adjoint f back = {}",
+                "{what}: f({:?}, {:?}) = {} but the adjoint f back = {}",
                 a[k],
                 b[k],
                 ab[c],
@@ -389,7 +511,7 @@ fn check_pairs(material: &str, side_a: f32, side_b: f32, ior: f32) {
         }
         assert!(
             close(rev[0], ba[3]) && close(rev[1], ab[3]),
-            "{material}: pdfs ({:?}, {:?}): forward {} reverse {}, back: forward {} reverse {}",
+            "{what}: pdfs ({:?}, {:?}): forward {} reverse {}, back: forward {} reverse {}",
             a[k],
             b[k],
             ab[3],
@@ -401,7 +523,7 @@ fn check_pairs(material: &str, side_a: f32, side_b: f32, ior: f32) {
     }
     // Refraction joins only directions more than acos(1 / eta) apart: about a fifth of the
     // random pairs on opposite sides.
-    assert!(nonzero > 300, "{material}: only {nonzero} pairs with a nonzero pdf");
+    assert!(nonzero > 300, "{what}: only {nonzero} pairs with a nonzero pdf");
 }
 
 #[test]
@@ -412,17 +534,301 @@ fn reflection_is_reciprocal_and_pdfs_are_consistent() {
         "(pbr: (base_color: (0.7, 0.8, 0.9), metallic: 0.3, roughness: 0.5, transmission: 0.5))",
         "(diffuse: (0.2, 0.3, 0.4), phong: (0.5, 0.5, 0.5), phong_exponent: 20.0)",
     ] {
-        check_pairs(m, 1.0, 1.0, 1.5);
+        check_pairs(m, Part::Whole, 1.0, 1.0, 1.5);
     }
     let glass = "(pbr: (base_color: (1, 1, 1), metallic: 0.2, roughness: 0.4, transmission: 0.8, ior: 1.5))";
-    check_pairs(glass, -1.0, -1.0, 1.5);
+    check_pairs(glass, Part::Whole, -1.0, -1.0, 1.5);
 }
 
 #[test]
 fn refraction_is_reciprocal_up_to_eta_squared_and_pdfs_are_consistent() {
     let glass = "(pbr: (base_color: (0.9, 0.8, 1.0), metallic: 0.2, roughness: 0.4, transmission: 0.8, ior: 1.5))";
-    check_pairs(glass, 1.0, -1.0, 1.5);
-    check_pairs(glass, -1.0, 1.0, 1.5);
+    check_pairs(glass, Part::Whole, 1.0, -1.0, 1.5);
+    check_pairs(glass, Part::Whole, -1.0, 1.0, 1.5);
+}
+
+#[test]
+fn parts_are_reciprocal_and_their_pdfs_consistent() {
+    check_pairs(PBR_MIX, Part::Diffuse, 1.0, 1.0, 1.5);
+    check_pairs(PBR_MIX, Part::Glossy, 1.0, 1.0, 1.5);
+    check_pairs(PBR_MIX, Part::Glossy, 1.0, -1.0, 1.5);
+    check_pairs(PBR_MIX, Part::Glossy, -1.0, 1.0, 1.5);
+    let smallvcm = "(diffuse: (0.2, 0.3, 0.4), phong: (0.5, 0.5, 0.5), phong_exponent: 20.0)";
+    check_pairs(smallvcm, Part::Diffuse, 1.0, 1.0, 1.5);
+    check_pairs(smallvcm, Part::Glossy, 1.0, 1.0, 1.5);
+}
+
+/// A random material of either model, with the parameters the checks need.
+struct RandomMaterial {
+    ron: String,
+    pbr: bool,
+    /// Lambertian reflectance (SmallVCM) or base colour (glTF).
+    diffuse: [f64; 3],
+    /// SmallVCM: whether there is a Phong lobe, and a mirror or glass lobe.
+    phong: bool,
+    specular: bool,
+    metallic: f64,
+    roughness: f64,
+    transmission: f64,
+    ior: f64,
+}
+
+impl RandomMaterial {
+    /// Lobes present or absent at random, colours in [0.05, 0.95]; glTF roughness 0 or 0.02
+    /// (smooth: alpha below 1e-3) half the time, metallic and transmission 0 or 1 two thirds
+    /// of the time.
+    fn new(pbr: bool, rng: &mut crate::common::SplitMix64) -> Self {
+        let u: [f64; 14] = std::array::from_fn(|_| rng.next_f64());
+        let colour = |k: usize, on: bool| {
+            let c = [u[k], u[k + 1], u[k + 2]].map(|x| 0.05 + 0.9 * x);
+            if on { c } else { [0.0; 3] }
+        };
+        let rgb = |c: [f64; 3]| format!("({}, {}, {})", c[0], c[1], c[2]);
+        if pbr {
+            let metallic = [0.0, 1.0, u[3]][(u[4] * 3.0) as usize];
+            let rough = 0.1 + 0.9 * u[5];
+            let roughness = [0.0, 0.02, rough, rough][(u[6] * 4.0) as usize];
+            let transmission = [0.0, 1.0, u[7]][(u[8] * 3.0) as usize];
+            let ior = 1.2 + 0.8 * u[9];
+            let diffuse = colour(0, true);
+            let ron = format!(
+                "(pbr: (base_color: {}, metallic: {metallic}, roughness: {roughness}, transmission: {transmission}, ior: {ior}))",
+                rgb(diffuse)
+            );
+            RandomMaterial {
+                ron,
+                pbr,
+                diffuse,
+                phong: false,
+                specular: false,
+                metallic,
+                roughness,
+                transmission,
+                ior,
+            }
+        } else {
+            let diffuse = colour(0, u[9] < 0.75);
+            let phong = u[10] < 0.5;
+            // A third without a specular lobe, a third mirrors, a third glass.
+            let specular = u[11] < 2.0 / 3.0;
+            let ior = if u[11] < 1.0 / 3.0 { 1.2 + 0.8 * u[12] } else { -1.0 };
+            let ron = format!(
+                "(diffuse: {}, phong: {}, phong_exponent: {}, mirror: {}, ior: {ior})",
+                rgb(diffuse),
+                rgb(colour(3, phong)),
+                1.0 + 99.0 * u[13],
+                rgb(colour(6, specular)),
+            );
+            RandomMaterial {
+                ron,
+                pbr,
+                diffuse,
+                phong,
+                specular,
+                metallic: 0.0,
+                roughness: 0.0,
+                transmission: 0.0,
+                ior,
+            }
+        }
+    }
+
+    /// The diffuse lobe's value for fix `a` and gen `b` (z-up).
+    fn diffuse(&self, a: &[f32; 4], b: &[f32; 4]) -> [f64; 3] {
+        if a[2] <= 0.0 || b[2] <= 0.0 {
+            return [0.0; 3];
+        }
+        let scale = if self.pbr {
+            self.diffuse_share(a) * (1.0 - fresnel(b[2] as f64, self.ior.max(1.001)))
+        } else {
+            1.0
+        };
+        self.diffuse.map(|c| c * scale / std::f64::consts::PI)
+    }
+
+    /// The share of the diffuse colour the diffuse lobe reflects at most from fix `a`: glTF's
+    /// (1 - metallic) (1 - transmission) (1 - F), all of it in SmallVCM's.
+    fn diffuse_share(&self, a: &[f32; 4]) -> f64 {
+        if !self.pbr {
+            return 1.0;
+        }
+        let f = fresnel(a[2] as f64, self.ior.max(1.001));
+        (1.0 - self.metallic) * (1.0 - self.transmission) * (1.0 - f)
+    }
+}
+
+/// Fresnel reflectance of a smooth dielectric of index `ior`, seen from outside at cosine
+/// `cos` > 0.
+fn fresnel(cos: f64, ior: f64) -> f64 {
+    let eta = 1.0 / ior;
+    let sin_t2 = eta * eta * (1.0 - cos * cos);
+    let cos_t = (1.0 - sin_t2).sqrt();
+    let parallel = (cos - eta * cos_t) / (cos + eta * cos_t);
+    let perpendicular = (eta * cos - cos_t) / (eta * cos + cos_t);
+    0.5 * (parallel * parallel + perpendicular * perpendicular)
+}
+
+/// Per pair of directions (a, b), a's w the index of the material: (f, pdf_forward) with
+/// fix = a and gen = b of the whole BSDF, of its diffuse part and of its glossy part; the
+/// whole's probabilities of its diffuse lobe and of the others, with bsdf_has_diffuse and
+/// bsdf_has_glossy; the diffuse part's (valid, is_delta, continuation) with the whole's
+/// continuation; the glossy part's (valid, is_delta, continuation) with the whole's valid.
+const PARTS: &str = "
+fn probe_flag(b: bool) -> f32 {
+    return select(0.0, 1.0, b);
+}
+
+fn probe(item: ptr<function, ProbeItem>, index: u32) -> bool {
+    let a = probe_in[2u * index];
+    let gen = normalize(probe_in[2u * index + 1u].xyz);
+    let b = bsdf_setup(material_at(u32(a.w), vec2<f32>(0.0)), vec3<f32>(0.0, 0.0, 1.0), normalize(a.xyz));
+    let d = bsdf_diffuse_part(b);
+    let g = bsdf_glossy_part(b);
+    let whole = bsdf_eval(b, gen);
+    let ed = bsdf_eval(d, gen);
+    let eg = bsdf_eval(g, gen);
+    let others = b.phong_prob + b.spec_prob + b.reflect_prob + b.refract_prob;
+    let o = index * PER_INDEX;
+    out[o] = vec4<f32>(whole.f, whole.pdf_forward);
+    out[o + 1u] = vec4<f32>(ed.f, ed.pdf_forward);
+    out[o + 2u] = vec4<f32>(eg.f, eg.pdf_forward);
+    out[o + 3u] = vec4<f32>(b.diffuse_prob, others, probe_flag(bsdf_has_diffuse(b)), probe_flag(bsdf_has_glossy(b)));
+    out[o + 4u] = vec4<f32>(probe_flag(d.valid), probe_flag(d.is_delta), d.continuation, b.continuation);
+    out[o + 5u] = vec4<f32>(probe_flag(g.valid), probe_flag(g.is_delta), g.continuation, probe_flag(b.valid));
+    return false;
+}
+";
+
+/// Whether `a` and `b` agree to float rounding.
+fn rounding(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-5 * a.abs().max(b.abs()) + 1e-30
+}
+
+#[test]
+fn parts_add_up_to_the_whole_bsdf() {
+    let mut rng = crate::common::SplitMix64(21);
+    let materials: Vec<RandomMaterial> = (0..64).map(|i| RandomMaterial::new(i % 2 == 1, &mut rng)).collect();
+    let named: Vec<String> = materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| format!("\"m{i:03}\": {}", m.ron))
+        .collect();
+    let s = scene(&format!(
+        r#"Scene(
+            camera: (position: (0, -4, 0), look: Target((0, 0, 0)), up: (0, 0, 1), fov_degrees: 40.0),
+            materials: {{{}}},
+            shapes: [Sphere(center: (0, 0, 0), radius: 1.0, material: "m000")],
+            lights: [Background(radiance: (1, 1, 1))],
+        )"#,
+        named.join(", ")
+    ));
+    // 64 pairs per material, fix above the surface for three in four.
+    let n = materials.len() * 64;
+    let (above, below, generated) = (directions(n, 31, 1.0), directions(n, 32, -1.0), directions(n, 33, 0.0));
+    let fix: Vec<[f32; 4]> = (0..n)
+        .map(|k| {
+            let d = if k % 4 == 3 { below[k] } else { above[k] };
+            [d[0], d[1], d[2], (k / 64) as f32]
+        })
+        .collect();
+    let input: Vec<[f32; 4]> = fix.iter().zip(&generated).flat_map(|(a, b)| [*a, *b]).collect();
+    let out = probe(&s, PARTS, n as u32, 6, &input, &[]);
+    let mut both = [0; 2];
+    for (k, o) in out.chunks(6).enumerate() {
+        let m = &materials[k / 64];
+        let (a, b) = (&fix[k], &generated[k]);
+        let what = format!("{} with fix {a:?}, gen {b:?}", m.ron);
+        let (whole, diffuse, glossy) = (o[0], o[1], o[2]);
+        let [p_diffuse, p_glossy, has_diffuse, has_glossy] = o[3];
+        let [d_valid, d_delta, d_continuation, continuation] = o[4];
+        let [g_valid, g_delta, g_continuation, valid] = o[5];
+        for c in 0..4 {
+            // f per channel, then the forward pdf: the parts' pdfs are their lobes' alone, so
+            // the whole's is their mixture with the whole's lobe probabilities.
+            let (sum, what_sum) = if c < 3 {
+                (diffuse[c] as f64 + glossy[c] as f64, "f")
+            } else {
+                let mix = p_diffuse as f64 * diffuse[3] as f64 + p_glossy as f64 * glossy[3] as f64;
+                (mix, "pdf")
+            };
+            assert!(
+                rounding(sum, whole[c] as f64),
+                "{what}: the parts' {what_sum} {diffuse:?} and {glossy:?} do not add up to {whole:?}"
+            );
+        }
+        // The diffuse part against the model's diffuse lobe.
+        let expected = m.diffuse(a, b);
+        let diffuse_expected = if m.pbr {
+            a[2] > 0.0 && m.metallic < 1.0 && m.transmission < 1.0
+        } else {
+            m.diffuse[0] > 0.0
+        };
+        for c in 0..3 {
+            assert!(
+                (diffuse[c] as f64 - expected[c]).abs() <= 1e-4 * expected[c] + 1e-7,
+                "{what}: the diffuse part is {diffuse:?}, the diffuse lobe {expected:?}"
+            );
+        }
+        let pdf = if diffuse_expected && a[2] > 0.0 && b[2] > 0.0 {
+            b[2] as f64 / std::f64::consts::PI
+        } else {
+            0.0
+        };
+        assert!(
+            (diffuse[3] as f64 - pdf).abs() <= 1e-5 * pdf + 1e-7,
+            "{what}: the diffuse part's pdf is {}, cosine sampling's {pdf}",
+            diffuse[3]
+        );
+        let glossy_expected = if m.pbr {
+            a[2] > 0.0 || (m.transmission > 0.0 && m.metallic < 1.0)
+        } else {
+            m.phong || m.specular
+        };
+        assert!(valid > 0.0, "{what}: the whole BSDF is not valid");
+        assert_eq!(
+            [has_diffuse, d_valid, d_delta, has_glossy, g_valid],
+            [
+                diffuse_expected,
+                diffuse_expected,
+                false,
+                glossy_expected,
+                glossy_expected
+            ]
+            .map(|x| x as u8 as f32),
+            "{what}: has_diffuse, the diffuse part's valid and is_delta, has_glossy, the glossy part's valid"
+        );
+        let delta = glossy_expected
+            && if m.pbr {
+                m.roughness * m.roughness < 1e-3
+            } else {
+                !m.phong
+            };
+        assert_eq!(g_delta > 0.0, delta, "{what}: the glossy part's is_delta");
+        // Continuation: the diffuse lobe's bound, each part's at most the whole's, and (with
+        // fix above, where every lobe is) the whole's at most the parts' together.
+        let largest = m.diffuse.iter().copied().fold(0.0, f64::max);
+        let d_bound = if diffuse_expected {
+            (largest * m.diffuse_share(a)).min(1.0)
+        } else {
+            0.0
+        };
+        assert!(
+            (d_continuation as f64 - d_bound).abs() <= 1e-5,
+            "{what}: the diffuse part continues with {d_continuation}, its bound is {d_bound}"
+        );
+        assert!(
+            d_continuation.max(g_continuation) <= continuation + 1e-6
+                && (a[2] < 0.0 || continuation <= d_continuation + g_continuation + 1e-6),
+            "{what}: continuation {continuation}, parts {d_continuation} and {g_continuation}"
+        );
+        let nonzero = |e: [f32; 4]| e[0] + e[1] + e[2] > 0.0;
+        both[m.pbr as usize] += (nonzero(diffuse) && nonzero(glossy)) as usize;
+    }
+    // Both parts nonzero at once in a good share of each model's pairs (about 1 in 14).
+    assert!(
+        both.iter().all(|&b| b > n / 64),
+        "pairs where both parts are nonzero: {both:?}"
+    );
 }
 
 /// A sphere of `material` under a uniform background of radiance 1, filling most of a
