@@ -1,7 +1,7 @@
 //! The kernels of the collective operators, written once and generated for each use: fill,
 //! exclusive scan (reduce-then-scan: tile sums, a scan of the sums, tiles rescanned with
-//! their offsets, as many levels as the length needs) and the count and scatter steps of a
-//! counting sort. Reduce-then-scan needs no forward-progress guarantee between workgroups, so
+//! their offsets, as many levels as the length needs), the count and scatter steps of a
+//! counting sort, and the radix sort ([`crate::radix`]). Reduce-then-scan needs no forward-progress guarantee between workgroups, so
 //! it runs on any adapter. Where the adapter has subgroups the tile scans use subgroup
 //! operations, of whatever size the adapter runs, when every subgroup of the workgroup is full
 //! (checked in the kernel); otherwise, and without subgroups, a scan in workgroup memory.
@@ -15,6 +15,25 @@ use std::fmt::Write;
 pub const WORKGROUP: u32 = 256;
 /// Elements each thread of a scan handles by default (a tile of 4096 elements).
 pub const SCAN_ITEMS: u32 = 16;
+
+/// Words of each scratch buffer an operator of `kind` over `n` elements needs, numbered as
+/// [`BufferRef::Scratch`]: a scan's levels of partial sums; a sort's (see
+/// [`crate::radix::sort_scratch`]). Scans run in tiles of `scan_tile` elements.
+pub fn scratch_words(kind: &OpKind, n: u64, scan_tile: u64) -> Vec<u64> {
+    match kind {
+        OpKind::Scan { .. } => scan_levels(n, scan_tile),
+        OpKind::Sort { .. } => crate::radix::sort_scratch(n, scan_tile),
+        _ => Vec::new(),
+    }
+}
+
+/// What scratch buffer `index` of an operator of `kind` holds, for reports.
+pub fn scratch_name(kind: &OpKind, index: usize) -> String {
+    match kind {
+        OpKind::Sort { .. } => crate::radix::scratch_name(index),
+        _ => format!("scan partials {}", index + 1),
+    }
+}
 
 /// Sizes of the levels of partial sums a scan of `n` elements in tiles of `tile` needs: one
 /// sum per tile, again while more than one tile remains.
@@ -37,12 +56,27 @@ pub struct Groups {
     /// Scan level (0: the elements themselves); each level holds one sum per group of the
     /// level below.
     pub level: usize,
+    /// `Some((tile, words))` when level 0 is not the elements but `words` words per tile of
+    /// `tile` elements (a sort's digit histograms).
+    pub per_tile: Option<(u64, u64)>,
 }
 
 impl Groups {
+    /// One workgroup per `per_group` elements of the operator.
+    pub fn elements(per_group: u64) -> Groups {
+        Groups {
+            per_group,
+            level: 0,
+            per_tile: None,
+        }
+    }
+
     /// Workgroups for `n` elements of the operator.
     pub fn count(&self, n: u64) -> u64 {
-        let mut n = n;
+        let mut n = match self.per_tile {
+            Some((tile, words)) => n.div_ceil(tile) * words,
+            None => n,
+        };
         for _ in 0..self.level {
             n = n.div_ceil(self.per_group);
         }
@@ -65,13 +99,15 @@ pub struct OpKernel {
 
 /// A module being written: a header with the frame record and control words, then the
 /// operator's buffers.
-struct Module {
-    text: String,
+pub(crate) struct Module {
+    /// The WGSL so far.
+    pub text: String,
     bindings: Vec<(u32, BufferRef)>,
 }
 
 impl Module {
-    fn new(control: bool) -> Module {
+    /// A module with the frame record, and the control words with `control`.
+    pub fn new(control: bool) -> Module {
         let mut m = Module {
             text: format!(
                 "struct Frame {{ index: u32, seed: u32, base: u32, count: u32 }}\n{}",
@@ -85,7 +121,8 @@ impl Module {
         m
     }
 
-    fn bind(&mut self, name: &str, ty: &str, buffer: BufferRef) {
+    /// Declares `buffer` as `var<storage, read_write> name: ty` at the next binding.
+    pub fn bind(&mut self, name: &str, ty: &str, buffer: BufferRef) {
         let n = self.bindings.len() as u32;
         let _ = writeln!(
             self.text,
@@ -95,7 +132,7 @@ impl Module {
     }
 
     /// `fn lg_n() -> u32`: the operator's elements, from the record or its GPU counter.
-    fn element_count(&mut self, counted: Option<&str>) {
+    pub fn element_count(&mut self, counted: Option<&str>) {
         match counted {
             Some(c) => {
                 self.bind("lg_counter", "array<u32>", BufferRef::Resource(c.to_string()));
@@ -106,7 +143,8 @@ impl Module {
         }
     }
 
-    fn finish(self, name: String, groups: Groups) -> OpKernel {
+    /// The kernel with entry point `name`.
+    pub fn finish(self, name: String, groups: Groups) -> OpKernel {
         OpKernel {
             name,
             wgsl: self.text,
@@ -117,7 +155,7 @@ impl Module {
 }
 
 /// The entry point header of an element-wise kernel: `i`, the element of the thread.
-fn element_entry(name: &str) -> String {
+pub(crate) fn element_entry(name: &str) -> String {
     format!(
         "@compute @workgroup_size({WORKGROUP})\nfn {name}(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>, @builtin(local_invocation_index) lid: u32) {{\n    let i = (wid.y * nwg.x + wid.x) * {WORKGROUP}u + lid;\n"
     )
@@ -128,10 +166,7 @@ fn element_entry(name: &str) -> String {
 pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, items: u32) -> Vec<OpKernel> {
     let counted = op.domain.as_ref().and_then(|d| d.counted.as_deref());
     let words = |r: &str| resolved.sizes[r].element_bytes / 4;
-    let element = Groups {
-        per_group: WORKGROUP as u64,
-        level: 0,
-    };
+    let element = Groups::elements(WORKGROUP as u64);
     let prefix = format!("lg_op{}", o.0);
     match &op.kind {
         OpKind::Clear { buffer, value, .. } => {
@@ -169,49 +204,86 @@ pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, 
             input,
             output,
         } => {
-            let mut m = Module::new(true);
-            m.bind("lg_keys", "array<u32>", BufferRef::Resource(keys.clone()));
-            m.bind("lg_slots", "array<u32>", BufferRef::Resource(slots.clone()));
-            m.bind("lg_offsets", "array<u32>", BufferRef::Resource(offsets.clone()));
-            m.bind("lg_input", "array<u32>", BufferRef::Resource(input.clone()));
-            m.bind("lg_output", "array<u32>", BufferRef::Resource(output.clone()));
-            m.element_count(counted);
-            let name = format!("{prefix}_scatter");
+            let buffers = [keys, slots, offsets, input, output].map(|b| BufferRef::Resource(b.clone()));
             let overflow = resolved.control.op_overflow[&o];
-            let w = words(input);
-            let mut copy = String::new();
-            for k in 0..w {
-                let _ = writeln!(copy, "    lg_output[d * {w}u + {k}u] = lg_input[i * {w}u + {k}u];");
-            }
-            let _ = write!(
-                m.text,
-                "{}    if (i >= lg_n()) {{ return; }}\n    let k = lg_keys[i];\n    var d = 0xffffffffu;\n    if (k < arrayLength(&lg_offsets)) {{ d = lg_offsets[k] + lg_slots[i]; }}\n    if (d >= arrayLength(&lg_output) / {w}u) {{\n        atomicAdd(&lg_control[{overflow}], 1u);\n        return;\n    }}\n{copy}}}\n",
-                element_entry(&name)
-            );
-            vec![m.finish(name, element)]
+            vec![scatter_kernel(&prefix, buffers, counted, words(input), overflow)]
         }
         OpKind::Scan { input, output } => {
             let scan = Scan {
                 o,
-                input,
-                output,
+                input: BufferRef::Resource(input.clone()),
+                output: BufferRef::Resource(output.clone()),
+                partials: 0,
+                levels: resolved.op_scratch[&o].len(),
+                length: "lg_n()".to_string(),
+                per_tile: None,
                 counted,
                 subgroups,
                 items,
             };
-            scan.kernels(&prefix, resolved)
+            scan.kernels(&prefix)
+        }
+        OpKind::Sort { keys, values, bits } => {
+            let sort = crate::radix::Sort {
+                o,
+                keys,
+                values,
+                bits: *bits,
+                counted,
+                subgroups,
+                items,
+            };
+            sort.kernels(&prefix, resolved)
         }
     }
 }
 
+/// The scatter of a counting sort over `buffers` (keys, slots, offsets, input, output) of
+/// elements of `w` words: each element to its bucket's first place plus its slot.
+fn scatter_kernel(prefix: &str, buffers: [BufferRef; 5], counted: Option<&str>, w: u32, overflow: u32) -> OpKernel {
+    let mut m = Module::new(true);
+    let [keys, slots, offsets, input, output] = buffers;
+    m.bind("lg_keys", "array<u32>", keys);
+    m.bind("lg_slots", "array<u32>", slots);
+    m.bind("lg_offsets", "array<u32>", offsets);
+    m.bind("lg_input", "array<u32>", input);
+    m.bind("lg_output", "array<u32>", output);
+    m.element_count(counted);
+    let name = format!("{prefix}_scatter");
+    let mut copy = String::new();
+    for k in 0..w {
+        let _ = writeln!(copy, "    lg_output[d * {w}u + {k}u] = lg_input[i * {w}u + {k}u];");
+    }
+    let _ = write!(
+        m.text,
+        "{}    if (i >= lg_n()) {{ return; }}\n    let k = lg_keys[i];\n    var d = 0xffffffffu;\n    if (k < arrayLength(&lg_offsets)) {{ d = lg_offsets[k] + lg_slots[i]; }}\n    if (d >= arrayLength(&lg_output) / {w}u) {{\n        atomicAdd(&lg_control[{overflow}], 1u);\n        return;\n    }}\n{copy}}}\n",
+        element_entry(&name)
+    );
+    m.finish(name, Groups::elements(WORKGROUP as u64))
+}
+
 /// A scan to generate.
-struct Scan<'a> {
-    o: OpId,
-    input: &'a str,
-    output: &'a str,
-    counted: Option<&'a str>,
-    subgroups: bool,
-    items: u32,
+pub(crate) struct Scan<'a> {
+    /// The operator it belongs to (whose scratch holds the partial sums).
+    pub o: OpId,
+    /// The elements summed (level 0).
+    pub input: BufferRef,
+    /// Where their sums go (may be `input`).
+    pub output: BufferRef,
+    /// The operator's scratch buffer of the first level of partial sums; the others follow.
+    pub partials: usize,
+    /// Levels of partial sums.
+    pub levels: usize,
+    /// Level 0's elements, a WGSL expression of `lg_n()` (the operator's elements).
+    pub length: String,
+    /// As [`Groups::per_tile`], for level 0.
+    pub per_tile: Option<(u64, u64)>,
+    /// The resource counting the operator's elements on the GPU.
+    pub counted: Option<&'a str>,
+    /// Whether to use subgroup operations.
+    pub subgroups: bool,
+    /// Elements per thread.
+    pub items: u32,
 }
 
 impl Scan<'_> {
@@ -219,12 +291,20 @@ impl Scan<'_> {
         (WORKGROUP * self.items) as u64
     }
 
-    /// Level l's elements: the input at level 0, scratch l - 1 above.
+    /// Level l's elements: the input at level 0, partial sums above.
     fn level_buffer(&self, l: usize) -> BufferRef {
         if l == 0 {
-            BufferRef::Resource(self.input.to_string())
+            self.input.clone()
         } else {
-            BufferRef::Scratch(self.o, l - 1)
+            BufferRef::Scratch(self.o, self.partials + l - 1)
+        }
+    }
+
+    fn groups(&self, level: usize) -> Groups {
+        Groups {
+            per_group: self.tile(),
+            level,
+            per_tile: self.per_tile,
         }
     }
 
@@ -232,22 +312,21 @@ impl Scan<'_> {
     /// tiles rescanned with their offsets. The top level (one tile at most) is not scanned
     /// apart: the level below sums the top's values before each of its tiles itself (or, for
     /// a single tile, starts at 0).
-    fn kernels(&self, prefix: &str, resolved: &Resolved) -> Vec<OpKernel> {
-        let levels = resolved.scan_levels[&self.o].len();
-        let per_group = self.tile();
+    pub fn kernels(&self, prefix: &str) -> Vec<OpKernel> {
+        let levels = self.levels;
         let mut out = Vec::new();
         for l in 0..levels {
             let mut m = self.module(l);
             m.bind("lg_src", "array<u32>", self.level_buffer(l));
-            m.bind("lg_dst", "array<u32>", BufferRef::Scratch(self.o, l));
+            m.bind("lg_dst", "array<u32>", BufferRef::Scratch(self.o, self.partials + l));
             let name = format!("{prefix}_reduce{l}");
             m.text.push_str(&scan_reduce_entry(&name, self.subgroups));
-            out.push(m.finish(name, Groups { per_group, level: l }));
+            out.push(m.finish(name, self.groups(l)));
         }
         for l in (0..levels.max(1)).rev() {
             let mut m = self.module(l);
             let dst = if l == 0 {
-                BufferRef::Resource(self.output.to_string())
+                self.output.clone()
             } else {
                 self.level_buffer(l)
             };
@@ -262,12 +341,16 @@ impl Scan<'_> {
                 _ => Offsets::Zero,
             };
             if offsets != Offsets::Zero {
-                m.bind("lg_offsets", "array<u32>", BufferRef::Scratch(self.o, l));
+                m.bind(
+                    "lg_offsets",
+                    "array<u32>",
+                    BufferRef::Scratch(self.o, self.partials + l),
+                );
             }
             let name = format!("{prefix}_down{l}");
             m.text
                 .push_str(&scan_down_entry(&name, in_place, offsets, self.subgroups));
-            out.push(m.finish(name, Groups { per_group, level: l }));
+            out.push(m.finish(name, self.groups(l)));
         }
         out
     }
@@ -285,9 +368,10 @@ impl Scan<'_> {
              // own consecutive elements hit distinct banks.\n\
              var<workgroup> lg_tile: array<u32, {}>;\n\
              // Elements at this level: each level above holds one sum per tile of the one below.\n\
-             fn lg_level_n() -> u32 {{\n    var n = lg_n();\n    for (var l = 0u; l < {level}u; l += 1u) {{ n = (n + LG_TILE - 1u) / LG_TILE; }}\n    return n;\n}}\n",
+             fn lg_level_n() -> u32 {{\n    var n = {};\n    for (var l = 0u; l < {level}u; l += 1u) {{ n = (n + LG_TILE - 1u) / LG_TILE; }}\n    return n;\n}}\n",
             self.items,
-            tile + tile / 32 + 1
+            tile + tile / 32 + 1,
+            self.length
         );
         m.text.push_str(SCAN_SHARED);
         if self.subgroups {

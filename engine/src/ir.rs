@@ -92,6 +92,8 @@ pub enum PassEntry {
     Count(CountDecl),
     /// The scatter step of a counting sort: each element to `offsets[key] + slot`.
     Scatter(ScatterDecl),
+    /// Stable radix sort of `u32` keys, with `u32` values permuted alongside.
+    Sort(SortDecl),
 }
 
 /// A pass catalog file (`passes/*.ron`), also the format of included declaration files.
@@ -219,6 +221,34 @@ pub struct ScatterDecl {
     /// Constant expression; the operator is culled when it is 0.
     #[serde(default)]
     pub enabled: Option<String>,
+}
+
+/// `Sort(name, keys, values, over, counted, bits)`: sorts the `u32` keys ascending in place,
+/// stably, by their low `bits` bits, moving each element's `u32` value with its key.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SortDecl {
+    /// Operator name.
+    pub name: String,
+    /// The `u32` keys, sorted in place.
+    pub keys: String,
+    /// The `u32` values, permuted with their keys.
+    pub values: String,
+    /// Elements.
+    pub over: String,
+    /// A GPU counter of the elements (at most `over`).
+    #[serde(default)]
+    pub counted: Option<String>,
+    /// The low bits of the keys that are sorted by (1 to 32, default 32).
+    #[serde(default = "all_bits")]
+    pub bits: u32,
+    /// Constant expression; the operator is culled when it is 0.
+    #[serde(default)]
+    pub enabled: Option<String>,
+}
+
+fn all_bits() -> u32 {
+    32
 }
 
 /// A pass: one WGSL function over one item.

@@ -8,7 +8,7 @@
 //! The stages, in order: parse and load ([`Graph::load`], [`load`]) → specialise and cull
 //! ([`Graph::specialize`]) → plan a layout ([`Plan::new`]) → resolve sizes, lifetimes and
 //! shared memory ([`resolve`]) → generate and validate WGSL ([`Program::compile`],
-//! [`codegen`], [`collective`]) → execute ([`Instance::new`], [`Instance::run_frame`]).
+//! [`codegen`], [`collective`], [`radix`]) → execute ([`Instance::new`], [`Instance::run_frame`]).
 
 pub mod auto;
 pub mod codegen;
@@ -26,6 +26,7 @@ pub mod memory;
 pub mod operator;
 pub mod plan;
 pub mod program;
+pub mod radix;
 pub mod reflect;
 pub mod resolve;
 pub mod runtime;

@@ -480,6 +480,17 @@ impl Declared {
                     ));
                 }
             }
+            if let crate::operator::OpKind::Sort { keys, values, .. } = &op.kind
+                && keys == values
+            {
+                return Err(here(
+                    values,
+                    format!(
+                        "operator '{}' sorts '{keys}' with itself as its values; keys and values must be different resources",
+                        op.name
+                    ),
+                ));
+            }
             if let crate::operator::OpKind::Scatter { input, output, .. } = &op.kind {
                 let (a, b) = (&self.resources[input].ty, &self.resources[output].ty);
                 if a != b {

@@ -1,5 +1,5 @@
 //! The engine's collective operators as graph nodes: `Clear`, `Scan` (exclusive prefix sum),
-//! and the `Count` and `Scatter` steps of a counting sort. Each runs over a whole buffer, so
+//! the `Count` and `Scatter` steps of a counting sort, and `Sort` (a stable radix sort). Each runs over a whole buffer, so
 //! it is a barrier: it never shares a kernel with a pass, and it runs between the phases
 //! declared before and after it. Their kernels are written once in the engine
 //! ([`crate::collective`]).
@@ -57,6 +57,15 @@ pub enum OpKind {
         input: String,
         /// Sorted elements.
         output: String,
+    },
+    /// Stable ascending sort of `keys` by their low `bits` bits, `values` moved alongside.
+    Sort {
+        /// The `u32` keys, sorted in place.
+        keys: String,
+        /// The `u32` values.
+        values: String,
+        /// Low bits sorted by, 1 to 32.
+        bits: u32,
     },
 }
 
@@ -129,6 +138,18 @@ impl Operator {
                 };
                 (&d.name, kind, Some(domain(&d.over, &d.counted)?), &d.enabled)
             }
+            PassEntry::Sort(d) => {
+                if !(1..=32).contains(&d.bits) {
+                    let why = format!("operator '{}': bits {} is not in 1..=32", d.name, d.bits);
+                    return Err((d.name.clone(), why));
+                }
+                let kind = OpKind::Sort {
+                    keys: d.keys.clone(),
+                    values: d.values.clone(),
+                    bits: d.bits,
+                };
+                (&d.name, kind, Some(domain(&d.over, &d.counted)?), &d.enabled)
+            }
         };
         Ok(Operator {
             name: name.clone(),
@@ -146,6 +167,7 @@ impl Operator {
             OpKind::Scan { .. } => "exclusive scan",
             OpKind::Count { .. } => "count (counting sort)",
             OpKind::Scatter { .. } => "scatter (counting sort)",
+            OpKind::Sort { .. } => "radix sort",
         }
     }
 
@@ -162,6 +184,7 @@ impl Operator {
                 input,
                 ..
             } => vec![keys, slots, offsets, input],
+            OpKind::Sort { keys, values, .. } => vec![keys, values],
         };
         if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
             out.push(c);
@@ -176,11 +199,12 @@ impl Operator {
             OpKind::Scan { output, .. } => vec![output],
             OpKind::Count { counts, slots, .. } => vec![counts, slots],
             OpKind::Scatter { output, .. } => vec![output],
+            OpKind::Sort { keys, values, .. } => vec![keys, values],
         }
     }
 
     /// Every resource it touches, with what the element type must be: `Some("u32")` for the
-    /// `u32` words of scans, keys, slots and counts, `None` for any type.
+    /// `u32` words of scans, keys, slots, counts and sorted values, `None` for any type.
     pub fn buffers(&self) -> Vec<(&str, Option<&'static str>)> {
         let mut out: Vec<(&str, Option<&'static str>)> = match &self.kind {
             OpKind::Clear { buffer, .. } => vec![(buffer, None)],
@@ -201,6 +225,7 @@ impl Operator {
                 (input, None),
                 (output, None),
             ],
+            OpKind::Sort { keys, values, .. } => vec![(keys, Some("u32")), (values, Some("u32"))],
         };
         if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
             out.push((c, Some("u32")));

@@ -2,7 +2,7 @@
 //! resource sizes (from naga's layouter), each phase's domain and chunks, thread pools and
 //! queue capacities, the lifetime of every buffer, and which transient buffers share memory.
 
-use crate::collective::scan_levels;
+use crate::collective::{scratch_name, scratch_words};
 use crate::error::Result;
 use crate::expr::Expr;
 use crate::graph::{ChainEntry, FrameStep};
@@ -53,7 +53,8 @@ pub enum BufferRef {
     BoundaryOut,
     /// A physical boundary buffer: boundary and which of its two buffers.
     Boundary(BoundaryId, usize),
-    /// Scratch of an operator: the partial sums of a scan's level.
+    /// Scratch buffer of an operator, numbered per operator: the partial sums of a scan's
+    /// levels; a sort's other keys and values, digit histograms and their partial sums.
     Scratch(OpId, usize),
 }
 
@@ -69,7 +70,7 @@ impl BufferRef {
             BufferRef::Boundary(b, side) => {
                 format!("boundary {b}.{side} of {}", g.chains[plan.boundaries[*b].chain].item)
             }
-            BufferRef::Scratch(o, level) => format!("scan partials {} of '{}'", level + 1, g.ops[*o].name),
+            BufferRef::Scratch(o, i) => format!("{} of '{}'", scratch_name(&g.ops[*o].kind, *i), g.ops[*o].name),
             other => format!("{other:?}").to_lowercase(),
         }
     }
@@ -147,8 +148,8 @@ pub struct Resolved {
     pub queue_capacity: BTreeMap<String, u64>,
     /// Elements of each operator with the default parameters (the most a counted one runs).
     pub op_elements: BTreeMap<OpId, u64>,
-    /// Sizes of a scan's levels of partial sums.
-    pub scan_levels: BTreeMap<OpId, Vec<u64>>,
+    /// Words of each operator's scratch buffers, by index of [`BufferRef::Scratch`].
+    pub op_scratch: BTreeMap<OpId, Vec<u64>>,
     /// Control word layout.
     pub control: ControlMap,
     /// Binding numbers of kernels.
@@ -238,7 +239,7 @@ impl Resolved {
             state_capacity: BTreeMap::new(),
             queue_capacity: BTreeMap::new(),
             op_elements: BTreeMap::new(),
-            scan_levels: BTreeMap::new(),
+            op_scratch: BTreeMap::new(),
             control: control_map(plan),
             bindings: bindings(plan),
             memory: MemoryPlan::default(),
@@ -338,7 +339,7 @@ impl Resolved {
         Ok(())
     }
 
-    /// Each operator's element count and a scan's levels of partial sums.
+    /// Each operator's element count and scratch buffers.
     fn operators(&mut self, plan: &Plan, vars: &BTreeMap<String, f64>, target: &Target) -> Result<()> {
         let g = &plan.graph;
         for (o, op) in g.ops.iter().enumerate() {
@@ -353,10 +354,8 @@ impl Resolved {
             };
             self.check_operator_fits(plan, o, n, vars)?;
             self.op_elements.insert(o, n);
-            if matches!(op.kind, OpKind::Scan { .. }) {
-                let tile = (crate::collective::WORKGROUP * target.scan_items) as u64;
-                self.scan_levels.insert(o, scan_levels(n, tile));
-            }
+            let tile = (crate::collective::WORKGROUP * target.scan_items) as u64;
+            self.op_scratch.insert(o, scratch_words(&op.kind, n, tile));
         }
         Ok(())
     }
@@ -404,6 +403,7 @@ impl Resolved {
             OpKind::Scan { input, output } => vec![input, output],
             OpKind::Count { keys, slots, .. } => vec![keys, slots],
             OpKind::Scatter { keys, slots, input, .. } => vec![keys, slots, input],
+            OpKind::Sort { keys, values, .. } => vec![keys, values],
         };
         for b in per_element {
             let have = self.elements(b);
@@ -486,17 +486,17 @@ impl Resolved {
                 );
             }
         }
-        for (&o, levels) in &self.scan_levels {
+        for (&o, scratch) in &self.op_scratch {
             let s = g
                 .steps
                 .iter()
                 .position(|x| *x == FrameStep::Op(o))
                 .expect("every operator is a step");
-            for (l, &n) in levels.iter().enumerate() {
+            for (i, &words) in scratch.iter().enumerate() {
                 out.insert(
-                    BufferRef::Scratch(o, l),
+                    BufferRef::Scratch(o, i),
                     Request {
-                        bytes: 4 * n,
+                        bytes: 4 * words.max(1),
                         lifetime: Some(Lifetime { first: s, last: s }),
                     },
                 );

@@ -1,7 +1,10 @@
 //! The engine's collective operators checked against the CPU and timed: an exclusive scan of
 //! `n` words, and a counting sort (clear, count, scan of the bucket counts, scatter) of `n`
-//! 12-byte elements into `buckets` buckets, both from one graph run on any adapter. The
-//! tests run it at the sizes lavapipe allows; `lightgraph operators` runs it on a GPU.
+//! 12-byte elements into `buckets` buckets, both from one graph run on any adapter; the
+//! radix sort in [`sort`]. The tests run them at the sizes lavapipe allows; `lightgraph
+//! operators` runs them on a GPU.
+
+pub mod sort;
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;

@@ -3,10 +3,18 @@
 //! (0, 1, 2, a subgroup of 32 and a workgroup of 256 plus or minus one, a scan tile plus or
 //! minus one, and 2^20 + 7), with random inputs, all-equal ones (one bucket holding every
 //! element) and concentrated ones, with and without subgroup operations, and with small tiles
-//! so that the scan goes through two and three levels of partial sums.
+//! so that the scan goes through two and three levels of partial sums. The radix sort against
+//! a stable CPU sort (values from the indices show any instability): lengths 0, 1, a tile
+//! minus one, a tile, a tile plus one and 10^5 and more; random, all-equal, descending and
+//! high-bit-only keys; fewer bits (odd passes copy back); small scan tiles; a GPU count; its
+//! errors; and its scratch as transient memory of its step.
 
+use lightgraph_engine::ids::OpId;
+use lightgraph_engine::radix::SORT_TILE;
+use lightgraph_engine::resolve::BufferRef;
+use lightgraph_engine::selfcheck::sort::{Keys, Sorter, compare};
 use lightgraph_engine::selfcheck::{Pattern, check, run};
-use lightgraph_engine::{Gpu, Target};
+use lightgraph_engine::{Gpu, Graph, Plan, Program, Target, Vfs};
 use std::sync::OnceLock;
 
 fn gpu() -> &'static Gpu {
@@ -89,5 +97,177 @@ fn a_key_beyond_the_buckets_is_an_error_not_a_lost_element() {
     assert!(
         msg.contains("operator 'count'") && msg.contains("skipped 1 elements with a key beyond its counts"),
         "{msg}"
+    );
+}
+
+/// Sorts `keys` (the first `over`, or with a counted sorter the first `count`) with values
+/// from their indices, and asserts that the GPU equals a stable CPU sort of the first
+/// `sorted`, the rest untouched.
+fn sort_equals_cpu(sorter: &mut Sorter, keys: &[u32], (over, count): (u64, u32), sorted: usize, bits: u32, what: &str) {
+    let values: Vec<u32> = (0..keys.len() as u32).map(|i| i ^ 0x5a5a_0000).collect();
+    let out = sorter.sort(keys, &values, over, count, 1).unwrap();
+    if let Some(m) = compare(keys, &values, sorted, bits, &out) {
+        panic!("{what}: {m}");
+    }
+}
+
+#[test]
+fn radix_sort_equals_a_stable_cpu_sort() {
+    let tile = SORT_TILE as usize;
+    let lengths = [0, 1, tile - 1, tile, tile + 1, 100_000, 250_007];
+    for (what, target) in targets() {
+        let mut sorter = Sorter::new(gpu(), &target, 250_012, 32, false).unwrap();
+        for n in lengths {
+            for pattern in Keys::ALL {
+                // Five elements past the sorted ones must keep their places.
+                let keys = pattern.draw(n + 5, n as u64);
+                sort_equals_cpu(
+                    &mut sorter,
+                    &keys,
+                    (n as u64, 0),
+                    n,
+                    32,
+                    &format!("{what}: n {n}, {pattern:?}"),
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn radix_sort_by_fewer_bits_and_with_small_scan_tiles() {
+    // 30 bits (Morton codes) and 12 and 1 bit (odd passes, copied back), with random keys
+    // whose higher bits must not matter; then tiles of 256 for the scan of the histograms,
+    // which need a level of partial sums.
+    let n = 30_000;
+    let keys = Keys::Random.draw(n, 7);
+    for (what, mut target) in targets() {
+        for bits in [30, 12, 1] {
+            let mut sorter = Sorter::new(gpu(), &target, n as u64, bits, false).unwrap();
+            sort_equals_cpu(
+                &mut sorter,
+                &keys,
+                (n as u64, 0),
+                n,
+                bits,
+                &format!("{what}: {bits} bits"),
+            );
+        }
+        target.scan_items = 1;
+        let mut sorter = Sorter::new(gpu(), &target, n as u64, 32, false).unwrap();
+        sort_equals_cpu(
+            &mut sorter,
+            &keys,
+            (n as u64, 0),
+            n,
+            32,
+            &format!("{what}: tiles of 256"),
+        );
+    }
+}
+
+#[test]
+fn a_counted_radix_sort_sorts_the_counted_elements_only() {
+    let (len, over) = (30_000, 25_000u64);
+    let keys = Keys::HighBits.draw(len, 11);
+    for (what, target) in targets() {
+        let mut sorter = Sorter::new(gpu(), &target, len as u64, 32, true).unwrap();
+        for count in [0, 1, 12_345, 25_000, 40_000] {
+            let sorted = count.min(over) as usize;
+            sort_equals_cpu(
+                &mut sorter,
+                &keys,
+                (over, count as u32),
+                sorted,
+                32,
+                &format!("{what}: {count} counted"),
+            );
+        }
+    }
+}
+
+/// A graph of the operators `entries` over 100 `u32` keys and values, `f32` floats and 10^5
+/// `u32` words.
+fn sort_graph(entries: &str) -> String {
+    format!(
+        r#"(
+    name: "sorting",
+    passes: [{entries}],
+    resources: {{
+        "keys": (ty: "u32", count: "100"),
+        "values": (ty: "u32", count: "100"),
+        "floats": (ty: "f32", count: "100"),
+        "words": (ty: "u32", count: "100000"),
+    }},
+    outputs: [],
+    layouts: {{ "sort": (kernels: []) }},
+    default_layout: "sort",
+)"#
+    )
+}
+
+/// The program of `sort_graph(entries)` for a default target (no GPU needed).
+fn compile(entries: &str) -> lightgraph_engine::Result<Program> {
+    let graph = Graph::from_text(&Vfs::default(), "sorting.ron", &sort_graph(entries))?;
+    let plan = Plan::new(&graph, "sort")?;
+    Program::compile(&plan, &Default::default(), &Target::default())
+}
+
+#[test]
+fn sort_errors_name_the_operator() {
+    let cases = [
+        (
+            r#"Sort(name: "order", keys: "keys", values: "floats", over: "100")"#,
+            "operator 'order' (radix sort) needs u32 elements in 'floats', which holds 'f32'",
+        ),
+        (
+            r#"Sort(name: "order", keys: "keys", values: "keys", over: "100")"#,
+            "operator 'order' sorts 'keys' with itself as its values",
+        ),
+        (
+            r#"Sort(name: "order", keys: "keys", values: "values", over: "100", bits: 0)"#,
+            "operator 'order': bits 0 is not in 1..=32",
+        ),
+        (
+            r#"Sort(name: "order", keys: "keys", values: "values", over: "100", bits: 33)"#,
+            "operator 'order': bits 33 is not in 1..=32",
+        ),
+        (
+            r#"Sort(name: "order", keys: "keys", values: "values", over: "101")"#,
+            "operator 'order' runs over 101 elements but 'keys' holds 100",
+        ),
+        (
+            r#"Sort(name: "order", keys: "words", values: "values", over: "1000")"#,
+            "operator 'order' runs over 1000 elements but 'values' holds 100",
+        ),
+    ];
+    for (entry, want) in cases {
+        let e = compile(entry)
+            .err()
+            .unwrap_or_else(|| panic!("{entry} is accepted"))
+            .to_string();
+        assert!(e.contains(want) && e.starts_with("sorting.ron:"), "{entry}: {e}");
+    }
+}
+
+#[test]
+fn sort_scratch_is_transient_memory_of_its_step() {
+    // The sort's scratch (keys, values, histograms) lives in its step only, so the scan after
+    // it reuses that memory for its partial sums.
+    let program = compile(
+        r#"Sort(name: "order", keys: "keys", values: "values", over: "100"), Scan(name: "sums", input: "words", over: "100000")"#,
+    )
+    .unwrap();
+    let memory = &program.resolved.memory;
+    let scratch = |o: usize, i: usize| BufferRef::Scratch(OpId(o), i);
+    for i in 0..3 {
+        let life = memory.lifetimes[&scratch(0, i)];
+        assert_eq!((life.first, life.last), (0, 0), "sort scratch {i}");
+    }
+    let (sort_keys, partials) = (memory.placements[&scratch(0, 0)], memory.placements[&scratch(1, 0)]);
+    assert!(sort_keys.arena.is_some() && sort_keys.arena == partials.arena);
+    assert!(
+        partials.offset < sort_keys.offset + sort_keys.bytes,
+        "{sort_keys:?} {partials:?}"
     );
 }

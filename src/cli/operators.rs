@@ -1,10 +1,11 @@
-//! `lightgraph operators`: the engine's collective operators (exclusive scan, counting sort)
-//! checked against the CPU and timed on a GPU.
+//! `lightgraph operators`: the engine's collective operators (exclusive scan, counting sort,
+//! radix sort) checked against the CPU and timed on a GPU.
 
 use anyhow::{Result, bail};
 use clap::Args;
-use lightgraph_engine::Gpu;
+use lightgraph_engine::selfcheck::sort::{self, Keys};
 use lightgraph_engine::selfcheck::{Pattern, check};
+use lightgraph_engine::{Gpu, Target};
 
 #[derive(Args)]
 pub struct OperatorsArgs {
@@ -21,6 +22,12 @@ pub struct OperatorsArgs {
     /// Inputs: random, equal, concentrated (comma-separated) [default: all].
     #[arg(long, value_delimiter = ',')]
     pub patterns: Vec<String>,
+    /// Keys of the radix sort: random, equal, descending, high (comma-separated) [default: all].
+    #[arg(long, value_delimiter = ',')]
+    pub keys: Vec<String>,
+    /// Low bits of the keys the radix sort sorts by (1 to 32).
+    #[arg(long, default_value_t = 32)]
+    pub bits: u32,
     /// Runs per size; the times are the median.
     #[arg(long, default_value_t = 5)]
     pub runs: u32,
@@ -44,6 +51,16 @@ fn parse_pattern(name: &str) -> Result<Pattern> {
     })
 }
 
+fn parse_keys(name: &str) -> Result<Keys> {
+    Ok(match name {
+        "random" => Keys::Random,
+        "equal" => Keys::Equal,
+        "descending" => Keys::Descending,
+        "high" => Keys::HighBits,
+        other => bail!("unknown keys '{other}' (random, equal, descending, high)"),
+    })
+}
+
 fn ms(s: Option<f64>) -> String {
     s.map_or("-".to_string(), |s| format!("{:.4}", s * 1e3))
 }
@@ -54,13 +71,22 @@ pub fn operators(args: OperatorsArgs) -> Result<()> {
         true => gpu.target().without_subgroups(),
         false => gpu.target(),
     };
+    println!("adapter: {}", gpu.describe());
+    println!("subgroup kernels: {}", target.subgroups());
+    let failed = scans(&args, &gpu, &target)? + radix_sorts(&args, &gpu, &target)?;
+    if failed > 0 {
+        bail!("{failed} runs differ from the CPU");
+    }
+    Ok(())
+}
+
+/// The table of scans and counting sorts; the runs that differ from the CPU.
+fn scans(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize> {
     let patterns = if args.patterns.is_empty() {
         Pattern::ALL.to_vec()
     } else {
         args.patterns.iter().map(|p| parse_pattern(p)).collect::<Result<_>>()?
     };
-    println!("adapter: {}", gpu.describe());
-    println!("subgroup kernels: {}", target.subgroups());
     println!("\n| elements | buckets | inputs | scan (ms) | counting sort (ms) | against the CPU |");
     println!("|---:|---:|---|---:|---:|---|");
     let mut failed = 0;
@@ -71,21 +97,15 @@ pub fn operators(args: OperatorsArgs) -> Result<()> {
             b => b.parse()?,
         };
         for &pattern in &patterns {
-            let r = check(&gpu, &target, n, buckets, pattern, args.runs)?;
-            let verdict = match &r.mismatch {
-                None => "equal".to_string(),
-                Some(m) => {
-                    failed += 1;
-                    format!("DIFFERS: {m}")
-                }
-            };
+            let r = check(gpu, target, n, buckets, pattern, args.runs)?;
+            failed += r.mismatch.is_some() as usize;
             println!(
-                "| {n} | {buckets} | {pattern:?} | {} | {} | {verdict} |",
+                "| {n} | {buckets} | {pattern:?} | {} | {} | {} |",
                 ms(r.scan_seconds),
-                ms(r.sort_seconds)
+                ms(r.sort_seconds),
+                verdict(&r.mismatch)
             );
-            let each: Vec<String> = r.kernels.iter().map(|(k, s)| format!("{k} {}", ms(Some(*s)))).collect();
-            kernel_lines.push(format!("{n} {pattern:?}: {}", each.join(", ")));
+            kernel_lines.push(format!("{n} {pattern:?}: {}", kernel_times(&r.kernels)));
         }
     }
     if args.kernels {
@@ -94,8 +114,54 @@ pub fn operators(args: OperatorsArgs) -> Result<()> {
             println!("  {line}");
         }
     }
-    if failed > 0 {
-        bail!("{failed} runs differ from the CPU");
+    Ok(failed)
+}
+
+/// The table of radix sorts; the runs that differ from the CPU.
+fn radix_sorts(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize> {
+    let keys = if args.keys.is_empty() {
+        Keys::ALL.to_vec()
+    } else {
+        args.keys.iter().map(|k| parse_keys(k)).collect::<Result<_>>()?
+    };
+    println!("\n| elements | keys | bits | radix sort (ms) | keys/s | against the CPU |");
+    println!("|---:|---|---:|---:|---:|---|");
+    let mut failed = 0;
+    let mut kernel_lines = Vec::new();
+    for &n in &args.sizes {
+        for &pattern in &keys {
+            let r = sort::check(gpu, target, n, pattern, args.bits, args.runs)?;
+            failed += r.mismatch.is_some() as usize;
+            let rate = r
+                .seconds
+                .filter(|&s| s > 0.0)
+                .map_or("-".to_string(), |s| format!("{:.3e}", n as f64 / s));
+            println!(
+                "| {n} | {pattern:?} | {} | {} | {rate} | {} |",
+                args.bits,
+                ms(r.seconds),
+                verdict(&r.mismatch)
+            );
+            kernel_lines.push(format!("{n} {pattern:?}: {}", kernel_times(&r.kernels)));
+        }
     }
-    Ok(())
+    if args.kernels {
+        println!("\nkernels (ms) of the radix sort, per pass: digit histograms, their scan, scatter");
+        for line in kernel_lines {
+            println!("  {line}");
+        }
+    }
+    Ok(failed)
+}
+
+fn verdict(mismatch: &Option<String>) -> String {
+    match mismatch {
+        None => "equal".to_string(),
+        Some(m) => format!("DIFFERS: {m}"),
+    }
+}
+
+fn kernel_times(kernels: &[(String, f64)]) -> String {
+    let each: Vec<String> = kernels.iter().map(|(k, s)| format!("{k} {}", ms(Some(*s)))).collect();
+    each.join(", ")
 }

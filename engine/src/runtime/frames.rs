@@ -233,9 +233,10 @@ impl Instance<'_> {
         let resolved = &self.program.resolved;
         let sized = resolved.op_elements[&o];
         let fail = |e: String| Error::Runtime(format!("operator '{}': {e}", op.name));
+        // A counted operator runs over at most this frame's `over`.
         let n = match &op.domain {
-            Some(d) if d.counted.is_none() => d.over.count(vars).map_err(fail)?,
-            _ => sized,
+            Some(d) => d.over.count(vars).map_err(fail)?,
+            None => sized,
         };
         if n > sized {
             return Err(fail(format!(

@@ -1,0 +1,215 @@
+//! The radix sort operator checked against a stable sort on the CPU and timed: a graph whose
+//! one step is a `Sort` of host-written keys and values, over a parameter's number of
+//! elements (so one compiled program sorts every length up to its capacity), optionally
+//! counted on the GPU.
+
+use super::{Numbers, median};
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::ir::ConstValue;
+use crate::program::{Program, Specialization, Target};
+use crate::runtime::Instance;
+use crate::vfs::Vfs;
+use crate::{Graph, Plan};
+use std::collections::BTreeMap;
+
+/// The keys a check sorts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Keys {
+    /// Random 32-bit keys.
+    Random,
+    /// One key for every element (the order must not change at all).
+    Equal,
+    /// Descending, spread over the 32 bits.
+    Descending,
+    /// Random in the top 4 bits, the other bits 0 (every pass but the last sees one digit).
+    HighBits,
+}
+
+impl Keys {
+    /// Every pattern.
+    pub const ALL: [Keys; 4] = [Keys::Random, Keys::Equal, Keys::Descending, Keys::HighBits];
+
+    /// `n` keys of this pattern.
+    pub fn draw(self, n: usize, seed: u64) -> Vec<u32> {
+        let mut rng = Numbers(seed);
+        (0..n)
+            .map(|i| match self {
+                Keys::Random => rng.next() as u32,
+                Keys::Equal => 0x8000_0001,
+                Keys::Descending => ((n - 1 - i) as u64 * u32::MAX as u64 / n as u64) as u32,
+                Keys::HighBits => rng.next() as u32 & 0xf000_0000,
+            })
+            .collect()
+    }
+}
+
+/// What the GPU left in the sort's buffers, and how long it took.
+#[derive(Debug, Clone)]
+pub struct Sorted {
+    /// The keys (as many as were written).
+    pub keys: Vec<u32>,
+    /// The values.
+    pub values: Vec<u32>,
+    /// GPU seconds of the sort, all its kernels (median of the runs; `None` without
+    /// timestamps).
+    pub seconds: Option<f64>,
+    /// GPU seconds of each kernel (median of the runs), in the order they run.
+    pub kernels: Vec<(String, f64)>,
+}
+
+/// A compiled sort on a GPU.
+pub struct Sorter<'g> {
+    instance: Instance<'g>,
+    kernels: Vec<String>,
+    capacity: u64,
+    counted: bool,
+}
+
+impl<'g> Sorter<'g> {
+    /// A sort of at most `capacity` elements by their low `bits` bits on `gpu` (subgroup
+    /// kernels where `target` has subgroups), over a GPU-written count when `counted`.
+    pub fn new(gpu: &'g Gpu, target: &Target, capacity: u64, bits: u32, counted: bool) -> Result<Sorter<'g>> {
+        let text = graph_text(capacity.max(1), bits, counted);
+        let graph = Graph::from_text(&Vfs::default(), "sort.ron", &text)?;
+        let plan = Plan::new(&graph, "sort")?;
+        let program = Program::compile(&plan, &Specialization::default(), target)?;
+        let kernels = program.ops[0].kernels.iter().map(|(k, _)| k.name.clone()).collect();
+        Ok(Sorter {
+            instance: Instance::new(gpu, program, &BTreeMap::new())?,
+            kernels,
+            capacity,
+            counted,
+        })
+    }
+
+    /// Writes `keys` and `values` from the first element, sorts the first `over` of them
+    /// (with a counted sorter, the first `count`, at most `over`), `runs` times (writing
+    /// them again before each), and reads back as many as were written.
+    pub fn sort(&mut self, keys: &[u32], values: &[u32], over: u64, count: u32, runs: u32) -> Result<Sorted> {
+        let n = keys.len();
+        if values.len() != n || n as u64 > self.capacity || over > n as u64 {
+            return Err(Error::Runtime(format!(
+                "cannot sort {over} of {n} keys with {} values in a sort of {}",
+                values.len(),
+                self.capacity
+            )));
+        }
+        self.instance.set_parameter("ELEMENTS", ConstValue::U32(over as u32))?;
+        let mut times = Vec::new();
+        let mut per_kernel: Vec<Vec<f64>> = vec![Vec::new(); self.kernels.len()];
+        for run in 0..runs.max(1) {
+            if n > 0 {
+                self.instance.write("keys", bytemuck::cast_slice(keys))?;
+                self.instance.write("values", bytemuck::cast_slice(values))?;
+            }
+            if self.counted {
+                self.instance.write("elements", bytemuck::bytes_of(&count))?;
+            }
+            let stats = self.instance.run_frame(run, 0)?;
+            let found: Vec<f64> = self
+                .kernels
+                .iter()
+                .filter_map(|k| stats.kernel_seconds.get(k))
+                .copied()
+                .collect();
+            for (k, name) in self.kernels.iter().enumerate() {
+                per_kernel[k].extend(stats.kernel_seconds.get(name));
+            }
+            if found.len() == self.kernels.len() {
+                times.push(found.iter().sum());
+            }
+        }
+        let read = |name: &str| -> Result<Vec<u32>> {
+            let mut v: Vec<u32> = bytemuck::pod_collect_to_vec(&self.instance.read(name)?);
+            v.truncate(n);
+            Ok(v)
+        };
+        let kernels = self
+            .kernels
+            .iter()
+            .zip(per_kernel)
+            .filter_map(|(name, t)| median(t).map(|t| (name.clone(), t)))
+            .collect();
+        Ok(Sorted {
+            keys: read("keys")?,
+            values: read("values")?,
+            seconds: median(times),
+            kernels,
+        })
+    }
+}
+
+/// The graph of a sort: `ELEMENTS` (a parameter) of `CAPACITY` keys and values.
+fn graph_text(capacity: u64, bits: u32, counted: bool) -> String {
+    let counted = if counted { ", counted: \"elements\"" } else { "" };
+    format!(
+        r#"(
+    name: "sort",
+    description: "stable radix sort of host-written keys and values",
+    passes: [Sort(name: "sort", keys: "keys", values: "values", over: "ELEMENTS", bits: {bits}{counted})],
+    resources: {{
+        "keys": (ty: "u32", count: "CAPACITY"),
+        "values": (ty: "u32", count: "CAPACITY"),
+        "elements": (ty: "u32"),
+    }},
+    constants: {{ "CAPACITY": U32({capacity}) }},
+    parameters: {{ "ELEMENTS": U32({capacity}) }},
+    outputs: ["keys", "values"],
+    layouts: {{ "sort": (kernels: []) }},
+    default_layout: "sort",
+)
+"#
+    )
+}
+
+/// The first disagreement of `sorted` with a stable sort on the CPU of the first `n` of
+/// `keys` (with `values`) by their low `bits` bits, the rest left as they were.
+pub fn compare(keys: &[u32], values: &[u32], n: usize, bits: u32, sorted: &Sorted) -> Option<String> {
+    let mask = if bits >= 32 { u32::MAX } else { (1u32 << bits) - 1 };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(|&i| keys[i] & mask);
+    order.extend(n..keys.len());
+    if sorted.keys.len() != keys.len() || sorted.values.len() != keys.len() {
+        return Some(format!(
+            "read back {} keys, {} were written",
+            sorted.keys.len(),
+            keys.len()
+        ));
+    }
+    for (place, &i) in order.iter().enumerate() {
+        let (k, v) = (sorted.keys[place], sorted.values[place]);
+        if k != keys[i] || v != values[i] {
+            return Some(format!(
+                "place {place} holds key {k:#x} value {v}, the CPU says key {:#x} value {} (of {n} sorted)",
+                keys[i], values[i]
+            ));
+        }
+    }
+    None
+}
+
+/// What one check of the sort found.
+#[derive(Debug, Clone)]
+pub struct SortReport {
+    /// The first disagreement with the CPU, if any.
+    pub mismatch: Option<String>,
+    /// GPU seconds of the sort (median of the runs).
+    pub seconds: Option<f64>,
+    /// GPU seconds of each kernel (median of the runs), in the order they run.
+    pub kernels: Vec<(String, f64)>,
+}
+
+/// Sorts `n` keys drawn by `pattern` by their low `bits` bits, with their indices as values
+/// (so any instability shows), `runs` times, and checks the last run against the CPU.
+pub fn check(gpu: &Gpu, target: &Target, n: u64, pattern: Keys, bits: u32, runs: u32) -> Result<SortReport> {
+    let keys = pattern.draw(n as usize, n ^ 0x50f7);
+    let values: Vec<u32> = (0..n as u32).collect();
+    let mut sorter = Sorter::new(gpu, target, n, bits, false)?;
+    let sorted = sorter.sort(&keys, &values, n, 0, runs)?;
+    Ok(SortReport {
+        mismatch: compare(&keys, &values, n as usize, bits, &sorted),
+        seconds: sorted.seconds,
+        kernels: sorted.kernels,
+    })
+}
