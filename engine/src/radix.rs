@@ -303,14 +303,22 @@ fn {name}(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: v
     let base = tile * LG_TILE;
     var m = 0u;
     if (base < n) {{ m = min(n - base, LG_TILE); }}
-{rank}{SCATTER_COUNT}{exclusive}{SCATTER_PLACE}}}
-"
+{rank}{SCATTER_READ}{count}{exclusive}{SCATTER_START}{place}{SCATTER_WRITE}}}
+",
+        count = run_lines(RUN_COUNT),
+        place = run_lines(RUN_PLACE),
     )
 }
 
-/// The scatter's tile read and each thread's run of it counted by digit.
-const SCATTER_COUNT: &str = "    if (lid < LG_RADIX && tile < tiles) { lg_delta[lid] = lg_hist[lid * tiles + tile]; }
-    // The tile in order; the places beyond the elements hold the largest digit, last.
+/// `line` once for each element of a thread's run, `{k}` replaced by its number: straight-line
+/// code, so that the run stays in registers.
+fn run_lines(line: &str) -> String {
+    (0..SORT_ITEMS).map(|k| line.replace("{k}", &k.to_string())).collect()
+}
+
+/// The scatter's tile, read in order into workgroup memory.
+const SCATTER_READ: &str = "    if (lid < LG_RADIX && tile < tiles) { lg_delta[lid] = lg_hist[lid * tiles + tile]; }
+    // The places beyond the elements hold the largest digit, last.
     for (var j = 0u; j < LG_ITEMS; j += 1u) {
         let q = j * LG_WG + lid;
         var key = 0xffffffffu;
@@ -323,25 +331,21 @@ const SCATTER_COUNT: &str = "    if (lid < LG_RADIX && tile < tiles) { lg_delta[
         lg_values[lg_pad(q)] = value;
     }
     workgroupBarrier();
-    // This thread's run of LG_ITEMS elements, its digits counted; `before[k]` counts the
-    // run's elements before k with the same digit.
-    var keys: array<u32, LG_ITEMS>;
-    var values: array<u32, LG_ITEMS>;
-    var before: array<u32, LG_ITEMS>;
+    // This thread's run of LG_ITEMS elements, its digits counted: before_k counts the run's
+    // elements before k with the same digit.
     var own = LgCounts(vec4<u32>(), vec4<u32>());
-    for (var k = 0u; k < LG_ITEMS; k += 1u) {
-        let at = lg_pad(rank * LG_ITEMS + k);
-        keys[k] = lg_keys[at];
-        values[k] = lg_values[at];
-        let d = lg_digit(keys[k]);
-        before[k] = lg_field(own, d);
-        lg_bump(&own, d);
-    }
 ";
 
-/// The scatter's reorder in workgroup memory (after the workgroup scan of the counts, `x`)
-/// and the writes in digit order.
-const SCATTER_PLACE: &str = "    workgroupBarrier();
+/// Element k of the run, counted.
+const RUN_COUNT: &str = "    let key{k} = lg_keys[lg_pad(rank * LG_ITEMS + {k}u)];
+    let value{k} = lg_values[lg_pad(rank * LG_ITEMS + {k}u)];
+    let digit{k} = lg_digit(key{k});
+    let before{k} = lg_field(own, digit{k});
+    lg_bump(&own, digit{k});
+";
+
+/// Each digit's first place in the tile, after the workgroup scan of the counts (`x`).
+const SCATTER_START: &str = "    workgroupBarrier();
     if (lid < LG_RADIX) {
         var start = 0u;
         for (var e = 0u; e < lid; e += 1u) { start += lg_field(lg_total, e); }
@@ -351,14 +355,16 @@ const SCATTER_PLACE: &str = "    workgroupBarrier();
     workgroupBarrier();
     // Each element to its digit's first place in the tile plus the elements of the digit
     // before it: those of earlier runs, then those of this run.
-    for (var k = 0u; k < LG_ITEMS; k += 1u) {
-        let d = lg_digit(keys[k]);
-        let at = lg_start[d] + lg_field(x, d) + before[k];
-        lg_keys[lg_pad(at)] = keys[k];
-        lg_values[lg_pad(at)] = values[k];
-    }
-    workgroupBarrier();
-    // In digit order, each element to its place in the sorted order.
+";
+
+/// Element k of the run to its place in the tile.
+const RUN_PLACE: &str = "    let at{k} = lg_pad(lg_start[digit{k}] + lg_field(x, digit{k}) + before{k});
+    lg_keys[at{k}] = key{k};
+    lg_values[at{k}] = value{k};
+";
+
+/// The tile in digit order, each element to its place in the sorted order.
+const SCATTER_WRITE: &str = "    workgroupBarrier();
     let room = min(arrayLength(&lg_dst_keys), arrayLength(&lg_dst_values));
     for (var j = 0u; j < LG_ITEMS; j += 1u) {
         let q = j * LG_WG + lid;
