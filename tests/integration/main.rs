@@ -13,6 +13,7 @@ mod docs;
 mod gltf;
 mod layouts;
 mod lights;
+mod photon_query;
 mod probe;
 mod reference;
 mod resolve;
