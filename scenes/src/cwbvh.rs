@@ -1,18 +1,22 @@
 //! Compressed wide BVH building (Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal
 //! on GPUs Through Compressed Wide BVHs", HPG 2017): obvhs builds an eight-wide BVH with
-//! quantized child boxes and leaves of at most three primitives; we pack its nodes into u32
-//! words for WGSL ([`GpuCwbvhNode`]), with primitives reordered into leaf order.
+//! quantized child boxes and leaves of at most three primitives, from a binary tree whose
+//! depth we bound until the wide one fits the traversal stack ([`MAX_DEPTH`]); we pack its nodes
+//! into u32 words for WGSL ([`GpuCwbvhNode`]), with primitives reordered into leaf order.
 
+use crate::bvh;
 use crate::gpu::GpuCwbvhNode;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
+use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::ploc::PlocBuilder;
 
-/// Deepest tree (in node levels, the root being level 1) the WGSL traversal stack supports.
+/// Deepest tree (in node levels, the root being level 1) the build makes: the WGSL traversal's
+/// stack has as many entries, and a tree needs one fewer than its depth.
 pub const MAX_DEPTH: usize = 32;
 
 /// A built compressed wide BVH: nodes (root first) and the primitive order leaves refer to.
@@ -38,26 +42,39 @@ pub fn build(boxes: &[(Vec3A, Vec3A)]) -> Result<Cwbvh, String> {
     // does, without that check.
     let aabbs: Vec<Aabb> = boxes.iter().map(|(lo, hi)| Aabb::new(*lo, *hi)).collect();
     let params = BvhBuildParams::medium_build();
-    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
-        params.ploc_search_distance,
-        &aabbs,
-        (0..aabbs.len() as u32).collect(),
-        params.sort_precision,
-        params.search_depth_threshold,
-    );
-    ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
-    let cwbvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
-    let depth = depth(&cwbvh.nodes);
-    if depth > MAX_DEPTH {
-        return Err(format!(
-            "the wide BVH is {depth} levels deep; traversal supports {MAX_DEPTH}"
-        ));
+    let mut bvh2 = binary_tree(&aabbs, &params);
+    // A wide node spans at most seven binary levels of inner nodes and a leaf two: a binary
+    // tree deeper than this cannot fit (and could overflow the recursion of obvhs's conversion).
+    bvh::limit_depth(&mut bvh2, 7 * MAX_DEPTH + 2);
+    let convert = |bvh2: &Bvh2| bvh2_to_cwbvh(bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+    let mut cwbvh = convert(&bvh2);
+    let mut depth = wide_depth(&cwbvh.nodes);
+    // A wide node spans at least one binary level, so a binary tree of MAX_DEPTH levels fits:
+    // shorten the binary tree in proportion to the excess until the wide one fits.
+    while depth > MAX_DEPTH {
+        let binary = bvh::depth(&bvh2);
+        bvh::limit_depth(&mut bvh2, (binary * MAX_DEPTH / depth).max(MAX_DEPTH));
+        cwbvh = convert(&bvh2);
+        depth = wide_depth(&cwbvh.nodes);
     }
     Ok(Cwbvh {
         nodes: cwbvh.nodes.iter().map(pack).collect(),
         order: cwbvh.primitive_indices,
         depth,
     })
+}
+
+/// obvhs's binary tree over `aabbs`, one primitive per leaf as its conversion needs.
+fn binary_tree(aabbs: &[Aabb], params: &BvhBuildParams) -> Bvh2 {
+    let mut bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+        params.ploc_search_distance,
+        aabbs,
+        (0..aabbs.len() as u32).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    bvh2
 }
 
 /// Packs eight bytes into two little-endian words.
@@ -88,7 +105,7 @@ fn pack(n: &CwBvhNode) -> GpuCwbvhNode {
 }
 
 /// Node levels on the longest path from the root.
-fn depth(nodes: &[CwBvhNode]) -> usize {
+fn wide_depth(nodes: &[CwBvhNode]) -> usize {
     let mut deepest = 0;
     let mut stack = vec![(0usize, 1usize)];
     while let Some((index, d)) = stack.pop() {
@@ -204,6 +221,20 @@ mod tests {
         assert!(seen.iter().all(|&s| s == 1), "n = {n}: {seen:?}");
         assert!(nodes_seen.iter().all(|&s| s == 1), "n = {n}: nodes {nodes_seen:?}");
         assert!((1..=MAX_DEPTH).contains(&bvh.depth));
+    }
+
+    /// obvhs's binary tree over these boxes is deeper than any that converts within
+    /// [`MAX_DEPTH`] wide levels.
+    #[test]
+    fn deep_trees_are_built_within_the_stack() {
+        let b = crate::bvh::tests::deep_boxes();
+        let aabbs: Vec<Aabb> = b.iter().map(|(lo, hi)| Aabb::new(*lo, *hi)).collect();
+        let unlimited = bvh::depth(&binary_tree(&aabbs, &BvhBuildParams::medium_build()));
+        assert!(
+            unlimited > 7 * MAX_DEPTH + 2,
+            "obvhs's tree is only {unlimited} levels deep"
+        );
+        assert_covers(&b);
     }
 
     #[test]

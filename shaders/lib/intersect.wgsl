@@ -139,7 +139,7 @@ fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: 
 // that the highest bit is the nearest child along the ray; bits 0..8 the node's imask) and a
 // primitive group (x: first primitive, y: bit k set for primitive x + k still to test). Each
 // level pushes at most one group, so the stack needs the tree's depth less one (the host
-// refuses deeper trees, scenes/src/cwbvh.rs MAX_DEPTH).
+// builds no deeper trees than this, scenes/src/cwbvh.rs MAX_DEPTH).
 const BVH_STACK_SIZE: u32 = 32u;
 
 // The byte of child `i` in a packed pair of words.
@@ -264,6 +264,8 @@ fn intersect_box(o: vec3<f32>, inv_d: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>, t
     return select(INFINITE_DISTANCE * 2.0, t_near, t_near <= t_far);
 }
 
+// Each level pushes at most one node, so the stack needs the tree's depth less one (the host
+// builds no deeper trees than this, scenes/src/bvh.rs MAX_DEPTH).
 const BVH_STACK_SIZE: u32 = 64u;
 
 // The closest hit along o + t d, t in (0, t_max).

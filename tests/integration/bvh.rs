@@ -3,11 +3,14 @@
 //! 1e-5 relative, and any-hit queries with a random distance limit; for the BVH2 and the
 //! compressed wide BVH. A second scene of axis-aligned quads on a grid, with rays partly
 //! parallel to the axes, exercises flat boxes and boxes sharing planes (as in Cornell boxes).
+//! A third scene, on which obvhs builds trees too deep for the traversal stacks, must load
+//! with trees within them, and its rays probe every scale of it.
 
 use crate::common::{data, gpu};
 use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization};
 use lightgraph_scenes::CompiledScene;
-use lightgraph_scenes::bvh::BvhKind;
+use lightgraph_scenes::bvh::{self, BvhKind};
+use lightgraph_scenes::cwbvh;
 use lightgraph_scenes::gpu::primitive_kind;
 use lightgraph_scenes::model::{Camera, FovAxis, Integrator, Light, Look, Material, Scene, Shape};
 use std::collections::BTreeMap;
@@ -137,8 +140,13 @@ fn random_scene(rng: &mut Rng, axis_aligned: bool) -> Scene {
             material: "m".into(),
         });
     }
+    scene_of(shapes)
+}
+
+/// A scene of `shapes` in one diffuse material under a white background.
+fn scene_of(shapes: Vec<Shape>) -> Scene {
     Scene {
-        description: "random shapes".into(),
+        description: "test shapes".into(),
         camera: Some(Camera {
             position: [0.0; 3],
             look: Look::Forward([0.0, 0.0, 1.0]),
@@ -160,49 +168,149 @@ fn random_scene(rng: &mut Rng, axis_aligned: bool) -> Scene {
     }
 }
 
+/// 500 triangles of random orientation nested around the origin, shrinking geometrically
+/// from 10 to 10^-6 (the surface area heuristic peels them off one by one), and 300
+/// degenerate triangles along a segment through them (boxes of zero area, which obvhs chains,
+/// as in Modern Hall): unbounded, obvhs's BVH2 would be 144 levels deep, its wide BVH 141.
+/// Half the rays are as in [`random_rays`], half start near a random nested triangle, at 1.5
+/// to 4 times its size, and aim at a random point of it, with an any-hit limit of up to twice
+/// that distance.
+fn deep_scene(rng: &mut Rng, n: usize) -> (Scene, Vec<Query>) {
+    let count = 500;
+    let size = |k: usize| 10.0 * 1e-7f64.powf(k as f64 / (count - 1) as f64);
+    // Triangle k is equilateral, in a plane size(k) / 2 from the origin, its corners size(k) / 2
+    // from the plane's point nearest the origin: a ray near a smaller one seldom starts so close
+    // to it that f32 cannot resolve its distance.
+    let nest: Vec<[[f32; 3]; 3]> = (0..count)
+        .map(|k| {
+            let n = rng.direction();
+            let w = rng.direction();
+            let u = cross(n, w).map(|x| x / dot(cross(n, w), cross(n, w)).sqrt());
+            let v = cross(n, u);
+            [0.0, 1.0, 2.0].map(|i: f64| {
+                let angle = 2.0 * std::f64::consts::PI * i / 3.0;
+                std::array::from_fn(|j| {
+                    ((0.5 * n[j] + 0.5 * (angle.cos() * u[j] + angle.sin() * v[j])) * size(k)) as f32
+                })
+            })
+        })
+        .collect();
+    let mut shapes: Vec<Shape> = nest
+        .iter()
+        .map(|&vertices| Shape::Triangle {
+            vertices,
+            material: "m".into(),
+            emission: None,
+        })
+        .collect();
+    shapes.extend((0..300).map(|k| {
+        let x = -1.5 + k as f32 * 0.01;
+        Shape::Triangle {
+            vertices: [[x, 0.0, 0.0], [x + 0.1, 0.0, 0.0], [x + 0.05, 0.0, 0.0]],
+            material: "m".into(),
+            emission: None,
+        }
+    }));
+    let mut queries = random_rays(rng, n / 2, false);
+    while queries.len() < n {
+        let k = (rng.next() * count as f64) as usize;
+        let [a, b, c] = nest[k].map(f64s);
+        let (u, v) = (rng.next(), rng.next());
+        let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+        let target: [f64; 3] = std::array::from_fn(|i| a[i] + u * (b[i] - a[i]) + v * (c[i] - a[i]));
+        let dir = rng.direction();
+        let distance = rng.range(1.5, 4.0) * size(k);
+        let o = std::array::from_fn(|i| (target[i] + distance * dir[i]) as f32);
+        let to = sub(target, f64s(o));
+        let d = to.map(|x| (x / dot(to, to).sqrt()) as f32);
+        queries.push((o, d, rng.range(0.0, 2.0 * distance) as f32));
+    }
+    (scene_of(shapes), queries)
+}
+
+/// A ray query: origin, unit direction and the any-hit limit.
+type Query = ([f32; 3], [f32; 3], f32);
+
+/// `n` rays from random origins in a cube of 30 units in random directions, with any-hit
+/// limits up to 30. With `axis_aligned`, half the rays have direction components of exactly
+/// 0: a fifth run along an axis.
+fn random_rays(rng: &mut Rng, n: usize, axis_aligned: bool) -> Vec<Query> {
+    (0..n)
+        .map(|_| {
+            let o = rng.point(15.0).map(|v| v as f32);
+            let mut d = rng.direction();
+            if axis_aligned {
+                let r = rng.next();
+                let k = (r * 30.0) as usize % 3;
+                if r < 0.3 {
+                    d[k] = 0.0;
+                } else if r < 0.5 {
+                    d = [0.0; 3];
+                    d[k] = if r < 0.4 { 1.0 } else { -1.0 };
+                }
+                d = d.map(|v| v / dot(d, d).sqrt());
+            }
+            (o, d.map(|v| v as f32), rng.range(0.0, 30.0) as f32)
+        })
+        .collect()
+}
+
+/// The scenes the traversal is checked on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Shapes {
+    /// [`random_scene`] of triangles and spheres.
+    Random,
+    /// [`random_scene`] of axis-aligned quads.
+    AxisAligned,
+    /// [`deep_scene`].
+    Deep,
+}
+
 #[test]
 fn gpu_bvh2_traversal_matches_brute_force() {
-    traversal_matches_brute_force(BvhKind::Bvh2, false);
-    traversal_matches_brute_force(BvhKind::Bvh2, true);
+    for shapes in [Shapes::Random, Shapes::AxisAligned, Shapes::Deep] {
+        traversal_matches_brute_force(BvhKind::Bvh2, shapes);
+    }
 }
 
 #[test]
 fn gpu_cwbvh_traversal_matches_brute_force() {
-    traversal_matches_brute_force(BvhKind::Cwbvh, false);
-    traversal_matches_brute_force(BvhKind::Cwbvh, true);
+    for shapes in [Shapes::Random, Shapes::AxisAligned, Shapes::Deep] {
+        traversal_matches_brute_force(BvhKind::Cwbvh, shapes);
+    }
 }
 
-/// Traces 4096 random rays through a BVH of `kind` over [`random_scene`] on the GPU and
-/// compares with brute force. With `axis_aligned`, half the rays have direction components
-/// of exactly 0: a fifth run along an axis.
-fn traversal_matches_brute_force(kind: BvhKind, axis_aligned: bool) {
+/// Traces 4096 rays through a BVH of `kind` over `shapes` on the GPU and compares with brute
+/// force; the BVH must be within the traversal's stack.
+fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes) {
     let mut rng = Rng(0x9E3779B97F4A7C15);
-    let scene = random_scene(&mut rng, axis_aligned);
+    let n = 4096usize;
+    let (scene, queries) = if shapes == Shapes::Deep {
+        deep_scene(&mut rng, n)
+    } else {
+        let axis_aligned = shapes == Shapes::AxisAligned;
+        let scene = random_scene(&mut rng, axis_aligned);
+        (scene, random_rays(&mut rng, n, axis_aligned))
+    };
     let compiled = CompiledScene::with_bvh(&scene, kind).unwrap();
     assert_eq!(compiled.bvh_kind, kind);
-    let n = 4096usize;
-    let mut rays: Vec<[f32; 4]> = Vec::new();
-    let mut queries = Vec::new();
-    for _ in 0..n {
-        let o = rng.point(15.0).map(|v| v as f32);
-        let mut d = rng.direction();
-        if axis_aligned {
-            let r = rng.next();
-            let k = (r * 30.0) as usize % 3;
-            if r < 0.3 {
-                d[k] = 0.0;
-            } else if r < 0.5 {
-                d = [0.0; 3];
-                d[k] = if r < 0.4 { 1.0 } else { -1.0 };
-            }
-            d = d.map(|v| v / dot(d, d).sqrt());
-        }
-        let d32 = d.map(|v| v as f32);
-        let t_any = rng.range(0.0, 30.0) as f32;
-        rays.push([o[0], o[1], o[2], t_any]);
-        rays.push([d32[0], d32[1], d32[2], 0.0]);
-        queries.push((f64s(o), f64s(d32), t_any as f64));
-    }
+    let max_depth = match kind {
+        BvhKind::Bvh2 => bvh::MAX_DEPTH,
+        BvhKind::Cwbvh => cwbvh::MAX_DEPTH,
+    };
+    assert!(
+        (1..=max_depth).contains(&compiled.bvh_depth),
+        "{kind:?} over {shapes:?}: {} levels",
+        compiled.bvh_depth
+    );
+    let rays: Vec<[f32; 4]> = queries
+        .iter()
+        .flat_map(|&(o, d, t_any)| [[o[0], o[1], o[2], t_any], [d[0], d[1], d[2], 0.0]])
+        .collect();
+    let queries: Vec<([f64; 3], [f64; 3], f64)> = queries
+        .iter()
+        .map(|&(o, d, t_any)| (f64s(o), f64s(d), t_any as f64))
+        .collect();
     let vfs = lightgraph::assets::builtin().with_front(Layer::Dir(data("")));
     let graph = Graph::load(&vfs, "graphs/bvh_query.ron").unwrap();
     let plan = Plan::new(&graph, "fused").unwrap();
@@ -245,7 +353,7 @@ fn traversal_matches_brute_force(kind: BvhKind, axis_aligned: bool) {
         // distance f32 cannot resolve to 1e-5, may legitimately differ.
         let near_tie = cpu.len() > 1 && (cpu[1].0 - cpu[0].0) < 1e-4 * cpu[0].0;
         let grazing = cpu.first().is_some_and(|h| h.1 < 1e-4 || h.2 > 1e-5);
-        let limit_tie = cpu.first().is_some_and(|h| (h.0 - t_any).abs() < 1e-4 * t_any.max(1.0));
+        let limit_tie = cpu.first().is_some_and(|h| (h.0 - t_any).abs() < 1e-4 * t_any);
         if near_tie || grazing || limit_tie {
             ambiguous += 1;
             reasons[0] += near_tie as usize;
@@ -278,13 +386,8 @@ fn traversal_matches_brute_force(kind: BvhKind, axis_aligned: bool) {
         assert_eq!(r[2] == 1.0, cpu_any, "ray {i}: any-hit below {t_any}");
     }
     eprintln!(
-        "{kind:?} (depth {}){}, {n} rays: {hits} closest hits, {any_hits} any-hits, {ambiguous} skipped as ambiguous (ties {}, edges {}, f32-ill-conditioned {}, at the any-hit limit {})",
-        compiled.bvh_depth,
-        if axis_aligned { ", axis-aligned quads" } else { "" },
-        reasons[0],
-        reasons[1],
-        reasons[2],
-        reasons[3]
+        "{kind:?} (depth {}), {shapes:?} shapes, {n} rays: {hits} closest hits, {any_hits} any-hits, {ambiguous} skipped as ambiguous (ties {}, edges {}, f32-ill-conditioned {}, at the any-hit limit {})",
+        compiled.bvh_depth, reasons[0], reasons[1], reasons[2], reasons[3]
     );
     // About 2.5% of random rays meet a surface at so grazing an angle that f32 cannot give
     // their distance to 1e-5 (the estimate above bounds the measured error; its largest
