@@ -85,7 +85,12 @@ impl Graph {
     /// the constants (derived ones may use each other, in any order). When not `strict`, one
     /// naming a constant not known yet is left out.
     fn derive_constants(&mut self, given: &BTreeMap<String, ConstValue>, strict: bool) -> Result<()> {
-        let mut pending: Vec<&String> = self.declared.derived.keys().filter(|n| !given.contains_key(*n)).collect();
+        let mut pending: Vec<&String> = self
+            .declared
+            .derived
+            .keys()
+            .filter(|n| !given.contains_key(*n))
+            .collect();
         while !pending.is_empty() {
             let vars: BTreeMap<String, f64> = self.constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
             let before = pending.len();

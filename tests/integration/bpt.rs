@@ -10,85 +10,10 @@
 /// Frames per render: independent estimates for the standard errors.
 const FRAMES: u32 = 48;
 
-use crate::common::{assert_finite, gpu, largest_relative_difference, render, render_with};
-use lightgraph::render::{Image, LoadedScene, Session, SessionOptions, load_graph, load_scene};
+use crate::common::{largest_relative_difference, render, render_with};
+use crate::frames::{Frames, block_means, render_frames, worst_z};
+use lightgraph::render::{LoadedScene, load_graph, load_scene};
 use lightgraph_engine::ConstValue;
-
-/// Per-frame block means of a render: `frames` frames of `spp` samples per pixel on a `size`
-/// x `size` image, averaged over `n` x `n` blocks. Frame k's estimate is recovered from the
-/// running means as k m_k - (k - 1) m_(k-1). Light tracing splats one sub-path into many
-/// pixels, so pixels are not independent within a frame; frames are, so the spread of the
-/// per-frame block means gives the standard error.
-struct Frames {
-    /// [frame][block][channel]
-    means: Vec<Vec<[f64; 3]>>,
-}
-
-#[allow(clippy::too_many_arguments)]
-fn render_frames(
-    scene: &LoadedScene,
-    graph: &str,
-    layout: &str,
-    size: u32,
-    spp: u32,
-    frames: u32,
-    seed: u32,
-    n: u32,
-) -> Frames {
-    let graph = load_graph(graph).unwrap();
-    let options = SessionOptions {
-        width: size,
-        height: size,
-        samples_per_frame: spp,
-        seed,
-        constants: Default::default(),
-        layout: Default::default(),
-    };
-    let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
-    let mut previous = vec![[0f64; 3]; (n * n) as usize];
-    let mut means = Vec::new();
-    for k in 1..=frames {
-        session.render_frame().unwrap();
-        let image = session.image().unwrap();
-        assert_finite(&image, &format!("{}:{layout}", graph.name));
-        let current = block_means(&image, n);
-        let frame: Vec<[f64; 3]> = current
-            .iter()
-            .zip(&previous)
-            .map(|(c, p)| std::array::from_fn(|i| k as f64 * c[i] - (k - 1) as f64 * p[i]))
-            .collect();
-        means.push(frame);
-        previous = current;
-    }
-    Frames { means }
-}
-
-/// Mean radiance per block of an image.
-fn block_means(image: &Image, n: u32) -> Vec<[f64; 3]> {
-    let (bw, bh) = (image.width / n, image.height / n);
-    let mut sums = vec![[0f64; 3]; (n * n) as usize];
-    for y in 0..image.height {
-        for x in 0..image.width {
-            let b = ((y / bh) * n + x / bw) as usize;
-            let pixel = image.mean[(y * image.width + x) as usize];
-            for (sum, v) in sums[b].iter_mut().zip(pixel) {
-                *sum += v as f64;
-            }
-        }
-    }
-    let area = (bw * bh) as f64;
-    sums.iter().map(|s| s.map(|v| v / area)).collect()
-}
-
-impl Frames {
-    /// Mean and standard error of block `b`, channel `c`, over the frames.
-    fn stat(&self, b: usize, c: usize) -> (f64, f64) {
-        let k = self.means.len() as f64;
-        let mean = self.means.iter().map(|f| f[b][c]).sum::<f64>() / k;
-        let var = self.means.iter().map(|f| (f[b][c] - mean).powi(2)).sum::<f64>() / (k - 1.0);
-        (mean, (var / k).sqrt())
-    }
-}
 
 /// The blocks in which the camera sees a light directly (path tracing with paths of one
 /// segment: only directly visible emission is nonzero); light tracing cannot render those.
@@ -107,31 +32,6 @@ fn direct_light_blocks(scene: &LoadedScene, size: u32, n: u32) -> Vec<bool> {
         .iter()
         .map(|m| m.iter().any(|v| *v > 0.0))
         .collect()
-}
-
-/// Largest |difference| / combined standard error over the blocks `keep` selects. Checks
-/// that the comparison has power: every kept block's combined standard error is under
-/// `max_rel_se` of its mean, except in blocks `noisy` marks (where the camera sees a light
-/// edge, whose pixel-jitter noise both estimators share).
-fn worst_z(a: &Frames, b: &Frames, keep: &[bool], noisy: &[bool], max_rel_se: f64, what: &str) -> f64 {
-    let mut worst = 0f64;
-    for (i, kept) in keep.iter().enumerate() {
-        if !kept {
-            continue;
-        }
-        for c in 0..3 {
-            let ((ma, sa), (mb, sb)) = (a.stat(i, c), b.stat(i, c));
-            let se = (sa * sa + sb * sb).sqrt();
-            let z = (ma - mb).abs() / se;
-            eprintln!("{what} block {i} channel {c}: {ma:.5} vs {mb:.5} +- {se:.5} (z {z:.2})");
-            assert!(
-                noisy[i] || se < max_rel_se * ma.max(mb),
-                "{what} block {i}: standard error {se} too large to test {ma} vs {mb}"
-            );
-            worst = worst.max(z);
-        }
-    }
-    worst
 }
 
 #[test]
@@ -482,21 +382,41 @@ const POINT_LIGHT_IN_GLASS_AND_A_MIRROR: &str = r#"Scene(
     integrator: (max_path_length: 6),
 )"#;
 
-#[test]
-fn bpt_misses_specular_diffuse_specular_paths() {
+/// The specular-diffuse-specular scene: a point light inside a glass ball over a floor, and a
+/// mirror.
+pub fn sds_scene() -> LoadedScene {
+    LoadedScene::parse(
+        "sds.ron",
+        POINT_LIGHT_IN_GLASS_AND_A_MIRROR,
+        lightgraph_scenes::bvh::BvhKind::Bvh2,
+        None,
+    )
+    .unwrap()
+}
+
+/// The specular-diffuse-specular scene's pixels that see only the mirror (none of its edges)
+/// and those that see only the floor: the mean green of `image` over each.
+pub fn mirror_and_floor(image: &lightgraph::render::Image) -> (f64, f64) {
     let parse = |text: &str| LoadedScene::parse("sds.ron", text, lightgraph_scenes::bvh::BvhKind::Bvh2, None).unwrap();
-    let scene = parse(POINT_LIGHT_IN_GLASS_AND_A_MIRROR);
-    // The pixels that see only the mirror (none of its edges): the mirror made a unit emitter,
-    // seen by paths of one segment with 16 jittered samples per pixel.
+    // The mirror made a unit emitter, seen by paths of one segment with 16 jittered samples
+    // per pixel.
     let glowing = POINT_LIGHT_IN_GLASS_AND_A_MIRROR.replace(
         r#"material: "mirror")"#,
         r#"material: "floor", emission: (1.0, 1.0, 1.0))"#,
     );
     let one_segment = [("MAX_PATH_LENGTH", ConstValue::U32(1))];
-    let mask = render(&parse(&glowing), "pt", "NaivePTsk", (32, 32), 16, 1, 1, &one_segment);
-    let bpt = render(&scene, "bpt-naive", "NaiveBPT", (32, 32), 4, 4, 67, &[]);
+    let mask = render(
+        &parse(&glowing),
+        "pt",
+        "NaivePTsk",
+        (image.width, image.height),
+        16,
+        1,
+        1,
+        &one_segment,
+    );
     let (mut mirror, mut floor) = ((0.0f64, 0usize), (0.0f64, 0usize));
-    for (m, p) in mask.image.mean.iter().zip(&bpt.image.mean) {
+    for (m, p) in mask.image.mean.iter().zip(&image.mean) {
         let target = match m[1] {
             v if v > 0.999 => &mut mirror,
             0.0 => &mut floor,
@@ -511,7 +431,14 @@ fn bpt_misses_specular_diffuse_specular_paths() {
         mirror.1,
         floor.1
     );
-    let (m_mirror, m_floor) = (mirror.0 / mirror.1 as f64, floor.0 / floor.1 as f64);
+    (mirror.0 / mirror.1 as f64, floor.0 / floor.1 as f64)
+}
+
+#[test]
+fn bpt_misses_specular_diffuse_specular_paths() {
+    let scene = sds_scene();
+    let bpt = render(&scene, "bpt-naive", "NaiveBPT", (32, 32), 4, 4, 67, &[]);
+    let (m_mirror, m_floor) = mirror_and_floor(&bpt.image);
     eprintln!("bpt: floor {m_floor:.4}, floor seen in the mirror {m_mirror:.6}");
     assert!(m_floor > 1e-3, "the floor is not lit ({m_floor})");
     assert!(

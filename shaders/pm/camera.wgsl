@@ -1,0 +1,254 @@
+// The camera side of photon mapping: camera sub-paths that estimate the density of photons
+// at their vertices, as Davidovic et al. 2014 (section 6, Figure 6) define the three
+// estimators (PM_MODE):
+// - PPM (PM_PPM): through delta vertices only; density estimation with the full BSDF at the
+//   first non-delta vertex, which ends the sub-path;
+// - SPPM (PM_SPPM): at each vertex, density estimation with the BSDF's diffuse part, and the
+//   sub-path goes on through the other lobes (glossy and delta) only; it ends at a vertex
+//   without them. Every light it hits counts (the glossy continuation is the only estimate of
+//   the light reaching the camera through those lobes);
+// - PBPM (PM_PBPM): continues as a path tracer (full BSDF, Russian roulette) and estimates
+//   the density at every non-delta vertex, combined by MIS over the vertices (dVM,
+//   shaders/pm/scatter.wgsl).
+// PPM and PBPM count a light the camera sees directly or through delta vertices only: every
+// other path reaches the camera through a merge. The radius of frame i (from 1) is
+// r_i = PM_RADIUS scene radius i^((PM_ALPHA - 1) / 2) (Knaus and Zwicker 2011), the same for
+// the structure, the query, the kernel 1 / (pi r^2 PM_LIGHT_PATHS) and the MIS.
+
+const PM_PPM: u32 = 0u;
+const PM_SPPM: u32 = 1u;
+const PM_PBPM: u32 = 2u;
+
+const MERGE_SPECULAR_PATH: u32 = 1u;   // every vertex so far was left through a delta lobe
+const MERGE_PENDING: u32 = 2u;         // a density estimation waits at the vertex below
+const MERGE_ALIVE: u32 = 4u;           // the sub-path goes on after this vertex
+
+// The merge radius of this frame.
+fn pm_radius() -> f32 {
+    return PM_RADIUS * scene.radius * pow(f32(frame.index) + 1.0, (PM_ALPHA - 1.0) * 0.5);
+}
+
+// The structures' contract (shaders/pm/photon.wgsl): built for this frame's radius, over the
+// cube around the scene's bounding sphere.
+fn pm_cell_radius() -> f32 {
+    return pm_radius();
+}
+
+fn pm_origin() -> vec3<f32> {
+    return scene.center - vec3<f32>(scene.radius);
+}
+
+fn pm_extent() -> f32 {
+    return 2.0 * scene.radius;
+}
+
+// A camera sub-path between passes, with the density estimation pending at its last vertex:
+// the vertex, what its BSDF needs (material, texture coordinates, geometric normal and the
+// direction towards the previous vertex, octahedral), and the throughput and dVM there.
+struct MergePath {
+    origin: vec3<f32>,
+    pixel: u32,
+    direction: vec3<f32>,
+    length: u32,            // camera segments traced so far
+    throughput: vec3<f32>,
+    rng: u32,
+    d_vm: f32,
+    flags: u32,
+    hit_t: f32,             // negative: the last ray escaped
+    hit_primitive: u32,
+    hit_uv: vec2<f32>,
+    merge_normal: u32,
+    merge_fix: u32,
+    merge_position: vec3<f32>,
+    merge_material: u32,
+    merge_throughput: vec3<f32>,
+    merge_d_vm: f32,
+    merge_tex: u32,
+    merge_length: u32,
+}
+
+// A density estimation under way: the query and the sums of the photons it found.
+struct Merge {
+    position: vec3<f32>,
+    radius: f32,
+    pending: bool,
+    bsdf: Bsdf,
+    d_vm: f32,
+    length: u32,
+    sum: vec3<f32>,
+}
+
+// Pass `pm_camera` (Start over PATHS): the camera ray of sample `index` (pixel index % PIXELS).
+fn pm_camera(p: ptr<function, MergePath>, index: u32) -> bool {
+    var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
+    let pixel = index % PIXELS;
+    let jitter = rng_vec2(&rng);
+    (*p).origin = camera.position;
+    (*p).pixel = pixel;
+    (*p).direction = camera_direction(f32(pixel % WIDTH) + jitter.x, f32(pixel / WIDTH) + jitter.y);
+    (*p).length = 0u;
+    (*p).throughput = vec3<f32>(1.0);
+    (*p).rng = rng;
+    (*p).d_vm = 0.0;
+    (*p).flags = MERGE_SPECULAR_PATH | MERGE_ALIVE;
+    return true;
+}
+
+// Pass `pm_trace` (Loop): the closest hit of the sub-path's ray.
+fn pm_trace(p: ptr<function, MergePath>) -> bool {
+    count(select(COUNTER_RAYS_EXTENSION, COUNTER_RAYS_PRIMARY, (*p).length == 0u), 1u);
+    let hit = trace_closest((*p).origin, (*p).direction, INFINITE_DISTANCE);
+    (*p).hit_t = select(-1.0, hit.t, hit.found);
+    (*p).hit_primitive = hit.primitive;
+    (*p).hit_uv = hit.uv;
+    (*p).length += 1u;
+    return true;
+}
+
+// Whether light found by the sub-path at its current length counts (see the top).
+fn merge_counts_emission(p: MergePath) -> bool {
+    return PM_MODE == PM_SPPM || p.length == 1u || (p.flags & MERGE_SPECULAR_PATH) != 0u;
+}
+
+// Pass `pm_vertex` (Loop): at the sub-path's new vertex, the light found there, the density
+// estimation to make (left pending for the structure's gather pass) and the next direction.
+// Always true; `pm_continue` ends the sub-path.
+fn pm_vertex(p: ptr<function, MergePath>) -> bool {
+    (*p).flags &= ~(MERGE_PENDING | MERGE_ALIVE);
+    let direction = (*p).direction;
+    if ((*p).hit_t < 0.0) {
+        let bg = background_radiance(direction);
+        if (bg.w > 0.0 && merge_counts_emission(*p)) {
+            film_add((*p).pixel, (*p).throughput * bg.xyz);
+        }
+        return true;
+    }
+    let s = surface_at(Hit((*p).hit_t, (*p).hit_primitive, (*p).hit_uv, true), (*p).origin, direction);
+    let bsdf = bsdf_setup(material_at(s.material, s.tex), s.normal, -direction);
+    if (s.light >= 0 && merge_counts_emission(*p)) {
+        let le = area_light_radiance(u32(s.light), direction);
+        if (le.w > 0.0) {
+            film_add((*p).pixel, (*p).throughput * le.xyz);
+        }
+    }
+    if (!bsdf.valid || (*p).length >= MAX_PATH_LENGTH) {
+        return true;
+    }
+    (*p).d_vm = mis_clamp((*p).d_vm / mis_pow(abs(bsdf.fix.z)));
+    var go_on = true;
+    var next = bsdf;
+    if (PM_MODE == PM_SPPM) {
+        if (bsdf_has_diffuse(bsdf)) {
+            merge_leave_pending(p, s, -direction);
+        }
+        go_on = bsdf_has_glossy(bsdf);
+        next = bsdf_glossy_part(bsdf);
+    } else if (!bsdf.is_delta) {
+        merge_leave_pending(p, s, -direction);
+        go_on = PM_MODE == PM_PBPM;
+    }
+    if (go_on && (*p).length + 1u < MAX_PATH_LENGTH) {
+        merge_scatter(p, next, s);
+    }
+    return true;
+}
+
+// Leaves the density estimation at surface `s` pending for the gather pass.
+fn merge_leave_pending(p: ptr<function, MergePath>, s: Surface, towards: vec3<f32>) {
+    (*p).flags |= MERGE_PENDING;
+    (*p).merge_position = s.position;
+    (*p).merge_normal = encode_octahedral(s.normal);
+    (*p).merge_fix = encode_octahedral(towards);
+    (*p).merge_material = s.material;
+    (*p).merge_tex = pack2x16unorm(fract(s.tex));
+    (*p).merge_throughput = (*p).throughput;
+    (*p).merge_d_vm = (*p).d_vm;
+    (*p).merge_length = (*p).length;
+}
+
+// Continues the sub-path through `bsdf` (all of it, or SPPM's glossy part).
+fn merge_scatter(p: ptr<function, MergePath>, bsdf: Bsdf, s: Surface) {
+    var rng = (*p).rng;
+    let r = pm_scatter(bsdf, s, (*p).throughput, (*p).d_vm, &rng);
+    (*p).rng = rng;
+    if (!r.alive) {
+        return;
+    }
+    (*p).origin = r.origin;
+    (*p).direction = r.direction;
+    (*p).throughput = r.throughput;
+    (*p).d_vm = r.d_vm;
+    if (!r.specular) {
+        (*p).flags &= ~MERGE_SPECULAR_PATH;
+    }
+    (*p).flags |= MERGE_ALIVE;
+}
+
+// Pass `pm_continue` (Loop, last): ends the sub-path when `pm_vertex` said so.
+fn pm_continue(p: ptr<function, MergePath>) -> bool {
+    return ((*p).flags & MERGE_ALIVE) != 0u;
+}
+
+// The density estimation pending at the sub-path's vertex, if any (the structures' contract).
+fn merge_begin(p: MergePath) -> Merge {
+    var m: Merge;
+    m.pending = (p.flags & MERGE_PENDING) != 0u;
+    if (!m.pending) {
+        return m;
+    }
+    count(COUNTER_PM_QUERIES, 1u);
+    m.position = p.merge_position;
+    m.radius = pm_radius();
+    let material = material_at(p.merge_material, unpack2x16unorm(p.merge_tex));
+    m.bsdf = bsdf_setup(material, decode_octahedral(p.merge_normal), decode_octahedral(p.merge_fix));
+    if (PM_MODE == PM_SPPM) {
+        m.bsdf = bsdf_diffuse_part(m.bsdf);
+    }
+    m.d_vm = p.merge_d_vm;
+    m.length = p.merge_length;
+    m.sum = vec3<f32>(0.0);
+    return m;
+}
+
+// Adds a photon in range (counted as `pm_found`; the queries as `pm_queries`), standing for
+// `weight` photons, to the estimation: the BSDF for the
+// direction it arrived from times its throughput (the photon arrives at the query point),
+// with PBPM's MIS weight. Photons that would make the path longer than MAX_PATH_LENGTH are
+// left out.
+fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
+    count(COUNTER_PM_FOUND, 1u);
+    if (photon_length(photon) + (*m).length > MAX_PATH_LENGTH) {
+        return;
+    }
+    let towards = photon_direction(photon);
+    let e = bsdf_eval((*m).bsdf, towards);
+    if (is_black(e.f)) {
+        return;
+    }
+    var w = weight;
+    if (PM_MODE == PM_PBPM) {
+        let w_light = photon.d_vm * mis_pow(e.pdf_forward * (*m).bsdf.continuation);
+        let w_camera = (*m).d_vm * mis_pow(e.pdf_reverse * merge_light_continuation(*m, towards));
+        w /= w_light + 1.0 + w_camera;
+    }
+    (*m).sum += e.f * photon.throughput * w;
+}
+
+// The continuation probability the light sub-path had at the merged vertex, arriving from
+// `towards`: the camera's own where it does not depend on the direction (no Fresnel term).
+fn merge_light_continuation(m: Merge, towards: vec3<f32>) -> f32 {
+    if (!m.bsdf.pbr && m.bsdf.reflect_prob + m.bsdf.refract_prob == 0.0) {
+        return m.bsdf.continuation;
+    }
+    return bsdf_setup(m.bsdf.m, m.bsdf.frame.n, towards).continuation;
+}
+
+// Adds the finished estimation to the film: the sums over pi r^2 PM_LIGHT_PATHS.
+fn merge_end(p: ptr<function, MergePath>, m: Merge) {
+    if (!m.pending) {
+        return;
+    }
+    (*p).flags &= ~MERGE_PENDING;
+    let kernel = 1.0 / (PI * m.radius * m.radius * f32(PM_LIGHT_PATHS));
+    film_add((*p).pixel, (*p).merge_throughput * m.sum * kernel);
+}

@@ -1,0 +1,95 @@
+// The hash grid's cells, shared by the full and the stochastic hash grids: the space is cut
+// into cubes of side 2 pm_cell_radius() from pm_origin(), and cell c goes to bucket
+// 8 hash(c >> 1) mod PM_CELLS / 8 + (the parities of c's coordinates), with Jenkins' lookup3
+// mix as the hash. A query of radius r <= pm_cell_radius() covers at most 2 cells along each
+// axis, whose parities differ, so its (at most) 8 cells land in distinct buckets and no
+// bucket is read twice. Coordinates are relative to the origin (no bounds: the hash takes
+// any cell), and the query's box of cells is widened by a margin above the rounding error
+// of the cell computations, so a photon within r is never in a cell the query skips.
+
+// A query's box of cells, and whether its cells' buckets are distinct (at most 2 cells along
+// each axis). Otherwise a bucket may hold several of the box's cells, and a gather keeps a
+// photon only in the visit of its own cell.
+struct CellBox {
+    lo: vec3<i32>,
+    hi: vec3<i32>,
+    distinct: bool,
+}
+
+// The cell side.
+fn cell_size() -> f32 {
+    return 2.0 * pm_cell_radius();
+}
+
+// The cell of a point.
+fn cell_of(position: vec3<f32>) -> vec3<i32> {
+    return vec3<i32>(floor((position - pm_origin()) / cell_size()));
+}
+
+// The cells a query of `radius` around `center` must visit.
+fn cell_box(center: vec3<f32>, radius: f32) -> CellBox {
+    let margin = radius * 1e-4 + pm_extent() * 1e-5;
+    let c = center - pm_origin();
+    let size = cell_size();
+    let lo = vec3<i32>(floor((c - radius - margin) / size));
+    let hi = vec3<i32>(floor((c + radius + margin) / size));
+    return CellBox(lo, hi, all(hi - lo <= vec3<i32>(1)));
+}
+
+fn hash_rotate(x: u32, k: u32) -> u32 {
+    return (x << k) | (x >> (32u - k));
+}
+
+// Bob Jenkins' lookup3 final mix of three words.
+fn hash_cell(a0: u32, b0: u32, c0: u32) -> u32 {
+    var a = a0 + 0xdeadbefbu;
+    var b = b0 + 0xdeadbefbu;
+    var c = c0 + 0xdeadbefbu;
+    c ^= b; c -= hash_rotate(b, 14u);
+    a ^= c; a -= hash_rotate(c, 11u);
+    b ^= a; b -= hash_rotate(a, 25u);
+    c ^= b; c -= hash_rotate(b, 16u);
+    a ^= c; a -= hash_rotate(c, 4u);
+    b ^= a; b -= hash_rotate(a, 14u);
+    c ^= b; c -= hash_rotate(b, 24u);
+    return c;
+}
+
+// The bucket of cell `c` (PM_CELLS buckets, a multiple of 8).
+fn cell_bucket(c: vec3<i32>) -> u32 {
+    let pair = vec3<u32>(c >> vec3<u32>(1u));
+    let parity = vec3<u32>(c & vec3<i32>(1));
+    let groups = PM_CELLS / 8u;
+    return (hash_cell(pair.x, pair.y, pair.z) % groups) * 8u + parity.x + 2u * parity.y + 4u * parity.z;
+}
+
+// Walks a box of cells in x, then y, then z order.
+struct CellWalk {
+    box: CellBox,
+    cell: vec3<i32>,
+}
+
+fn cell_walk(box: CellBox) -> CellWalk {
+    return CellWalk(box, box.lo);
+}
+
+// The next cell; false after the last.
+fn cell_walk_next(w: ptr<function, CellWalk>) -> bool {
+    var c = (*w).cell;
+    c.x += 1;
+    if (c.x > (*w).box.hi.x) {
+        c.x = (*w).box.lo.x;
+        c.y += 1;
+        if (c.y > (*w).box.hi.y) {
+            c.y = (*w).box.lo.y;
+            c.z += 1;
+        }
+    }
+    (*w).cell = c;
+    return c.z <= (*w).box.hi.z;
+}
+
+// Whether a photon found in the bucket of `cell` counts in this visit.
+fn cell_owns(box: CellBox, cell: vec3<i32>, photon: Photon) -> bool {
+    return box.distinct || all(cell_of(photon.position) == cell);
+}

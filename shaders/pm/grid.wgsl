@@ -1,0 +1,87 @@
+// The full hash grid (Davidovic et al. 2014, Algorithm 1), built with the engine's operators:
+// `grid_keys` writes each photon's bucket (shaders/pm/cells.wgsl), a Count gives each photon
+// its slot in its bucket, a Scan of the counts each bucket's first place, and a Scatter puts
+// the photon records themselves in bucket order in `grid_photons` (no index array), so a
+// bucket's photons are contiguous: grid_first[b] .. grid_first[b + 1] (the photon total for the
+// last). The gather visits the query's cells with NaiveQuery (cell by cell) or, with
+// PM_WHILE_QUERY, WhileQuery (Algorithm 2: one loop that first finds the next photon in range,
+// over all cells, then processes it); both find the same photons in the same order.
+
+// Pass `grid_keys` (Start over the stored photons): the photon's bucket.
+fn grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
+    (*p).index = index;
+    grid_key[index] = cell_bucket(cell_of(pm_staging[index].position));
+    return false;
+}
+
+// The photons of bucket `b` in `grid_photons`: first and end.
+fn grid_bucket(b: u32) -> vec2<u32> {
+    if (b + 1u < PM_CELLS) {
+        return vec2<u32>(grid_first[b], grid_first[b + 1u]);
+    }
+    return vec2<u32>(grid_first[b], photon_total());
+}
+
+// Pass `grid_gather` (Loop over MergePath): the pending density estimation, if any.
+fn grid_gather(p: ptr<function, MergePath>) -> bool {
+    var m = merge_begin(*p);
+    if (m.pending) {
+        let box = cell_box(m.position, m.radius);
+        if (PM_WHILE_QUERY) {
+            grid_while_query(&m, box);
+        } else {
+            grid_naive_query(&m, box);
+        }
+        merge_end(p, m);
+    }
+    return true;
+}
+
+// NaiveQuery: every cell's photons in turn.
+fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
+    var walk = cell_walk(box);
+    loop {
+        let range = grid_bucket(cell_bucket(walk.cell));
+        for (var i = range.x; i < range.y; i += 1u) {
+            let photon = grid_photons[i];
+            if (pm_in_range(photon.position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, photon)) {
+                merge_photon(m, photon, 1.0);
+            }
+        }
+        if (!cell_walk_next(&walk)) {
+            break;
+        }
+    }
+}
+
+// WhileQuery: finds the next photon in range over all cells, then processes it, so threads
+// of a warp process photons together whatever the cells' sizes.
+fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
+    var walk = cell_walk(box);
+    var range = grid_bucket(cell_bucket(walk.cell));
+    var i = range.x;
+    loop {
+        var found = false;
+        var photon: Photon;
+        loop {
+            if (i < range.y) {
+                photon = grid_photons[i];
+                i += 1u;
+                if (pm_in_range(photon.position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, photon)) {
+                    found = true;
+                    break;
+                }
+                continue;
+            }
+            if (!cell_walk_next(&walk)) {
+                break;
+            }
+            range = grid_bucket(cell_bucket(walk.cell));
+            i = range.x;
+        }
+        if (!found) {
+            break;
+        }
+        merge_photon(m, photon, 1.0);
+    }
+}

@@ -1,0 +1,72 @@
+// Photons: the vertices of light sub-paths that density estimation gathers (photon mapping,
+// shaders/pm). The light phase stores them in arrival order in `pm_staging` (PM_CAPACITY
+// slots) and counts them in `pm_count` (which may exceed the capacity: the rest is
+// overflow); a spatial structure is then built over them and queried at camera vertices.
+//
+// The contract between the estimators and the structures (full hash grid: grid.wgsl,
+// stochastic hash grids: stochastic.wgsl, kD-tree: kdtree.wgsl), so that any structure serves
+// any estimator, and a test can query a structure with clouds of its own:
+// - resources `pm_staging: array<Photon>` and `pm_count: atomic<u32>`;
+// - `pm_cell_radius()`: the query radius the structure is built for this frame;
+//   `pm_origin()` and `pm_extent()`: a cube [origin, origin + extent]^3 holding every photon
+//   (the scene's bounding sphere's cube);
+// - the camera chain's item `MergePath`, and a `Merge` with the fields `position`, `radius`
+//   and `pending`: `merge_begin(path)` says whether the path has a query pending and where;
+//   a structure's gather pass (Loop over MergePath) calls `merge_photon(&m, photon, weight)`
+//   once for every stored photon with `pm_in_range(photon.position, m.position, m.radius)`
+//   (weight 1; a stochastic grid's kept photon stands for `weight` photons), then
+//   `merge_end(&path, m)`, and returns true.
+
+// A photon (32 bytes): where it landed, PBPM's MIS quantity, the light sub-path's throughput
+// there, and the direction it arrived from (octahedral, 12 bits a component) with the
+// segments from the light (8 bits).
+struct Photon {
+    position: vec3<f32>,
+    d_vm: f32,
+    throughput: vec3<f32>,
+    direction_length: u32,
+}
+
+// One stored photon, the item of the passes over them.
+struct PhotonSlot {
+    index: u32,
+}
+
+// Packs the direction towards the previous vertex and the sub-path's length.
+fn photon_pack(towards: vec3<f32>, length: u32) -> u32 {
+    let n = towards / (abs(towards.x) + abs(towards.y) + abs(towards.z));
+    var o = n.xy;
+    if (n.z < 0.0) {
+        o = (1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0));
+    }
+    let q = vec2<u32>(round(clamp(o * 0.5 + 0.5, vec2<f32>(0.0), vec2<f32>(1.0)) * 4095.0));
+    return q.x | (q.y << 12u) | (min(length, 255u) << 24u);
+}
+
+// The direction towards the previous vertex of the light sub-path (unit length).
+fn photon_direction(p: Photon) -> vec3<f32> {
+    let q = vec2<f32>(f32(p.direction_length & 0xfffu), f32((p.direction_length >> 12u) & 0xfffu));
+    let o = q * (2.0 / 4095.0) - 1.0;
+    var n = vec3<f32>(o, 1.0 - abs(o.x) - abs(o.y));
+    if (n.z < 0.0) {
+        n = vec3<f32>((1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0)), n.z);
+    }
+    return normalize(n);
+}
+
+// Segments from the light to the photon.
+fn photon_length(p: Photon) -> u32 {
+    return p.direction_length >> 24u;
+}
+
+// The photons stored this frame (at most the capacity).
+fn photon_total() -> u32 {
+    return min(atomicLoad(&pm_count), arrayLength(&pm_staging));
+}
+
+// Whether a photon at `position` is within `radius` of `center`: the one test every
+// structure applies, so that all of them find the same photons.
+fn pm_in_range(position: vec3<f32>, center: vec3<f32>, radius: f32) -> bool {
+    let d = position - center;
+    return dot(d, d) <= radius * radius;
+}
