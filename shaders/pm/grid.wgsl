@@ -5,7 +5,8 @@
 // bucket's photons are contiguous: grid_first[b] .. grid_first[b + 1] (the photon total for the
 // last). The gather visits the query's cells with NaiveQuery (cell by cell) or, with
 // PM_WHILE_QUERY, WhileQuery (Algorithm 2: one loop that first finds the next photon in range,
-// over all cells, then processes it); both find the same photons in the same order.
+// over all cells, then processes it); both find the same photons in the same order. NaiveQuery
+// is the default: faster on an H100 (docs/performance.md).
 
 // Pass `grid_keys` (Start over the stored photons): the photon's bucket.
 fn grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {

@@ -234,3 +234,32 @@ fn the_original_stochastic_grid_is_biased_and_the_rectified_one_is_not() {
         }
     }
 }
+
+#[test]
+fn merge_radii_from_a_millionth_to_ten_times_the_scene_stay_finite() {
+    // scenes/stress/README.md's merge-radius cases on cornell-diffuse: a radius of 1e-6 of the
+    // scene (almost no photon merges; what emission alone shows stays), 10 times the scene
+    // (every photon merges everywhere: blurred, finite), and the progressive radius after
+    // 10^4 frames. The grid's buckets follow the light sub-paths, not the cells, so its memory
+    // is the same at every radius.
+    let scene = load_scene("cornell-diffuse").unwrap();
+    for (graph, layout) in [("ppm", "PPMsk"), ("sppm", "SPPMsk"), ("pbpm", "PBPMsk")] {
+        let mut memory = Vec::new();
+        for r0 in [1e-6f32, 10.0] {
+            let constants = [("PM_RADIUS", ConstValue::F32(r0)), ("PM_ALPHA", ConstValue::F32(1.0))];
+            let rendered = render(&scene, graph, layout, (16, 16), 1, 4, 9, &constants);
+            crate::common::assert_finite(&rendered.image, &format!("{graph} at radius {r0}"));
+            let total: f64 = rendered.image.mean.iter().map(|p| p[1] as f64).sum();
+            assert!(total > 0.0, "{graph} at radius {r0}: a black image");
+            memory.push(rendered.memory_bytes);
+        }
+        assert_eq!(memory[0], memory[1], "{graph}: the grid's memory depends on the radius");
+        let options = crate::common::options((16, 16), 1, 9, &[], Default::default());
+        let loaded = lightgraph::render::load_graph(graph).unwrap();
+        let mut session =
+            lightgraph::render::Session::new(crate::common::gpu(), &loaded, layout, &scene, options).unwrap();
+        session.first_frame = 10_000;
+        session.render_frames(4).unwrap();
+        crate::common::assert_finite(&session.image().unwrap(), &format!("{graph} after 10^4 frames"));
+    }
+}
