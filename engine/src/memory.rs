@@ -113,21 +113,14 @@ impl<K: Ord + Clone> MemoryPlan<K> {
         plan
     }
 
-    /// Arenas in which no two buffers share bytes, or whose alignment padding costs more than
-    /// the sharing saves (tiny buffers), save nothing: their buffers get memory of their own
-    /// (no padding, no ranges to bind).
+    /// Arenas in which no two buffers share bytes save nothing: their buffers get memory of
+    /// their own (no alignment padding, no ranges to bind).
     fn drop_unshared_arenas(&mut self) {
         let sharing = self.sharing();
         let mut kept = Vec::new();
         for a in 0..self.arenas.len() {
             let shares = sharing.iter().any(|(x, _)| self.placements[x].arena == Some(a));
-            let members: u64 = self
-                .placements
-                .values()
-                .filter(|p| p.arena == Some(a))
-                .map(|p| p.bytes)
-                .sum();
-            let new = (shares && self.arenas[a] < members).then(|| {
+            let new = shares.then(|| {
                 kept.push(self.arenas[a]);
                 kept.len() - 1
             });

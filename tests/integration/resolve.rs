@@ -83,7 +83,10 @@ fn shared_memory_is_never_live_twice() {
                     "{name} {layout}: {a:?} {la:?} and {b:?} {lb:?} share memory while both live"
                 );
             }
-            assert!(m.peak_bytes() <= m.unshared_bytes(), "{name} {layout}");
+            // Sharing never costs more than each buffer's alignment padding (256 bytes at
+            // most: wgpu's largest storage offset alignment), which tiny buffers can exceed.
+            let padding = 256 * m.placements.len() as u64;
+            assert!(m.peak_bytes() <= m.unshared_bytes() + padding, "{name} {layout}");
         }
     }
 }
