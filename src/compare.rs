@@ -13,31 +13,39 @@ use std::fmt::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-/// One estimator in one layout to compare: `graph:layout`, or `graph` for its default layout.
+/// One estimator in one layout to compare: `graph:layout`, or `graph` for its default layout,
+/// each optionally followed by `@NAME=VALUE` settings of its own constants (e.g.
+/// `ppm:PPMsk@PM_STRUCTURE=3`), which the reference need not share.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunSpec {
     /// Graph name or `.ron` path.
     pub graph: String,
     /// Layout name; the graph's default when absent.
     pub layout: Option<String>,
+    /// The run's own constant settings, `NAME=VALUE`.
+    pub sets: Vec<String>,
 }
 
 impl RunSpec {
-    /// Parses a comma-separated list of `graph[:layout]`.
+    /// Parses a comma-separated list of `graph[:layout][@NAME=VALUE...]`.
     pub fn parse_list(list: &str) -> Result<Vec<RunSpec>> {
         let runs: Vec<RunSpec> = list
             .split(',')
             .map(str::trim)
             .filter(|s| !s.is_empty())
-            .map(|s| match s.rsplit_once(':') {
-                Some((g, l)) if !l.is_empty() && !l.contains(['/', '\\']) => RunSpec {
-                    graph: g.to_string(),
-                    layout: Some(l.to_string()),
-                },
-                _ => RunSpec {
-                    graph: s.to_string(),
-                    layout: None,
-                },
+            .map(|s| {
+                let mut parts = s.split('@').map(str::trim);
+                let run = parts.next().unwrap_or_default();
+                let sets = parts.map(str::to_string).collect();
+                let (graph, layout) = match run.rsplit_once(':') {
+                    Some((g, l)) if !l.is_empty() && !l.contains(['/', '\\']) => (g, Some(l.to_string())),
+                    _ => (run, None),
+                };
+                RunSpec {
+                    graph: graph.to_string(),
+                    layout,
+                    sets,
+                }
             })
             .collect();
         if runs.is_empty() {
@@ -98,22 +106,21 @@ pub fn sample_times(first: f64, budget: f64, per_decade: u32) -> Vec<f64> {
     (1..=n).map(|k| first * ratio.powf(k as f64 / n as f64)).collect()
 }
 
-/// Renders `graph` in `layout` for `budget` on its clock and samples its error against
-/// `reference` after the first frame, then at log-spaced times (see [`sample_times`]) and
-/// after the last frame; `progress` sees the clock and the latest error.
+/// Renders `graph` in `layout` (the run called `label`) for `budget` on its clock and samples
+/// its error against `reference` after the first frame, then at log-spaced times (see
+/// [`sample_times`]) and after the last frame; `progress` sees the clock and the latest error.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     gpu: &Gpu,
     scene: &LoadedScene,
     graph: &Graph,
-    layout: &str,
+    (layout, label): (&str, String),
     options: SessionOptions,
     budget: Duration,
     reference: &[[f32; 3]],
     per_decade: u32,
     mut progress: impl FnMut(f64, Option<&ErrorSample>),
 ) -> Result<RunResult> {
-    let label = format!("{}:{layout}", graph.name);
     let mut clock = Stopwatch::started();
     let mut session = Session::new(gpu, graph, layout, scene, options)?;
     let setup_seconds = clock.seconds();
@@ -448,6 +455,11 @@ mod tests {
             ("tests/x.ron", Some("L"))
         );
         assert!(RunSpec::parse_list(" , ").is_err());
+        let set = RunSpec::parse_list("ppm:PPMsk@PM_STRUCTURE=3@PM_ALPHA=1, ppm@PM_STRUCTURE=1").unwrap();
+        assert_eq!(set[0].layout.as_deref(), Some("PPMsk"));
+        assert_eq!(set[0].sets, ["PM_STRUCTURE=3", "PM_ALPHA=1"]);
+        assert_eq!((set[1].graph.as_str(), set[1].layout.as_ref()), ("ppm", None));
+        assert_eq!(set[1].sets, ["PM_STRUCTURE=1"]);
     }
 
     #[test]

@@ -92,7 +92,14 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
             );
         }
         check_size(&reference, &args.reference, (opts.width, opts.height))?;
-        runs.push((format!("{}:{layout}", graph.name), graph, layout, opts));
+        // The run's own settings come after the check: they choose the estimator, not the image.
+        let mut opts = opts;
+        opts.constants.extend(parse_sets(&spec.sets, &graph.constants)?);
+        let label = std::iter::once(format!("{}:{layout}", graph.name))
+            .chain(spec.sets.iter().cloned())
+            .collect::<Vec<_>>()
+            .join("@");
+        runs.push((label, graph, layout, opts));
     }
     let labels: Vec<&str> = runs.iter().map(|r| r.0.as_str()).collect();
     let baseline = match &args.baseline {
@@ -116,12 +123,12 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
     for (label, graph, layout, opts) in runs {
         let bar = ProgressBar::new(args.time.as_millis() as u64);
         bar.set_style(ProgressStyle::with_template("{prefix:>24} {bar:30} {msg}").expect("valid template"));
-        bar.set_prefix(label);
+        bar.set_prefix(label.clone());
         let result = run(
             &gpu,
             &scene,
             &graph,
-            &layout,
+            (&layout, label),
             opts,
             args.time,
             &ref_mean,
