@@ -5,8 +5,7 @@ fn ao_primary(s: ptr<function, AoSample>, index: u32) -> bool {
     let pixel = index % PIXELS;
     (*s).pixel = pixel;
     var rng = rng_seed(frame.seed, frame.index, index);
-    let jitter = rng_vec2(&rng);
-    let d = camera_direction(f32(pixel % WIDTH) + jitter.x, f32(pixel / WIDTH) + jitter.y);
+    let d = camera_jittered_direction(pixel, &rng);
     count(COUNTER_RAYS_PRIMARY, 1u);
     let hit = trace_closest(camera.position, d, INFINITE_DISTANCE);
     if (!hit.found) {

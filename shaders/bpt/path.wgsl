@@ -58,8 +58,7 @@ fn bpt_light_visit(lp: ptr<function, LightPath>, a: Arrival) -> LightVisit {
 // `rng` goes on in the sub-path.
 fn camera_subpath_start(index: u32, rng: ptr<function, u32>) -> CameraSubpath {
     let pixel = index % PIXELS;
-    let jitter = rng_vec2(rng);
-    let direction = camera_direction(f32(pixel % WIDTH) + jitter.x, f32(pixel / WIDTH) + jitter.y);
+    let direction = camera_jittered_direction(pixel, rng);
     let d_vcm = mis_clamp(mis_pow(f32(PIXELS) / camera_pdf_w(dot(direction, camera.forward))));
     return CameraSubpath(camera.position, pixel, direction, 0u, vec3<f32>(1.0), *rng, d_vcm, 0.0, 0.0, 0u, vec2<f32>(0.0));
 }

@@ -7,6 +7,12 @@ fn camera_direction(x: f32, y: f32) -> vec3<f32> {
     return normalize(camera.forward + ndc_x * camera.right + ndc_y * camera.up);
 }
 
+// The direction through a uniform point of pixel `pixel`, jittered with two numbers of `rng`.
+fn camera_jittered_direction(pixel: u32, rng: ptr<function, u32>) -> vec3<f32> {
+    let jitter = rng_vec2(rng);
+    return camera_direction(f32(pixel % WIDTH) + jitter.x, f32(pixel / WIDTH) + jitter.y);
+}
+
 // Where a light sub-path meets the camera (light tracing): the raster position of the world
 // point `p` (x, y) and the cosine between the view direction and the direction to `p` (z);
 // z <= 0 when `p` is behind the camera or outside the image.

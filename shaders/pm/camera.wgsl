@@ -82,10 +82,9 @@ struct Merge {
 fn pm_camera(p: ptr<function, MergePath>, index: u32) -> bool {
     var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
     let pixel = index % PIXELS;
-    let jitter = rng_vec2(&rng);
     (*p).origin = camera.position;
     (*p).pixel = pixel;
-    (*p).direction = camera_direction(f32(pixel % WIDTH) + jitter.x, f32(pixel / WIDTH) + jitter.y);
+    (*p).direction = camera_jittered_direction(pixel, &rng);
     (*p).length = 0u;
     (*p).throughput = vec3<f32>(1.0);
     (*p).rng = rng;

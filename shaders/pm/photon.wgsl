@@ -17,6 +17,8 @@
 //   (weight 1; a stochastic grid's kept photon stands for `weight` photons), then
 //   `merge_end(&path, m)`, and returns true.
 
+// Needs shaders/lib/scene.wgsl (the octahedral code of directions).
+
 // A photon (32 bytes): where it landed, PBPM's MIS quantity, the light sub-path's throughput
 // there, and the direction it arrived from (octahedral, 12 bits a component) with the
 // segments from the light (8 bits).
@@ -32,26 +34,17 @@ struct PhotonSlot {
     index: u32,
 }
 
-// Packs the direction towards the previous vertex and the sub-path's length.
+// Packs the direction towards the previous vertex (the scene's octahedral code, each snorm16
+// component cut to its top 12 bits) and the sub-path's length.
 fn photon_pack(towards: vec3<f32>, length: u32) -> u32 {
-    let n = towards / (abs(towards.x) + abs(towards.y) + abs(towards.z));
-    var o = n.xy;
-    if (n.z < 0.0) {
-        o = (1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0));
-    }
-    let q = vec2<u32>(round(clamp(o * 0.5 + 0.5, vec2<f32>(0.0), vec2<f32>(1.0)) * 4095.0));
-    return q.x | (q.y << 12u) | (min(length, 255u) << 24u);
+    let code = encode_octahedral(towards);
+    return ((code >> 4u) & 0xfffu) | (((code >> 20u) & 0xfffu) << 12u) | (min(length, 255u) << 24u);
 }
 
 // The direction towards the previous vertex of the light sub-path (unit length).
 fn photon_direction(p: Photon) -> vec3<f32> {
-    let q = vec2<f32>(f32(p.direction_length & 0xfffu), f32((p.direction_length >> 12u) & 0xfffu));
-    let o = q * (2.0 / 4095.0) - 1.0;
-    var n = vec3<f32>(o, 1.0 - abs(o.x) - abs(o.y));
-    if (n.z < 0.0) {
-        n = vec3<f32>((1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0)), n.z);
-    }
-    return normalize(n);
+    let w = p.direction_length;
+    return decode_octahedral(((w & 0xfffu) << 4u) | (((w >> 12u) & 0xfffu) << 20u));
 }
 
 // Segments from the light to the photon.
