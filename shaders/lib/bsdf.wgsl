@@ -104,9 +104,30 @@ fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bs
     b.phong_prob = albedo_phong / total;
     b.reflect_prob = albedo_reflect / total;
     b.refract_prob = albedo_refract / total;
-    b.continuation = clamp(max_component(m.diffuse + m.phong + bsdf_specular_albedo(b)), 0.0, 1.0);
+    b.continuation = smallvcm_continuation(b);
     b.is_delta = b.diffuse_prob == 0.0 && b.phong_prob == 0.0;
     return b;
+}
+
+// The SmallVCM lobes' Russian roulette continuation: their albedo bound at `fix` (through
+// the Fresnel term in `b.fresnel`).
+fn smallvcm_continuation(b: Bsdf) -> f32 {
+    return clamp(max_component(b.m.diffuse + b.m.phong + bsdf_specular_albedo(b)), 0.0, 1.0);
+}
+
+// The continuation probability the BSDF at this vertex would have for a path arriving from
+// world direction `towards` instead of its own `fix`: only the Fresnel terms depend on it, so
+// no new set-up (photon mapping's MIS evaluates it for every photon). `b` must be valid.
+fn bsdf_continuation_towards(b: Bsdf, towards: vec3<f32>) -> f32 {
+    var l = b;
+    l.fix = to_local(b.frame, towards);
+    l.fresnel = fresnel_dielectric(l.fix.z, b.m.ior).x;
+#if BSDF_PBR
+    if (b.pbr) {
+        return pbr_continuation(l);
+    }
+#endif
+    return smallvcm_continuation(l);
 }
 
 // The SmallVCM mirror or dielectric lobe's albedo at `fix`: F mirror, plus 1 - F through a
@@ -363,15 +384,7 @@ fn pbr_setup(bsdf: Bsdf) -> Bsdf {
         b.refract_prob = b.spec_prob - b.reflect_prob;
         b.spec_prob = 0.0;
     }
-    // Albedo bound: everything the interface reflects plus what it lets through to the
-    // base, metal on the outside.
-    let base = m.diffuse;
-    let dielectric = (1.0 - m.metallic) * (b.fresnel + (1.0 - b.fresnel) * base);
-    var bound = select(vec3<f32>(0.0), dielectric, pbr_scatters(b, b.fix.z));
-    if (b.fix.z > 0.0) {
-        bound += m.metallic * fresnel_schlick(base, b.fix.z);
-    }
-    b.continuation = clamp(max_component(bound), 0.0, 1.0);
+    b.continuation = pbr_continuation(b);
     if (b.diffuse_prob + b.spec_prob + b.reflect_prob + b.refract_prob <= 0.0) {
         b.continuation = 0.0;
     }
@@ -390,6 +403,19 @@ fn pbr_glossy_albedo(b: Bsdf) -> vec3<f32> {
         bound += m.metallic * fresnel_schlick(m.diffuse, b.fix.z);
     }
     return bound;
+}
+
+// The Russian roulette continuation: the albedo bound at `fix`, everything the interface
+// reflects (`b.fresnel`) plus what it lets through to the base, metal on the outside.
+fn pbr_continuation(b: Bsdf) -> f32 {
+    let m = b.m;
+    let base = m.diffuse;
+    let dielectric = (1.0 - m.metallic) * (b.fresnel + (1.0 - b.fresnel) * base);
+    var bound = select(vec3<f32>(0.0), dielectric, pbr_scatters(b, b.fix.z));
+    if (b.fix.z > 0.0) {
+        bound += m.metallic * fresnel_schlick(base, b.fix.z);
+    }
+    return clamp(max_component(bound), 0.0, 1.0);
 }
 
 fn pbr_transmissive(b: Bsdf) -> bool {

@@ -227,19 +227,10 @@ fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
     var w = weight;
     if (PM_MODE == PM_PBPM) {
         let w_light = photon.d_vm * mis_pow(e.pdf_forward * (*m).bsdf.continuation);
-        let w_camera = (*m).d_vm * mis_pow(e.pdf_reverse * merge_light_continuation(*m, towards));
+        let w_camera = (*m).d_vm * mis_pow(e.pdf_reverse * bsdf_continuation_towards((*m).bsdf, towards));
         w /= w_light + 1.0 + w_camera;
     }
     (*m).sum += e.f * photon.throughput * w;
-}
-
-// The continuation probability the light sub-path had at the merged vertex, arriving from
-// `towards`: the camera's own where it does not depend on the direction (no Fresnel term).
-fn merge_light_continuation(m: Merge, towards: vec3<f32>) -> f32 {
-    if (!m.bsdf.pbr && m.bsdf.reflect_prob + m.bsdf.refract_prob == 0.0) {
-        return m.bsdf.continuation;
-    }
-    return bsdf_setup(m.bsdf.m, m.bsdf.frame.n, towards).continuation;
 }
 
 // Adds the finished estimation to the film: the sums over pi r^2 PM_LIGHT_PATHS.
