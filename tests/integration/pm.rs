@@ -165,25 +165,37 @@ fn every_photon_mapping_layout_and_query_finds_the_same_photons() {
     }
 }
 
-/// The diffuse Cornell box with every wall of albedo 0.99 (the paper's Figure 8).
+/// The diffuse Cornell box with walls of albedo 0.99 (the paper's Figure 8): each wall's
+/// albedo scaled so that its largest channel is 0.99, its colour kept. Long light sub-paths
+/// then carry the walls' colours almost undimmed, so a structure that favours them shows it.
+/// (With every wall a gray of 0.99, Russian roulette keeps the photons of every depth at the
+/// same power, and the original grid's bias only moves power between the cells of an edge:
+/// measured below 3.2 standard errors at 32x32 pixels for radii 0.05 to 0.2, too small to test.)
 fn bright_box() -> LoadedScene {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/scenes/cornell/cornell-diffuse.ron"
     ))
     .unwrap();
+    let k = 0.99 / 0.803922;
     let text = text
-        .replace("(0.156863, 0.803922, 0.172549)", "(0.99, 0.99, 0.99)")
-        .replace("(0.803922, 0.152941, 0.152941)", "(0.99, 0.99, 0.99)")
+        .replace(
+            "(0.156863, 0.803922, 0.172549)",
+            &format!("({}, 0.99, {})", 0.156863 * k, 0.172549 * k),
+        )
+        .replace(
+            "(0.803922, 0.152941, 0.152941)",
+            &format!("(0.99, {}, {})", 0.152941 * k, 0.152941 * k),
+        )
         .replace("(0.803922, 0.803922, 0.803922)", "(0.99, 0.99, 0.99)");
-    assert_eq!(text.matches("0.99, 0.99, 0.99").count(), 3, "the box's albedos moved");
+    assert!(!text.contains("0.803922"), "the box's albedos moved");
     LoadedScene::parse("bright-box.ron", &text, lightgraph_scenes::bvh::BvhKind::Bvh2, None).unwrap()
 }
 
 /// The largest |difference| / combined standard error over the blocks and channels.
 fn worst_block_z(a: &Frames, b: &Frames) -> f64 {
     let mut worst = 0f64;
-    for block in 0..(BLOCKS * BLOCKS) as usize {
+    for block in 0..a.means[0].len() {
         for c in 0..3 {
             let ((ma, sa), (mb, sb)) = (a.stat(block, c), b.stat(block, c));
             worst = worst.max((ma - mb).abs() / (sa * sa + sb * sb).sqrt());
@@ -210,8 +222,10 @@ fn the_original_stochastic_grid_is_biased_and_the_rectified_one_is_not() {
     // On the box of albedo-0.99 walls (the paper's Figure 8) and the ordinary diffuse box,
     // the rectified grid (reservoir sampling) agrees with the full grid within 4 standard
     // errors (for 16 blocks x 3 channels a |z| above 4 happens about 0.3% of the time).
-    // The original grid keeps the last photon written, so the deepest: on the diffuse box
-    // (albedo 0.8, photons dimmer with depth) it is darker by tens of standard errors.
+    // The original grid keeps the last photon written, so the deepest: on the albedo-0.99
+    // box its colours shift towards the walls' (measured: 120 standard errors), on the
+    // diffuse box (albedo 0.8, photons dimmer with depth) it is darker (87). Both are
+    // asserted above 6, far above what noise gives.
     for (name, scene) in [
         ("albedo-0.99 box", bright_box()),
         ("cornell-diffuse", load_scene("cornell-diffuse").unwrap()),
@@ -226,12 +240,10 @@ fn the_original_stochastic_grid_is_biased_and_the_rectified_one_is_not() {
             z_rectified < 4.0,
             "{name}: the rectified grid differs from the full grid by {z_rectified:.2} standard errors"
         );
-        if name == "cornell-diffuse" {
-            assert!(
-                z_original > 6.0,
-                "{name}: the original grid's bias is not seen ({z_original:.2} standard errors)"
-            );
-        }
+        assert!(
+            z_original > 6.0,
+            "{name}: the original grid's bias is not seen ({z_original:.2} standard errors)"
+        );
     }
 }
 
