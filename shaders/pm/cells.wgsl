@@ -89,7 +89,7 @@ fn cell_walk_next(w: ptr<function, CellWalk>) -> bool {
     return c.z <= (*w).box.hi.z;
 }
 
-// Whether a photon found in the bucket of `cell` counts in this visit.
-fn cell_owns(box: CellBox, cell: vec3<i32>, photon: Photon) -> bool {
-    return box.distinct || all(cell_of(photon.position) == cell);
+// Whether a photon at `position`, found in the bucket of `cell`, counts in this visit.
+fn cell_owns(box: CellBox, cell: vec3<i32>, position: vec3<f32>) -> bool {
+    return box.distinct || all(cell_of(position) == cell);
 }

@@ -6,7 +6,9 @@
 // last). The gather visits the query's cells with NaiveQuery (cell by cell) or, with
 // PM_WHILE_QUERY, WhileQuery (Algorithm 2: one loop that first finds the next photon in range,
 // over all cells, then processes it); both find the same photons in the same order. NaiveQuery
-// is the default: faster on an H100 (docs/performance.md).
+// is the default: faster on an H100 (docs/performance.md). Both read a photon's position
+// first and the rest of its record only when it is in range (most are not: a query's 8
+// cells cover about 5 times its disc).
 
 // Pass `grid_keys` (Start over the stored photons): the photon's bucket.
 fn grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
@@ -44,9 +46,9 @@ fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
     loop {
         let range = grid_bucket(cell_bucket(walk.cell));
         for (var i = range.x; i < range.y; i += 1u) {
-            let photon = grid_photons[i];
-            if (pm_in_range(photon.position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, photon)) {
-                merge_photon(m, photon, 1.0);
+            let position = grid_photons[i].position;
+            if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, position)) {
+                merge_photon(m, grid_photons[i], 1.0);
             }
         }
         if (!cell_walk_next(&walk)) {
@@ -63,12 +65,11 @@ fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
     var i = range.x;
     loop {
         var found = false;
-        var photon: Photon;
         loop {
             if (i < range.y) {
-                photon = grid_photons[i];
+                let position = grid_photons[i].position;
                 i += 1u;
-                if (pm_in_range(photon.position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, photon)) {
+                if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, position)) {
                     found = true;
                     break;
                 }
@@ -83,6 +84,6 @@ fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
         if (!found) {
             break;
         }
-        merge_photon(m, photon, 1.0);
+        merge_photon(m, grid_photons[i - 1u], 1.0);
     }
 }

@@ -232,9 +232,8 @@ fn kd_query(m: ptr<function, Merge>) {
         }
         let i = node & ~KD_LEAF;
         if ((node & KD_LEAF) != 0u) {
-            let photon = kd_photons[i];
-            if (pm_in_range(photon.position, center, radius)) {
-                merge_photon(m, photon, 1.0);
+            if (pm_in_range(kd_photons[i].position, center, radius)) {
+                merge_photon(m, kd_photons[i], 1.0);
             }
             node = kd_leaf_after(i, n);
         } else {

@@ -4,7 +4,7 @@
 // sub-path carries one quantity, dVM, which at a vertex is the sum over the merges at earlier
 // vertices of the ratio of their densities to this one's (the power heuristic with MIS_POWER).
 // It starts at 0, is divided by the cosine at each vertex it arrives at, and scatters as below.
-// PPM and SPPM carry it without using it.
+// PPM and SPPM leave it at 0.
 
 // A sub-path continued from a vertex: the next ray, the throughput and dVM after it, and
 // whether the sampled lobe was a delta one.
@@ -32,7 +32,9 @@ fn pm_scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vm: f32, rng: ptr
         return r;
     }
     let pdf = smp.pdf * q;
-    if (smp.specular) {
+    if (PM_MODE != PM_PBPM) {
+        // PPM and SPPM never read dVM: no reverse density (a second BSDF evaluation).
+    } else if (smp.specular) {
         r.d_vm = mis_clamp(d_vm * mis_pow(smp.cos_gen));
     } else {
         let reverse = bsdf_eval(bsdf, smp.direction).pdf_reverse * q;

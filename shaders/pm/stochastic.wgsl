@@ -61,7 +61,7 @@ fn sg_gather(p: ptr<function, MergePath>) -> bool {
             let n = atomicLoad(&sg_count[b]);
             if (n > 0u) {
                 let photon = pm_staging[atomicLoad(&sg_pick[b])];
-                if (pm_in_range(photon.position, m.position, m.radius) && cell_owns(box, walk.cell, photon)) {
+                if (pm_in_range(photon.position, m.position, m.radius) && cell_owns(box, walk.cell, photon.position)) {
                     merge_photon(&m, photon, f32(n));
                 }
             }
