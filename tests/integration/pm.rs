@@ -136,10 +136,10 @@ fn photon_mapping_renders_the_caustic_seen_in_a_mirror() {
 #[test]
 fn every_photon_mapping_layout_and_query_finds_the_same_photons() {
     let scene = load_scene("cornell-glossy-mirrorball").unwrap();
-    for (graph, sk, mk) in [
-        ("ppm", "PPMsk", "PPMmk"),
-        ("sppm", "SPPMsk", "SPPMmk"),
-        ("pbpm", "PBPMsk", "PBPMmk"),
+    for (graph, sk, mk, screen) in [
+        ("ppm", "PPMsk", "PPMmk", "PPMmkScreen"),
+        ("sppm", "SPPMsk", "SPPMmk", "SPPMmkScreen"),
+        ("pbpm", "PBPMsk", "PBPMmk", "PBPMmkScreen"),
     ] {
         let run = |layout: &str, while_query: bool| {
             let constants = [
@@ -149,7 +149,7 @@ fn every_photon_mapping_layout_and_query_finds_the_same_photons() {
             render(&scene, graph, layout, (SIZE, SIZE), 2, 2, 3, &constants)
         };
         let reference = run(sk, true);
-        for (layout, while_query) in [(sk, false), (mk, true)] {
+        for (layout, while_query) in [(sk, false), (mk, true), (screen, false)] {
             let other = run(layout, while_query);
             // Photons of a bucket are summed in the order their atomics gave them slots.
             let worst = largest_relative_difference(&reference.image, &other.image);
