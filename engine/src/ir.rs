@@ -50,6 +50,11 @@ pub struct GraphFile {
     /// (e.g. a capacity from a measured average and `PATHS`).
     #[serde(default)]
     pub derived: BTreeMap<String, String>,
+    /// Conditions over the constants that must hold (condition → what the constants may be,
+    /// for the error), checked once the constants are known, e.g.
+    /// `"PM_STRUCTURE <= 3": "PM_STRUCTURE is 0, 1, 2 or 3"`.
+    #[serde(default)]
+    pub checks: BTreeMap<String, String>,
     /// Resources the host reads after frames (passes that contribute to none are culled).
     #[serde(default)]
     pub outputs: Vec<String>,
@@ -119,6 +124,9 @@ pub struct CatalogFile {
     /// `u32` constants computed from the others (as the graph's `derived`).
     #[serde(default)]
     pub derived: BTreeMap<String, String>,
+    /// Conditions over the constants that must hold (as the graph's `checks`).
+    #[serde(default)]
+    pub checks: BTreeMap<String, String>,
     /// The passes this catalog offers.
     #[serde(default)]
     pub passes: Vec<PassDecl>,
@@ -389,6 +397,18 @@ pub enum ConstValue {
     F32(f32),
     /// `bool`
     Bool(bool),
+}
+
+/// The value as `--set NAME=VALUE` takes it.
+impl std::fmt::Display for ConstValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ConstValue::U32(v) => write!(f, "{v}"),
+            ConstValue::I32(v) => write!(f, "{v}"),
+            ConstValue::F32(v) => write!(f, "{v}"),
+            ConstValue::Bool(v) => write!(f, "{v}"),
+        }
+    }
 }
 
 impl ConstValue {

@@ -92,10 +92,36 @@ pub struct Declared {
     pub constants: BTreeMap<String, ConstValue>,
     /// Derived `u32` constants: name → count expression over the other constants.
     pub derived: BTreeMap<String, String>,
+    /// Conditions over the constants that must hold, from the graph and the files it uses.
+    pub checks: Vec<ConstCheck>,
     /// The file declaring each resource, counter and constant.
     pub origins: BTreeMap<String, String>,
     /// The texts of the graph, catalog and include files.
     pub sources: Sources,
+}
+
+/// A condition over the constants that must hold (`checks` of a graph or catalog).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConstCheck {
+    /// The condition, an expression over the constants (0 fails).
+    pub condition: String,
+    /// What the constants may be, for the error.
+    pub message: String,
+    /// The file that declares it.
+    pub file: String,
+}
+
+/// Adds `file`'s checks to `out`, each condition once.
+fn add_checks(out: &mut Vec<ConstCheck>, checks: &BTreeMap<String, String>, file: &str) {
+    for (condition, message) in checks {
+        if !out.iter().any(|c| &c.condition == condition) {
+            out.push(ConstCheck {
+                condition: condition.clone(),
+                message: message.clone(),
+                file: file.to_string(),
+            });
+        }
+    }
 }
 
 /// How strongly a declaration holds: the graph's own over an included file's over a
@@ -239,7 +265,10 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
     for (name, r) in &g.resources {
         resources.add(&sources, "resource", name, r, Rank::Graph, file)?;
     }
+    let mut checks = Vec::new();
+    add_checks(&mut checks, &g.checks, file);
     for (path, inc) in &includes {
+        add_checks(&mut checks, &inc.checks, path);
         push_unique(&mut library, &inc.library);
         push_unique(&mut counters, &inc.counters);
         for (name, v) in &inc.constants {
@@ -263,6 +292,7 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
             for (name, e) in &cat.derived {
                 derived.add(&sources, "derived constant", name, e, Rank::Catalog, &p.origin)?;
             }
+            add_checks(&mut checks, &cat.checks, &p.origin);
             for (name, r) in &cat.resources {
                 if d.reads.contains(name) || d.writes.contains(name) {
                     resources.add(&sources, "resource", name, r, Rank::Catalog, &p.origin)?;
@@ -303,6 +333,7 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
         counters,
         constants,
         derived,
+        checks,
         origins,
         sources,
         file: g,
@@ -368,6 +399,13 @@ impl Declared {
             }
             if let Err(e) = Expr::parse(&self.derived[name]) {
                 return Err(self.error_at_decl(file, name, format!("derived constant '{name}': {e}")));
+            }
+        }
+        for c in &self.checks {
+            if let Err(e) = Expr::parse(&c.condition) {
+                return Err(self
+                    .sources
+                    .at_key(&c.file, &c.condition, format!("check '{}': {e}", c.condition)));
             }
         }
         for name in g.parameters.keys() {

@@ -53,6 +53,7 @@ impl Graph {
         }
         self.derive_constants(given, strict)?;
         let vars: BTreeMap<String, f64> = self.constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
+        self.check_constants(&vars)?;
         // The whole declared structure, to cull on.
         self.passes = self.declared.passes.clone();
         self.ops = self.declared.ops.clone();
@@ -79,6 +80,29 @@ impl Graph {
             .collect();
         self.check_live()?;
         Ok(self)
+    }
+
+    /// The graph's `checks` whose constants are all known: a condition that is 0 is an error
+    /// at its declaration, with the values of the constants it names.
+    fn check_constants(&self, vars: &BTreeMap<String, f64>) -> Result<()> {
+        for c in &self.declared.checks {
+            let Ok(expr) = Expr::parse(&c.condition) else { continue };
+            let mut names = expr.names();
+            names.sort();
+            names.dedup();
+            if names.iter().any(|n| !vars.contains_key(n)) {
+                continue;
+            }
+            if expr.eval(vars).is_ok_and(|v| v == 0.0) {
+                let values: Vec<String> = names.iter().map(|n| format!("{n} = {}", self.constants[n])).collect();
+                return Err(self.declared.sources.at_key(
+                    &c.file,
+                    &c.condition,
+                    format!("'{}' does not hold ({}): {}", c.condition, values.join(", "), c.message),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Adds the derived constants the host did not give, each a `u32` count evaluated over

@@ -1,4 +1,4 @@
-//! Derived constants, catalog resources brought by operators, and loop groups kept whole by
+//! Derived constants, constant checks, catalog resources brought by operators, and loop groups kept whole by
 //! culling (graph loading and specialisation only; no GPU).
 
 use lightgraph_engine::{ConstValue, Graph, Layer, Vfs};
@@ -53,6 +53,32 @@ fn a_derived_constant_naming_an_unknown_constant_is_located() {
     let clash = collatz(r#""N": "BINS""#, |t| t);
     let e = Graph::from_text(&vfs(), "derived.ron", &clash).unwrap_err().to_string();
     assert!(e.contains("'N' is derived and also declared as a constant"), "{e}");
+}
+
+#[test]
+fn a_failing_constant_check_is_an_error_at_its_declaration_with_the_values() {
+    let text = collatz("", |t| {
+        t.replace(
+            r#"derived: {  },"#,
+            "derived: {  },\n    checks: { \"BINS <= 64 && BINS >= 1\": \"BINS is 1 to 64\" },",
+        )
+    });
+    assert!(text.contains("checks"), "the test graph changed");
+    let graph = Graph::from_text(&vfs(), "checks.ron", &text).unwrap();
+    graph.specialize(&constants(&[("BINS", ConstValue::U32(64))])).unwrap();
+    let e = graph
+        .specialize(&constants(&[("BINS", ConstValue::U32(65))]))
+        .unwrap_err()
+        .to_string();
+    let line = text.lines().position(|l| l.contains("checks")).unwrap() + 1;
+    assert!(e.starts_with(&format!("checks.ron:{line}:")), "{e}");
+    assert!(
+        e.contains("'BINS <= 64 && BINS >= 1' does not hold (BINS = 65): BINS is 1 to 64"),
+        "{e}"
+    );
+    let bad = text.replace("BINS <= 64 &&", "BINS <= &&");
+    let e = Graph::from_text(&vfs(), "checks.ron", &bad).unwrap_err().to_string();
+    assert!(e.contains("check 'BINS <= && BINS >= 1'"), "{e}");
 }
 
 #[test]

@@ -210,6 +210,28 @@ fn unknown_layout_lists_the_available_ones() {
 }
 
 #[test]
+fn a_constant_out_of_its_range_is_refused_at_its_check() {
+    // Without the check, PM_STRUCTURE 4 culled every structure and with them the photons.
+    let err = fails(&[
+        "render",
+        "--graph",
+        "ppm",
+        "--set",
+        "PM_STRUCTURE=4",
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ]);
+    let catalog = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/passes/pm.ron")).unwrap();
+    let at = format!("passes/pm.ron:{}:", line_of(&catalog, "\"PM_STRUCTURE <= 3\""));
+    assert!(
+        err.contains(&at) && err.contains("(PM_STRUCTURE = 4)") && err.contains("3 (kD-tree)"),
+        "{err}"
+    );
+}
+
+#[test]
 fn missing_scene_file() {
     let err = fails(&["render", "--scene", "/no/such/scene.ron", "--frames", "1"]);
     assert!(
