@@ -26,9 +26,14 @@ fn cell_of(position: vec3<f32>) -> vec3<i32> {
     return vec3<i32>(floor((position - pm_origin()) / cell_size()));
 }
 
+// Above the rounding error of the cell computations for a query of `radius`.
+fn cell_margin(radius: f32) -> f32 {
+    return radius * 1e-4 + pm_extent() * 1e-5;
+}
+
 // The cells a query of `radius` around `center` must visit.
 fn cell_box(center: vec3<f32>, radius: f32) -> CellBox {
-    let margin = radius * 1e-4 + pm_extent() * 1e-5;
+    let margin = cell_margin(radius);
     let c = center - pm_origin();
     let size = cell_size();
     let lo = vec3<i32>(floor((c - radius - margin) / size));
@@ -87,6 +92,18 @@ fn cell_walk_next(w: ptr<function, CellWalk>) -> bool {
     }
     (*w).cell = c;
     return c.z <= (*w).box.hi.z;
+}
+
+// Whether `cell` comes within `radius` (and the margin) of `center`: the box's other cells
+// (those only its corners touch) hold no photon in range and are skipped. Nothing in range
+// is missed: their buckets differ from those of the cells that reach (a box wider than 2
+// cells keeps a photon only in its own cell's visit, and its cell reaches).
+fn cell_reaches(cell: vec3<i32>, center: vec3<f32>, radius: f32) -> bool {
+    let size = cell_size();
+    let lo = pm_origin() + vec3<f32>(cell) * size;
+    let d = max(max(lo - center, center - (lo + size)), vec3<f32>(0.0));
+    let reach = radius + cell_margin(radius);
+    return dot(d, d) <= reach * reach;
 }
 
 // Whether a photon at `position`, found in the bucket of `cell`, counts in this visit.

@@ -25,6 +25,14 @@ fn grid_bucket(b: u32) -> vec2<u32> {
     return vec2<u32>(grid_first[b], photon_total());
 }
 
+// The photons of the bucket of `cell`, or none when the cell is out of the query's reach.
+fn grid_reached_bucket(cell: vec3<i32>, m: Merge) -> vec2<u32> {
+    if (cell_reaches(cell, m.position, m.radius)) {
+        return grid_bucket(cell_bucket(cell));
+    }
+    return vec2<u32>(0u);
+}
+
 // Pass `grid_gather` (Loop over MergePath): the pending density estimation, if any.
 fn grid_gather(p: ptr<function, MergePath>) -> bool {
     var m = merge_begin(*p);
@@ -44,7 +52,7 @@ fn grid_gather(p: ptr<function, MergePath>) -> bool {
 fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
     var walk = cell_walk(box);
     loop {
-        let range = grid_bucket(cell_bucket(walk.cell));
+        let range = grid_reached_bucket(walk.cell, *m);
         for (var i = range.x; i < range.y; i += 1u) {
             let position = grid_photons[i].position;
             if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, position)) {
@@ -61,7 +69,7 @@ fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
 // of a warp process photons together whatever the cells' sizes.
 fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
     var walk = cell_walk(box);
-    var range = grid_bucket(cell_bucket(walk.cell));
+    var range = grid_reached_bucket(walk.cell, *m);
     var i = range.x;
     loop {
         var found = false;
@@ -78,7 +86,7 @@ fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
             if (!cell_walk_next(&walk)) {
                 break;
             }
-            range = grid_bucket(cell_bucket(walk.cell));
+            range = grid_reached_bucket(walk.cell, *m);
             i = range.x;
         }
         if (!found) {

@@ -58,7 +58,10 @@ fn sg_gather(p: ptr<function, MergePath>) -> bool {
         var walk = cell_walk(box);
         loop {
             let b = cell_bucket(walk.cell);
-            let n = atomicLoad(&sg_count[b]);
+            var n = 0u;
+            if (cell_reaches(walk.cell, m.position, m.radius)) {
+                n = atomicLoad(&sg_count[b]);
+            }
             if (n > 0u) {
                 let photon = pm_staging[atomicLoad(&sg_pick[b])];
                 if (pm_in_range(photon.position, m.position, m.radius) && cell_owns(box, walk.cell, photon.position)) {
