@@ -7,6 +7,20 @@ fn camera_direction(x: f32, y: f32) -> vec3<f32> {
     return normalize(camera.forward + ndc_x * camera.right + ndc_y * camera.up);
 }
 
+// The pixel of sample `index` (< PIXELS) in tile order: 8x8 tiles row by row (narrower or
+// lower at the right and bottom edges), each row by row, so 64 consecutive samples cover a
+// tile, not a strip of a row: threads of a workgroup then query nearby photons (photon
+// mapping), whose cells a warp shares. A bijection of 0 .. PIXELS.
+fn camera_tiled_pixel(index: u32) -> u32 {
+    let ty = index / (WIDTH * 8u);
+    let r = index - ty * WIDTH * 8u;
+    let th = min(8u, HEIGHT - ty * 8u);
+    let tx = r / (8u * th);
+    let q = r - tx * 8u * th;
+    let tw = min(8u, WIDTH - tx * 8u);
+    return (ty * 8u + q / tw) * WIDTH + tx * 8u + q % tw;
+}
+
 // The direction through a uniform point of pixel `pixel`, jittered with two numbers of `rng`.
 fn camera_jittered_direction(pixel: u32, rng: ptr<function, u32>) -> vec3<f32> {
     let jitter = rng_vec2(rng);

@@ -78,10 +78,11 @@ struct Merge {
     sum: vec3<f32>,
 }
 
-// Pass `pm_camera` (Start over PATHS): the camera ray of sample `index` (pixel index % PIXELS).
+// Pass `pm_camera` (Start over PATHS): the camera ray of sample `index` (pixel index % PIXELS
+// in tile order, so that a workgroup's queries are close).
 fn pm_camera(p: ptr<function, MergePath>, index: u32) -> bool {
     var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
-    let pixel = index % PIXELS;
+    let pixel = camera_tiled_pixel(index % PIXELS);
     (*p).origin = camera.position;
     (*p).pixel = pixel;
     (*p).direction = camera_jittered_direction(pixel, &rng);
