@@ -13,12 +13,9 @@ set -uo pipefail
 log=${1:?usage: bash bench/gpu_pm.sh LOG [FRAMES]}
 frames=${2:-10}
 exec > >(tee "$log") 2>&1
-lg() { bash .gpu/run.sh lightgraph "$@"; }
 out=$(mktemp -d)
-run() {
-  echo "== $*"
-  lg render --res 1280x720 --frames "$frames" --out "$out/x.exr" "$@" 2>&1 | grep -E "frames,|per frame|GPU time|rror"
-}
+source "$(dirname "$0")/gpu_common.sh"
+run() { render_summary "$frames" "$@"; }
 scenes="sponza cornell-glossy-point .gpu/scenes/LivingRoom/living-room.gltf .gpu/scenes/ModernHall/staircase2.gltf .gpu/scenes/VeachBidir/veach-bidir.gltf"
 for s in $scenes; do
   for st in 0 1 3; do run --graph ppm --scene "$s" --set PM_STRUCTURE=$st; done

@@ -11,8 +11,8 @@ log=${1:?usage: bash bench/gpu_pm_table6.sh LOG [SECONDS] [REFERENCE_SECONDS]}
 secs=${2:-20}
 ref_secs=${3:-90}
 exec > >(tee "$log") 2>&1
-lg() { bash .gpu/run.sh lightgraph "$@"; }
 out=${OUT:-$(mktemp -d)}
+source "$(dirname "$0")/gpu_common.sh"
 runs=ppm:PPMsk@PM_STRUCTURE=0,ppm:PPMsk@PM_STRUCTURE=1,ppm:PPMsk@PM_STRUCTURE=3
 table6() {
   local name=$1 scene=$2 res=$3

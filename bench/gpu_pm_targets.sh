@@ -9,12 +9,9 @@
 set -uo pipefail
 log=${1:?usage: bash bench/gpu_pm_targets.sh LOG}
 exec > >(tee "$log") 2>&1
-lg() { bash .gpu/run.sh lightgraph "$@"; }
 out=$(mktemp -d)
-run() {
-  echo "== $*"
-  lg render --res 1280x720 --frames 30 --out "$out/x.exr" "$@" 2>&1 | grep -E "frames,|per frame|GPU time|rror"
-}
+source "$(dirname "$0")/gpu_common.sh"
+run() { render_summary 30 "$@"; }
 lg render --graph pt --scene sponza --res 1280x720 --frames 200 --out "$out/warm.exr" >/dev/null 2>&1
 hall=.gpu/scenes/ModernHall/staircase2.gltf
 veach=.gpu/scenes/VeachBidir/veach-bidir.gltf
