@@ -2,27 +2,18 @@
 // `grid_keys` writes each photon's bucket (shaders/pm/cells.wgsl), a Count gives each photon
 // its slot in its bucket, a Scan of the counts each bucket's first place, and a Scatter puts
 // the photon records themselves in bucket order in `grid_photons` (no index array), so a
-// bucket's photons are contiguous: grid_first[b] .. grid_first[b + 1] (the photon total for
-// the last); `grid_place_positions` copies their positions into `grid_positions`. The gather
-// visits the query's cells with NaiveQuery (cell by cell) or, with PM_WHILE_QUERY, WhileQuery
-// (Algorithm 2: one loop that first finds the next photon in range, over all cells, then
-// processes it); both find the same photons in the same order. NaiveQuery is the default:
-// faster on an H100 (docs/performance.md). Both read a photon's position from
-// `grid_positions` (16 bytes) and its record only when it is in range (most are not: a
-// query's cells cover several times its disc).
+// bucket's photons are contiguous: grid_first[b] .. grid_first[b + 1] (the photon total for the
+// last). The gather visits the query's cells with NaiveQuery (cell by cell) or, with
+// PM_WHILE_QUERY, WhileQuery (Algorithm 2: one loop that first finds the next photon in range,
+// over all cells, then processes it); both find the same photons in the same order. NaiveQuery
+// is the default: faster on an H100 (docs/performance.md). Both read a photon's position
+// first and the rest of its record only when it is in range (most are not: a query's 8
+// cells cover about 5 times its disc).
 
 // Pass `grid_keys` (Start over the stored photons): the photon's bucket.
 fn grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     (*p).index = index;
     grid_key[index] = cell_bucket(cell_of(pm_staging[index].position));
-    return false;
-}
-
-// Pass `grid_place_positions` (Start over the stored photons): the position of the photon in
-// place `index` of `grid_photons`, alone, where the queries read it.
-fn grid_place_positions(p: ptr<function, PhotonSlot>, index: u32) -> bool {
-    (*p).index = index;
-    grid_positions[index] = vec4<f32>(grid_photons[index].position, 0.0);
     return false;
 }
 
@@ -63,7 +54,7 @@ fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
     loop {
         let range = grid_reached_bucket(walk.cell, *m);
         for (var i = range.x; i < range.y; i += 1u) {
-            let position = grid_positions[i].xyz;
+            let position = grid_photons[i].position;
             if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, position)) {
                 merge_photon(m, grid_photons[i], 1.0);
             }
@@ -84,7 +75,7 @@ fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
         var found = false;
         loop {
             if (i < range.y) {
-                let position = grid_positions[i].xyz;
+                let position = grid_photons[i].position;
                 i += 1u;
                 if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, position)) {
                     found = true;
