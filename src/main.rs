@@ -1,4 +1,4 @@
-//! The `lightgraph` command line: render, reference, compare, stress, explain, bench,
+//! The `lightgraph` command line: render, reference, merge, compare, stress, explain, bench,
 //! operators, list.
 
 mod cli;
@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 use cli::bench::BenchArgs;
 use cli::compare::CompareArgs;
 use cli::explain::ExplainArgs;
+use cli::merge::MergeArgs;
 use cli::operators::OperatorsArgs;
 use cli::reference::ReferenceArgs;
 use cli::render::RenderArgs;
@@ -30,6 +31,8 @@ enum Command {
     Render(RenderArgs),
     /// Render a long reference accumulated in f64, with its variance; resumable.
     Reference(ReferenceArgs),
+    /// Add films of the same settings over disjoint frame ranges (shards of one run) into one.
+    Merge(MergeArgs),
     /// Render several estimators and layouts for the same time and plot their error against
     /// a reference over time.
     Compare(CompareArgs),
@@ -59,7 +62,7 @@ fn main() -> ExitCode {
         Command::Compare(a) => a.common.assets.clone(),
         Command::Explain(a) => a.common.assets.clone(),
         Command::Bench(a) => a.common.assets.clone(),
-        Command::List | Command::Stress(_) | Command::Operators(_) => None,
+        Command::List | Command::Stress(_) | Command::Operators(_) | Command::Merge(_) => None,
     };
     if let Some(dir) = assets {
         // SAFETY: set before any thread starts; scene loading reads it.
@@ -68,6 +71,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(a) => cli::render::render(a),
         Command::Reference(a) => cli::reference::reference(a),
+        Command::Merge(a) => cli::merge::merge(a),
         Command::Compare(a) => cli::compare::compare(a),
         Command::Explain(a) => cli::explain::explain(a),
         Command::Bench(a) => cli::bench::bench(a),

@@ -1,6 +1,8 @@
-//! Reference images: long progressive renders whose sums are kept on the host in f64, stored
-//! as EXR with the mean radiance, its per-pixel variance and the settings that made it, and
-//! resumable (more samples are added to a stored reference with the same settings).
+//! Films: progressive renders whose sums are kept on the host in f64, stored as EXR with the
+//! mean radiance (and the f32 remainder of its f64 value), its per-pixel variance, the
+//! settings that made it and the frame indices it holds. `reference` writes them and resumes
+//! them (more samples added with the same settings), `render` writes one, and `merge` adds
+//! films of the same settings over disjoint frame ranges (shards of one run) into one.
 
 use crate::output::{ExrFile, read_exr, write_channels};
 use crate::render::{Accumulation, Image};
@@ -11,14 +13,16 @@ use std::path::Path;
 /// Settings that must be the same for every sample of a reference: the estimate they define.
 pub const SETTINGS: [&str; 5] = ["scene", "graph", "samples_per_frame", "seed", "constants"];
 
-/// A reference image being accumulated in f64: per pixel the sum of the frames' estimates
-/// and of their squares.
+/// A film (a reference image) being accumulated in f64: per pixel the sum of the frames'
+/// estimates and of their squares, and the frame indices summed.
 #[derive(Debug, Clone)]
 pub struct Reference {
     /// Width and height.
     pub size: (u32, u32),
     /// Frames accumulated.
     pub frames: u64,
+    /// The frame indices accumulated: sorted, disjoint, half-open ranges, adjacent ones joined.
+    pub ranges: Vec<(u64, u64)>,
     /// Render seconds spent on it, over every run that added to it.
     pub seconds: f64,
     /// The [`SETTINGS`] and descriptive entries (layout, adapter) as text.
@@ -34,6 +38,7 @@ impl Reference {
         Reference {
             size,
             frames: 0,
+            ranges: Vec::new(),
             seconds: 0.0,
             info,
             sum: vec![[0.0; 3]; n],
@@ -42,8 +47,11 @@ impl Reference {
     }
 
     /// Adds the frames of a GPU accumulation (see
-    /// [`crate::render::Session::take_accumulation`]).
-    pub fn absorb(&mut self, taken: &Accumulation) {
+    /// [`crate::render::Session::take_accumulation`]); an error if it holds frame indices the
+    /// film has already.
+    pub fn absorb(&mut self, taken: &Accumulation) -> Result<()> {
+        let first = taken.first_frame as u64;
+        self.add_range((first, first + taken.frames as u64))?;
         for ((s, q), (ts, tq)) in self
             .sum
             .iter_mut()
@@ -56,6 +64,89 @@ impl Reference {
             }
         }
         self.frames += taken.frames as u64;
+        Ok(())
+    }
+
+    /// Records the frame indices `range` (half-open) as accumulated.
+    fn add_range(&mut self, range: (u64, u64)) -> Result<()> {
+        if range.0 >= range.1 {
+            return Ok(());
+        }
+        if let Some(r) = self.ranges.iter().find(|r| r.0 < range.1 && range.0 < r.1) {
+            bail!(
+                "frames {} overlap frames {} already in the film",
+                range_text(range),
+                range_text(*r)
+            );
+        }
+        self.ranges.push(range);
+        self.ranges.sort_unstable();
+        let mut joined: Vec<(u64, u64)> = Vec::new();
+        for r in self.ranges.drain(..) {
+            match joined.last_mut() {
+                Some(last) if last.1 == r.0 => last.1 = r.1,
+                _ => joined.push(r),
+            }
+        }
+        self.ranges = joined;
+        Ok(())
+    }
+
+    /// The frame index after the last one accumulated (0 for an empty film): where a resumed
+    /// run starts.
+    pub fn end_frame(&self) -> u64 {
+        self.ranges.last().map_or(0, |r| r.1)
+    }
+
+    /// Adds the film `other` (read from `path`), made with the same settings over frames this
+    /// one does not hold: the sums, frames and seconds add up, the layouts and adapters are
+    /// listed once each, and numeric statistics (`rays`, `rejected_samples`) add up.
+    pub fn merge(&mut self, other: &Reference, path: &Path) -> Result<()> {
+        other.check_settings(&self.info, path)?;
+        if other.size != self.size {
+            bail!(
+                "{}: the film is {}x{}, the others {}x{}",
+                path.display(),
+                other.size.0,
+                other.size.1,
+                self.size.0,
+                self.size.1
+            );
+        }
+        for r in &other.ranges {
+            self.add_range(*r).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        }
+        for (a, b) in self
+            .sum
+            .iter_mut()
+            .zip(&other.sum)
+            .chain(self.sum_sq.iter_mut().zip(&other.sum_sq))
+        {
+            for c in 0..3 {
+                a[c] += b[c];
+            }
+        }
+        self.frames += other.frames;
+        self.seconds += other.seconds;
+        for key in ["layout", "adapter"] {
+            let mut items: Vec<String> = Vec::new();
+            for list in [self.info.get(key), other.info.get(key)].into_iter().flatten() {
+                for item in list.split(", ").filter(|s| !s.is_empty()) {
+                    if !items.iter().any(|i| i == item) {
+                        items.push(item.to_string());
+                    }
+                }
+            }
+            self.info.insert(key.to_string(), items.join(", "));
+        }
+        for key in ["rays", "rejected_samples"] {
+            let sum = [self.info.get(key), other.info.get(key)].map(|v| v.and_then(|v| v.parse::<u64>().ok()));
+            match sum {
+                [Some(a), Some(b)] => self.info.insert(key.to_string(), (a + b).to_string()),
+                _ => self.info.remove(key),
+            };
+        }
+        Ok(())
     }
 
     /// Samples per pixel accumulated.
@@ -113,34 +204,47 @@ impl Reference {
         }
     }
 
-    /// Writes the reference as an EXR: channels R, G, B (mean radiance) and variance.R,
-    /// variance.G, variance.B (variance of the mean), with the settings, frames, samples per
-    /// pixel and seconds as `lightgraph.*` attributes.
-    pub fn write(&self, path: &Path) -> Result<()> {
-        let mean = self.mean();
+    /// Writes the film as an EXR: channels R, G, B (mean radiance), residual.R, residual.G,
+    /// residual.B (the f32 remainder of the f64 mean, so that shards merge to float rounding
+    /// of f64) and variance.R, variance.G, variance.B (variance of the mean), with the
+    /// settings, frames, frame ranges, samples per pixel and seconds as `lightgraph.*`
+    /// attributes, and `kind` (what wrote it: reference, render or merge).
+    pub fn write(&self, path: &Path, kind: &str) -> Result<()> {
+        let n = self.frames.max(1) as f64;
         let var = self.variance_of_mean();
         let channel = |v: &[[f32; 3]], c: usize| v.iter().map(|p| p[c]).collect::<Vec<f32>>();
         let mut channels = Vec::new();
         for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
-            channels.push((name.to_string(), channel(&mean, c)));
+            let mean: Vec<f64> = self.sum.iter().map(|s| s[c] / n).collect();
+            channels.push((name.to_string(), mean.iter().map(|&m| m as f32).collect()));
+            channels.push((
+                format!("residual.{name}"),
+                mean.iter().map(|&m| (m - m as f32 as f64) as f32).collect(),
+            ));
             channels.push((format!("variance.{name}"), channel(&var, c)));
         }
         let mut meta: Vec<(&str, String)> = self.info.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
-        meta.push(("kind", "reference".into()));
+        meta.push(("kind", kind.into()));
         meta.push(("frames", self.frames.to_string()));
+        meta.push((
+            "frame_ranges",
+            self.ranges.iter().map(|r| range_text(*r)).collect::<Vec<_>>().join(","),
+        ));
         meta.push(("samples_per_pixel", self.samples_per_pixel().to_string()));
         meta.push(("seconds", format!("{:.3}", self.seconds)));
         write_channels(path, self.size, channels, &meta)
     }
 
-    /// Reads a reference written by [`Reference::write`]; its f32 mean and variance give the
-    /// sums back to about 1e-7 relative, far below any reference's noise.
+    /// Reads a film written by [`Reference::write`]: its mean and residual give the sums back
+    /// to about 1e-14 relative (films written before the residual, to 1e-7), its variance the
+    /// sums of squares to about 1e-7, far below any film's noise. A film without frame ranges
+    /// holds frames 0 .. frames.
     pub fn read(path: &Path) -> Result<Reference> {
         let file = read_exr(path)?;
         let frames = number(&file, path, "frames")?;
         let seconds = number(&file, path, "seconds")?;
         let mut info = file.metadata.clone();
-        for key in ["kind", "frames", "samples_per_pixel", "seconds"] {
+        for key in ["kind", "frames", "frame_ranges", "samples_per_pixel", "seconds"] {
             info.remove(key);
         }
         if let Some(missing) = SETTINGS.iter().find(|k| !info.contains_key(**k)) {
@@ -150,14 +254,33 @@ impl Reference {
             );
         }
         let mut reference = Reference::new(file.size, info);
-        reference.frames = frames as u64;
         reference.seconds = seconds;
+        reference.ranges = match file.metadata.get("frame_ranges") {
+            Some(text) => parse_ranges(text).ok_or_else(|| {
+                anyhow!(
+                    "{}: invalid frame ranges '{text}' (expected FIRST..END,...)",
+                    path.display()
+                )
+            })?,
+            None if frames > 0.0 => vec![(0, frames as u64)],
+            None => Vec::new(),
+        };
+        reference.frames = reference.ranges.iter().map(|r| r.1 - r.0).sum();
+        if reference.frames != frames as u64 {
+            bail!(
+                "{}: its frame ranges hold {} frames, its 'frames' says {frames}",
+                path.display(),
+                reference.frames
+            );
+        }
         let n = frames;
         for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
             let mean = file.channel(name, path)?;
             let var = file.channel(&format!("variance.{name}"), path)?;
+            let residual = file.channels.get(&format!("residual.{name}"));
             for (i, (&m, &v)) in mean.iter().zip(var).enumerate() {
-                let (m, v) = (m as f64, v as f64);
+                let m = m as f64 + residual.map_or(0.0, |r| r[i] as f64);
+                let v = v as f64;
                 reference.sum[i][c] = m * n;
                 // Inverse of variance_of_mean: sum_sq / n = v (n - 1) + m².
                 reference.sum_sq[i][c] = n * (v * (n - 1.0).max(0.0) + m * m);
@@ -182,13 +305,33 @@ impl Reference {
             .collect();
         if !differ.is_empty() {
             bail!(
-                "{}: the reference was made with other settings, so samples cannot be added to it: {}",
+                "{}: the film was made with other settings, so samples cannot be added to it: {}",
                 path.display(),
                 differ.join("; ")
             );
         }
         Ok(())
     }
+}
+
+/// A frame range as text: FIRST..END (END excluded).
+fn range_text(r: (u64, u64)) -> String {
+    format!("{}..{}", r.0, r.1)
+}
+
+/// Parses FIRST..END,... into sorted, disjoint, joined ranges; None if malformed or
+/// overlapping.
+fn parse_ranges(text: &str) -> Option<Vec<(u64, u64)>> {
+    let mut film = Reference::new((0, 0), BTreeMap::new());
+    for item in text.split(',').filter(|s| !s.trim().is_empty()) {
+        let (a, b) = item.trim().split_once("..")?;
+        let (a, b) = (a.parse::<u64>().ok()?, b.parse::<u64>().ok()?);
+        if a >= b {
+            return None;
+        }
+        film.add_range((a, b)).ok()?;
+    }
+    Some(film.ranges)
 }
 
 fn number(file: &ExrFile, path: &Path, key: &str) -> Result<f64> {
@@ -216,8 +359,10 @@ mod tests {
             .collect()
     }
 
-    fn frames(values: &[[f32; 3]]) -> Accumulation {
+    /// One pixel's frames `values`, the first of them frame index `first`.
+    fn frames_from(first: u32, values: &[[f32; 3]]) -> Accumulation {
         Accumulation {
+            first_frame: first,
             frames: values.len() as u32,
             sum: vec![
                 values
@@ -230,12 +375,18 @@ mod tests {
         }
     }
 
+    fn frames(values: &[[f32; 3]]) -> Accumulation {
+        frames_from(0, values)
+    }
+
     #[test]
     fn mean_and_variance_of_absorbed_batches() {
         let mut r = Reference::new((1, 1), info());
-        r.absorb(&frames(&[[1.0, 0.0, 2.0], [3.0, 0.0, 2.0]]));
-        r.absorb(&frames(&[[5.0, 0.0, 2.0]]));
-        assert_eq!(r.frames, 3);
+        r.absorb(&frames(&[[1.0, 0.0, 2.0], [3.0, 0.0, 2.0]])).unwrap();
+        r.absorb(&frames_from(2, &[[5.0, 0.0, 2.0]])).unwrap();
+        assert_eq!((r.frames, r.ranges.clone(), r.end_frame()), (3, vec![(0, 3)], 3));
+        let e = r.absorb(&frames_from(2, &[[5.0, 0.0, 2.0]])).unwrap_err().to_string();
+        assert!(e.contains("frames 2..3 overlap frames 0..3"), "{e}");
         assert_eq!(r.samples_per_pixel(), 6);
         assert_eq!(r.mean()[0], [3.0, 0.0, 2.0]);
         // Sample variance of 1, 3, 5 is 4; of the mean, 4 / 3.
@@ -254,14 +405,21 @@ mod tests {
         let mut a = frames(&[[0.25, 1.0, 7.0], [0.75, 1.5, 9.0]]);
         a.sum.push([10.0, 0.0, 1.0, 0.0]);
         a.sum_sq.push([50.5, 0.0, 0.5, 0.0]);
-        r.absorb(&a);
+        r.absorb(&a).unwrap();
         r.seconds = 1.5;
-        r.write(&path).unwrap();
+        r.write(&path, "reference").unwrap();
         let back = Reference::read(&path).unwrap();
         std::fs::remove_dir_all(&dir).ok();
         assert_eq!((back.size, back.frames, back.seconds), ((2, 1), 2, 1.5));
+        assert_eq!(back.ranges, vec![(0, 2)]);
         assert_eq!(back.info, r.info);
-        for (a, b) in r.sum.iter().zip(&back.sum).chain(r.sum_sq.iter().zip(&back.sum_sq)) {
+        // The mean with its residual gives the sums to f64 rounding; the squares to f32's.
+        for (a, b) in r.sum.iter().zip(&back.sum) {
+            for c in 0..3 {
+                assert!((a[c] - b[c]).abs() <= 1e-13 * a[c].abs().max(1.0), "{a:?} vs {b:?}");
+            }
+        }
+        for (a, b) in r.sum_sq.iter().zip(&back.sum_sq) {
             for c in 0..3 {
                 assert!((a[c] - b[c]).abs() <= 1e-6 * a[c].abs().max(1.0), "{a:?} vs {b:?}");
             }
@@ -274,6 +432,61 @@ mod tests {
             e.contains("seed is 'seed-value' there, '9' here") && e.contains("ref.exr"),
             "{e}"
         );
+    }
+
+    /// A 1x1 film of `info` holding frames `first ..` with the values `v`.
+    fn film(info: BTreeMap<String, String>, first: u32, v: &[[f32; 3]]) -> Reference {
+        let mut r = Reference::new((1, 1), info);
+        r.absorb(&frames_from(first, v)).unwrap();
+        r
+    }
+
+    #[test]
+    fn films_of_disjoint_frames_merge_into_their_union() {
+        let path = Path::new("b.exr");
+        let mut a = film(info(), 0, &[[1.0, 2.0, 3.0], [3.0, 2.0, 1.0]]);
+        a.info.insert("layout".into(), "L1".into());
+        a.info.insert("rays".into(), "10".into());
+        let mut b = film(info(), 4, &[[5.0, 2.0, 2.0]]);
+        b.info.insert("layout".into(), "L2".into());
+        b.info.insert("rays".into(), "5".into());
+        a.merge(&b, path).unwrap();
+        assert_eq!((a.frames, a.ranges.clone()), (3, vec![(0, 2), (4, 5)]));
+        assert_eq!(a.mean()[0], [3.0, 2.0, 2.0]);
+        assert_eq!((a.info["layout"].as_str(), a.info["rays"].as_str()), ("L1, L2", "15"));
+        // Filling the gap joins the ranges.
+        a.merge(&film(info(), 2, &[[0.0; 3], [0.0; 3]]), path).unwrap();
+        assert_eq!(a.ranges, vec![(0, 5)]);
+    }
+
+    #[test]
+    fn films_that_do_not_match_are_refused_each_with_its_reason() {
+        let path = Path::new("shard-1.exr");
+        let a = film(info(), 0, &[[1.0; 3]]);
+        let mut other_seed = info();
+        other_seed.insert("seed".into(), "7".into());
+        let mut other_constants = info();
+        other_constants.insert("constants".into(), "MAX_PATH_LENGTH=3".into());
+        let mut wide = film(info(), 1, &[[1.0; 3]]);
+        wide.size = (2, 1);
+        for (b, expected) in [
+            (film(other_seed, 1, &[[1.0; 3]]), "seed is '7' there, 'seed-value' here"),
+            (film(other_constants, 1, &[[1.0; 3]]), "constants is"),
+            (wide, "the film is 2x1, the others 1x1"),
+            (film(info(), 0, &[[1.0; 3]]), "frames 0..1 overlap frames 0..1"),
+        ] {
+            let e = a.clone().merge(&b, path).unwrap_err().to_string();
+            assert!(e.contains("shard-1.exr") && e.contains(expected), "{e}");
+        }
+    }
+
+    #[test]
+    fn frame_ranges_parse_and_malformed_ones_are_refused() {
+        assert_eq!(parse_ranges("4..6,0..2,2..3"), Some(vec![(0, 3), (4, 6)]));
+        assert_eq!(parse_ranges(""), Some(vec![]));
+        for bad in ["0..", "3..1", "0..2,1..3", "x..2", "5"] {
+            assert_eq!(parse_ranges(bad), None, "{bad}");
+        }
     }
 
     #[test]

@@ -235,6 +235,8 @@ pub struct Image {
 /// squares.
 #[derive(Debug, Clone)]
 pub struct Accumulation {
+    /// Frame index of the first frame summed (the others follow it).
+    pub first_frame: u32,
     /// Frames summed.
     pub frames: u32,
     /// Sum of the per-frame estimates (RGB, fourth word unused).
@@ -419,6 +421,7 @@ impl<'g> Session<'g> {
     /// frames' estimates and the sums of their squares (RGB and an unused fourth word).
     pub fn accumulation(&self) -> Result<Accumulation> {
         Ok(Accumulation {
+            first_frame: self.first_frame + self.taken_frames,
             frames: self.frames - self.taken_frames,
             sum: bytemuck::pod_collect_to_vec(&self.instance.read("accum")?),
             sum_sq: bytemuck::pod_collect_to_vec(&self.instance.read("accum_sq")?),
@@ -443,6 +446,7 @@ impl<'g> Session<'g> {
             frames,
             sum,
             sum_sq: sq,
+            ..
         } = self.accumulation()?;
         let n = frames.max(1) as f64;
         let mut mean = Vec::with_capacity(sum.len());

@@ -197,6 +197,20 @@ pub fn check_size(reference: &Reference, path: &Path, size: (u32, u32)) -> Resul
 }
 
 /// The constant overrides as `NAME=VALUE` words (the inverse of [`parse_sets`]).
+/// The settings a film records and `merge` checks (lightgraph::reference::SETTINGS).
+pub fn film_settings(scene: &str, graph: &str, opts: &SessionOptions) -> BTreeMap<String, String> {
+    [
+        ("scene", scene.to_string()),
+        ("graph", graph.to_string()),
+        ("samples_per_frame", opts.samples_per_frame.to_string()),
+        ("seed", opts.seed.to_string()),
+        ("constants", constants_text(&opts.constants)),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
+}
+
 pub fn constants_text(constants: &BTreeMap<String, ConstValue>) -> String {
     let words: Vec<String> = constants
         .iter()

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod compare;
 pub mod explain;
 pub mod list;
+pub mod merge;
 pub mod operators;
 pub mod reference;
 pub mod render;

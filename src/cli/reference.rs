@@ -8,7 +8,6 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::reference::Reference;
 use lightgraph::render::{Session, load_graph, load_scene_with};
 use lightgraph_engine::Gpu;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -49,6 +48,22 @@ pub struct ReferenceArgs {
     /// Exposure of the PNG preview in stops.
     #[arg(long, default_value_t = 0.0)]
     pub exposure: f32,
+    /// Frame index of the first frame [default: 0, or where the resumed reference ends]: the
+    /// shard of one run that this process renders (`merge` adds the shards up).
+    #[arg(long)]
+    pub first_frame: Option<u32>,
+}
+
+/// The first frame index of this run: `given`, which must come after every frame the
+/// (resumed) film holds, or the end of those frames.
+fn first_frame(given: Option<u32>, film: &Reference) -> Result<u32> {
+    let end = film.end_frame();
+    let first = given.map_or(end, u64::from);
+    if first < end {
+        bail!("--first-frame {first} is inside the frames the reference holds (up to {end}); give {end} or more");
+    }
+    u32::try_from(first)
+        .map_err(|_| anyhow::anyhow!("the reference ends at frame {end}, past 2^32; start another with a new seed"))
 }
 
 /// How often the GPU's f32 sums are moved into the host's f64 ones.
@@ -87,16 +102,7 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
     let opts = options(c, &scene, &graph.constants, seed)?;
     let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
     let size = (opts.width, opts.height);
-    let mut info: BTreeMap<String, String> = [
-        ("scene", c.scene().to_string()),
-        ("graph", args.graph.name().to_string()),
-        ("samples_per_frame", opts.samples_per_frame.to_string()),
-        ("seed", seed.to_string()),
-        ("constants", constants_text(&opts.constants)),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
+    let mut info = film_settings(c.scene(), args.graph.name(), &opts);
     let mut reference = match resumed {
         Some(r) => {
             let path = args.resume.as_ref().expect("resumed from a path");
@@ -116,9 +122,6 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         info.insert(key.to_string(), items.join(", "));
     }
     reference.info.extend(info);
-    if reference.frames >= u32::MAX as u64 {
-        bail!("the reference has 2^32 frames already; start another with a new seed");
-    }
     eprintln!(
         "{} | scene {} (loaded in {:.2} s) | graph {} layout {layout} | {}x{} | {} spp so far",
         gpu.describe(),
@@ -129,8 +132,9 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         size.1,
         reference.samples_per_pixel()
     );
+    let first_frame = first_frame(args.first_frame, &reference)?;
     let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
-    session.first_frame = reference.frames as u32;
+    session.first_frame = first_frame;
     let bar = match (args.time, args.frames) {
         (Some(t), _) => ProgressBar::new(t.as_millis() as u64),
         (None, frames) => ProgressBar::new(frames.unwrap_or(0) as u64),
@@ -150,15 +154,15 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         }
         session.render_for(step.min(Duration::from_millis(100)), max)?;
         if absorbed_at.elapsed() >= ABSORB_EVERY {
-            reference.absorb(&session.take_accumulation()?);
+            reference.absorb(&session.take_accumulation()?)?;
             absorbed_at = Instant::now();
         }
         if saved_at.elapsed() >= args.checkpoint {
-            reference.absorb(&session.take_accumulation()?);
+            reference.absorb(&session.take_accumulation()?)?;
             let now = start.elapsed().as_secs_f64();
             reference.seconds += now - seconds_saved;
             seconds_saved = now;
-            reference.write(&out)?;
+            reference.write(&out, "reference")?;
             saved_at = Instant::now();
         }
         let secs = start.elapsed().as_secs_f64();
@@ -174,9 +178,9 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         });
     }
     bar.finish();
-    reference.absorb(&session.take_accumulation()?);
+    reference.absorb(&session.take_accumulation()?)?;
     reference.seconds += start.elapsed().as_secs_f64() - seconds_saved;
-    reference.write(&out)?;
+    reference.write(&out, "reference")?;
     let png = out.with_extension("png");
     lightgraph::output::write_png(&png, &reference.image(), args.exposure)?;
     println!(

@@ -44,6 +44,10 @@ pub struct RenderArgs {
     /// against it, measured about once a second.
     #[arg(long)]
     pub reference: Option<PathBuf>,
+    /// Frame index of the first frame: renders frames FIRST .. FIRST + frames of the seed's
+    /// random streams, a shard of a longer run (`lightgraph merge` adds the shards' films).
+    #[arg(long, default_value_t = 0)]
+    pub first_frame: u32,
 }
 
 pub fn render(args: RenderArgs) -> Result<()> {
@@ -98,7 +102,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
         }
         None => None,
     };
+    let mut film = Reference::new((w, h), film_settings(c.scene(), &graph.name, &opts));
     let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
+    session.first_frame = args.first_frame;
     let mut error_text = String::new();
     let mut error_at: Option<Instant> = None;
     let bar = match args.time {
@@ -152,19 +158,17 @@ pub fn render(args: RenderArgs) -> Result<()> {
             e.rel_mse
         );
     }
-    let metadata = [
-        ("graph", graph.name.clone()),
+    for (k, v) in [
         ("layout", layout.clone()),
-        ("scene", c.scene().to_string()),
-        ("samples_per_pixel", session.samples_per_pixel().to_string()),
-        ("frames", session.frames.to_string()),
-        ("seconds", format!("{seconds:.3}")),
-        ("seed", args.seed.to_string()),
         ("adapter", gpu.info.name.clone()),
         ("rays", session.rays().to_string()),
         ("rejected_samples", rejected.to_string()),
-    ];
-    output::write_exr(&args.out, &image, &metadata)?;
+    ] {
+        film.info.insert(k.to_string(), v);
+    }
+    film.absorb(&session.accumulation()?)?;
+    film.seconds = seconds;
+    film.write(&args.out, "render")?;
     let png = args.out.with_extension("png");
     output::write_png(&png, &image, args.exposure)?;
     let gpu_time: f64 = session.kernel_seconds.values().sum();

@@ -20,6 +20,7 @@ mod probe;
 mod reference;
 mod resolve;
 mod scenes;
+mod shards;
 mod specialize;
 mod stress;
 mod textures;

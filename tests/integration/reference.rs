@@ -64,6 +64,11 @@ fn settings_that_would_mix_estimates_are_refused() {
     );
     let err = fails(&["reference", "--resume", p, "--frames", "1", "--max-path-length", "3"]);
     assert!(err.contains("constants is '' there, 'MAX_PATH_LENGTH=3' here"), "{err}");
+    let err = fails(&["reference", "--resume", p, "--frames", "1", "--first-frame", "0"]);
+    assert!(
+        err.contains("--first-frame 0 is inside the frames the reference holds (up to 1)"),
+        "{err}"
+    );
     let err = fails(&["reference", "--resume", p, "--frames", "1", "--res", "8x8"]);
     assert!(err.contains("the reference is 16x12, the render 8x8"), "{err}");
     // Runs with the reference's own seed would repeat its random numbers.
@@ -108,7 +113,7 @@ fn settings_that_would_mix_estimates_are_refused() {
         err.contains("--baseline Nope is none of the runs (pt:NaivePTsk, pt:NaivePTmk)"),
         "{err}"
     );
-    // A render is not a reference.
+    // A render writes a film with its settings: a reference can go on from it.
     let render = dir.join("render.exr");
     let run = lightgraph(
         &[
@@ -119,6 +124,29 @@ fn settings_that_would_mix_estimates_are_refused() {
         .concat(),
     );
     assert!(run.status.success());
+    let more = dir.join("more.exr");
+    let run = lightgraph(&[
+        "reference",
+        "--resume",
+        render.to_str().unwrap(),
+        "--frames",
+        "2",
+        "--out",
+        more.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let film = lightgraph::reference::Reference::read(&more).unwrap();
+    assert_eq!((film.frames, film.ranges.clone()), (3, vec![(0, 3)]));
+    // An EXR without lightgraph's settings is not a reference.
+    let plain = dir.join("plain.exr");
+    let image = lightgraph::render::Image {
+        width: 16,
+        height: 12,
+        frames: 1,
+        mean: vec![[1.0; 3]; 16 * 12],
+        variance: vec![[0.0; 3]; 16 * 12],
+    };
+    lightgraph::output::write_exr(&plain, &image, &[]).unwrap();
     let err = fails(&[
         "render",
         "--scene",
@@ -128,11 +156,11 @@ fn settings_that_would_mix_estimates_are_refused() {
         "--frames",
         "1",
         "--reference",
-        render.to_str().unwrap(),
+        plain.to_str().unwrap(),
         "--out",
         dir.join("x.exr").to_str().unwrap(),
     ]);
-    assert!(err.contains("render.exr: not a lightgraph reference"), "{err}");
+    assert!(err.contains("plain.exr: not a lightgraph reference"), "{err}");
 }
 
 #[test]
