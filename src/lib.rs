@@ -7,6 +7,7 @@ pub mod assets;
 pub mod bench;
 pub mod compare;
 pub mod metrics;
+pub mod multi;
 pub mod output;
 pub mod plot;
 pub mod reference;

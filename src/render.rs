@@ -355,6 +355,22 @@ impl<'g> Session<'g> {
         self.render_frames(1)
     }
 
+    /// Goes on at frame index `first` instead of the next one: frames claimed out of order
+    /// (by several GPUs sharing a run). The GPU accumulation must be empty (taken), so that
+    /// it holds consecutive frames.
+    pub fn jump_to(&mut self, first: u32) -> Result<()> {
+        if self.frames != self.taken_frames {
+            bail!(
+                "jump_to with {} frames still in the accumulation",
+                self.frames - self.taken_frames
+            );
+        }
+        self.first_frame = first
+            .checked_sub(self.frames)
+            .ok_or_else(|| anyhow!("frame {first} is before the {} frames rendered", self.frames))?;
+        Ok(())
+    }
+
     /// Renders `count` more frames (at most [`MAX_BATCH`]) recorded together, with one
     /// read-back of statistics; returns the batch's statistics.
     pub fn render_frames(&mut self, count: u32) -> Result<FrameStats> {

@@ -41,15 +41,70 @@ fn instance() -> wgpu::Instance {
     wgpu::Instance::new(desc)
 }
 
-/// All adapters wgpu can see, best first.
-pub fn adapters() -> Vec<wgpu::AdapterInfo> {
+/// What tells a physical GPU apart: its PCI bus id where the backend gives one, else its
+/// name and PCI vendor and device ids (identical GPUs without a bus id then look alike).
+fn identity(info: &wgpu::AdapterInfo) -> String {
+    if info.device_pci_bus_id.is_empty() {
+        format!("{} {:04x}:{:04x}", info.name, info.vendor, info.device)
+    } else {
+        info.device_pci_bus_id.clone()
+    }
+}
+
+/// Each GPU wgpu can see, once (through its best backend: Vulkan lists a GPU once per
+/// driver, and other backends list it again), best first: the order of adapter indices.
+fn distinct_adapters() -> Vec<wgpu::Adapter> {
     let inst = instance();
-    let mut infos: Vec<wgpu::AdapterInfo> = pollster::block_on(inst.enumerate_adapters(wgpu::Backends::all()))
-        .iter()
-        .map(|a| a.get_info())
-        .collect();
-    infos.sort_by_key(rank);
-    infos
+    let mut all = pollster::block_on(inst.enumerate_adapters(wgpu::Backends::all()));
+    all.sort_by_key(|a| rank(&a.get_info()));
+    let mut seen = Vec::new();
+    all.retain(|a| {
+        let id = identity(&a.get_info());
+        let new = !seen.contains(&id);
+        seen.push(id);
+        new
+    });
+    all
+}
+
+/// Each GPU wgpu can see, once, best first (index `i` is adapter `i` of `--adapter`).
+pub fn adapters() -> Vec<wgpu::AdapterInfo> {
+    distinct_adapters().iter().map(|a| a.get_info()).collect()
+}
+
+/// Picks an adapter of `candidates` (best first) by `selector`: its index, its PCI bus id,
+/// or text its name contains (case-insensitive).
+fn select(mut candidates: Vec<wgpu::Adapter>, selector: &str) -> Result<wgpu::Adapter> {
+    let infos: Vec<wgpu::AdapterInfo> = candidates.iter().map(|a| a.get_info()).collect();
+    let lower = selector.to_lowercase();
+    let pos = match selector.parse::<usize>() {
+        Ok(i) => (i < candidates.len()).then_some(i),
+        Err(_) => infos
+            .iter()
+            .position(|i| !i.device_pci_bus_id.is_empty() && i.device_pci_bus_id.eq_ignore_ascii_case(selector))
+            .or_else(|| infos.iter().position(|i| i.name.to_lowercase().contains(&lower))),
+    };
+    let listed: Vec<String> = infos.iter().enumerate().map(|(k, i)| describe_adapter(k, i)).collect();
+    let pos = pos.ok_or_else(|| {
+        Error::Gpu(format!(
+            "no adapter matches '{selector}' (an index, a PCI bus id or part of a name); available: {}",
+            listed.join("; ")
+        ))
+    })?;
+    Ok(candidates.swap_remove(pos))
+}
+
+/// One line on adapter `index`: index, name, PCI bus id, backend, type, driver.
+pub fn describe_adapter(index: usize, info: &wgpu::AdapterInfo) -> String {
+    let bus = if info.device_pci_bus_id.is_empty() {
+        String::new()
+    } else {
+        format!(" [{}]", info.device_pci_bus_id)
+    };
+    format!(
+        "{index}: {}{bus} ({:?}, {:?}, {})",
+        info.name, info.backend, info.device_type, info.driver
+    )
 }
 
 /// Features lightgraph uses when the adapter has them.
@@ -61,24 +116,16 @@ pub fn wanted_features() -> wgpu::Features {
 }
 
 impl Gpu {
-    /// Opens the best adapter, or the first whose name contains `name` (case-insensitive).
-    pub fn new(name: Option<&str>) -> Result<Gpu> {
-        let inst = instance();
-        let mut candidates = pollster::block_on(inst.enumerate_adapters(wgpu::Backends::all()));
+    /// Opens the best adapter, or the one `selector` names: its index in [`adapters`], its
+    /// PCI bus id, or text its name contains (case-insensitive). Each call opens a device of
+    /// its own, also on an adapter already open.
+    pub fn new(selector: Option<&str>) -> Result<Gpu> {
+        let mut candidates = distinct_adapters();
         if candidates.is_empty() {
             return Err(Error::Gpu(NO_ADAPTER_HELP.to_string()));
         }
-        candidates.sort_by_key(|a| rank(&a.get_info()));
-        let adapter = match name {
-            Some(n) => {
-                let lower = n.to_lowercase();
-                let names: Vec<String> = candidates.iter().map(|a| a.get_info().name).collect();
-                let pos = candidates
-                    .iter()
-                    .position(|a| a.get_info().name.to_lowercase().contains(&lower))
-                    .ok_or_else(|| Error::Gpu(format!("no adapter matches '{n}'; available: {}", names.join(", "))))?;
-                candidates.swap_remove(pos)
-            }
+        let adapter = match selector {
+            Some(s) => select(candidates, s)?,
             None => candidates.remove(0),
         };
         let info = adapter.get_info();

@@ -55,7 +55,8 @@ pub struct Common {
     /// ../shared/scenes when it exists).
     #[arg(long, env = "LIGHTGRAPH_ASSETS")]
     pub assets: Option<PathBuf>,
-    /// GPU adapter whose name contains this text (also LIGHTGRAPH_ADAPTER).
+    /// GPU adapter: its index in `lightgraph list`, its PCI bus id, or text its name contains
+    /// (also LIGHTGRAPH_ADAPTER).
     #[arg(long, env = "LIGHTGRAPH_ADAPTER")]
     pub adapter: Option<String>,
     /// Thread pool of regeneration and compaction layouts (overrides the layout's).
@@ -180,6 +181,14 @@ pub fn named_layout(graph: &Graph, name: Option<&str>) -> Result<(String, Layout
 }
 
 /// Checks that a reference has the image size of the render compared with it.
+/// The mean of the reference at `path`, if any, checked to be `size` (for `--reference`).
+pub fn reference_mean(path: Option<&PathBuf>, size: (u32, u32)) -> Result<Option<Vec<[f32; 3]>>> {
+    let Some(path) = path else { return Ok(None) };
+    let r = Reference::read(path)?;
+    check_size(&r, path, size)?;
+    Ok(Some(r.mean()))
+}
+
 pub fn check_size(reference: &Reference, path: &Path, size: (u32, u32)) -> Result<()> {
     if reference.size != size {
         bail!(

@@ -26,8 +26,8 @@ pub fn list() -> Result<()> {
     if adapters.is_empty() {
         println!("  none: {}", lightgraph_engine::gpu::NO_ADAPTER_HELP);
     }
-    for a in adapters {
-        println!("  {} ({:?}, {:?}, {})", a.name, a.backend, a.device_type, a.driver);
+    for (i, a) in adapters.iter().enumerate() {
+        println!("  {}", lightgraph_engine::gpu::describe_adapter(i, a));
     }
     Ok(())
 }

@@ -4,6 +4,7 @@ pub mod args;
 pub mod bench;
 pub mod compare;
 pub mod explain;
+pub mod gpus;
 pub mod list;
 pub mod merge;
 pub mod operators;

@@ -48,9 +48,17 @@ pub struct RenderArgs {
     /// random streams, a shard of a longer run (`lightgraph merge` adds the shards' films).
     #[arg(long, default_value_t = 0)]
     pub first_frame: u32,
+    /// Render on several GPUs at once: `all`, the first N adapters, or a comma-separated list
+    /// of adapter indices, PCI bus ids or names (see `lightgraph list`; one may repeat). Each
+    /// GPU claims batches of frames sized to its own speed; the host adds them into one film.
+    #[arg(long)]
+    pub gpus: Option<String>,
 }
 
 pub fn render(args: RenderArgs) -> Result<()> {
+    if let Some(spec) = &args.gpus {
+        return super::gpus::render_on_several_gpus(&args, spec);
+    }
     let c = &args.common;
     let scene = load_scene_with(c.scene(), c.bvh)?;
     let graph = load_graph(args.graph.name())?;
@@ -94,14 +102,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         graph.name,
         layout
     );
-    let reference = match &args.reference {
-        Some(path) => {
-            let r = Reference::read(path)?;
-            check_size(&r, path, (w, h))?;
-            Some(r.mean())
-        }
-        None => None,
-    };
+    let reference = reference_mean(args.reference.as_ref(), (w, h))?;
     let mut film = Reference::new((w, h), film_settings(c.scene(), &graph.name, &opts));
     let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
     session.first_frame = args.first_frame;

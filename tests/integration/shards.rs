@@ -1,7 +1,8 @@
 //! Sample-split rendering: shards of one run, disjoint frame ranges of the same random
 //! streams (`Session::first_frame`, `--first-frame`), merged as films equal the run itself to
 //! float rounding, for path tracing, LVC-BPT and photon mapping (whose radius shrinks with the
-//! global frame index); and the CLI's `render --first-frame` and `merge` end to end.
+//! global frame index); the CLI's `render --first-frame` and `merge` end to end; and one run
+//! on several GPUs (`render --gpus`, here two devices of lavapipe) equals it on one.
 
 use crate::cli::{fails, lightgraph, temp_dir};
 use crate::common::{gpu, options};
@@ -124,4 +125,44 @@ fn render_shards_merge_through_the_cli() {
         err.contains("seed4.exr") && err.contains("seed is '4' there, '3' here"),
         "{err}"
     );
+}
+
+#[test]
+fn a_run_on_two_devices_equals_it_on_one() {
+    let dir = temp_dir("gpus");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let base = [
+        "render",
+        "--scene",
+        "cornell-glossy-point",
+        "--graph",
+        "bpt-lvc",
+        "--res",
+        "16x12",
+        "--frames",
+        "8",
+    ];
+    let one = lightgraph(&[&base[..], &["--out", &path("one.exr")]].concat());
+    assert!(one.status.success(), "{}", String::from_utf8_lossy(&one.stderr));
+    let two = lightgraph(&[&base[..], &["--gpus", "0,0", "--out", &path("two.exr")]].concat());
+    let stderr = String::from_utf8_lossy(&two.stderr);
+    assert!(two.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("on 2 GPUs") && stderr.contains("GPU 0 (") && stderr.contains("GPU 1 ("),
+        "{stderr}"
+    );
+    let (one, two) = (
+        Reference::read(&dir.join("one.exr")).unwrap(),
+        Reference::read(&dir.join("two.exr")).unwrap(),
+    );
+    assert_eq!((two.frames, two.ranges.clone()), (8, vec![(0, 8)]));
+    let worst = largest_difference(&one, &two);
+    assert!(worst < 1e-5, "two devices differ from one by {worst:.2e}");
+    let err = fails(&[&base[..], &["--gpus", "0,9", "--out", &path("x.exr")]].concat());
+    assert!(
+        err.contains("GPU 1 ('9')") && err.contains("no adapter matches '9'"),
+        "{err}"
+    );
+    let err = fails(&[&base[..], &["--gpus", "5", "--out", &path("x.exr")]].concat());
+    assert!(err.contains("--gpus 5: this machine has"), "{err}");
 }

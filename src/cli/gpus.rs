@@ -1,0 +1,157 @@
+//! `render --gpus`: one run on several GPUs of the machine (lightgraph::multi), with a
+//! progress line of each GPU's rate and one film at the end.
+
+use super::args::*;
+use super::render::RenderArgs;
+use anyhow::{Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use lightgraph::metrics::image_error;
+use lightgraph::multi::{Budget, Run, Share, render_on_gpus};
+use lightgraph::reference::Reference;
+use lightgraph::render::{load_graph, load_scene_with};
+use std::time::{Duration, Instant};
+
+/// The adapters `--gpus` names: `all`, the first N, or a comma-separated list of indices, PCI
+/// bus ids or names (one may repeat: several devices of one adapter).
+pub fn gpu_selectors(spec: &str) -> Result<Vec<String>> {
+    let adapters = lightgraph_engine::gpu::adapters();
+    let listed = || {
+        adapters
+            .iter()
+            .enumerate()
+            .map(|(i, a)| lightgraph_engine::gpu::describe_adapter(i, a))
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let count = match spec.trim() {
+        "all" => adapters.len(),
+        s if !s.contains(',') => match s.parse::<usize>() {
+            Ok(n) => n,
+            Err(_) => return Ok(vec![s.to_string()]),
+        },
+        s => {
+            return Ok(s
+                .split(',')
+                .map(|x| x.trim().to_string())
+                .filter(|x| !x.is_empty())
+                .collect());
+        }
+    };
+    if count == 0 || count > adapters.len() {
+        bail!(
+            "--gpus {spec}: this machine has {} adapters: {}",
+            adapters.len(),
+            listed()
+        );
+    }
+    Ok((0..count).map(|i| i.to_string()).collect())
+}
+
+/// The progress line: frames, samples/s and each GPU's rate.
+fn progress_line(shares: &[Share], film: &Reference, pixels: f64, secs: f64, error: &str) -> String {
+    let spf = film.samples_per_pixel() as f64 / film.frames.max(1) as f64;
+    let per_gpu: Vec<String> = shares
+        .iter()
+        .enumerate()
+        .map(|(i, s)| format!("GPU {i} {}samples/s", si(s.frames_per_second() * spf * pixels)))
+        .collect();
+    format!(
+        "frame {} | {} samples/s | {}{error}",
+        film.frames,
+        si(film.samples_per_pixel() as f64 * pixels / secs),
+        per_gpu.join(", ")
+    )
+}
+
+pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
+    let c = &args.common;
+    if args.layout.as_deref() == Some("auto") {
+        bail!("--layout auto measures layouts on one GPU; name a layout with --gpus");
+    }
+    let selectors = gpu_selectors(spec)?;
+    let scene = load_scene_with(c.scene(), c.bvh)?;
+    let graph = load_graph(args.graph.name())?;
+    let opts = options(c, &scene, &graph.constants, args.seed)?;
+    let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
+    let (w, h) = (opts.width, opts.height);
+    let reference = reference_mean(args.reference.as_ref(), (w, h))?;
+    eprintln!(
+        "{} GPUs ({}) | scene {} | graph {} layout {layout} | {w}x{h}",
+        selectors.len(),
+        selectors.join(", "),
+        c.scene(),
+        graph.name
+    );
+    let mut film = Reference::new((w, h), film_settings(c.scene(), &graph.name, &opts));
+    let budget = match args.time {
+        Some(t) => Budget::Time(t),
+        None => Budget::Frames(args.frames as u64),
+    };
+    let bar = match args.time {
+        Some(t) => ProgressBar::new(t.as_millis() as u64),
+        None => ProgressBar::new(args.frames as u64),
+    };
+    bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
+    let run = Run {
+        graph: &graph,
+        layout: (&layout, &decl),
+        scene: &scene,
+        options: &opts,
+        first_frame: args.first_frame as u64,
+    };
+    let start = Instant::now();
+    let pixels = (w as f64) * (h as f64);
+    let (mut error, mut error_at) = (String::new(), None::<Instant>);
+    let shares = render_on_gpus(&run, &selectors, budget, &mut film, |shares, film| {
+        if let Some(r) = &reference
+            && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
+        {
+            error = format!(" | RMSE {:.4e}", image_error(&film.mean(), r).rmse);
+            error_at = Some(Instant::now());
+        }
+        let secs = start.elapsed().as_secs_f64();
+        bar.set_message(progress_line(shares, film, pixels, secs, &error));
+        bar.set_position(match args.time {
+            Some(_) => start.elapsed().as_millis() as u64,
+            None => film.frames,
+        });
+    })?;
+    bar.finish();
+    let seconds = start.elapsed().as_secs_f64();
+    let mut adapters: Vec<String> = shares.iter().map(|s| s.adapter.clone()).collect();
+    adapters.dedup();
+    film.info.insert("layout".into(), layout.clone());
+    film.info.insert("adapter".into(), adapters.join(", "));
+    film.info
+        .insert("rays".into(), shares.iter().map(|s| s.rays).sum::<u64>().to_string());
+    film.seconds = seconds;
+    film.write(&args.out, "render")?;
+    let png = args.out.with_extension("png");
+    lightgraph::output::write_png(&png, &film.image(), args.exposure)?;
+    if let Some(r) = &reference {
+        let e = image_error(&film.mean(), r);
+        eprintln!(
+            "error against the reference: RMSE {:.4e}, relMSE {:.4e}",
+            e.rmse, e.rel_mse
+        );
+    }
+    let spf = film.samples_per_pixel() as f64 / film.frames.max(1) as f64;
+    eprintln!(
+        "{} frames, {} spp in {seconds:.2} s on {} GPUs: {}samples/s wall-clock",
+        film.frames,
+        film.samples_per_pixel(),
+        shares.len(),
+        si(film.samples_per_pixel() as f64 * pixels / seconds)
+    );
+    for (i, s) in shares.iter().enumerate() {
+        eprintln!(
+            "GPU {i} ({}): {} frames, {}samples/s while rendering, {}rays/s",
+            s.adapter,
+            s.frames,
+            si(s.frames_per_second() * spf * pixels),
+            si(s.rays as f64 / s.busy_seconds.max(1e-9))
+        );
+    }
+    println!("wrote {} and {}", args.out.display(), png.display());
+    Ok(())
+}
