@@ -5,9 +5,11 @@ use super::args::*;
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use lightgraph::multi::{Budget, Run, render_on_gpus};
 use lightgraph::reference::Reference;
 use lightgraph::render::{Session, load_graph, load_scene_with};
 use lightgraph_engine::Gpu;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -52,6 +54,11 @@ pub struct ReferenceArgs {
     /// shard of one run that this process renders (`merge` adds the shards up).
     #[arg(long)]
     pub first_frame: Option<u32>,
+    /// Render on several GPUs at once, as `render --gpus`: `all`, the first N adapters, or a
+    /// comma-separated list of adapter indices, PCI bus ids or names (`--adapter` is then
+    /// not used).
+    #[arg(long)]
+    pub gpus: Option<String>,
 }
 
 /// The first frame index of this run: `given`, which must come after every frame the
@@ -69,25 +76,46 @@ fn first_frame(given: Option<u32>, film: &Reference) -> Result<u32> {
 /// How often the GPU's f32 sums are moved into the host's f64 ones.
 const ABSORB_EVERY: Duration = Duration::from_secs(2);
 
+/// Fills the settings a resumed reference has and `args` does not give.
+fn settings_from_resumed(args: &mut ReferenceArgs, r: &Reference) {
+    let c = &mut args.common;
+    let info = |k: &str| r.info.get(k).cloned().unwrap_or_default();
+    c.scene.get_or_insert_with(|| info("scene"));
+    args.graph.graph.get_or_insert_with(|| info("graph"));
+    c.res.get_or_insert(r.size);
+    c.spp
+        .get_or_insert_with(|| info("samples_per_frame").parse().unwrap_or(1));
+    args.seed
+        .get_or_insert_with(|| info("seed").parse().unwrap_or(REFERENCE_SEED));
+    if c.set.is_empty() && c.max_path_length.is_none() {
+        c.set = info("constants").split_whitespace().map(String::from).collect();
+    }
+}
+
+/// Adds `value` to the comma-separated list `key` of `info` unless it is there.
+fn list_once(info: &mut BTreeMap<String, String>, key: &str, value: &str) {
+    let list = info.remove(key).unwrap_or_default();
+    let mut items: Vec<&str> = list.split(", ").filter(|s| !s.is_empty()).collect();
+    if !items.contains(&value) {
+        items.push(value);
+    }
+    info.insert(key.to_string(), items.join(", "));
+}
+
+/// Where a reference render goes: the film (new or resumed), the file and the progress bar.
+struct Target {
+    film: Reference,
+    out: PathBuf,
+    bar: ProgressBar,
+}
+
 pub fn reference(mut args: ReferenceArgs) -> Result<()> {
     let resumed = match &args.resume {
         Some(path) => Some(Reference::read(path)?),
         None => None,
     };
     if let Some(r) = &resumed {
-        // Settings not given are the reference's own.
-        let c = &mut args.common;
-        let info = |k: &str| r.info.get(k).cloned().unwrap_or_default();
-        c.scene.get_or_insert_with(|| info("scene"));
-        args.graph.graph.get_or_insert_with(|| info("graph"));
-        c.res.get_or_insert(r.size);
-        c.spp
-            .get_or_insert_with(|| info("samples_per_frame").parse().unwrap_or(1));
-        args.seed
-            .get_or_insert_with(|| info("seed").parse().unwrap_or(REFERENCE_SEED));
-        if c.set.is_empty() && c.max_path_length.is_none() {
-            c.set = info("constants").split_whitespace().map(String::from).collect();
-        }
+        settings_from_resumed(&mut args, r);
     }
     let c = &args.common;
     let out = match (&args.out, &args.resume) {
@@ -97,13 +125,12 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
     };
     let scene = load_scene_with(c.scene(), c.bvh)?;
     let graph = load_graph(args.graph.name())?;
-    let gpu = Gpu::new(c.adapter.as_deref())?;
     let seed = args.seed.unwrap_or(REFERENCE_SEED);
     let opts = options(c, &scene, &graph.constants, seed)?;
     let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
     let size = (opts.width, opts.height);
-    let mut info = film_settings(c.scene(), args.graph.name(), &opts);
-    let mut reference = match resumed {
+    let info = film_settings(c.scene(), args.graph.name(), &opts);
+    let mut film = match resumed {
         Some(r) => {
             let path = args.resume.as_ref().expect("resumed from a path");
             r.check_settings(&info, path)?;
@@ -112,35 +139,69 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         }
         None => Reference::new(size, info.clone()),
     };
-    // Layouts and adapters that contributed are listed, each once.
-    for (key, value) in [("layout", layout.clone()), ("adapter", gpu.info.name.clone())] {
-        let list = reference.info.remove(key).unwrap_or_default();
-        let mut items: Vec<String> = list.split(", ").filter(|s| !s.is_empty()).map(String::from).collect();
-        if !items.contains(&value) {
-            items.push(value);
-        }
-        info.insert(key.to_string(), items.join(", "));
-    }
-    reference.info.extend(info);
+    film.info.extend(info);
+    list_once(&mut film.info, "layout", &layout);
+    let first = first_frame(args.first_frame, &film)?;
     eprintln!(
-        "{} | scene {} (loaded in {:.2} s) | graph {} layout {layout} | {}x{} | {} spp so far",
-        gpu.describe(),
+        "scene {} (loaded in {:.2} s) | graph {} layout {layout} | {}x{} | {} spp so far",
         c.scene(),
         scene.load_seconds,
         graph.name,
         size.0,
         size.1,
-        reference.samples_per_pixel()
+        film.samples_per_pixel()
     );
-    let first_frame = first_frame(args.first_frame, &reference)?;
-    let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
-    session.first_frame = first_frame;
     let bar = match (args.time, args.frames) {
         (Some(t), _) => ProgressBar::new(t.as_millis() as u64),
         (None, frames) => ProgressBar::new(frames.unwrap_or(0) as u64),
     };
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
-    let spp_before = reference.samples_per_pixel();
+    let mut target = Target { film, out, bar };
+    let run = Run {
+        graph: &graph,
+        layout: (&layout, &decl),
+        scene: &scene,
+        options: &opts,
+        first_frame: first as u64,
+    };
+    match &args.gpus {
+        Some(spec) => on_several_gpus(&args, &run, spec, &mut target)?,
+        None => on_one_gpu(&args, &run, &mut target)?,
+    }
+    let Target { film, out, bar } = target;
+    bar.finish();
+    film.write(&out, "reference")?;
+    let png = out.with_extension("png");
+    lightgraph::output::write_png(&png, &film.image(), args.exposure)?;
+    println!(
+        "wrote {} and {}: {} spp in {:.1} s in all; noise (RMSE of the reference itself) {:.3e}",
+        out.display(),
+        png.display(),
+        film.samples_per_pixel(),
+        film.seconds,
+        film.noise_floor_mse().sqrt()
+    );
+    Ok(())
+}
+
+/// The progress message: samples per pixel in all and the run's samples per second.
+fn progress(film: &Reference, spp_before: u64, size: (u32, u32), secs: f64) -> String {
+    let spp = film.samples_per_pixel();
+    let samples = (spp - spp_before) as f64 * size.0 as f64 * size.1 as f64;
+    format!("{spp} spp | {} samples/s", si(samples / secs))
+}
+
+/// Renders `run` on one GPU (`--adapter`) into the target's film, taking the GPU's sums
+/// every [`ABSORB_EVERY`] and writing the film every `--checkpoint`.
+fn on_one_gpu(args: &ReferenceArgs, run: &Run, target: &mut Target) -> Result<()> {
+    let gpu = Gpu::new(args.common.adapter.as_deref())?;
+    eprintln!("{}", gpu.describe());
+    let film = &mut target.film;
+    list_once(&mut film.info, "adapter", &gpu.info.name);
+    let (layout, decl) = run.layout;
+    let mut session = Session::with_layout(&gpu, run.graph, layout, decl.clone(), run.scene, run.options.clone())?;
+    session.first_frame = run.first_frame as u32;
+    let spp_before = film.samples_per_pixel();
     let start = Instant::now();
     let (mut absorbed_at, mut saved_at) = (Instant::now(), Instant::now());
     let mut seconds_saved = 0.0;
@@ -153,43 +214,63 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
             break;
         }
         session.render_for(step.min(Duration::from_millis(100)), max)?;
-        if absorbed_at.elapsed() >= ABSORB_EVERY {
-            reference.absorb(&session.take_accumulation()?)?;
+        if absorbed_at.elapsed() >= ABSORB_EVERY || saved_at.elapsed() >= args.checkpoint {
+            film.absorb(&session.take_accumulation()?)?;
             absorbed_at = Instant::now();
         }
         if saved_at.elapsed() >= args.checkpoint {
-            reference.absorb(&session.take_accumulation()?)?;
             let now = start.elapsed().as_secs_f64();
-            reference.seconds += now - seconds_saved;
+            film.seconds += now - seconds_saved;
             seconds_saved = now;
-            reference.write(&out, "reference")?;
+            film.write(&target.out, "reference")?;
             saved_at = Instant::now();
         }
-        let secs = start.elapsed().as_secs_f64();
-        let samples = session.samples_per_pixel() as f64 * (size.0 as f64 * size.1 as f64);
-        bar.set_message(format!(
-            "{} spp | {} samples/s",
-            spp_before + session.samples_per_pixel(),
-            si(samples / secs)
-        ));
-        bar.set_position(match args.time {
+        target
+            .bar
+            .set_message(progress(film, spp_before, film.size, start.elapsed().as_secs_f64()));
+        target.bar.set_position(match args.time {
             Some(_) => start.elapsed().as_millis() as u64,
             None => session.frames as u64,
         });
     }
-    bar.finish();
-    reference.absorb(&session.take_accumulation()?)?;
-    reference.seconds += start.elapsed().as_secs_f64() - seconds_saved;
-    reference.write(&out, "reference")?;
-    let png = out.with_extension("png");
-    lightgraph::output::write_png(&png, &reference.image(), args.exposure)?;
-    println!(
-        "wrote {} and {}: {} spp in {:.1} s in all; noise (RMSE of the reference itself) {:.3e}",
-        out.display(),
-        png.display(),
-        reference.samples_per_pixel(),
-        reference.seconds,
-        reference.noise_floor_mse().sqrt()
-    );
+    film.absorb(&session.take_accumulation()?)?;
+    film.seconds += start.elapsed().as_secs_f64() - seconds_saved;
+    Ok(())
+}
+
+/// Renders `run` on the GPUs `spec` names (`--gpus`, lightgraph::multi) into the target's
+/// film, writing it every `--checkpoint` (with the seconds of the runs before this one).
+fn on_several_gpus(args: &ReferenceArgs, run: &Run, spec: &str, target: &mut Target) -> Result<()> {
+    let selectors = super::gpus::gpu_selectors(spec)?;
+    let budget = match (args.time, args.frames) {
+        (Some(t), _) => Budget::Time(t),
+        (None, frames) => Budget::Frames(frames.unwrap_or(0) as u64),
+    };
+    let spp_before = target.film.samples_per_pixel();
+    let frames_before = target.film.frames;
+    let start = Instant::now();
+    let mut saved_at = Instant::now();
+    let (bar, out) = (&target.bar, &target.out);
+    let mut checkpoint_error = None;
+    let shares = render_on_gpus(run, &selectors, budget, &mut target.film, |_, film| {
+        if saved_at.elapsed() >= args.checkpoint {
+            if let Err(e) = film.write(out, "reference") {
+                checkpoint_error.get_or_insert(e);
+            }
+            saved_at = Instant::now();
+        }
+        bar.set_message(progress(film, spp_before, film.size, start.elapsed().as_secs_f64()));
+        bar.set_position(match args.time {
+            Some(_) => start.elapsed().as_millis() as u64,
+            None => film.frames - frames_before,
+        });
+    })?;
+    if let Some(e) = checkpoint_error {
+        return Err(e);
+    }
+    for s in &shares {
+        list_once(&mut target.film.info, "adapter", &s.adapter);
+    }
+    target.film.seconds += start.elapsed().as_secs_f64();
     Ok(())
 }

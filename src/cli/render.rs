@@ -50,7 +50,8 @@ pub struct RenderArgs {
     pub first_frame: u32,
     /// Render on several GPUs at once: `all`, the first N adapters, or a comma-separated list
     /// of adapter indices, PCI bus ids or names (see `lightgraph list`; one may repeat). Each
-    /// GPU claims batches of frames sized to its own speed; the host adds them into one film.
+    /// GPU claims batches of frames sized to its own speed; the host adds them into one film
+    /// (`--adapter` is then not used).
     #[arg(long)]
     pub gpus: Option<String>,
 }

@@ -158,6 +158,35 @@ fn a_run_on_two_devices_equals_it_on_one() {
     assert_eq!((two.frames, two.ranges.clone()), (8, vec![(0, 8)]));
     let worst = largest_difference(&one, &two);
     assert!(worst < 1e-5, "two devices differ from one by {worst:.2e}");
+    // A reference too.
+    let reference = |extra: &[&str], out: &str| {
+        let args = [
+            &[
+                "reference",
+                "--scene",
+                "cornell-diffuse",
+                "--res",
+                "12x8",
+                "--frames",
+                "5",
+            ][..],
+            extra,
+            &["--out", out],
+        ];
+        let run = lightgraph(&args.concat());
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        Reference::read(out.as_ref()).unwrap()
+    };
+    let (one, two) = (
+        reference(&[], &path("ref1.exr")),
+        reference(&["--gpus", "0,0"], &path("ref2.exr")),
+    );
+    assert_eq!((two.frames, two.ranges.clone()), (5, vec![(0, 5)]));
+    let worst = largest_difference(&one, &two);
+    assert!(
+        worst < 1e-5,
+        "a reference on two devices differs from one by {worst:.2e}"
+    );
     let err = fails(&[&base[..], &["--gpus", "0,9", "--out", &path("x.exr")]].concat());
     assert!(
         err.contains("GPU 1 ('9')") && err.contains("no adapter matches '9'"),
