@@ -5,6 +5,8 @@
 
 pub mod assets;
 pub mod bench;
+#[cfg(feature = "mpi")]
+pub mod cluster;
 pub mod compare;
 pub mod metrics;
 pub mod multi;

@@ -27,8 +27,8 @@ pub struct Reference {
     pub seconds: f64,
     /// The [`SETTINGS`] and descriptive entries (layout, adapter) as text.
     pub info: BTreeMap<String, String>,
-    sum: Vec<[f64; 3]>,
-    sum_sq: Vec<[f64; 3]>,
+    pub(crate) sum: Vec<[f64; 3]>,
+    pub(crate) sum_sq: Vec<[f64; 3]>,
 }
 
 impl Reference {
@@ -72,23 +72,17 @@ impl Reference {
         if range.0 >= range.1 {
             return Ok(());
         }
-        if let Some(r) = self.ranges.iter().find(|r| r.0 < range.1 && range.0 < r.1) {
-            bail!(
-                "frames {} overlap frames {} already in the film",
-                range_text(range),
-                range_text(*r)
-            );
-        }
-        self.ranges.push(range);
-        self.ranges.sort_unstable();
-        let mut joined: Vec<(u64, u64)> = Vec::new();
-        for r in self.ranges.drain(..) {
-            match joined.last_mut() {
-                Some(last) if last.1 == r.0 => last.1 = r.1,
-                _ => joined.push(r),
-            }
-        }
-        self.ranges = joined;
+        let mut all = self.ranges.clone();
+        all.push(range);
+        self.ranges = join_ranges(all)?;
+        Ok(())
+    }
+
+    /// Sets the frame indices accumulated to `ranges` (any order; they must not overlap) and
+    /// the frame count to their total.
+    pub fn set_ranges(&mut self, ranges: Vec<(u64, u64)>) -> Result<()> {
+        self.ranges = join_ranges(ranges)?;
+        self.frames = self.ranges.iter().map(|r| r.1 - r.0).sum();
         Ok(())
     }
 
@@ -314,6 +308,26 @@ impl Reference {
     }
 }
 
+/// `ranges` sorted, adjacent ones joined; an error naming two that overlap.
+fn join_ranges(mut ranges: Vec<(u64, u64)>) -> Result<Vec<(u64, u64)>> {
+    ranges.sort_unstable();
+    let mut joined: Vec<(u64, u64)> = Vec::new();
+    for r in ranges.into_iter().filter(|r| r.0 < r.1) {
+        match joined.last_mut() {
+            Some(last) if r.0 < last.1 => {
+                bail!(
+                    "frames {} overlap frames {} already in the film",
+                    range_text(r),
+                    range_text(*last)
+                )
+            }
+            Some(last) if last.1 == r.0 => last.1 = r.1,
+            _ => joined.push(r),
+        }
+    }
+    Ok(joined)
+}
+
 /// A frame range as text: FIRST..END (END excluded).
 fn range_text(r: (u64, u64)) -> String {
     format!("{}..{}", r.0, r.1)
@@ -322,16 +336,16 @@ fn range_text(r: (u64, u64)) -> String {
 /// Parses FIRST..END,... into sorted, disjoint, joined ranges; None if malformed or
 /// overlapping.
 fn parse_ranges(text: &str) -> Option<Vec<(u64, u64)>> {
-    let mut film = Reference::new((0, 0), BTreeMap::new());
+    let mut ranges = Vec::new();
     for item in text.split(',').filter(|s| !s.trim().is_empty()) {
         let (a, b) = item.trim().split_once("..")?;
         let (a, b) = (a.parse::<u64>().ok()?, b.parse::<u64>().ok()?);
         if a >= b {
             return None;
         }
-        film.add_range((a, b)).ok()?;
+        ranges.push((a, b));
     }
-    Some(film.ranges)
+    join_ranges(ranges).ok()
 }
 
 fn number(file: &ExrFile, path: &Path, key: &str) -> Result<f64> {

@@ -7,6 +7,8 @@ pub mod explain;
 pub mod gpus;
 pub mod list;
 pub mod merge;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 pub mod operators;
 pub mod reference;
 pub mod render;

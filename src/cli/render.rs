@@ -54,9 +54,18 @@ pub struct RenderArgs {
     /// (`--adapter` is then not used).
     #[arg(long)]
     pub gpus: Option<String>,
+    /// Render across the ranks of an MPI job (`mpirun -n N lightgraph render --mpi ...`), one
+    /// GPU per rank (the rank's index on its machine, or --adapter); rank 0 writes the film.
+    #[cfg(feature = "mpi")]
+    #[arg(long, conflicts_with = "gpus")]
+    pub mpi: bool,
 }
 
 pub fn render(args: RenderArgs) -> Result<()> {
+    #[cfg(feature = "mpi")]
+    if args.mpi {
+        return super::mpi::render_with_mpi(&args);
+    }
     if let Some(spec) = &args.gpus {
         return super::gpus::render_on_several_gpus(&args, spec);
     }

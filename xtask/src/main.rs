@@ -11,7 +11,7 @@ const INSTALL: &str = "apt-get install -y --no-install-recommends mesa-vulkan-dr
 
 fn usage() -> ExitCode {
     eprintln!(
-        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [cargo test args]           run the whole test suite\n  vulkan                           only make sure a Vulkan driver is installed"
+        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [cargo test args]           run the whole test suite (and the MPI test where mpirun exists)\n  vulkan                           only make sure a Vulkan driver is installed"
     );
     ExitCode::from(2)
 }
@@ -98,6 +98,34 @@ fn cargo(args: &[&str], extra: &[String]) -> ExitCode {
     }
 }
 
+/// The MPI test (`render --mpi` across 2 and 3 ranks), built with the `mpi` feature, where
+/// `mpirun` is installed; a note otherwise.
+fn mpi_test(extra: &[String]) -> ExitCode {
+    let found = Command::new("mpirun")
+        .arg("--version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        eprintln!(
+            "xtask: no mpirun on the PATH: the MPI test is skipped (Debian: apt-get install openmpi-bin libopenmpi-dev libclang-dev)"
+        );
+        return ExitCode::SUCCESS;
+    }
+    cargo(
+        &[
+            "test",
+            "--release",
+            "--package",
+            "lightgraph",
+            "--features",
+            "mpi",
+            "--test",
+            "mpi",
+        ],
+        extra,
+    )
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(command) = args.first() else { return usage() };
@@ -111,7 +139,10 @@ fn main() -> ExitCode {
     }
     match command.as_str() {
         "render" => cargo(&["run", "--release", "--package", "lightgraph", "--", "render"], rest),
-        "test" => cargo(&["test", "--workspace", "--release"], rest),
+        "test" => match cargo(&["test", "--workspace", "--release"], rest) {
+            ExitCode::SUCCESS => mpi_test(rest),
+            failed => failed,
+        },
         _ => ExitCode::SUCCESS,
     }
 }
