@@ -8,7 +8,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::metrics::image_error;
 use lightgraph::multi::{Budget, Run, Share, render_on_gpus};
 use lightgraph::reference::Reference;
-use lightgraph::render::{load_graph, load_scene_with};
+use lightgraph::render::{LoadedScene, SessionOptions, load_graph, load_scene_with};
+use lightgraph_engine::Graph;
+use lightgraph_engine::ir::LayoutDecl;
 use std::time::{Duration, Instant};
 
 /// The adapters `--gpus` names: `all`, the first N, or a comma-separated list of indices, PCI
@@ -63,17 +65,68 @@ fn progress_line(shares: &[Share], film: &Reference, pixels: f64, secs: f64, err
     )
 }
 
+/// What a render shared by GPUs or ranks needs: scene, graph, options and the named layout.
+pub struct Setup {
+    pub scene: LoadedScene,
+    pub graph: Graph,
+    pub opts: SessionOptions,
+    pub layout: String,
+    pub decl: LayoutDecl,
+}
+
+impl Setup {
+    /// Loads what `args` name; `how` is the option that shares the run (for the error when
+    /// the layout is `auto`, which measures on one GPU).
+    pub fn load(args: &RenderArgs, how: &str) -> Result<Setup> {
+        let c = &args.common;
+        if args.layout.as_deref() == Some("auto") {
+            bail!("--layout auto measures layouts on one GPU; name a layout with {how}");
+        }
+        let scene = load_scene_with(c.scene(), c.bvh)?;
+        let graph = load_graph(args.graph.name())?;
+        let opts = options(c, &scene, &graph.constants, args.seed)?;
+        let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
+        Ok(Setup {
+            scene,
+            graph,
+            opts,
+            layout,
+            decl,
+        })
+    }
+
+    /// The run of `args`'s frames.
+    pub fn run(&self, args: &RenderArgs) -> Run<'_> {
+        Run {
+            graph: &self.graph,
+            layout: (&self.layout, &self.decl),
+            scene: &self.scene,
+            options: &self.opts,
+            first_frame: args.first_frame as u64,
+        }
+    }
+
+    /// An empty film with the run's settings.
+    pub fn film(&self, args: &RenderArgs) -> Reference {
+        let size = (self.opts.width, self.opts.height);
+        Reference::new(size, film_settings(args.common.scene(), &self.graph.name, &self.opts))
+    }
+}
+
+/// The budget of `args`: its time, else its frames.
+pub fn budget(args: &RenderArgs) -> Budget {
+    match args.time {
+        Some(t) => Budget::Time(t),
+        None => Budget::Frames(args.frames as u64),
+    }
+}
+
 pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
     let c = &args.common;
-    if args.layout.as_deref() == Some("auto") {
-        bail!("--layout auto measures layouts on one GPU; name a layout with --gpus");
-    }
     let selectors = gpu_selectors(spec)?;
-    let scene = load_scene_with(c.scene(), c.bvh)?;
-    let graph = load_graph(args.graph.name())?;
-    let opts = options(c, &scene, &graph.constants, args.seed)?;
-    let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
-    let (w, h) = (opts.width, opts.height);
+    let setup = Setup::load(args, "--gpus")?;
+    let (graph, layout) = (&setup.graph, &setup.layout);
+    let (w, h) = (setup.opts.width, setup.opts.height);
     let reference = reference_mean(args.reference.as_ref(), (w, h))?;
     eprintln!(
         "{} GPUs ({}) | scene {} | graph {} layout {layout} | {w}x{h}",
@@ -82,27 +135,17 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
         c.scene(),
         graph.name
     );
-    let mut film = Reference::new((w, h), film_settings(c.scene(), &graph.name, &opts));
-    let budget = match args.time {
-        Some(t) => Budget::Time(t),
-        None => Budget::Frames(args.frames as u64),
-    };
+    let mut film = setup.film(args);
     let bar = match args.time {
         Some(t) => ProgressBar::new(t.as_millis() as u64),
         None => ProgressBar::new(args.frames as u64),
     };
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
-    let run = Run {
-        graph: &graph,
-        layout: (&layout, &decl),
-        scene: &scene,
-        options: &opts,
-        first_frame: args.first_frame as u64,
-    };
+    let run = setup.run(args);
     let start = Instant::now();
     let pixels = (w as f64) * (h as f64);
     let (mut error, mut error_at) = (String::new(), None::<Instant>);
-    let shares = render_on_gpus(&run, &selectors, budget, &mut film, |shares, film| {
+    let shares = render_on_gpus(&run, &selectors, budget(args), &mut film, |shares, film| {
         if let Some(r) = &reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {

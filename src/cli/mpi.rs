@@ -1,41 +1,22 @@
 //! `render --mpi` (cargo feature `mpi`): one run across the ranks of an MPI job, one GPU each
 //! (lightgraph::cluster); rank 0 shows the progress and writes the film.
 
-use super::args::*;
+use super::args::si;
+use super::gpus::{Setup, budget};
 use super::render::RenderArgs;
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Result, anyhow};
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::cluster::render_across;
-use lightgraph::multi::{Budget, Run};
-use lightgraph::reference::Reference;
-use lightgraph::render::{load_graph, load_scene_with};
 use std::time::Instant;
 
 pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
-    let c = &args.common;
-    if args.layout.as_deref() == Some("auto") {
-        bail!("--layout auto measures layouts on one GPU; name a layout with --mpi");
-    }
     let universe = mpi::initialize().ok_or_else(|| anyhow!("MPI is initialised already"))?;
     let world = universe.world();
     let root = lightgraph::cluster::place(&world).rank == 0;
-    let scene = load_scene_with(c.scene(), c.bvh)?;
-    let graph = load_graph(args.graph.name())?;
-    let opts = options(c, &scene, &graph.constants, args.seed)?;
-    let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
-    let (w, h) = (opts.width, opts.height);
-    let mut film = Reference::new((w, h), film_settings(c.scene(), &graph.name, &opts));
-    let budget = match args.time {
-        Some(t) => Budget::Time(t),
-        None => Budget::Frames(args.frames as u64),
-    };
-    let run = Run {
-        graph: &graph,
-        layout: (&layout, &decl),
-        scene: &scene,
-        options: &opts,
-        first_frame: args.first_frame as u64,
-    };
+    let setup = Setup::load(args, "--mpi")?;
+    let (w, h) = (setup.opts.width, setup.opts.height);
+    let mut film = setup.film(args);
+    let run = setup.run(args);
     let bar = if root {
         ProgressBar::new(args.time.map_or(args.frames as u64, |t| t.as_millis() as u64))
     } else {
@@ -44,31 +25,38 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
     let pixels = w as f64 * h as f64;
     let start = Instant::now();
-    let (frames_by_rank, rays_by_rank) = render_across(&world, &run, c.adapter.as_deref(), budget, &mut film, |p| {
-        let secs = start.elapsed().as_secs_f64();
-        let per_rank: Vec<String> = p
-            .frames_by_rank
-            .iter()
-            .enumerate()
-            .map(|(r, f)| format!("rank {r} {f}"))
-            .collect();
-        bar.set_message(format!(
-            "frame {} | {} samples/s | frames by rank: {}",
-            p.film.frames,
-            si(p.film.samples_per_pixel() as f64 * pixels / secs),
-            per_rank.join(", ")
-        ));
-        bar.set_position(match args.time {
-            Some(_) => start.elapsed().as_millis() as u64,
-            None => p.film.frames,
-        });
-    })?;
+    let (frames_by_rank, rays_by_rank) = render_across(
+        &world,
+        &run,
+        args.common.adapter.as_deref(),
+        budget(args),
+        &mut film,
+        |p| {
+            let secs = start.elapsed().as_secs_f64();
+            let per_rank: Vec<String> = p
+                .frames_by_rank
+                .iter()
+                .enumerate()
+                .map(|(r, f)| format!("rank {r} {f}"))
+                .collect();
+            bar.set_message(format!(
+                "frame {} | {} samples/s | frames by rank: {}",
+                p.film.frames,
+                si(p.film.samples_per_pixel() as f64 * pixels / secs),
+                per_rank.join(", ")
+            ));
+            bar.set_position(match args.time {
+                Some(_) => start.elapsed().as_millis() as u64,
+                None => p.film.frames,
+            });
+        },
+    )?;
     bar.finish();
     if !root {
         return Ok(());
     }
     let seconds = start.elapsed().as_secs_f64();
-    film.info.insert("layout".into(), layout.clone());
+    film.info.insert("layout".into(), setup.layout.clone());
     film.info.insert("ranks".into(), frames_by_rank.len().to_string());
     film.info
         .insert("rays".into(), rays_by_rank.iter().sum::<u64>().to_string());
