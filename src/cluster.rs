@@ -33,6 +33,20 @@ pub struct Place {
     pub local: usize,
 }
 
+/// What a run across ranks did, as rank 0 knows it.
+#[derive(Debug, Clone, Default)]
+pub struct Outcome {
+    /// Frames each rank rendered.
+    pub frames_by_rank: Vec<u64>,
+    /// Rays each rank traced.
+    pub rays_by_rank: Vec<u64>,
+    /// Seconds the last reduction took to complete (no rendering beside it): the time of one
+    /// film reduction.
+    pub last_reduction_seconds: f64,
+    /// Bytes each rank sent in a reduction.
+    pub reduction_bytes: usize,
+}
+
 /// What rank 0 learns at each reduction.
 pub struct Progress<'a> {
     /// The run's film so far.
@@ -77,7 +91,6 @@ impl Worker<'_> {
         let first = u32::try_from(run.first_frame + a).map_err(|_| anyhow!("frame index past 2^32"))?;
         self.session.jump_to(first)?;
         let stats = self.session.render_frames((b - a) as u32)?;
-        self.film.absorb(&self.session.take_accumulation()?)?;
         self.rays += stats
             .counters
             .iter()
@@ -88,15 +101,16 @@ impl Worker<'_> {
         Ok(())
     }
 
-    /// The rank's contribution to a reduction: its sums, then its blocks and rays in its own
-    /// slots of a vector per rank (zeros elsewhere).
-    fn snapshot(&self, place: Place) -> Vec<f64> {
+    /// The rank's contribution to a reduction: its sums (the GPU's taken over first), then its
+    /// blocks and rays in its own slots of a vector per rank (zeros elsewhere).
+    fn snapshot(&mut self, place: Place) -> Result<Vec<f64>> {
+        self.film.absorb(&self.session.take_accumulation()?)?;
         let mut v: Vec<f64> = self.film.sum.iter().chain(&self.film.sum_sq).flat_map(|p| *p).collect();
         let mut slots = vec![0.0; 2 * place.ranks];
         slots[place.rank] = self.blocks as f64;
         slots[place.ranks + place.rank] = self.rays as f64;
         v.extend(slots);
-        v
+        Ok(v)
     }
 }
 
@@ -140,8 +154,8 @@ pub fn place(world: &impl Communicator) -> Place {
 
 /// Renders `run` within `budget` on every rank of `world`, each on its adapter (`adapter`, or
 /// the rank's node-local index). Rank 0 gets the run's film in `film` and `progress` after
-/// every reduction; the other ranks leave `film` empty. Returns the frames and rays of each
-/// rank (on rank 0; zeros elsewhere).
+/// every reduction; the other ranks leave `film` empty. Returns what the ranks did (on rank
+/// 0; zeros elsewhere).
 pub fn render_across<C: Communicator>(
     world: &C,
     run: &Run,
@@ -149,7 +163,7 @@ pub fn render_across<C: Communicator>(
     budget: Budget,
     film: &mut Reference,
     mut progress: impl FnMut(&Progress),
-) -> Result<(Vec<u64>, Vec<u64>)> {
+) -> Result<Outcome> {
     let place = place(world);
     // More ranks than GPUs on a machine share them in turn.
     let adapters = lightgraph_engine::gpu::adapters().len().max(1);
@@ -178,10 +192,20 @@ pub fn render_across<C: Communicator>(
     let root = world.process_at_rank(0);
     world.barrier();
     let start = Instant::now();
-    let mut result = (vec![0; place.ranks], vec![0; place.ranks]);
+    let mut outcome = Outcome {
+        frames_by_rank: vec![0; place.ranks],
+        rays_by_rank: vec![0; place.ranks],
+        ..Default::default()
+    };
     let mut failure: Option<anyhow::Error> = None;
     for round in 1u32.. {
-        let snapshot = worker.snapshot(place);
+        let snapshot = match worker.snapshot(place) {
+            Ok(v) => v,
+            Err(e) => {
+                eprintln!("error: rank {}: {e:#}", place.rank);
+                world.abort(1)
+            }
+        };
         let mut sums = vec![0.0; snapshot.len()];
         let done_here = u32::from(worker.done || failure.is_some());
         let mut done_ranks = 0u32;
@@ -198,15 +222,18 @@ pub fn render_across<C: Communicator>(
                     failure = Some(e);
                 }
             }
+            let waited = Instant::now();
             films.wait();
             done.wait();
+            outcome.last_reduction_seconds = waited.elapsed().as_secs_f64();
         });
+        outcome.reduction_bytes = 8 * snapshot.len();
         if place.rank == 0 {
-            result = rebuild(film, &sums, run, place, budget)?;
+            (outcome.frames_by_rank, outcome.rays_by_rank) = rebuild(film, &sums, run, place, budget)?;
             progress(&Progress {
                 film,
-                frames_by_rank: &result.0,
-                rays_by_rank: &result.1,
+                frames_by_rank: &outcome.frames_by_rank,
+                rays_by_rank: &outcome.rays_by_rank,
             });
         }
         if done_ranks as usize == place.ranks {
@@ -220,5 +247,5 @@ pub fn render_across<C: Communicator>(
     if let Some(e) = failure {
         bail!("rank {}: {e:#}", place.rank);
     }
-    Ok(result)
+    Ok(outcome)
 }

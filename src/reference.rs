@@ -47,11 +47,10 @@ impl Reference {
     }
 
     /// Adds the frames of a GPU accumulation (see
-    /// [`crate::render::Session::take_accumulation`]); an error if it holds frame indices the
-    /// film has already.
+    /// [`crate::render::Session::take_accumulation`]); an error, and nothing added, if it
+    /// holds frame indices the film has already.
     pub fn absorb(&mut self, taken: &Accumulation) -> Result<()> {
-        let first = taken.first_frame as u64;
-        self.add_range((first, first + taken.frames as u64))?;
+        self.ranges = join_ranges(self.ranges.iter().chain(&taken.ranges).copied().collect())?;
         for ((s, q), (ts, tq)) in self
             .sum
             .iter_mut()
@@ -64,17 +63,6 @@ impl Reference {
             }
         }
         self.frames += taken.frames as u64;
-        Ok(())
-    }
-
-    /// Records the frame indices `range` (half-open) as accumulated.
-    fn add_range(&mut self, range: (u64, u64)) -> Result<()> {
-        if range.0 >= range.1 {
-            return Ok(());
-        }
-        let mut all = self.ranges.clone();
-        all.push(range);
-        self.ranges = join_ranges(all)?;
         Ok(())
     }
 
@@ -107,9 +95,8 @@ impl Reference {
                 self.size.1
             );
         }
-        for r in &other.ranges {
-            self.add_range(*r).map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        }
+        self.ranges = join_ranges(self.ranges.iter().chain(&other.ranges).copied().collect())
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         for (a, b) in self
             .sum
             .iter_mut()
@@ -376,7 +363,7 @@ mod tests {
     /// One pixel's frames `values`, the first of them frame index `first`.
     fn frames_from(first: u32, values: &[[f32; 3]]) -> Accumulation {
         Accumulation {
-            first_frame: first,
+            ranges: vec![(first as u64, first as u64 + values.len() as u64)],
             frames: values.len() as u32,
             sum: vec![
                 values

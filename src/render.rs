@@ -235,8 +235,8 @@ pub struct Image {
 /// squares.
 #[derive(Debug, Clone)]
 pub struct Accumulation {
-    /// Frame index of the first frame summed (the others follow it).
-    pub first_frame: u32,
+    /// The frame indices summed: sorted, disjoint half-open ranges.
+    pub ranges: Vec<(u64, u64)>,
     /// Frames summed.
     pub frames: u32,
     /// Sum of the per-frame estimates (RGB, fourth word unused).
@@ -255,9 +255,9 @@ pub struct Session<'g> {
     /// Frame index of the session's first frame: a resumed render continues the random
     /// streams where the earlier one stopped instead of repeating them.
     pub first_frame: u32,
-    /// Frames whose sums were taken out of the GPU accumulation by
-    /// [`Session::take_accumulation`].
-    taken_frames: u32,
+    /// The frame indices rendered since [`Session::take_accumulation`] last emptied the GPU
+    /// accumulation (what it holds), adjacent ones joined.
+    pending: Vec<(u64, u64)>,
     /// Counter totals.
     pub counters: BTreeMap<String, u64>,
     /// GPU time per kernel, summed over frames.
@@ -338,7 +338,7 @@ impl<'g> Session<'g> {
             options,
             frames: 0,
             first_frame: 0,
-            taken_frames: 0,
+            pending: Vec::new(),
             counters: BTreeMap::new(),
             kernel_seconds: BTreeMap::new(),
             loops_capped: 0,
@@ -356,15 +356,8 @@ impl<'g> Session<'g> {
     }
 
     /// Goes on at frame index `first` instead of the next one: frames claimed out of order
-    /// (by several GPUs sharing a run). The GPU accumulation must be empty (taken), so that
-    /// it holds consecutive frames.
+    /// (by several GPUs or ranks sharing a run). The accumulation records which frames it holds.
     pub fn jump_to(&mut self, first: u32) -> Result<()> {
-        if self.frames != self.taken_frames {
-            bail!(
-                "jump_to with {} frames still in the accumulation",
-                self.frames - self.taken_frames
-            );
-        }
         self.first_frame = first
             .checked_sub(self.frames)
             .ok_or_else(|| anyhow!("frame {first} is before the {} frames rendered", self.frames))?;
@@ -380,6 +373,11 @@ impl<'g> Session<'g> {
         let first = self.first_frame + self.frames;
         let stats = self.instance.run_frames(first, count, self.options.seed)?;
         self.frames += count;
+        let range = (first as u64, first as u64 + count as u64);
+        match self.pending.last_mut() {
+            Some(last) if last.1 == range.0 => last.1 = range.1,
+            _ => self.pending.push(range),
+        }
         for (k, v) in &stats.counters {
             *self.counters.entry(k.clone()).or_insert(0) += v;
         }
@@ -437,8 +435,8 @@ impl<'g> Session<'g> {
     /// frames' estimates and the sums of their squares (RGB and an unused fourth word).
     pub fn accumulation(&self) -> Result<Accumulation> {
         Ok(Accumulation {
-            first_frame: self.first_frame + self.taken_frames,
-            frames: self.frames - self.taken_frames,
+            ranges: self.pending.clone(),
+            frames: self.pending.iter().map(|r| (r.1 - r.0) as u32).sum(),
             sum: bytemuck::pod_collect_to_vec(&self.instance.read("accum")?),
             sum_sq: bytemuck::pod_collect_to_vec(&self.instance.read("accum_sq")?),
         })
@@ -451,7 +449,7 @@ impl<'g> Session<'g> {
         for name in ["accum", "accum_comp", "accum_sq"] {
             self.instance.clear(name)?;
         }
-        self.taken_frames = self.frames;
+        self.pending.clear();
         Ok(taken)
     }
 

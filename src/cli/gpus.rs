@@ -145,7 +145,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
     let start = Instant::now();
     let pixels = (w as f64) * (h as f64);
     let (mut error, mut error_at) = (String::new(), None::<Instant>);
-    let shares = render_on_gpus(&run, &selectors, budget(args), &mut film, |shares, film| {
+    let (shares, merging) = render_on_gpus(&run, &selectors, budget(args), &mut film, |shares, film| {
         if let Some(r) = &reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
@@ -160,7 +160,9 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
         });
     })?;
     bar.finish();
-    let seconds = start.elapsed().as_secs_f64();
+    // The run's time once every GPU was ready (each GPU's set-up is not on the clock, as a
+    // one-GPU render's is not).
+    let seconds = merging.run_seconds;
     let mut adapters: Vec<String> = shares.iter().map(|s| s.adapter.clone()).collect();
     adapters.dedup();
     film.info.insert("layout".into(), layout.clone());
@@ -195,6 +197,11 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
             si(s.rays as f64 / s.busy_seconds.max(1e-9))
         );
     }
+    eprintln!(
+        "host merging: {} batches, {:.2} ms each",
+        merging.batches,
+        1e3 * merging.seconds / merging.batches.max(1) as f64
+    );
     println!("wrote {} and {}", args.out.display(), png.display());
     Ok(())
 }

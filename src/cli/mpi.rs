@@ -25,7 +25,7 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
     let pixels = w as f64 * h as f64;
     let start = Instant::now();
-    let (frames_by_rank, rays_by_rank) = render_across(
+    let outcome = render_across(
         &world,
         &run,
         args.common.adapter.as_deref(),
@@ -57,9 +57,10 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     }
     let seconds = start.elapsed().as_secs_f64();
     film.info.insert("layout".into(), setup.layout.clone());
+    let frames_by_rank = &outcome.frames_by_rank;
     film.info.insert("ranks".into(), frames_by_rank.len().to_string());
     film.info
-        .insert("rays".into(), rays_by_rank.iter().sum::<u64>().to_string());
+        .insert("rays".into(), outcome.rays_by_rank.iter().sum::<u64>().to_string());
     film.seconds = seconds;
     film.write(&args.out, "render")?;
     let png = args.out.with_extension("png");
@@ -71,6 +72,11 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
         frames_by_rank.len(),
         si(film.samples_per_pixel() as f64 * pixels / seconds),
         frames_by_rank
+    );
+    eprintln!(
+        "last film reduction: {:.1} MB a rank in {:.1} ms",
+        outcome.reduction_bytes as f64 / 1e6,
+        1e3 * outcome.last_reduction_seconds
     );
     println!("wrote {} and {}", args.out.display(), png.display());
     Ok(())

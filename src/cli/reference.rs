@@ -252,7 +252,7 @@ fn on_several_gpus(args: &ReferenceArgs, run: &Run, spec: &str, target: &mut Tar
     let mut saved_at = Instant::now();
     let (bar, out) = (&target.bar, &target.out);
     let mut checkpoint_error = None;
-    let shares = render_on_gpus(run, &selectors, budget, &mut target.film, |_, film| {
+    let (shares, _) = render_on_gpus(run, &selectors, budget, &mut target.film, |_, film| {
         if saved_at.elapsed() >= args.checkpoint {
             if let Err(e) = film.write(out, "reference") {
                 checkpoint_error.get_or_insert(e);

@@ -12,6 +12,11 @@ use lightgraph_engine::ConstValue;
 use std::collections::BTreeMap;
 
 const SIZE: u32 = 16;
+
+/// The largest relative difference float rounding gives between two renders of the same frames
+/// by an estimator that splats light sub-paths with atomic float adds (see
+/// `shards_merged_equal_one_run`).
+const SPLAT_ROUNDING: f64 = 2e-4;
 const SEED: u32 = 5;
 
 /// Frames `first .. first + frames` of `graph` in `layout` on `scene`, as a film.
@@ -49,8 +54,11 @@ fn shards_merged_equal_one_run() {
     // Six frames in one session against shards of 2 and 4 frames (unequal on purpose). The
     // GPU sums each run in f32 (with compensation), so the means agree to float rounding:
     // 1e-5 relative is far below the noise of a 6-frame render (percents) and far above
-    // rounding. A shard that repeated the first frames, or a radius that restarted with each
-    // shard, would differ by the noise.
+    // rounding, except where light sub-paths splat into pixels with atomic float adds in
+    // whatever order the threads run (LVC-BPT): many adds a pixel, each rounding to 6e-8,
+    // measured up to 4.6e-5 on a dim pixel, so SPLAT_ROUNDING there. A shard that repeated
+    // the first frames, or a radius that restarted with each shard, would differ by the noise
+    // (over 1e-3, checked below).
     let pm = [("PM_RADIUS", ConstValue::F32(0.05))];
     type Run<'a> = (&'a str, &'a str, &'a str, &'a [(&'a str, ConstValue)]);
     let runs: [Run; 3] = [
@@ -67,8 +75,9 @@ fn shards_merged_equal_one_run() {
             .unwrap();
         assert_eq!((merged.frames, merged.ranges.clone()), (6, vec![(0, 6)]));
         let worst = largest_difference(&merged, &whole);
+        let tolerance = if graph == "bpt-lvc" { SPLAT_ROUNDING } else { 1e-5 };
         assert!(
-            worst < 1e-5,
+            worst < tolerance,
             "{graph}: the merged shards differ from one run by {worst:.2e}"
         );
         let other_frames = film_of(&scene, graph, layout, (6, 6), constants);
@@ -157,7 +166,7 @@ fn a_run_on_two_devices_equals_it_on_one() {
     );
     assert_eq!((two.frames, two.ranges.clone()), (8, vec![(0, 8)]));
     let worst = largest_difference(&one, &two);
-    assert!(worst < 1e-5, "two devices differ from one by {worst:.2e}");
+    assert!(worst < SPLAT_ROUNDING, "two devices differ from one by {worst:.2e}");
     // A reference too.
     let reference = |extra: &[&str], out: &str| {
         let args = [
