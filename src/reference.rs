@@ -464,15 +464,22 @@ mod tests {
     fn films_that_do_not_match_are_refused_each_with_its_reason() {
         let path = Path::new("shard-1.exr");
         let a = film(info(), 0, &[[1.0; 3]]);
-        let mut other_seed = info();
-        other_seed.insert("seed".into(), "7".into());
-        let mut other_constants = info();
-        other_constants.insert("constants".into(), "MAX_PATH_LENGTH=3".into());
+        // Each setting that defines the estimate, changed alone.
+        for key in SETTINGS {
+            let mut other = info();
+            other.insert(key.to_string(), "other".into());
+            let e = a
+                .clone()
+                .merge(&film(other, 1, &[[1.0; 3]]), path)
+                .unwrap_err()
+                .to_string();
+            let value = &info()[key];
+            let expected = format!("{key} is 'other' there, '{value}' here");
+            assert!(e.contains("shard-1.exr") && e.contains(&expected), "{e}");
+        }
         let mut wide = film(info(), 1, &[[1.0; 3]]);
         wide.size = (2, 1);
         for (b, expected) in [
-            (film(other_seed, 1, &[[1.0; 3]]), "seed is '7' there, 'seed-value' here"),
-            (film(other_constants, 1, &[[1.0; 3]]), "constants is"),
             (wide, "the film is 2x1, the others 1x1"),
             (film(info(), 0, &[[1.0; 3]]), "frames 0..1 overlap frames 0..1"),
         ] {
