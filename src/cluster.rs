@@ -152,6 +152,13 @@ pub fn place(world: &impl Communicator) -> Place {
     }
 }
 
+/// The adapter of the rank at `place`: `adapter` if given, else its node-local index (more
+/// ranks than GPUs on a machine share them in turn).
+pub fn rank_adapter(place: &Place, adapter: Option<&str>) -> String {
+    let adapters = lightgraph_engine::gpu::adapters().len().max(1);
+    adapter.map_or_else(|| (place.local % adapters).to_string(), String::from)
+}
+
 /// Renders `run` within `budget` on every rank of `world`, each on its adapter (`adapter`, or
 /// the rank's node-local index). Rank 0 gets the run's film in `film` and `progress` after
 /// every reduction; the other ranks leave `film` empty. Returns what the ranks did (on rank
@@ -165,9 +172,7 @@ pub fn render_across<C: Communicator>(
     mut progress: impl FnMut(&Progress),
 ) -> Result<Outcome> {
     let place = place(world);
-    // More ranks than GPUs on a machine share them in turn.
-    let adapters = lightgraph_engine::gpu::adapters().len().max(1);
-    let selector = adapter.map_or_else(|| (place.local % adapters).to_string(), String::from);
+    let selector = rank_adapter(&place, adapter);
     let (layout, decl) = run.layout;
     let opened = Gpu::new(Some(&selector)).map_err(anyhow::Error::from);
     let session = opened

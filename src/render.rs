@@ -280,7 +280,9 @@ impl<'g> Session<'g> {
         Self::with_layout(gpu, graph, layout, decl, scene, options)
     }
 
-    /// Plans, compiles and instantiates `graph` in the layout `decl` (named `layout`).
+    /// Plans, compiles and instantiates `graph` in the layout `decl` (named `layout`). The
+    /// graph's measured constants not given in the options are measured first
+    /// ([`measure_constants`]).
     pub fn with_layout(
         gpu: &'g Gpu,
         graph: &Graph,
@@ -289,47 +291,13 @@ impl<'g> Session<'g> {
         scene: &LoadedScene,
         options: SessionOptions,
     ) -> Result<Session<'g>> {
-        if options.width == 0 || options.height == 0 || options.samples_per_frame == 0 {
-            bail!("resolution and samples per frame must be at least 1");
-        }
-        let paths = options.width as u64 * options.height as u64 * options.samples_per_frame as u64;
-        if paths > u32::MAX as u64 {
-            bail!("{paths} paths per frame is more than 2^32; use fewer samples per frame");
-        }
-        let plan = Plan::with_decl(graph, layout, options.layout.apply(decl))?;
-        let flags = kernel_flags(device_flags(gpu), scene, options.layout.all_features);
-        let mut spec = specialization(graph, &scene.scene, &options, flags);
-        let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
-        // The scene offers every scene resource; a graph takes those it declares.
-        let mut externals = scene.compiled.resources(&camera);
-        externals.retain(|name, _| {
-            graph
-                .resources
-                .get(name)
-                .is_some_and(|r| r.scope == lightgraph_engine::ir::Scope::External)
-        });
-        // Measured constants (unless given): one frame with the measuring constants set.
-        for (name, m) in &graph.measured {
-            if options.constants.contains_key(name) {
-                continue;
-            }
-            let mut measuring = spec.clone();
-            measuring.constants.extend(m.set.clone());
-            let program = Program::compile(&plan, &measuring, &options.layout.target(gpu))?;
-            let mut instance = Instance::new(gpu, program, &externals)
-                .with_context(|| format!("measuring '{name}' of graph '{}' in layout '{layout}'", graph.name))?;
-            let stats = instance.run_frames(0, 1, options.seed)?;
-            let (a, b) = (stats.counters[&m.ratio.0], stats.counters[&m.ratio.1]);
-            if b == 0 {
-                bail!(
-                    "measuring '{name}' of graph '{}': counter '{}' stayed 0 (no light in the scene?)",
-                    graph.name,
-                    m.ratio.1
-                );
-            }
-            spec.constants
-                .insert(name.clone(), ConstValue::F32((a as f64 / b as f64) as f32));
-        }
+        let Prepared {
+            plan,
+            mut spec,
+            externals,
+        } = prepare(gpu, graph, layout, decl, scene, &options)?;
+        let measured = measure_prepared(gpu, graph, layout, (&plan, &spec, &externals), &options)?;
+        spec.constants.extend(measured);
         let program = Program::compile(&plan, &spec, &options.layout.target(gpu))?;
         let instance = Instance::new(gpu, program, &externals)
             .with_context(|| format!("instantiating graph '{}' in layout '{layout}'", graph.name))?;
@@ -484,4 +452,94 @@ impl<'g> Session<'g> {
             variance,
         })
     }
+}
+
+/// What a session is compiled from: the plan, the specialization and the scene's resources
+/// the graph declares.
+struct Prepared {
+    plan: Plan,
+    spec: Specialization,
+    externals: BTreeMap<String, Vec<u8>>,
+}
+
+/// Checks the options and plans and specializes `graph` in the layout `decl` for `scene`.
+fn prepare(
+    gpu: &Gpu,
+    graph: &Graph,
+    layout: &str,
+    decl: LayoutDecl,
+    scene: &LoadedScene,
+    options: &SessionOptions,
+) -> Result<Prepared> {
+    if options.width == 0 || options.height == 0 || options.samples_per_frame == 0 {
+        bail!("resolution and samples per frame must be at least 1");
+    }
+    let paths = options.width as u64 * options.height as u64 * options.samples_per_frame as u64;
+    if paths > u32::MAX as u64 {
+        bail!("{paths} paths per frame is more than 2^32; use fewer samples per frame");
+    }
+    let plan = Plan::with_decl(graph, layout, options.layout.apply(decl))?;
+    let flags = kernel_flags(device_flags(gpu), scene, options.layout.all_features);
+    let spec = specialization(graph, &scene.scene, options, flags);
+    let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
+    // The scene offers every scene resource; a graph takes those it declares.
+    let mut externals = scene.compiled.resources(&camera);
+    externals.retain(|name, _| {
+        graph
+            .resources
+            .get(name)
+            .is_some_and(|r| r.scope == lightgraph_engine::ir::Scope::External)
+    });
+    Ok(Prepared { plan, spec, externals })
+}
+
+/// Measures the graph's measured constants that `options` does not give (LVC-BPT's average
+/// light sub-path length): one frame each with its measuring constants set. Runs that are
+/// merged (shards, GPUs, ranks, a resumed reference) must share one measurement, or they
+/// render different estimators: measure once and put the values into every run's constants.
+pub fn measure_constants(
+    gpu: &Gpu,
+    graph: &Graph,
+    layout: &str,
+    decl: LayoutDecl,
+    scene: &LoadedScene,
+    options: &SessionOptions,
+) -> Result<BTreeMap<String, ConstValue>> {
+    if graph.measured.keys().all(|name| options.constants.contains_key(name)) {
+        return Ok(BTreeMap::new());
+    }
+    let Prepared { plan, spec, externals } = prepare(gpu, graph, layout, decl, scene, options)?;
+    measure_prepared(gpu, graph, layout, (&plan, &spec, &externals), options)
+}
+
+/// [`measure_constants`] on a prepared plan and specialization.
+fn measure_prepared(
+    gpu: &Gpu,
+    graph: &Graph,
+    layout: &str,
+    (plan, spec, externals): (&Plan, &Specialization, &BTreeMap<String, Vec<u8>>),
+    options: &SessionOptions,
+) -> Result<BTreeMap<String, ConstValue>> {
+    let mut measured = BTreeMap::new();
+    for (name, m) in &graph.measured {
+        if options.constants.contains_key(name) {
+            continue;
+        }
+        let mut measuring = spec.clone();
+        measuring.constants.extend(m.set.clone());
+        let program = Program::compile(plan, &measuring, &options.layout.target(gpu))?;
+        let mut instance = Instance::new(gpu, program, externals)
+            .with_context(|| format!("measuring '{name}' of graph '{}' in layout '{layout}'", graph.name))?;
+        let stats = instance.run_frames(0, 1, options.seed)?;
+        let (a, b) = (stats.counters[&m.ratio.0], stats.counters[&m.ratio.1]);
+        if b == 0 {
+            bail!(
+                "measuring '{name}' of graph '{}': counter '{}' stayed 0 (no light in the scene?)",
+                graph.name,
+                m.ratio.1
+            );
+        }
+        measured.insert(name.clone(), ConstValue::F32((a as f64 / b as f64) as f32));
+    }
+    Ok(measured)
 }

@@ -11,8 +11,9 @@ use std::process::Command;
 
 const BIN: &str = env!("CARGO_BIN_EXE_lightgraph");
 
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("lightgraph-mpi-{}", std::process::id()));
+/// A fresh folder of this test process named `name`.
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("lightgraph-mpi-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }
@@ -20,19 +21,26 @@ fn dir() -> PathBuf {
 /// `lightgraph render` of 40 frames (seed 3, the diffuse box at 16x12) into `out`, through
 /// `mpirun -n ranks` when given.
 fn render(ranks: Option<u32>, out: &std::path::Path) -> Reference {
+    let args = ["--scene", "cornell-diffuse", "--frames", "40"];
+    render_with(ranks, &args, out)
+}
+
+/// `lightgraph render` at 16x12 with seed 3 and `extra` arguments into `out`, through
+/// `mpirun -n ranks` when given.
+fn render_with(ranks: Option<u32>, extra: &[&str], out: &std::path::Path) -> Reference {
     let args = [
-        "render",
-        "--scene",
-        "cornell-diffuse",
-        "--res",
-        "16x12",
-        "--frames",
-        "40",
-        "--seed",
-        "3",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+        &[
+            "render",
+            "--res",
+            "16x12",
+            "--seed",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        extra,
+    ]
+    .concat();
     let output = match ranks {
         None => Command::new(BIN).args(args).output().unwrap(),
         Some(n) => Command::new("mpirun")
@@ -52,21 +60,46 @@ fn render(ranks: Option<u32>, out: &std::path::Path) -> Reference {
 
 #[test]
 fn ranks_together_render_the_film_of_one_process() {
-    let d = dir();
+    let d = dir("pt");
     let one = render(None, &d.join("one.exr"));
     for n in [2, 3] {
         let film = render(Some(n), &d.join(format!("ranks-{n}.exr")));
         assert_eq!((film.frames, film.ranges.clone()), (40, vec![(0, 40)]), "{n} ranks");
         assert_eq!(film.samples_per_pixel(), one.samples_per_pixel());
-        let (a, b) = (film.mean(), one.mean());
-        let worst = a
-            .iter()
-            .zip(&b)
-            .flat_map(|(p, q)| {
-                (0..3).map(move |c| (p[c] - q[c]).abs() as f64 / p[c].abs().max(q[c].abs()).max(1e-3) as f64)
-            })
-            .fold(0.0, f64::max);
+        let worst = largest_difference(&film, &one);
         assert!(worst < 1e-5, "{n} ranks differ from one process by {worst:.2e}");
     }
+    std::fs::remove_dir_all(&d).ok();
+}
+
+/// The largest difference of two films' means relative to the larger (floored at 1e-3).
+fn largest_difference(a: &Reference, b: &Reference) -> f64 {
+    a.mean()
+        .iter()
+        .zip(&b.mean())
+        .flat_map(|(p, q)| {
+            (0..3).map(move |c| (p[c] - q[c]).abs() as f64 / p[c].abs().max(q[c].abs()).max(1e-3) as f64)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// LVC-BPT measures its average light sub-path length before the first frame: rank 0 measures
+/// it and gives it to every rank, and the film records it, so the ranks render one estimator
+/// and the film equals a process given the same value (to the rounding of the splats' atomic
+/// float sums: 2e-4, as tests/integration/shards.rs explains).
+#[test]
+fn ranks_share_rank_zeros_measured_constant() {
+    let d = dir("lvc");
+    let base = ["--scene", "cornell-glossy-point", "--graph", "bpt-lvc", "--frames", "8"];
+    let ranks = render_with(Some(2), &base, &d.join("ranks.exr"));
+    let constants = ranks.info["constants"].clone();
+    let measured = constants
+        .split_whitespace()
+        .find(|w| w.starts_with("LVC_AVERAGE_LENGTH="))
+        .unwrap_or_else(|| panic!("the film does not record the measured constant: '{constants}'"));
+    let one = render_with(None, &[&base[..], &["--set", measured]].concat(), &d.join("one.exr"));
+    assert_eq!(one.info["constants"], constants);
+    let worst = largest_difference(&ranks, &one);
+    assert!(worst < 2e-4, "2 ranks differ from one process by {worst:.2e}");
     std::fs::remove_dir_all(&d).ok();
 }

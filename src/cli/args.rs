@@ -6,7 +6,7 @@ use lightgraph::reference::Reference;
 use lightgraph::render::{LayoutOverrides, LoadedScene, SessionOptions};
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::ir::StateStorage;
-use lightgraph_engine::{ConstValue, Graph, Plan};
+use lightgraph_engine::{ConstValue, Gpu, Graph, Plan};
 use lightgraph_scenes::bvh::BvhKind;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -202,6 +202,25 @@ pub fn check_size(reference: &Reference, path: &Path, size: (u32, u32)) -> Resul
             reference.size.1
         );
     }
+    Ok(())
+}
+
+/// Puts the graph's measured constants (those `opts` does not give) into `opts`, measured
+/// once on the GPU `adapter`, so that every session and GPU of a run, and the film's settings,
+/// share one measurement (see [`lightgraph::render::measure_constants`]).
+pub fn measure_into(
+    opts: &mut SessionOptions,
+    graph: &Graph,
+    (layout, decl): (&str, &LayoutDecl),
+    scene: &LoadedScene,
+    adapter: Option<&str>,
+) -> Result<()> {
+    if graph.measured.keys().all(|name| opts.constants.contains_key(name)) {
+        return Ok(());
+    }
+    let gpu = Gpu::new(adapter)?;
+    let measured = lightgraph::render::measure_constants(&gpu, graph, layout, decl.clone(), scene, opts)?;
+    opts.constants.extend(measured);
     Ok(())
 }
 

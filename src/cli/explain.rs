@@ -65,7 +65,7 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
         };
         for name in graph.measured.keys() {
             match (&session, program.constants().get(name)) {
-                (Some(_), Some(v)) => println!("measured {name} = {v:?}"),
+                (Some(_), Some(v)) => println!("measured {name} = {v}"),
                 _ => println!("{name} not measured (no GPU): sizes that depend on it are shown for its default"),
             }
         }

@@ -124,7 +124,16 @@ pub fn budget(args: &RenderArgs) -> Budget {
 pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
     let c = &args.common;
     let selectors = gpu_selectors(spec)?;
-    let setup = Setup::load(args, "--gpus")?;
+    let mut setup = Setup::load(args, "--gpus")?;
+    // One measurement shared by every GPU (each measuring its own could differ).
+    let first = selectors.first().map(String::as_str);
+    measure_into(
+        &mut setup.opts,
+        &setup.graph,
+        (&setup.layout, &setup.decl),
+        &setup.scene,
+        first,
+    )?;
     let (graph, layout) = (&setup.graph, &setup.layout);
     let (w, h) = (setup.opts.width, setup.opts.height);
     let reference = reference_mean(args.reference.as_ref(), (w, h))?;

@@ -1,19 +1,24 @@
 //! `render --mpi` (cargo feature `mpi`): one run across the ranks of an MPI job, one GPU each
 //! (lightgraph::cluster); rank 0 shows the progress and writes the film.
 
+use super::args::measure_into;
 use super::args::si;
 use super::gpus::{Setup, budget};
 use super::render::RenderArgs;
 use anyhow::{Result, anyhow};
 use indicatif::{ProgressBar, ProgressStyle};
-use lightgraph::cluster::render_across;
+use lightgraph::cluster::{place, rank_adapter, render_across};
+use lightgraph_engine::ConstValue;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
 use std::time::Instant;
 
 pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     let universe = mpi::initialize().ok_or_else(|| anyhow!("MPI is initialised already"))?;
     let world = universe.world();
-    let root = lightgraph::cluster::place(&world).rank == 0;
-    let setup = Setup::load(args, "--mpi")?;
+    let root = place(&world).rank == 0;
+    let mut setup = Setup::load(args, "--mpi")?;
+    share_measured(&world, &mut setup, args.common.adapter.as_deref());
     let (w, h) = (setup.opts.width, setup.opts.height);
     let mut film = setup.film(args);
     let run = setup.run(args);
@@ -80,4 +85,40 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     );
     println!("wrote {} and {}", args.out.display(), png.display());
     Ok(())
+}
+
+/// Rank 0 measures the graph's measured constants that the options do not give (on its GPU)
+/// and sends them to every rank, so that all ranks render one estimator and the film records
+/// the values. A failed measurement ends the job.
+fn share_measured(world: &SimpleCommunicator, setup: &mut Setup, adapter: Option<&str>) {
+    let opts = &setup.opts;
+    let names: Vec<String> = setup
+        .graph
+        .measured
+        .keys()
+        .filter(|name| !opts.constants.contains_key(*name))
+        .cloned()
+        .collect();
+    if names.is_empty() {
+        return;
+    }
+    let place = place(world);
+    let mut values = vec![0f32; names.len()];
+    if place.rank == 0 {
+        let selector = rank_adapter(&place, adapter);
+        let run = (setup.layout.as_str(), &setup.decl);
+        if let Err(e) = measure_into(&mut setup.opts, &setup.graph, run, &setup.scene, Some(&selector)) {
+            eprintln!("error: rank 0: {e:#}");
+            world.abort(1)
+        }
+        for (value, name) in values.iter_mut().zip(&names) {
+            if let Some(ConstValue::F32(v)) = setup.opts.constants.get(name) {
+                *value = *v;
+            }
+        }
+    }
+    world.process_at_rank(0).broadcast_into(&mut values[..]);
+    for (name, value) in names.into_iter().zip(values) {
+        setup.opts.constants.insert(name, ConstValue::F32(value));
+    }
 }

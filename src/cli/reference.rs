@@ -2,6 +2,7 @@
 //! written as a reference EXR and resumable.
 
 use super::args::*;
+use super::gpus::gpu_selectors;
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -126,8 +127,14 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
     let scene = load_scene_with(c.scene(), c.bvh)?;
     let graph = load_graph(args.graph.name())?;
     let seed = args.seed.unwrap_or(REFERENCE_SEED);
-    let opts = options(c, &scene, &graph.constants, seed)?;
+    let mut opts = options(c, &scene, &graph.constants, seed)?;
     let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
+    // One measurement for every GPU and for the film (a resumed film brings its own).
+    let first_gpu = match &args.gpus {
+        Some(spec) => gpu_selectors(spec)?.into_iter().next(),
+        None => c.adapter.clone(),
+    };
+    measure_into(&mut opts, &graph, (&layout, &decl), &scene, first_gpu.as_deref())?;
     let size = (opts.width, opts.height);
     let info = film_settings(c.scene(), args.graph.name(), &opts);
     let mut film = match resumed {

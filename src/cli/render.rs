@@ -73,7 +73,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let scene = load_scene_with(c.scene(), c.bvh)?;
     let graph = load_graph(args.graph.name())?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
-    let opts = options(c, &scene, &graph.constants, args.seed)?;
+    let mut opts = options(c, &scene, &graph.constants, args.seed)?;
     let (layout, decl) = match args.layout.as_deref() {
         Some("auto") => {
             eprintln!(
@@ -101,6 +101,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
         }
         name => named_layout(&graph, name)?,
     };
+    // Measured once, so that the film records the value (shards must share it to merge).
+    let measured = lightgraph::render::measure_constants(&gpu, &graph, &layout, decl.clone(), &scene, &opts)?;
+    opts.constants.extend(measured);
     let (w, h) = (opts.width, opts.height);
     eprintln!(
         "{} | scene {} ({} primitives, {} lights, loaded in {:.2} s) | graph {} layout {} | {w}x{h}",

@@ -10,7 +10,7 @@
 /// Frames per render: independent estimates for the standard errors.
 const FRAMES: u32 = 48;
 
-use crate::common::{largest_relative_difference, render, render_with};
+use crate::common::{borrowed, largest_relative_difference, measured, render, render_with};
 use crate::frames::{Frames, block_means, render_frames, worst_z};
 use lightgraph::render::{LoadedScene, load_graph, load_scene};
 use lightgraph_engine::ConstValue;
@@ -137,9 +137,12 @@ fn layouts_match(graph: &str, reference_layout: &str, others: &[&str]) {
     }
     for name in ["cornell-glossy-point", "cornell-glossy-background"] {
         let scene = load_scene(name).unwrap();
-        let reference = render(&scene, graph, reference_layout, (16, 16), 2, 2, 42, &[]);
+        // One measurement of the measured constants (LVC-BPT's) for every layout.
+        let owned = measured(&scene, graph, reference_layout, ((16, 16), 2, 42), &[]);
+        let constants = &borrowed(&owned)[..];
+        let reference = render(&scene, graph, reference_layout, (16, 16), 2, 2, 42, constants);
         for (other_graph, layout) in &layouts {
-            let other = render(&scene, other_graph, layout, (16, 16), 2, 2, 42, &[]);
+            let other = render(&scene, other_graph, layout, (16, 16), 2, 2, 42, constants);
             assert_eq!(
                 reference.counters, other.counters,
                 "{other_graph} {name}, {layout}: different rays"

@@ -47,6 +47,29 @@ pub fn options(
     }
 }
 
+/// The graph's measured constants (LVC-BPT's average light sub-path length) for `scene` in
+/// `layout` at `size` and `spp` with `seed` and `constants`, measured once: runs that must
+/// render the same image are given one measurement (on lavapipe the measuring frame's count
+/// can differ between sessions, see the README, Testing).
+pub fn measured(
+    scene: &LoadedScene,
+    graph: &str,
+    layout: &str,
+    (size, spp, seed): ((u32, u32), u32, u32),
+    constants: &[(&str, ConstValue)],
+) -> Vec<(String, ConstValue)> {
+    let loaded = load_graph(graph).unwrap();
+    let decl = Plan::new(&loaded, layout).unwrap().layout;
+    let opts = options(size, spp, seed, constants, Default::default());
+    let measured = lightgraph::render::measure_constants(gpu(), &loaded, layout, decl, scene, &opts).unwrap();
+    measured.into_iter().collect()
+}
+
+/// `owned` constants as the `(&str, value)` pairs the render helpers take.
+pub fn borrowed(owned: &[(String, ConstValue)]) -> Vec<(&str, ConstValue)> {
+    owned.iter().map(|(k, v)| (k.as_str(), *v)).collect()
+}
+
 /// Renders `scene` with `graph` in `layout` with the layout options `overrides`: `size`
 /// pixels, `spp` samples per pixel per frame, `frames` frames, seed `seed`, constant overrides
 /// `constants`.

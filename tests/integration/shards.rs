@@ -5,7 +5,7 @@
 //! on several GPUs (`render --gpus`, here two devices of lavapipe) equals it on one.
 
 use crate::cli::{fails, lightgraph, temp_dir};
-use crate::common::{gpu, options};
+use crate::common::{borrowed, gpu, measured, options};
 use lightgraph::reference::Reference;
 use lightgraph::render::{LoadedScene, Session, load_graph, load_scene};
 use lightgraph_engine::ConstValue;
@@ -56,8 +56,11 @@ fn shards_merged_equal_one_run() {
     // 1e-5 relative is far below the noise of a 6-frame render (percents) and far above
     // rounding, except where light sub-paths splat into pixels with atomic float adds in
     // whatever order the threads run (LVC-BPT): many adds a pixel, each rounding to 6e-8,
-    // measured up to 4.6e-5 on a dim pixel, so SPLAT_ROUNDING there. A shard that repeated
-    // the first frames, or a radius that restarted with each shard, would differ by the noise
+    // measured up to 4.6e-5 on a dim pixel, so SPLAT_ROUNDING there. LVC-BPT's measured
+    // average sub-path length is measured once and given to every shard (as the CLI's films
+    // record it): on lavapipe the measuring frame's count can differ between sessions (README,
+    // Testing), and other values weight the strategies differently. A shard that repeated the
+    // first frames, or a radius that restarted with each shard, would differ by the noise
     // (over 1e-3, checked below).
     let pm = [("PM_RADIUS", ConstValue::F32(0.05))];
     type Run<'a> = (&'a str, &'a str, &'a str, &'a [(&'a str, ConstValue)]);
@@ -68,6 +71,9 @@ fn shards_merged_equal_one_run() {
     ];
     for (graph, layout, scene_name, constants) in runs {
         let scene = load_scene(scene_name).unwrap();
+        let mut owned: Vec<(String, ConstValue)> = constants.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+        owned.extend(measured(&scene, graph, layout, ((SIZE, SIZE), 2, SEED), constants));
+        let constants = &borrowed(&owned)[..];
         let whole = film_of(&scene, graph, layout, (0, 6), constants);
         let mut merged = film_of(&scene, graph, layout, (0, 2), constants);
         merged
@@ -153,7 +159,16 @@ fn a_run_on_two_devices_equals_it_on_one() {
     ];
     let one = lightgraph(&[&base[..], &["--out", &path("one.exr")]].concat());
     assert!(one.status.success(), "{}", String::from_utf8_lossy(&one.stderr));
-    let two = lightgraph(&[&base[..], &["--gpus", "0,0", "--out", &path("two.exr")]].concat());
+    // The film records the measured average sub-path length; the run on two devices is given
+    // it (as shards are), so both render one estimator.
+    let constants = Reference::read(&dir.join("one.exr")).unwrap().info["constants"].clone();
+    let measured = constants
+        .split_whitespace()
+        .find(|w| w.starts_with("LVC_AVERAGE_LENGTH="))
+        .unwrap_or_else(|| panic!("the film does not record the measured constant: '{constants}'"))
+        .to_string();
+    let set = ["--set", measured.as_str()];
+    let two = lightgraph(&[&base[..], &set, &["--gpus", "0,0", "--out", &path("two.exr")]].concat());
     let stderr = String::from_utf8_lossy(&two.stderr);
     assert!(two.status.success(), "{stderr}");
     assert!(
@@ -165,6 +180,7 @@ fn a_run_on_two_devices_equals_it_on_one() {
         Reference::read(&dir.join("two.exr")).unwrap(),
     );
     assert_eq!((two.frames, two.ranges.clone()), (8, vec![(0, 8)]));
+    assert_eq!(one.info["constants"], two.info["constants"]);
     let worst = largest_difference(&one, &two);
     assert!(worst < SPLAT_ROUNDING, "two devices differ from one by {worst:.2e}");
     // A reference too.
