@@ -108,7 +108,8 @@ pub fn sample_times(first: f64, budget: f64, per_decade: u32) -> Vec<f64> {
 
 /// Renders `graph` in `layout` (the run called `label`) for `budget` on its clock and samples
 /// its error against `reference` after the first frame, then at log-spaced times (see
-/// [`sample_times`]) and after the last frame; `progress` sees the clock and the latest error.
+/// [`sample_times`]) and after the last frame; `progress` sees the clock, the latest error and
+/// the image it was measured on.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     gpu: &Gpu,
@@ -119,7 +120,7 @@ pub fn run(
     budget: Duration,
     reference: &[[f32; 3]],
     per_decade: u32,
-    mut progress: impl FnMut(f64, Option<&ErrorSample>),
+    mut progress: impl FnMut(f64, Option<&ErrorSample>, &[[f32; 3]]),
 ) -> Result<RunResult> {
     let mut clock = Stopwatch::started();
     let mut session = Session::new(gpu, graph, layout, scene, options)?;
@@ -137,8 +138,9 @@ pub fn run(
             samples_per_pixel: session.samples_per_pixel(),
             error: image_error(&image.mean, reference),
         });
+        // Off the clock too: the progress may send the image to a live view.
+        progress(seconds, samples.last(), &image.mean);
         clock.resume();
-        progress(seconds, samples.last());
         Ok(())
     };
     session.render_frame()?;

@@ -15,4 +15,5 @@ pub mod plot;
 pub mod reference;
 pub mod render;
 pub mod stress;
+pub mod tev;
 pub mod tune;

@@ -13,6 +13,11 @@ use std::path::Path;
 /// Settings that must be the same for every sample of a reference: the estimate they define.
 pub const SETTINGS: [&str; 5] = ["scene", "graph", "samples_per_frame", "seed", "constants"];
 
+/// Settings that must be the same too, but that a film may lack: `measured`, the graph's
+/// measured constants (LVC-BPT's average light sub-path length), which choose the estimator's
+/// weights but not the image it converges to (so `compare` does not ask a reference for them).
+pub const OPTIONAL_SETTINGS: [&str; 1] = ["measured"];
+
 /// A film (a reference image) being accumulated in f64: per pixel the sum of the frames'
 /// estimates and of their squares, and the frame indices summed.
 #[derive(Debug, Clone)]
@@ -275,6 +280,7 @@ impl Reference {
     pub fn check_settings(&self, info: &BTreeMap<String, String>, path: &Path) -> Result<()> {
         let differ: Vec<String> = SETTINGS
             .iter()
+            .chain(&OPTIONAL_SETTINGS)
             .filter(|k| self.info.get(**k) != info.get(**k))
             .map(|k| {
                 format!(
@@ -355,6 +361,7 @@ mod tests {
     fn info() -> BTreeMap<String, String> {
         SETTINGS
             .iter()
+            .chain(&OPTIONAL_SETTINGS)
             .map(|k| (k.to_string(), format!("{k}-value")))
             .chain([("samples_per_frame".to_string(), "2".to_string())])
             .collect()
@@ -465,7 +472,7 @@ mod tests {
         let path = Path::new("shard-1.exr");
         let a = film(info(), 0, &[[1.0; 3]]);
         // Each setting that defines the estimate, changed alone.
-        for key in SETTINGS {
+        for key in SETTINGS.into_iter().chain(OPTIONAL_SETTINGS) {
             let mut other = info();
             other.insert(key.to_string(), "other".into());
             let e = a
@@ -477,6 +484,15 @@ mod tests {
             let expected = format!("{key} is 'other' there, '{value}' here");
             assert!(e.contains("shard-1.exr") && e.contains(&expected), "{e}");
         }
+        // A film that measured nothing against one that did.
+        let mut unmeasured = info();
+        unmeasured.remove("measured");
+        let e = a
+            .clone()
+            .merge(&film(unmeasured, 1, &[[1.0; 3]]), path)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("measured is '' there, 'measured-value' here"), "{e}");
         let mut wide = film(info(), 1, &[[1.0; 3]]);
         wide.size = (2, 1);
         for (b, expected) in [

@@ -4,17 +4,37 @@ use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use lightgraph::reference::Reference;
 use lightgraph::render::{LayoutOverrides, LoadedScene, SessionOptions};
+use lightgraph::tev::LiveView;
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::ir::StateStorage;
 use lightgraph_engine::{ConstValue, Gpu, Graph, Plan};
 use lightgraph_scenes::bvh::BvhKind;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 /// The scene rendered when none is named.
 pub const DEFAULT_SCENE: &str = "cornell-mitsuba";
 /// The graph used when none is named.
 pub const DEFAULT_GRAPH: &str = "pt";
+
+/// The live view option of the commands that render progressively.
+#[derive(Args, Clone)]
+pub struct TevArg {
+    /// Stream the progressive image to a running tev (https://github.com/Tom94/tev), about
+    /// once a second and at the end: at its default address 127.0.0.1:14158, or at HOST:PORT.
+    /// A tev that is not there costs a warning, not the render.
+    #[arg(long, num_args = 0..=1, default_missing_value = lightgraph::tev::DEFAULT_ADDRESS, value_name = "HOST:PORT")]
+    pub tev: Option<String>,
+}
+
+impl TevArg {
+    /// The live view of an image `name` of `size` pixels, if asked for.
+    pub fn view(&self, name: &str, size: (u32, u32)) -> Option<LiveView> {
+        let address = self.tev.as_deref()?;
+        Some(LiveView::connect(address, name, size, Duration::from_secs(1)))
+    }
+}
 
 /// The graph option of the commands that render one graph.
 #[derive(Args, Clone)]
@@ -224,21 +244,31 @@ pub fn measure_into(
     Ok(())
 }
 
-/// The constant overrides as `NAME=VALUE` words (the inverse of [`parse_sets`]).
-/// The settings a film records and `merge` checks (lightgraph::reference::SETTINGS).
-pub fn film_settings(scene: &str, graph: &str, opts: &SessionOptions) -> BTreeMap<String, String> {
-    [
+/// The settings a film records and `merge` checks (lightgraph::reference::SETTINGS, and
+/// `measured`, the graph's measured constants, where it has any).
+pub fn film_settings(scene: &str, graph: &Graph, opts: &SessionOptions) -> BTreeMap<String, String> {
+    let (measured, constants): (BTreeMap<_, _>, BTreeMap<_, _>) = opts
+        .constants
+        .clone()
+        .into_iter()
+        .partition(|(name, _)| graph.measured.contains_key(name));
+    let mut settings: BTreeMap<String, String> = [
         ("scene", scene.to_string()),
-        ("graph", graph.to_string()),
+        ("graph", graph.name.clone()),
         ("samples_per_frame", opts.samples_per_frame.to_string()),
         ("seed", opts.seed.to_string()),
-        ("constants", constants_text(&opts.constants)),
+        ("constants", constants_text(&constants)),
     ]
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
-    .collect()
+    .collect();
+    if !measured.is_empty() {
+        settings.insert("measured".to_string(), constants_text(&measured));
+    }
+    settings
 }
 
+/// The constant overrides as `NAME=VALUE` words (the inverse of [`parse_sets`]).
 pub fn constants_text(constants: &BTreeMap<String, ConstValue>) -> String {
     let words: Vec<String> = constants
         .iter()

@@ -1,14 +1,16 @@
 //! `lightgraph compare`: estimators and layouts against a reference, error against time.
 
 use super::args::*;
-use anyhow::{Result, bail};
+use super::gpus::gpu_selectors;
+use anyhow::{Result, anyhow, bail};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
-use lightgraph::compare::{ReportContext, RunSpec, run, write_report};
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use lightgraph::compare::{ReportContext, RunResult, RunSpec, run, write_report};
 use lightgraph::reference::Reference;
-use lightgraph::render::{load_graph, load_scene_with};
-use lightgraph_engine::Gpu;
+use lightgraph::render::{LoadedScene, SessionOptions, load_graph, load_scene_with};
+use lightgraph_engine::{Gpu, Graph};
 use std::path::PathBuf;
+use std::sync::Mutex;
 use std::time::Duration;
 
 #[derive(Args)]
@@ -36,12 +38,20 @@ pub struct CompareArgs {
     /// Seed of the runs' random streams (must differ from the reference's).
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
+    #[command(flatten)]
+    pub tev: TevArg,
     /// Output folder: curves.csv, rmse_vs_time.png, summary.md and each run's EXR and PNG.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
     /// Exposure of the PNG previews in stops.
     #[arg(long, default_value_t = 0.0)]
     pub exposure: f32,
+    /// Run on several GPUs of one model at once, each taking the next run when its last one
+    /// ends (every run still has `--time` on one GPU): `all`, the first N adapters, or a
+    /// comma-separated list of adapter indices, PCI bus ids or names (`--adapter` is then
+    /// not used).
+    #[arg(long)]
+    pub gpus: Option<String>,
 }
 
 pub fn compare(mut args: CompareArgs) -> Result<()> {
@@ -75,7 +85,10 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
     }
     let specs = RunSpec::parse_list(&args.runs)?;
     let scene = load_scene_with(c.scene(), c.bvh)?;
-    let gpu = Gpu::new(c.adapter.as_deref())?;
+    let gpus = match &args.gpus {
+        Some(spec) => open_gpus(spec)?,
+        None => vec![Gpu::new(c.adapter.as_deref())?],
+    };
     // Every run is checked before any renders: a typo should not cost the others' time.
     let mut runs = Vec::new();
     for spec in &specs {
@@ -109,9 +122,13 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
             None => bail!("--baseline {b} is none of the runs ({})", labels.join(", ")),
         },
     };
+    let device = match gpus.len() {
+        1 => gpus[0].info.name.clone(),
+        n => format!("{} x{n}", gpus[0].info.name),
+    };
     eprintln!(
         "{} | scene {} (loaded in {:.2} s) | {} runs of {:?} | reference {} spp",
-        gpu.describe(),
+        gpus.iter().map(Gpu::describe).collect::<Vec<_>>().join("; "),
         c.scene(),
         scene.load_seconds,
         specs.len(),
@@ -119,33 +136,10 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
         reference.samples_per_pixel()
     );
     let ref_mean = reference.mean();
-    let mut results = Vec::new();
-    for (label, graph, layout, opts) in runs {
-        let bar = ProgressBar::new(args.time.as_millis() as u64);
-        bar.set_style(ProgressStyle::with_template("{prefix:>24} {bar:30} {msg}").expect("valid template"));
-        bar.set_prefix(label.clone());
-        let result = run(
-            &gpu,
-            &scene,
-            &graph,
-            (&layout, label),
-            opts,
-            args.time,
-            &ref_mean,
-            args.per_decade,
-            |t, e| {
-                bar.set_position((t * 1e3) as u64);
-                if let Some(e) = e {
-                    bar.set_message(format!("{} spp | RMSE {:.4e}", e.samples_per_pixel, e.error.rmse));
-                }
-            },
-        )?;
-        bar.finish();
-        results.push(result);
-    }
+    let results = run_all(&gpus, &scene, runs, &args, &ref_mean)?;
     let ctx = ReportContext {
         scene: c.scene(),
-        device: &gpu.info.name,
+        device: &device,
         load_seconds: scene.load_seconds,
         budget: args.time,
         reference_path: &args.reference,
@@ -158,4 +152,94 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+/// Opens the GPUs `spec` names (as `render --gpus`); they must be of one model.
+fn open_gpus(spec: &str) -> Result<Vec<Gpu>> {
+    let mut gpus = Vec::new();
+    for (i, selector) in gpu_selectors(spec)?.iter().enumerate() {
+        gpus.push(Gpu::new(Some(selector)).map_err(|e| anyhow!("GPU {i} ('{selector}'): {e}"))?);
+    }
+    if let Some((i, other)) = gpus.iter().enumerate().find(|(_, g)| g.info.name != gpus[0].info.name) {
+        bail!(
+            "--gpus {spec}: compare needs GPUs of one model (its curves would compare GPUs), but GPU 0 is \
+             '{}' and GPU {i} '{}'",
+            gpus[0].info.name,
+            other.info.name
+        );
+    }
+    Ok(gpus)
+}
+
+/// One run of the comparison: its label, graph, layout and options.
+type Job = (String, Graph, String, SessionOptions);
+
+/// Renders every run of `jobs`, each for `--time` on one of `gpus` (one thread per GPU, each
+/// taking the next run when its last one ends), with a progress bar per run; the results in
+/// the order of `jobs`. The first failure stops the GPUs from taking more runs.
+fn run_all(
+    gpus: &[Gpu],
+    scene: &LoadedScene,
+    jobs: Vec<Job>,
+    args: &CompareArgs,
+    reference: &[[f32; 3]],
+) -> Result<Vec<RunResult>> {
+    let bars = MultiProgress::new();
+    let style = ProgressStyle::with_template("{prefix:>24} {bar:30} {msg}").expect("valid template");
+    let progress: Vec<ProgressBar> = jobs
+        .iter()
+        .map(|(label, ..)| {
+            let bar = bars.add(ProgressBar::new(args.time.as_millis() as u64));
+            bar.set_style(style.clone());
+            bar.set_prefix(label.clone());
+            bar
+        })
+        .collect();
+    let next = Mutex::new(0usize);
+    let results: Mutex<Vec<Option<Result<RunResult>>>> = Mutex::new(jobs.iter().map(|_| None).collect());
+    let take = || {
+        let mut i = next.lock().expect("run queue");
+        let failed = results.lock().expect("results").iter().flatten().any(|r| r.is_err());
+        (*i < jobs.len() && !failed).then(|| {
+            *i += 1;
+            *i - 1
+        })
+    };
+    std::thread::scope(|scope| {
+        for gpu in gpus {
+            scope.spawn(|| {
+                while let Some(i) = take() {
+                    let (label, graph, layout, opts) = &jobs[i];
+                    let bar = &progress[i];
+                    let mut view = args.tev.view(label, (opts.width, opts.height));
+                    let result = run(
+                        gpu,
+                        scene,
+                        graph,
+                        (layout, label.clone()),
+                        opts.clone(),
+                        args.time,
+                        reference,
+                        args.per_decade,
+                        |t, e, image| {
+                            bar.set_position((t * 1e3) as u64);
+                            if let Some(e) = e {
+                                bar.set_message(format!("{} spp | RMSE {:.4e}", e.samples_per_pixel, e.error.rmse));
+                            }
+                            if let Some(v) = view.as_mut().filter(|v| v.due()) {
+                                v.show(image);
+                            }
+                        },
+                    );
+                    bar.finish();
+                    if let (Some(v), Ok(r)) = (&mut view, &result) {
+                        v.show(&r.image.mean);
+                    }
+                    results.lock().expect("results")[i] = Some(result);
+                }
+            });
+        }
+    });
+    // Runs are left untaken only after a failure, which `?` then returns.
+    results.into_inner().expect("results").into_iter().flatten().collect()
 }

@@ -109,7 +109,7 @@ impl Setup {
     /// An empty film with the run's settings.
     pub fn film(&self, args: &RenderArgs) -> Reference {
         let size = (self.opts.width, self.opts.height);
-        Reference::new(size, film_settings(args.common.scene(), &self.graph.name, &self.opts))
+        Reference::new(size, film_settings(args.common.scene(), &self.graph, &self.opts))
     }
 }
 
@@ -154,12 +154,16 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
     let start = Instant::now();
     let pixels = (w as f64) * (h as f64);
     let (mut error, mut error_at) = (String::new(), None::<Instant>);
+    let mut view = args.tev.view(&args.out.display().to_string(), (w, h));
     let (shares, merging) = render_on_gpus(&run, &selectors, budget(args), &mut film, |shares, film| {
         if let Some(r) = &reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
             error = format!(" | RMSE {:.4e}", image_error(&film.mean(), r).rmse);
             error_at = Some(Instant::now());
+        }
+        if let Some(v) = view.as_mut().filter(|v| v.due()) {
+            v.show(&film.mean());
         }
         let secs = start.elapsed().as_secs_f64();
         bar.set_message(progress_line(shares, film, pixels, secs, &error));
@@ -169,6 +173,9 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
         });
     })?;
     bar.finish();
+    if let Some(v) = &mut view {
+        v.show(&film.mean());
+    }
     // The run's time once every GPU was ready (each GPU's set-up is not on the clock, as a
     // one-GPU render's is not).
     let seconds = merging.run_seconds;

@@ -8,8 +8,8 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct MergeArgs {
-    /// The films to add up: same scene, graph, samples per frame, seed, constants and
-    /// resolution, disjoint frame ranges.
+    /// The films to add up: same scene, graph, samples per frame, seed, constants, measured
+    /// constants and resolution, disjoint frame ranges.
     #[arg(required = true, num_args = 1..)]
     pub films: Vec<PathBuf>,
     /// Output EXR; a PNG preview is written beside it.

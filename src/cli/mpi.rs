@@ -29,6 +29,9 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     };
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
     let pixels = w as f64 * h as f64;
+    let mut view = root
+        .then(|| args.tev.view(&args.out.display().to_string(), (w, h)))
+        .flatten();
     let start = Instant::now();
     let outcome = render_across(
         &world,
@@ -37,6 +40,9 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
         budget(args),
         &mut film,
         |p| {
+            if let Some(v) = view.as_mut().filter(|v| v.due()) {
+                v.show(&p.film.mean());
+            }
             let secs = start.elapsed().as_secs_f64();
             let per_rank: Vec<String> = p
                 .frames_by_rank
@@ -59,6 +65,9 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     bar.finish();
     if !root {
         return Ok(());
+    }
+    if let Some(v) = &mut view {
+        v.show(&film.mean());
     }
     let seconds = start.elapsed().as_secs_f64();
     film.info.insert("layout".into(), setup.layout.clone());

@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::multi::{Budget, Run, render_on_gpus};
 use lightgraph::reference::Reference;
 use lightgraph::render::{Session, load_graph, load_scene_with};
+use lightgraph::tev::LiveView;
 use lightgraph_engine::Gpu;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -24,6 +25,8 @@ pub struct ReferenceArgs {
     pub common: Common,
     #[command(flatten)]
     pub graph: GraphArg,
+    #[command(flatten)]
+    pub tev: TevArg,
     /// Kernel layout (default: the graph's); every layout of a graph gives the same image.
     #[arg(long)]
     pub layout: Option<String>,
@@ -89,7 +92,9 @@ fn settings_from_resumed(args: &mut ReferenceArgs, r: &Reference) {
     args.seed
         .get_or_insert_with(|| info("seed").parse().unwrap_or(REFERENCE_SEED));
     if c.set.is_empty() && c.max_path_length.is_none() {
-        c.set = info("constants").split_whitespace().map(String::from).collect();
+        // The measured constants too: the resumed run renders the film's estimator.
+        let words = format!("{} {}", info("constants"), info("measured"));
+        c.set = words.split_whitespace().map(String::from).collect();
     }
 }
 
@@ -103,11 +108,13 @@ fn list_once(info: &mut BTreeMap<String, String>, key: &str, value: &str) {
     info.insert(key.to_string(), items.join(", "));
 }
 
-/// Where a reference render goes: the film (new or resumed), the file and the progress bar.
+/// Where a reference render goes: the film (new or resumed), the file, the progress bar and
+/// the live view (`--tev`).
 struct Target {
     film: Reference,
     out: PathBuf,
     bar: ProgressBar,
+    view: Option<LiveView>,
 }
 
 pub fn reference(mut args: ReferenceArgs) -> Result<()> {
@@ -136,7 +143,7 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
     };
     measure_into(&mut opts, &graph, (&layout, &decl), &scene, first_gpu.as_deref())?;
     let size = (opts.width, opts.height);
-    let info = film_settings(c.scene(), args.graph.name(), &opts);
+    let info = film_settings(c.scene(), &graph, &opts);
     let mut film = match resumed {
         Some(r) => {
             let path = args.resume.as_ref().expect("resumed from a path");
@@ -163,7 +170,8 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         (None, frames) => ProgressBar::new(frames.unwrap_or(0) as u64),
     };
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
-    let mut target = Target { film, out, bar };
+    let view = args.tev.view(&out.display().to_string(), size);
+    let mut target = Target { film, out, bar, view };
     let run = Run {
         graph: &graph,
         layout: (&layout, &decl),
@@ -175,8 +183,11 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         Some(spec) => on_several_gpus(&args, &run, spec, &mut target)?,
         None => on_one_gpu(&args, &run, &mut target)?,
     }
-    let Target { film, out, bar } = target;
+    let Target { film, out, bar, view } = target;
     bar.finish();
+    if let Some(mut v) = view {
+        v.show(&film.mean());
+    }
     film.write(&out, "reference")?;
     let png = out.with_extension("png");
     lightgraph::output::write_png(&png, &film.image(), args.exposure)?;
@@ -224,6 +235,9 @@ fn on_one_gpu(args: &ReferenceArgs, run: &Run, target: &mut Target) -> Result<()
         if absorbed_at.elapsed() >= ABSORB_EVERY || saved_at.elapsed() >= args.checkpoint {
             film.absorb(&session.take_accumulation()?)?;
             absorbed_at = Instant::now();
+            if let Some(v) = target.view.as_mut().filter(|v| v.due()) {
+                v.show(&film.mean());
+            }
         }
         if saved_at.elapsed() >= args.checkpoint {
             let now = start.elapsed().as_secs_f64();
@@ -257,9 +271,12 @@ fn on_several_gpus(args: &ReferenceArgs, run: &Run, spec: &str, target: &mut Tar
     let frames_before = target.film.frames;
     let start = Instant::now();
     let mut saved_at = Instant::now();
-    let (bar, out) = (&target.bar, &target.out);
+    let (bar, out, view) = (&target.bar, &target.out, &mut target.view);
     let mut checkpoint_error = None;
     let (shares, _) = render_on_gpus(run, &selectors, budget, &mut target.film, |_, film| {
+        if let Some(v) = view.as_mut().filter(|v| v.due()) {
+            v.show(&film.mean());
+        }
         if saved_at.elapsed() >= args.checkpoint {
             if let Err(e) = film.write(out, "reference") {
                 checkpoint_error.get_or_insert(e);

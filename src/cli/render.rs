@@ -18,6 +18,8 @@ pub struct RenderArgs {
     pub common: Common,
     #[command(flatten)]
     pub graph: GraphArg,
+    #[command(flatten)]
+    pub tev: TevArg,
     /// Kernel layout (default: the graph's); `auto` measures every legal layout first and
     /// renders with the fastest.
     #[arg(long)]
@@ -116,7 +118,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         layout
     );
     let reference = reference_mean(args.reference.as_ref(), (w, h))?;
-    let mut film = Reference::new((w, h), film_settings(c.scene(), &graph.name, &opts));
+    let mut film = Reference::new((w, h), film_settings(c.scene(), &graph, &opts));
     let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
     session.first_frame = args.first_frame;
     let mut error_text = String::new();
@@ -126,6 +128,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         None => ProgressBar::new(args.frames as u64),
     };
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
+    let mut view = args.tev.view(&args.out.display().to_string(), (w, h));
     let start = Instant::now();
     loop {
         let elapsed = start.elapsed();
@@ -148,6 +151,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
             error_text = format!(" | RMSE {:.4e}", image_error(&session.image()?.mean, r).rmse);
             error_at = Some(Instant::now());
         }
+        if let Some(v) = view.as_mut().filter(|v| v.due()) {
+            v.show(&session.image()?.mean);
+        }
         bar.set_message(format!(
             "frame {} | {} samples/s | {}rays/s{error_text}",
             session.frames,
@@ -163,6 +169,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let seconds = start.elapsed().as_secs_f64();
     let rejected = session.counters.get("samples_rejected").copied().unwrap_or(0);
     let image = session.image()?;
+    if let Some(v) = &mut view {
+        v.show(&image.mean);
+    }
     if let Some(r) = &reference {
         let e = image_error(&image.mean, r);
         eprintln!(

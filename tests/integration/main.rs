@@ -23,4 +23,5 @@ mod scenes;
 mod shards;
 mod specialize;
 mod stress;
+mod tev;
 mod textures;

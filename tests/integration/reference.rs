@@ -209,3 +209,90 @@ fn render_reports_its_error_against_a_reference() {
         "RMSE {few} with 1 frame, {many} with 16"
     );
 }
+
+/// A reference of LVC-BPT records the average light sub-path length it measured (apart from
+/// the constants: it weights the strategies, it does not change the image), resumes with that
+/// value rather than a new measurement, and serves runs of other graphs in `compare`.
+#[test]
+fn a_measured_constant_is_recorded_resumed_and_left_out_of_compare() {
+    let dir = temp_dir("measured");
+    let path = dir.join("lvc.exr");
+    let lvc = ["--graph", "bpt-lvc", "--frames", "1"];
+    let film = reference(&lvc, &path);
+    let measured = film.info.get("measured").cloned().unwrap_or_default();
+    assert!(measured.starts_with("LVC_AVERAGE_LENGTH="), "measured: '{measured}'");
+    assert_eq!(film.info["constants"], "");
+    let p = path.to_str().unwrap();
+    let run = lightgraph(&["reference", "--resume", p, "--frames", "1"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let resumed = Reference::read(&path).unwrap();
+    assert_eq!(
+        (resumed.frames, resumed.info["measured"].as_str()),
+        (2, measured.as_str())
+    );
+    // Another measurement is refused: it would mix two estimators.
+    let err = fails(&[
+        "reference",
+        "--resume",
+        p,
+        "--frames",
+        "1",
+        "--set",
+        "LVC_AVERAGE_LENGTH=9",
+    ]);
+    assert!(
+        err.contains(&format!(
+            "measured is '{measured}' there, 'LVC_AVERAGE_LENGTH=9.0' here"
+        )),
+        "{err}"
+    );
+    let out = dir.join("cmp");
+    let run = lightgraph(&[
+        "compare",
+        "--runs",
+        "pt",
+        "--reference",
+        p,
+        "--time",
+        "1s",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+}
+
+/// `compare --gpus`: two runs on two devices of lavapipe at once, one each, both in the report;
+/// an unknown adapter is refused naming it.
+#[test]
+fn compare_runs_on_two_devices() {
+    let dir = temp_dir("compare-gpus");
+    let path = dir.join("ref.exr");
+    reference(&["--frames", "2"], &path);
+    let p = path.to_str().unwrap();
+    let out = dir.join("cmp");
+    let o = out.to_str().unwrap();
+    let runs = [
+        "compare",
+        "--runs",
+        "pt:NaivePTsk,pt:NaivePTmk",
+        "--reference",
+        p,
+        "--time",
+        "1s",
+    ];
+    let run = lightgraph(&[&runs[..], &["--gpus", "0,0", "--out", o]].concat());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    let curves = std::fs::read_to_string(out.join("curves.csv")).unwrap();
+    assert!(
+        curves.contains("pt:NaivePTsk") && curves.contains("pt:NaivePTmk"),
+        "{curves}"
+    );
+    let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(summary.contains(" x2"), "{summary}");
+    let err = fails(&[&runs[..], &["--gpus", "0,9", "--out", o]].concat());
+    assert!(
+        err.contains("GPU 1 ('9')") && err.contains("no adapter matches '9'"),
+        "{err}"
+    );
+}
