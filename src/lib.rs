@@ -3,6 +3,7 @@
 //! engine (`lightgraph-engine`) into fused or split kernels, over scenes from
 //! `lightgraph-scenes`.
 
+pub mod aov;
 pub mod assets;
 pub mod bench;
 #[cfg(feature = "mpi")]

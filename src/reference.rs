@@ -32,6 +32,9 @@ pub struct Reference {
     pub seconds: f64,
     /// The [`SETTINGS`] and descriptive entries (layout, adapter) as text.
     pub info: BTreeMap<String, String>,
+    /// Further layers written as they are (`render --aov`'s feature buffers): channel name
+    /// (`layer.channel`) and one value per pixel. Not read back, not merged.
+    pub layers: Vec<(String, Vec<f32>)>,
     pub(crate) sum: Vec<[f64; 3]>,
     pub(crate) sum_sq: Vec<[f64; 3]>,
 }
@@ -46,6 +49,7 @@ impl Reference {
             ranges: Vec::new(),
             seconds: 0.0,
             info,
+            layers: Vec::new(),
             sum: vec![[0.0; 3]; n],
             sum_sq: vec![[0.0; 3]; n],
         }
@@ -209,6 +213,7 @@ impl Reference {
             ));
             channels.push((format!("variance.{name}"), channel(&var, c)));
         }
+        channels.extend(self.layers.iter().cloned());
         let mut meta: Vec<(&str, String)> = self.info.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
         meta.push(("kind", kind.into()));
         meta.push(("frames", self.frames.to_string()));

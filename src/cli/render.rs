@@ -1,13 +1,14 @@
 //! `lightgraph render`: a progressive render to EXR and PNG.
 
 use super::args::*;
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use lightgraph::aov::{Aov, AovRender};
 use lightgraph::metrics::image_error;
 use lightgraph::output;
 use lightgraph::reference::Reference;
-use lightgraph::render::{Session, load_graph, load_scene_with};
+use lightgraph::render::{LoadedScene, Session, load_graph, load_scene_with};
 use lightgraph_engine::Gpu;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -46,6 +47,11 @@ pub struct RenderArgs {
     /// against it, measured about once a second.
     #[arg(long)]
     pub reference: Option<PathBuf>,
+    /// Feature buffers to write as further layers of the EXR, comma-separated: albedo, normal,
+    /// depth, position (at each sample's first non-specular hit, averaged over the pixel's
+    /// samples that hit; see the README). Rendered by kernels of their own after the run.
+    #[arg(long, value_name = "LIST")]
+    pub aov: Option<String>,
     /// Frame index of the first frame: renders frames FIRST .. FIRST + frames of the seed's
     /// random streams, a shard of a longer run (`lightgraph merge` adds the shards' films).
     #[arg(long, default_value_t = 0)]
@@ -64,6 +70,9 @@ pub struct RenderArgs {
 }
 
 pub fn render(args: RenderArgs) -> Result<()> {
+    if args.aov.is_some() && (args.gpus.is_some() || mpi_asked(&args)) {
+        bail!("--aov renders its buffers on one GPU: leave out --gpus and --mpi");
+    }
     #[cfg(feature = "mpi")]
     if args.mpi {
         return super::mpi::render_with_mpi(&args);
@@ -191,6 +200,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
     }
     film.absorb(&session.accumulation()?)?;
     film.seconds = seconds;
+    if let Some(list) = &args.aov {
+        film.layers = feature_buffers(&gpu, &scene, &session, list, args.first_frame)?;
+    }
     film.write(&args.out, "render")?;
     let png = args.out.with_extension("png");
     output::write_png(&png, &image, args.exposure)?;
@@ -227,4 +239,39 @@ pub fn render(args: RenderArgs) -> Result<()> {
     }
     println!("wrote {} and {}", args.out.display(), png.display());
     Ok(())
+}
+
+/// The feature buffers `list` names, over the frames `session` rendered (see lightgraph::aov).
+fn feature_buffers(
+    gpu: &Gpu,
+    scene: &LoadedScene,
+    session: &Session,
+    list: &str,
+    first_frame: u32,
+) -> Result<Vec<(String, Vec<f32>)>> {
+    let aovs = Aov::parse_list(list)?;
+    let started = Instant::now();
+    let mut render = AovRender::new(gpu, scene, &session.options, &aovs)?;
+    render.render(first_frame, session.frames)?;
+    let layers = render.layers()?;
+    let names: Vec<&str> = aovs.iter().map(|a| a.name()).collect();
+    eprintln!(
+        "feature buffers {} over {} frames in {:.2} s",
+        names.join(", "),
+        session.frames,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(layers)
+}
+
+/// Whether `args` asks for an MPI run.
+#[cfg(feature = "mpi")]
+fn mpi_asked(args: &RenderArgs) -> bool {
+    args.mpi
+}
+
+/// Whether `args` asks for an MPI run (never without the `mpi` feature).
+#[cfg(not(feature = "mpi"))]
+fn mpi_asked(_: &RenderArgs) -> bool {
+    false
 }

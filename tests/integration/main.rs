@@ -2,6 +2,7 @@
 //! layouts, analytic radiance, the built-in scenes, the CLI and its errors.
 
 mod analytic;
+mod aov;
 mod bpt;
 mod bsdf;
 mod bvh;
