@@ -28,17 +28,33 @@ pub fn load_scene(name: &str) -> Result<LoadedScene> {
     load_scene_with(name, BvhKind::Bvh2)
 }
 
-/// Loads a built-in scene by name, a scene file by path, or a bare glTF file (`.gltf`,
-/// `.glb`; see [`LoadedScene::from_gltf`]), with a BVH of `kind`; the glTF assets of scene
+/// Loads a built-in scene by name, a scene file by path, a bare glTF file (`.gltf`,
+/// `.glb`; see [`LoadedScene::from_gltf`]) or a Mitsuba scene file (`.xml`), with a BVH of `kind`; the glTF assets of scene
 /// files come from [`crate::assets::asset_root`].
 pub fn load_scene_with(name: &str, kind: BvhKind) -> Result<LoadedScene> {
     let lower = name.to_ascii_lowercase();
     let bare_gltf = (lower.ends_with(".gltf") || lower.ends_with(".glb")) && std::path::Path::new(name).is_file();
+    let mitsuba = lower.ends_with(".xml") && std::path::Path::new(name).is_file();
     let (file, mut scene) = if bare_gltf {
         (
             name.to_string(),
             LoadedScene::from_gltf(std::path::Path::new(name), kind)?,
         )
+    } else if mitsuba {
+        // A Mitsuba scene file (see lightgraph_scenes::mitsuba).
+        let start = Instant::now();
+        let imported = lightgraph_scenes::mitsuba::load(std::path::Path::new(name))?;
+        for warning in &imported.warnings {
+            eprintln!("warning: {warning}");
+        }
+        let compiled = CompiledScene::with_bvh(&imported.scene, kind).map_err(|e| anyhow!("{name}: {e}"))?;
+        let scene = LoadedScene {
+            name: name.to_string(),
+            scene: imported.scene,
+            compiled,
+            load_seconds: start.elapsed().as_secs_f64(),
+        };
+        (name.to_string(), scene)
     } else {
         let (file, text) = crate::assets::scene_text(name).map_err(|e| anyhow!(e))?;
         let scene = LoadedScene::parse(&file, &text, kind, crate::assets::asset_root().as_deref())?;

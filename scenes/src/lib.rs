@@ -8,6 +8,7 @@ pub mod environment;
 pub mod features;
 pub mod gltf;
 pub mod gpu;
+pub mod mitsuba;
 pub mod model;
 pub mod texture;
 

@@ -15,6 +15,7 @@ mod frames;
 mod gltf;
 mod layouts;
 mod lights;
+mod mitsuba;
 mod photon_query;
 mod pm;
 mod probe;

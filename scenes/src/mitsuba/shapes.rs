@@ -1,0 +1,356 @@
+//! Shape geometry: `obj` (through `tobj`) and `ply` (through `ply-rs-bw`) meshes, and the
+//! built-in `rectangle`, `disk`, `cube` and `sphere`, made in object space as Mitsuba defines
+//! them and placed in the world by `to_world`. Texture coordinates follow Mitsuba's
+//! convention, v = 0 at the image's top row (an OBJ's `vt` v is flipped, as Mitsuba does).
+
+use super::xml::{Context, Props, Result};
+use glam::{Mat3, Mat4, Vec3};
+use std::f32::consts::PI;
+
+/// Segments around a disk's rim, and around a sphere tessellated into triangles.
+pub const SEGMENTS: u32 = 64;
+
+/// A triangle mesh.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Mesh {
+    /// Positions.
+    pub positions: Vec<Vec3>,
+    /// Three vertex indices per triangle, facing by the right-hand rule.
+    pub indices: Vec<[u32; 3]>,
+    /// Unit shading normals per vertex (none: flat shading).
+    pub normals: Option<Vec<Vec3>>,
+    /// Texture coordinates per vertex.
+    pub uvs: Option<Vec<[f32; 2]>>,
+}
+
+impl Mesh {
+    /// The mesh placed by `m`: normals by its inverse transpose, and the winding reversed by a
+    /// mirroring `m` (so triangles keep facing as authored) or by `flip` (Mitsuba's
+    /// `flip_normals`, which also turns the normals over).
+    pub fn placed(mut self, m: Mat4, flip: bool) -> Mesh {
+        let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
+        let sign = if flip { -1.0 } else { 1.0 };
+        for p in &mut self.positions {
+            *p = m.transform_point3(*p);
+        }
+        if let Some(normals) = &mut self.normals {
+            for n in normals {
+                *n = (normal_matrix * *n).normalize_or_zero() * sign;
+            }
+        }
+        if (m.determinant() < 0.0) != flip {
+            for t in &mut self.indices {
+                t.swap(1, 2);
+            }
+        }
+        self
+    }
+
+    /// Area-weighted vertex normals (Mitsuba computes these for meshes without normals).
+    pub fn smooth_normals(&mut self) {
+        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        for t in &self.indices {
+            let [a, b, c] = t.map(|i| self.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            for &i in t {
+                normals[i as usize] += n;
+            }
+        }
+        self.normals = Some(normals.into_iter().map(Vec3::normalize_or_zero).collect());
+    }
+}
+
+/// The object-space mesh of a shape of `kind` other than `sphere` (see [`sphere`]), with the
+/// properties the kind reads; `None` for a kind this importer does not know.
+pub fn mesh(ctx: &mut Context, props: &Props, kind: &str) -> Result<Option<Mesh>> {
+    Ok(Some(match kind {
+        "obj" => obj(ctx, props)?,
+        "ply" => ply(ctx, props)?,
+        "rectangle" => rectangle(),
+        "disk" => disk(),
+        "cube" => cube(),
+        _ => return Ok(None),
+    }))
+}
+
+/// Mitsuba's rectangle: [-1, 1]² in the plane z = 0, facing +Z.
+pub fn rectangle() -> Mesh {
+    let positions = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
+        .map(|[x, y]| Vec3::new(x, y, 0.0))
+        .to_vec();
+    planar(positions, vec![[0, 1, 2], [0, 2, 3]])
+}
+
+/// A mesh in the plane z = 0 facing +Z, with Mitsuba's texture coordinates of [-1, 1]²
+/// (u along +X, v down +Y).
+fn planar(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Mesh {
+    Mesh {
+        uvs: Some(
+            positions
+                .iter()
+                .map(|p| [(p.x + 1.0) / 2.0, (1.0 - p.y) / 2.0])
+                .collect(),
+        ),
+        normals: Some(vec![Vec3::Z; positions.len()]),
+        positions,
+        indices,
+    }
+}
+
+/// Mitsuba's disk: the unit disk in the plane z = 0 facing +Z, as a fan of [`SEGMENTS`]
+/// triangles (its area is 0.16% short of π).
+pub fn disk() -> Mesh {
+    let mut positions = vec![Vec3::ZERO];
+    for i in 0..SEGMENTS {
+        let phi = 2.0 * PI * i as f32 / SEGMENTS as f32;
+        positions.push(Vec3::new(phi.cos(), phi.sin(), 0.0));
+    }
+    let indices = (0..SEGMENTS).map(|i| [0, i + 1, (i + 1) % SEGMENTS + 1]).collect();
+    planar(positions, indices)
+}
+
+/// Mitsuba's cube: [-1, 1]³ with outward faces (flat shaded).
+pub fn cube() -> Mesh {
+    let mut out = Mesh::default();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = sign;
+            // Two axes spanning the face, ordered so that u x v = n.
+            let mut u = Vec3::ZERO;
+            u[(axis + 1) % 3] = 1.0;
+            let v = n.cross(u);
+            let base = out.positions.len() as u32;
+            for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                out.positions.push(n + u * a + v * b);
+            }
+            out.indices
+                .extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+        }
+    }
+    out
+}
+
+/// A sphere as a latitude-longitude mesh of [`SEGMENTS`] x [`SEGMENTS`]/2 quads with
+/// smooth normals (for emitting spheres and spheres under non-uniform scales; others stay
+/// analytic).
+pub fn sphere(center: Vec3, radius: f32) -> Mesh {
+    let (nu, nv) = (SEGMENTS, SEGMENTS / 2);
+    let mut out = Mesh {
+        normals: Some(Vec::new()),
+        uvs: Some(Vec::new()),
+        ..Default::default()
+    };
+    for j in 0..=nv {
+        let theta = PI * j as f32 / nv as f32;
+        for i in 0..=nu {
+            let phi = 2.0 * PI * i as f32 / nu as f32;
+            let n = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+            out.positions.push(center + n * radius);
+            out.normals.as_mut().unwrap().push(n);
+            out.uvs
+                .as_mut()
+                .unwrap()
+                .push([i as f32 / nu as f32, j as f32 / nv as f32]);
+        }
+    }
+    let row = nu + 1;
+    for j in 0..nv {
+        for i in 0..nu {
+            let (a, b, c, d) = (j * row + i, j * row + i + 1, (j + 1) * row + i + 1, (j + 1) * row + i);
+            // Outward facing: the poles' degenerate triangles are dropped.
+            if j > 0 {
+                out.indices.push([a, d, b]);
+            }
+            if j + 1 < nv {
+                out.indices.push([b, d, c]);
+            }
+        }
+    }
+    out
+}
+
+fn obj(ctx: &mut Context, props: &Props) -> Result<Mesh> {
+    let node = props.node();
+    let name = props
+        .string(ctx, "filename")?
+        .ok_or_else(|| ctx.error(node, "an obj shape needs a filename"))?;
+    let path = ctx.existing_file(node, &name)?;
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, _) =
+        tobj::load_obj(&path, &options).map_err(|e| ctx.error(node, format!("{}: {e}", path.display())))?;
+    let mut out = Mesh::default();
+    let (mut with_normals, mut with_uvs) = (true, true);
+    for model in &models {
+        let m = &model.mesh;
+        let base = out.positions.len() as u32;
+        let count = m.positions.len() / 3;
+        out.positions
+            .extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        with_normals &= m.normals.len() == count * 3;
+        with_uvs &= m.texcoords.len() == count * 2;
+        let normals = out.normals.get_or_insert_with(Vec::new);
+        normals.extend(
+            m.normals
+                .chunks_exact(3)
+                .map(|n| Vec3::new(n[0], n[1], n[2]).normalize_or_zero()),
+        );
+        let uvs = out.uvs.get_or_insert_with(Vec::new);
+        uvs.extend(m.texcoords.chunks_exact(2).map(|t| [t[0], 1.0 - t[1]]));
+        for t in m.indices.chunks_exact(3) {
+            if let Some(&bad) = t.iter().find(|&&i| i as usize >= count) {
+                return Err(ctx.error(node, format!("{}: a face uses vertex {bad} of {count}", path.display())));
+            }
+            out.indices.push([base + t[0], base + t[1], base + t[2]]);
+        }
+    }
+    if !with_normals {
+        out.normals = None;
+    }
+    if !with_uvs {
+        out.uvs = None;
+    }
+    Ok(out)
+}
+
+fn ply(ctx: &mut Context, props: &Props) -> Result<Mesh> {
+    use ply_rs_bw::ply::Property;
+    let node = props.node();
+    let name = props
+        .string(ctx, "filename")?
+        .ok_or_else(|| ctx.error(node, "a ply shape needs a filename"))?;
+    let path = ctx.existing_file(node, &name)?;
+    let shown = path.display().to_string();
+    let mut file = std::fs::File::open(&path).map_err(|e| ctx.error(node, format!("{shown}: {e}")))?;
+    let parser = ply_rs_bw::parser::Parser::<ply_rs_bw::ply::DefaultElement>::new();
+    let ply = parser
+        .read_ply(&mut file)
+        .map_err(|e| ctx.error(node, format!("{shown}: {e}")))?;
+    let empty = Vec::new();
+    let vertices = ply.payload.get("vertex").unwrap_or(&empty);
+    let scalar = |v: &ply_rs_bw::ply::DefaultElement, key: &str| v.get(key).and_then(Property::to_f32_lossy);
+    let mut out = Mesh::default();
+    let (mut normals, mut uvs) = (Vec::new(), Vec::new());
+    for v in vertices {
+        let p = ["x", "y", "z"].map(|k| scalar(v, k));
+        let [Some(x), Some(y), Some(z)] = p else {
+            return Err(ctx.error(node, format!("{shown}: a vertex has no x, y and z")));
+        };
+        out.positions.push(Vec3::new(x, y, z));
+        if let [Some(x), Some(y), Some(z)] = ["nx", "ny", "nz"].map(|k| scalar(v, k)) {
+            normals.push(Vec3::new(x, y, z).normalize_or_zero());
+        }
+        let u = scalar(v, "u")
+            .or_else(|| scalar(v, "s"))
+            .or_else(|| scalar(v, "texture_u"));
+        let w = scalar(v, "v")
+            .or_else(|| scalar(v, "t"))
+            .or_else(|| scalar(v, "texture_v"));
+        if let (Some(u), Some(w)) = (u, w) {
+            uvs.push([u, 1.0 - w]);
+        }
+    }
+    let count = out.positions.len();
+    for face in ply.payload.get("face").unwrap_or(&empty) {
+        let list = face.get("vertex_indices").or_else(|| face.get("vertex_index"));
+        let indices: Vec<i64> = match list {
+            Some(Property::ListInt(v)) => v.iter().map(|&i| i as i64).collect(),
+            Some(Property::ListUInt(v)) => v.iter().map(|&i| i as i64).collect(),
+            Some(Property::ListShort(v)) => v.iter().map(|&i| i as i64).collect(),
+            Some(Property::ListUShort(v)) => v.iter().map(|&i| i as i64).collect(),
+            Some(Property::ListChar(v)) => v.iter().map(|&i| i as i64).collect(),
+            Some(Property::ListUChar(v)) => v.iter().map(|&i| i as i64).collect(),
+            _ => return Err(ctx.error(node, format!("{shown}: a face has no integer vertex_indices"))),
+        };
+        if let Some(bad) = indices.iter().find(|&&i| i < 0 || i as usize >= count) {
+            return Err(ctx.error(node, format!("{shown}: a face uses vertex {bad} of {count}")));
+        }
+        // Polygons as fans.
+        for k in 2..indices.len() {
+            out.indices
+                .push([indices[0] as u32, indices[k - 1] as u32, indices[k] as u32]);
+        }
+    }
+    out.normals = (normals.len() == count).then_some(normals);
+    out.uvs = (uvs.len() == count).then_some(uvs);
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn area(m: &Mesh) -> f32 {
+        m.indices
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                (b - a).cross(c - a).length() / 2.0
+            })
+            .sum()
+    }
+
+    /// Every triangle's winding normal points away from `inside` (or along `+Z` for flat
+    /// shapes when `inside` is None).
+    fn faces_out(m: &Mesh, inside: Option<Vec3>) -> bool {
+        m.indices.iter().all(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            match inside {
+                Some(o) => n.dot((a + b + c) / 3.0 - o) > 0.0,
+                None => n.z > 0.0,
+            }
+        })
+    }
+
+    #[test]
+    fn rectangle_and_disk_lie_in_z0_facing_plus_z() {
+        let r = rectangle();
+        assert_eq!(area(&r), 4.0);
+        assert!(faces_out(&r, None));
+        assert_eq!(r.uvs.as_ref().unwrap()[0], [0.0, 1.0]);
+        let d = disk();
+        assert!((area(&d) - PI).abs() < 0.01 * PI);
+        assert!(faces_out(&d, None));
+    }
+
+    #[test]
+    fn cube_and_sphere_face_outward() {
+        let c = cube();
+        assert_eq!((c.indices.len(), area(&c)), (12, 24.0));
+        assert!(faces_out(&c, Some(Vec3::ZERO)));
+        let center = Vec3::new(1.0, 2.0, 3.0);
+        let s = sphere(center, 2.0);
+        assert!(faces_out(&s, Some(center)));
+        assert!((area(&s) - 16.0 * PI).abs() < 0.01 * 16.0 * PI);
+        assert!(s.positions.iter().all(|p| ((*p - center).length() - 2.0).abs() < 1e-5));
+    }
+
+    #[test]
+    fn placing_transforms_points_and_normals_and_keeps_facing_under_mirrors() {
+        let m = Mat4::from_translation(Vec3::new(0.0, 0.0, 5.0)) * Mat4::from_scale(Vec3::new(2.0, 1.0, 1.0));
+        let r = rectangle().placed(m, false);
+        assert_eq!(r.positions[2], Vec3::new(2.0, 1.0, 5.0));
+        assert!(faces_out(&r, None));
+        let mirrored = rectangle().placed(Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)), false);
+        assert!(faces_out(&mirrored, None));
+        let flipped = rectangle().placed(Mat4::IDENTITY, true);
+        assert!(flipped.indices.iter().all(|t| {
+            let [a, b, c] = t.map(|i| flipped.positions[i as usize]);
+            (b - a).cross(c - a).z < 0.0
+        }));
+        assert_eq!(flipped.normals.unwrap()[0], Vec3::NEG_Z);
+    }
+
+    #[test]
+    fn smooth_normals_average_the_faces() {
+        let mut c = cube();
+        c.smooth_normals();
+        // Each corner of a face belongs to that face only (faces do not share vertices).
+        assert_eq!(c.normals.unwrap()[0], Vec3::NEG_X);
+    }
+}
