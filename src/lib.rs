@@ -3,9 +3,13 @@
 //! engine (`lightgraph-engine`) into fused or split kernels, over scenes from
 //! `lightgraph-scenes`.
 
+// The command-line modules name this crate `lightgraph`, as the binary does.
+extern crate self as lightgraph;
+
 pub mod aov;
 pub mod assets;
 pub mod bench;
+pub mod cli;
 #[cfg(feature = "mpi")]
 pub mod cluster;
 pub mod compare;

@@ -5,8 +5,9 @@
 //! films of the same settings over disjoint frame ranges (shards of one run) into one.
 
 use crate::output::{ExrFile, read_exr, write_channels};
-use crate::render::{Accumulation, Image};
+use crate::render::{Accumulation, Image, SessionOptions};
 use anyhow::{Result, anyhow, bail};
+use lightgraph_engine::{ConstValue, Graph};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -304,6 +305,44 @@ impl Reference {
         }
         Ok(())
     }
+}
+
+/// The settings a film records and `merge` checks ([`SETTINGS`], and
+/// `measured`, the graph's measured constants, where it has any).
+pub fn film_settings(scene: &str, graph: &Graph, opts: &SessionOptions) -> BTreeMap<String, String> {
+    let (measured, constants): (BTreeMap<_, _>, BTreeMap<_, _>) = opts
+        .constants
+        .clone()
+        .into_iter()
+        .partition(|(name, _)| graph.measured.contains_key(name));
+    let mut settings: BTreeMap<String, String> = [
+        ("scene", scene.to_string()),
+        ("graph", graph.name.clone()),
+        ("samples_per_frame", opts.samples_per_frame.to_string()),
+        ("seed", opts.seed.to_string()),
+        ("constants", constants_text(&constants)),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    if !measured.is_empty() {
+        settings.insert("measured".to_string(), constants_text(&measured));
+    }
+    settings
+}
+
+/// The constant overrides as `NAME=VALUE` words (the inverse of the CLI's `--set` parsing).
+pub fn constants_text(constants: &BTreeMap<String, ConstValue>) -> String {
+    let words: Vec<String> = constants
+        .iter()
+        .map(|(k, v)| match v {
+            ConstValue::U32(x) => format!("{k}={x}"),
+            ConstValue::I32(x) => format!("{k}={x}"),
+            ConstValue::F32(x) => format!("{k}={x:?}"),
+            ConstValue::Bool(x) => format!("{k}={x}"),
+        })
+        .collect();
+    words.join(" ")
 }
 
 /// `ranges` sorted, adjacent ones joined; an error naming two that overlap.

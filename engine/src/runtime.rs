@@ -47,7 +47,7 @@ enum ParameterSource {
     /// The same value every frame.
     Fixed(ConstValue),
     /// A function of the frame index.
-    Schedule(Box<dyn Fn(u32) -> ConstValue>),
+    Schedule(Box<dyn Fn(u32) -> ConstValue + Send + Sync>),
 }
 
 /// The pipelines of an instance.
@@ -138,7 +138,11 @@ impl<'g> Instance<'g> {
 
     /// Sets parameter `name` to `schedule(frame index)` in every later frame (converted to
     /// the parameter's type).
-    pub fn set_parameter_schedule(&mut self, name: &str, schedule: impl Fn(u32) -> f64 + 'static) -> Result<()> {
+    pub fn set_parameter_schedule(
+        &mut self,
+        name: &str,
+        schedule: impl Fn(u32) -> f64 + Send + Sync + 'static,
+    ) -> Result<()> {
         let default = self.parameter_default(name)?;
         self.parameters.insert(
             name.to_string(),

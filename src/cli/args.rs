@@ -244,43 +244,7 @@ pub fn measure_into(
     Ok(())
 }
 
-/// The settings a film records and `merge` checks (lightgraph::reference::SETTINGS, and
-/// `measured`, the graph's measured constants, where it has any).
-pub fn film_settings(scene: &str, graph: &Graph, opts: &SessionOptions) -> BTreeMap<String, String> {
-    let (measured, constants): (BTreeMap<_, _>, BTreeMap<_, _>) = opts
-        .constants
-        .clone()
-        .into_iter()
-        .partition(|(name, _)| graph.measured.contains_key(name));
-    let mut settings: BTreeMap<String, String> = [
-        ("scene", scene.to_string()),
-        ("graph", graph.name.clone()),
-        ("samples_per_frame", opts.samples_per_frame.to_string()),
-        ("seed", opts.seed.to_string()),
-        ("constants", constants_text(&constants)),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
-    if !measured.is_empty() {
-        settings.insert("measured".to_string(), constants_text(&measured));
-    }
-    settings
-}
-
-/// The constant overrides as `NAME=VALUE` words (the inverse of [`parse_sets`]).
-pub fn constants_text(constants: &BTreeMap<String, ConstValue>) -> String {
-    let words: Vec<String> = constants
-        .iter()
-        .map(|(k, v)| match v {
-            ConstValue::U32(x) => format!("{k}={x}"),
-            ConstValue::I32(x) => format!("{k}={x}"),
-            ConstValue::F32(x) => format!("{k}={x:?}"),
-            ConstValue::Bool(x) => format!("{k}={x}"),
-        })
-        .collect();
-    words.join(" ")
-}
+pub use lightgraph::reference::{constants_text, film_settings};
 
 /// A number with an SI prefix and a trailing space, e.g. "1.28 G".
 pub fn si(v: f64) -> String {

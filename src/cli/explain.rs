@@ -5,6 +5,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use lightgraph::render::{Session, load_graph, load_scene_with};
 use lightgraph_engine::{Gpu, Plan, Program};
+use std::fmt::Write;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -24,7 +25,16 @@ pub struct ExplainArgs {
     pub wgsl: Option<PathBuf>,
 }
 
+/// Prints [`report`].
 pub fn explain(args: ExplainArgs) -> Result<()> {
+    print!("{}", report(&args)?);
+    Ok(())
+}
+
+/// The explanation of the layouts `args` names: features, measured constants, each layout's
+/// kernels, schedule and memory; writes the WGSL and DOT files it asks for.
+pub fn report(args: &ExplainArgs) -> Result<String> {
+    let mut out = String::new();
     let c = &args.common;
     let graph = load_graph(args.graph.name())?;
     let scene = load_scene_with(c.scene(), c.bvh)?;
@@ -38,15 +48,16 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
     let (device, mut target) = device.unwrap_or_default();
     target.alias_transients = !c.separate_memory;
     let flags = lightgraph::render::kernel_flags(device, &scene, c.all_features);
-    print_features(&flags);
+    features(&mut out, &flags)?;
     let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
     let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
     let externals = scene.compiled.resources(&camera);
-    println!(
+    writeln!(
+        out,
         "layouts of graph '{}': {}\n",
         graph.name,
         graph.layouts.keys().cloned().collect::<Vec<_>>().join(", ")
-    );
+    )?;
     for layout in layouts {
         let plan = Plan::new(&graph, &layout)?;
         // A graph with measured constants (LVC-BPT's average light sub-path length) is
@@ -65,14 +76,18 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
         };
         for name in graph.measured.keys() {
             match (&session, program.constants().get(name)) {
-                (Some(_), Some(v)) => println!("measured {name} = {v}"),
-                _ => println!("{name} not measured (no GPU): sizes that depend on it are shown for its default"),
+                (Some(_), Some(v)) => writeln!(out, "measured {name} = {v}")?,
+                _ => writeln!(
+                    out,
+                    "{name} not measured (no GPU): sizes that depend on it are shown for its default"
+                )?,
             }
         }
-        println!(
+        writeln!(
+            out,
             "{}",
             lightgraph_engine::explain::report(program, &|name| externals.get(name).map(|b| b.len() as u64))
-        );
+        )?;
         if let Some(dir) = &args.wgsl {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
             let operator_kernels = program.ops.iter().flat_map(|op| op.kernels.iter().map(|(k, _)| k));
@@ -84,27 +99,28 @@ pub fn explain(args: ExplainArgs) -> Result<()> {
     }
     if let Some(dot) = &args.dot {
         std::fs::write(dot, graph.to_dot()).with_context(|| format!("writing {}", dot.display()))?;
-        println!("wrote {}", dot.display());
+        writeln!(out, "wrote {}", dot.display())?;
     }
-    Ok(())
+    Ok(out)
 }
 
 /// Lists the scene features compiled into the kernels and those left out.
-fn print_features(flags: &std::collections::BTreeSet<String>) {
+fn features(out: &mut String, flags: &std::collections::BTreeSet<String>) -> std::fmt::Result {
     let (used, unused): (Vec<_>, Vec<_>) = lightgraph_scenes::features::ALL
         .iter()
         .partition(|(f, _)| flags.contains(*f));
-    println!("scene features compiled in:");
+    writeln!(out, "scene features compiled in:")?;
     for (f, what) in used {
-        println!("  {f:<18} {what}");
+        writeln!(out, "  {f:<18} {what}")?;
     }
     let names: Vec<&str> = unused.iter().map(|(f, _)| *f).collect();
-    println!(
+    writeln!(
+        out,
         "left out: {}\n",
         if names.is_empty() {
             "none".to_string()
         } else {
             names.join(", ")
         }
-    );
+    )
 }

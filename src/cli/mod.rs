@@ -1,4 +1,5 @@
-//! The commands of the `lightgraph` binary, one module each, and the options they share.
+//! The commands of the `lightgraph` binary, one module each, the options they share, and the
+//! command line that chooses one (also run from the Python module).
 
 pub mod args;
 pub mod bench;
@@ -13,3 +14,90 @@ pub mod operators;
 pub mod reference;
 pub mod render;
 pub mod stress;
+
+use bench::BenchArgs;
+use clap::{Parser, Subcommand};
+use compare::CompareArgs;
+use explain::ExplainArgs;
+use merge::MergeArgs;
+use operators::OperatorsArgs;
+use reference::ReferenceArgs;
+use render::RenderArgs;
+use stress::StressArgs;
+
+/// The command line: one of the commands with its arguments.
+#[derive(Parser)]
+#[command(
+    name = "lightgraph",
+    version,
+    about = "GPU progressive light transport: algorithms as frame graphs of compute passes"
+)]
+pub struct Cli {
+    /// The command to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene progressively and write an EXR and a PNG preview.
+    Render(RenderArgs),
+    /// Render a long reference accumulated in f64, with its variance; resumable.
+    Reference(ReferenceArgs),
+    /// Add films of the same settings over disjoint frame ranges (shards of one run) into one.
+    Merge(MergeArgs),
+    /// Render several estimators and layouts for the same time and plot their error against
+    /// a reference over time.
+    Compare(CompareArgs),
+    /// Run the numerical stress suite: extreme scenes with every estimator, each checked
+    /// against its invariant.
+    Stress(StressArgs),
+    /// Print the kernels, schedule and resources of a graph's layouts.
+    Explain(ExplainArgs),
+    /// Measure layouts over a sweep of paths per frame: Markdown table, CSV and PNG plot.
+    Bench(BenchArgs),
+    /// Check the engine's collective operators (scan, counting sort) against the CPU and
+    /// time them on the GPU.
+    Operators(OperatorsArgs),
+    /// List built-in graphs with their layouts, built-in scenes and GPU adapters.
+    List,
+}
+
+impl Cli {
+    /// Parses `args` (the program name first), a usage error as an error with clap's message.
+    pub fn parse_from_args<I, T>(args: I) -> anyhow::Result<Cli>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
+        Cli::try_parse_from(args).map_err(|e| anyhow::anyhow!("{}", e.render().to_string().trim_end()))
+    }
+
+    /// The asset root `--assets` gives, if any.
+    pub fn assets(&self) -> Option<std::path::PathBuf> {
+        match &self.command {
+            Command::Render(a) => a.common.assets.clone(),
+            Command::Reference(a) => a.common.assets.clone(),
+            Command::Compare(a) => a.common.assets.clone(),
+            Command::Explain(a) => a.common.assets.clone(),
+            Command::Bench(a) => a.common.assets.clone(),
+            Command::List | Command::Stress(_) | Command::Operators(_) | Command::Merge(_) => None,
+        }
+    }
+
+    /// Runs the command.
+    pub fn run(self) -> anyhow::Result<()> {
+        match self.command {
+            Command::Render(a) => render::render(a),
+            Command::Reference(a) => reference::reference(a),
+            Command::Merge(a) => merge::merge(a),
+            Command::Compare(a) => compare::compare(a),
+            Command::Explain(a) => explain::explain(a),
+            Command::Bench(a) => bench::bench(a),
+            Command::List => list::list(),
+            Command::Stress(a) => stress::stress(a),
+            Command::Operators(a) => operators::operators(a),
+        }
+    }
+}

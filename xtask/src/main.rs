@@ -11,7 +11,7 @@ const INSTALL: &str = "apt-get install -y --no-install-recommends mesa-vulkan-dr
 
 fn usage() -> ExitCode {
     eprintln!(
-        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [cargo test args]           run the whole test suite (and the MPI test where mpirun exists)\n  vulkan                           only make sure a Vulkan driver is installed"
+        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [cargo test args]           run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do)\n  vulkan                           only make sure a Vulkan driver is installed"
     );
     ExitCode::from(2)
 }
@@ -126,6 +126,65 @@ fn mpi_test(extra: &[String]) -> ExitCode {
     )
 }
 
+/// The first Python interpreter (LIGHTGRAPH_PYTHON, python3, /usr/bin/python3) that has
+/// numpy and pytest.
+fn python_with_pytest() -> Option<String> {
+    let candidates = std::env::var("LIGHTGRAPH_PYTHON")
+        .into_iter()
+        .chain(["python3".into(), "/usr/bin/python3".into()]);
+    candidates.into_iter().find(|python| {
+        Command::new(python)
+            .args(["-c", "import numpy, pytest"])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    })
+}
+
+/// The Python module's tests (python/tests): builds the module for an interpreter with numpy
+/// and pytest, puts it where that interpreter finds it, and runs pytest against the CLI binary
+/// of the same build; a note when no such interpreter exists.
+fn python_test() -> ExitCode {
+    let Some(python) = python_with_pytest() else {
+        eprintln!(
+            "xtask: no Python with numpy and pytest: the Python module's tests are skipped (Debian: apt-get install python3-numpy python3-pytest)"
+        );
+        return ExitCode::SUCCESS;
+    };
+    // SAFETY: xtask is single-threaded; the child cargo reads it.
+    unsafe { std::env::set_var("PYO3_PYTHON", &python) };
+    let built = cargo(&["build", "--release", "--package", "lightgraph-python"], &[]);
+    if built != ExitCode::SUCCESS {
+        return built;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), Into::into);
+    let module_dir = target.join("python");
+    let copied = std::fs::create_dir_all(&module_dir).and_then(|_| {
+        std::fs::copy(
+            target.join("release/liblightgraph.so"),
+            module_dir.join("lightgraph.so"),
+        )
+    });
+    if let Err(e) = copied {
+        eprintln!("xtask: cannot put the Python module into {}: {e}", module_dir.display());
+        return ExitCode::FAILURE;
+    }
+    let status = Command::new(&python)
+        .args(["-m", "pytest", "-q", "python/tests"])
+        .current_dir(&root)
+        .env("PYTHONPATH", &module_dir)
+        .env("LIGHTGRAPH_BIN", target.join("release/lightgraph"))
+        .status();
+    match status {
+        Ok(s) if s.success() => ExitCode::SUCCESS,
+        Ok(_) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("xtask: cannot run {python}: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(command) = args.first() else { return usage() };
@@ -139,10 +198,19 @@ fn main() -> ExitCode {
     }
     match command.as_str() {
         "render" => cargo(&["run", "--release", "--package", "lightgraph", "--", "render"], rest),
-        "test" => match cargo(&["test", "--workspace", "--release"], rest) {
-            ExitCode::SUCCESS => mpi_test(rest),
-            failed => failed,
-        },
+        "test" => {
+            let rust = cargo(
+                &["test", "--workspace", "--exclude", "lightgraph-python", "--release"],
+                rest,
+            );
+            if rust != ExitCode::SUCCESS {
+                return rust;
+            }
+            match mpi_test(rest) {
+                ExitCode::SUCCESS => python_test(),
+                failed => failed,
+            }
+        }
         _ => ExitCode::SUCCESS,
     }
 }

@@ -1,0 +1,487 @@
+//! `import lightgraph`: the renderer from Python. Images come back as float32 numpy arrays of
+//! shape (height, width, 3); errors are `lightgraph.Error` exceptions carrying the CLI's
+//! messages (file:line:column for bad scene and graph files). Keyword arguments are the CLI's
+//! flags (`max_path_length=8` is `--max-path-length 8`) and are checked as the CLI checks
+//! them. The GPU work runs with the interpreter released, so other Python threads go on
+//! meanwhile. Every call on one adapter shares one device, opened on first use and kept for
+//! the process's life.
+
+use ::lightgraph::cli::args::{named_layout, options};
+use ::lightgraph::cli::{Cli, Command};
+use ::lightgraph::reference::Reference;
+use ::lightgraph::render::{Session as RenderSession, load_graph, load_scene_with};
+use lightgraph_engine::Gpu;
+use numpy::{PyArray1, PyArray3, PyArrayMethods};
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyList};
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::{Mutex, OnceLock};
+use std::time::{Duration, Instant};
+
+create_exception!(
+    lightgraph,
+    Error,
+    PyException,
+    "An error of lightgraph, with the CLI's message (file:line:column for bad files)."
+);
+
+/// The error as a `lightgraph.Error` with the whole chain of causes, as the CLI prints it.
+fn err(e: impl Into<anyhow::Error>) -> PyErr {
+    Error::new_err(format!("{:#}", e.into()))
+}
+
+/// The device of `adapter` (index, PCI bus id or name; the default adapter when absent),
+/// opened once per process.
+fn gpu(adapter: Option<&str>) -> PyResult<&'static Gpu> {
+    static GPUS: OnceLock<Mutex<HashMap<String, &'static Gpu>>> = OnceLock::new();
+    let key = adapter.unwrap_or("").to_string();
+    let mut gpus = GPUS
+        .get_or_init(Default::default)
+        .lock()
+        .map_err(|_| Error::new_err("device table poisoned"))?;
+    if let Some(g) = gpus.get(&key) {
+        return Ok(g);
+    }
+    let opened: &'static Gpu = Box::leak(Box::new(Gpu::new(adapter).map_err(err)?));
+    gpus.insert(key, opened);
+    Ok(opened)
+}
+
+/// A command line built from keyword arguments, parsed by the CLI's own parser.
+struct Argv(Vec<String>);
+
+impl Argv {
+    /// `lightgraph COMMAND`.
+    fn new(command: &str) -> Argv {
+        Argv(vec!["lightgraph".into(), command.into()])
+    }
+
+    /// Adds `--flag value` when `value` is given.
+    fn opt(mut self, flag: &str, value: Option<impl ToString>) -> Argv {
+        if let Some(v) = value {
+            self.0.push(format!("--{flag}"));
+            self.0.push(v.to_string());
+        }
+        self
+    }
+
+    /// Adds `--flag` when `on`.
+    fn flag(mut self, flag: &str, on: bool) -> Argv {
+        if on {
+            self.0.push(format!("--{flag}"));
+        }
+        self
+    }
+
+    /// Adds `--set NAME=VALUE` for each entry of `constants` (booleans as true/false).
+    fn constants(mut self, constants: Option<&Bound<'_, PyDict>>) -> PyResult<Argv> {
+        for (k, v) in constants.into_iter().flat_map(|d| d.iter()) {
+            let value = match v.cast::<PyBool>() {
+                Ok(b) => b.is_true().to_string(),
+                Err(_) => v.str()?.to_string(),
+            };
+            self.0.push("--set".into());
+            self.0.push(format!("{}={value}", k.str()?));
+        }
+        Ok(self)
+    }
+
+    /// The command the CLI's parser makes of it; a usage error as `lightgraph.Error`.
+    fn parse(self) -> PyResult<Command> {
+        Ok(Cli::parse_from_args(self.0).map_err(err)?.command)
+    }
+}
+
+/// `WxH` of a (width, height) pair.
+fn size_text(res: Option<(u32, u32)>) -> Option<String> {
+    res.map(|(w, h)| format!("{w}x{h}"))
+}
+
+/// Pixels as a float32 array of shape (height, width, 3).
+fn array<'py>(py: Python<'py>, mean: &[[f32; 3]], (w, h): (u32, u32)) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let flat: Vec<f32> = mean.iter().flatten().copied().collect();
+    PyArray1::from_vec(py, flat).reshape([h as usize, w as usize, 3])
+}
+
+/// The scene options shared by `Session`, `render`, `reference` and `explain`.
+#[derive(Clone, Copy)]
+struct SceneArgs<'a> {
+    scene: &'a str,
+    graph: &'a str,
+    layout: Option<&'a str>,
+    spp: u32,
+    res: Option<(u32, u32)>,
+    max_path_length: Option<u32>,
+    bvh: &'a str,
+    adapter: Option<&'a str>,
+}
+
+impl SceneArgs<'_> {
+    /// `lightgraph COMMAND` with these options and `constants`.
+    fn argv(&self, command: &str, constants: Option<&Bound<'_, PyDict>>) -> PyResult<Argv> {
+        Argv::new(command)
+            .opt("scene", Some(self.scene))
+            .opt("graph", Some(self.graph))
+            .opt("layout", self.layout)
+            .opt("spp", Some(self.spp))
+            .opt("res", size_text(self.res))
+            .opt("max-path-length", self.max_path_length)
+            .opt("bvh", Some(self.bvh))
+            .opt("adapter", self.adapter)
+            .constants(constants)
+    }
+}
+
+/// A progressive render: frames accumulate into one image; `render` renders more of them
+/// with the interpreter released, `image` reads the mean so far.
+#[pyclass(module = "lightgraph")]
+struct Session {
+    session: RenderSession<'static>,
+    adapter: String,
+    seconds: f64,
+}
+
+impl Session {
+    /// The session `render`'s command-line options describe.
+    fn open(py: Python<'_>, command: Command) -> PyResult<Session> {
+        let Command::Render(args) = command else {
+            unreachable!("a render command line")
+        };
+        let c = &args.common;
+        let gpu = gpu(c.adapter.as_deref())?;
+        let graph = load_graph(args.graph.name()).map_err(err)?;
+        let scene = py.detach(|| load_scene_with(c.scene(), c.bvh)).map_err(err)?;
+        let opts = options(c, &scene, &graph.constants, args.seed).map_err(err)?;
+        let (layout, decl) = named_layout(&graph, args.layout.as_deref()).map_err(err)?;
+        let session = py
+            .detach(|| RenderSession::with_layout(gpu, &graph, &layout, decl, &scene, opts))
+            .map_err(err)?;
+        Ok(Session {
+            session,
+            adapter: gpu.info.name.clone(),
+            seconds: 0.0,
+        })
+    }
+
+    /// Renders `frames` more frames, or frames for `time` seconds, with the interpreter
+    /// released.
+    fn advance(&mut self, py: Python<'_>, frames: u32, time: Option<f64>) -> PyResult<()> {
+        let started = Instant::now();
+        let session = &mut self.session;
+        py.detach(|| match time {
+            Some(t) => {
+                let budget = Duration::from_secs_f64(t.max(0.0));
+                while started.elapsed() < budget {
+                    session.render_for(budget - started.elapsed(), u32::MAX)?;
+                }
+                anyhow::Ok(())
+            }
+            None => {
+                while session.frames < frames {
+                    session.render_for(Duration::from_millis(200), frames - session.frames)?;
+                }
+                Ok(())
+            }
+        })
+        .map_err(err)?;
+        self.seconds += started.elapsed().as_secs_f64();
+        Ok(())
+    }
+}
+
+#[pymethods]
+impl Session {
+    /// Plans, compiles and instantiates `graph` in `layout` (its default when None) for
+    /// `scene` (a built-in name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file).
+    /// `constants` maps graph constants to values (`--set`); `res` is (width, height).
+    #[new]
+    #[pyo3(signature = (scene = "cornell-mitsuba", graph = "pt", layout = None, spp = 1, res = None, seed = 1,
+        constants = None, max_path_length = None, bvh = "cwbvh", adapter = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        scene: &str,
+        graph: &str,
+        layout: Option<&str>,
+        spp: u32,
+        res: Option<(u32, u32)>,
+        seed: u32,
+        constants: Option<&Bound<'_, PyDict>>,
+        max_path_length: Option<u32>,
+        bvh: &str,
+        adapter: Option<&str>,
+    ) -> PyResult<Session> {
+        let s = SceneArgs {
+            scene,
+            graph,
+            layout,
+            spp,
+            res,
+            max_path_length,
+            bvh,
+            adapter,
+        };
+        let command = s.argv("render", constants)?.opt("seed", Some(seed)).parse()?;
+        Session::open(py, command)
+    }
+
+    /// Renders `frames` more frames, or as many as fit in `time` seconds when given (the GPU
+    /// works with the interpreter released).
+    #[pyo3(signature = (frames = 1, time = None))]
+    fn render(&mut self, py: Python<'_>, frames: u32, time: Option<f64>) -> PyResult<()> {
+        let target = self.session.frames.saturating_add(frames);
+        self.advance(py, target, time)
+    }
+
+    /// The mean image so far, float32 of shape (height, width, 3).
+    fn image<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let image = self.session.image().map_err(err)?;
+        array(py, &image.mean, (image.width, image.height))
+    }
+
+    /// Frames rendered so far.
+    #[getter]
+    fn frames(&self) -> u32 {
+        self.session.frames
+    }
+
+    /// Statistics so far: frames, samples (per pixel), rays, seconds (of rendering calls)
+    /// and the adapter.
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("frames", self.session.frames)?;
+        d.set_item("samples", self.session.samples_per_pixel())?;
+        d.set_item("rays", self.session.rays())?;
+        d.set_item("seconds", self.seconds)?;
+        d.set_item("adapter", &self.adapter)?;
+        Ok(d)
+    }
+}
+
+/// Renders `scene` with `graph` for `frames` frames (or for `time` seconds) and returns the
+/// mean image (float32, (height, width, 3)) and the statistics, as `lightgraph render` with
+/// the same options and seed renders it.
+#[pyfunction]
+#[pyo3(signature = (scene = "cornell-mitsuba", graph = "pt", layout = None, spp = 1, res = None, seed = 1,
+    frames = 64, time = None, constants = None, max_path_length = None, bvh = "cwbvh", adapter = None))]
+#[allow(clippy::too_many_arguments)]
+fn render<'py>(
+    py: Python<'py>,
+    scene: &str,
+    graph: &str,
+    layout: Option<&str>,
+    spp: u32,
+    res: Option<(u32, u32)>,
+    seed: u32,
+    frames: u32,
+    time: Option<f64>,
+    constants: Option<&Bound<'_, PyDict>>,
+    max_path_length: Option<u32>,
+    bvh: &str,
+    adapter: Option<&str>,
+) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyDict>)> {
+    let mut s = Session::new(
+        py,
+        scene,
+        graph,
+        layout,
+        spp,
+        res,
+        seed,
+        constants,
+        max_path_length,
+        bvh,
+        adapter,
+    )?;
+    s.advance(py, frames, time)?;
+    Ok((s.image(py)?, s.stats(py)?))
+}
+
+/// Renders a reference film as `lightgraph reference` does (f64 sums and variance, the
+/// settings, a PNG preview; seed 1000003 by default, resumable with `resume`) for `frames`
+/// frames or `time` seconds, writes it to `out`, and returns its mean image.
+#[pyfunction]
+#[pyo3(signature = (scene = "cornell-mitsuba", out = PathBuf::from("out/reference.exr"), graph = "pt", layout = None,
+    spp = 1, res = None, seed = None, frames = None, time = None, constants = None, max_path_length = None,
+    bvh = "cwbvh", adapter = None, resume = None))]
+#[allow(clippy::too_many_arguments)]
+fn reference<'py>(
+    py: Python<'py>,
+    scene: &str,
+    out: PathBuf,
+    graph: &str,
+    layout: Option<&str>,
+    spp: u32,
+    res: Option<(u32, u32)>,
+    seed: Option<u32>,
+    frames: Option<u32>,
+    time: Option<f64>,
+    constants: Option<&Bound<'_, PyDict>>,
+    max_path_length: Option<u32>,
+    bvh: &str,
+    adapter: Option<&str>,
+    resume: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let s = SceneArgs {
+        scene,
+        graph,
+        layout,
+        spp,
+        res,
+        max_path_length,
+        bvh,
+        adapter,
+    };
+    let frames = frames.or(time.is_none().then_some(64));
+    let cli = s
+        .argv("reference", constants)?
+        .opt("out", Some(out.display()))
+        .opt("seed", seed)
+        .opt("frames", frames)
+        .opt("time", time.map(|t| format!("{}ms", (t * 1e3).round() as u64)))
+        .opt("resume", resume.as_ref().map(|p| p.display()));
+    run(py, cli)?;
+    let film = Reference::read(&out).map_err(err)?;
+    array(py, &film.mean(), film.size)
+}
+
+/// Runs each of `runs` (`graph[:layout][@NAME=VALUE...]`, comma-separated) for `time`
+/// seconds against the reference film `reference`, as `lightgraph compare` does, writes the
+/// comparison into `out` (curves.csv, rmse_vs_time.png, summary.md, each run's EXR and PNG)
+/// and returns the summary (Markdown).
+#[pyfunction]
+#[pyo3(signature = (reference, runs, time = 10.0, seed = 1, out = PathBuf::from("out/compare"), per_decade = 6,
+    baseline = None, adapter = None))]
+#[allow(clippy::too_many_arguments)]
+fn compare(
+    py: Python<'_>,
+    reference: PathBuf,
+    runs: &str,
+    time: f64,
+    seed: u32,
+    out: PathBuf,
+    per_decade: u32,
+    baseline: Option<&str>,
+    adapter: Option<&str>,
+) -> PyResult<String> {
+    let cli = Argv::new("compare")
+        .opt("reference", Some(reference.display()))
+        .opt("runs", Some(runs))
+        .opt("time", Some(format!("{}ms", (time * 1e3).round() as u64)))
+        .opt("seed", Some(seed))
+        .opt("out", Some(out.display()))
+        .opt("per-decade", Some(per_decade))
+        .opt("baseline", baseline)
+        .opt("adapter", adapter);
+    run(py, cli)?;
+    let summary = out.join("summary.md");
+    std::fs::read_to_string(&summary).map_err(|e| Error::new_err(format!("{}: {e}", summary.display())))
+}
+
+/// The kernels, schedule and resources of `graph`'s layouts (all of them, or `layout`) for
+/// `scene`, as `lightgraph explain` prints them.
+#[pyfunction]
+#[pyo3(signature = (graph = "pt", layout = None, scene = "cornell-mitsuba", res = None, spp = 1, constants = None,
+    all_features = false, adapter = None))]
+#[allow(clippy::too_many_arguments)]
+fn explain(
+    py: Python<'_>,
+    graph: &str,
+    layout: Option<&str>,
+    scene: &str,
+    res: Option<(u32, u32)>,
+    spp: u32,
+    constants: Option<&Bound<'_, PyDict>>,
+    all_features: bool,
+    adapter: Option<&str>,
+) -> PyResult<String> {
+    let s = SceneArgs {
+        scene,
+        graph,
+        layout,
+        spp,
+        res,
+        max_path_length: None,
+        bvh: "cwbvh",
+        adapter,
+    };
+    let Command::Explain(args) = s
+        .argv("explain", constants)?
+        .flag("all-features", all_features)
+        .parse()?
+    else {
+        unreachable!("an explain command line")
+    };
+    py.detach(|| ::lightgraph::cli::explain::report(&args)).map_err(err)
+}
+
+/// What this installation offers: built-in scenes (name to file), graphs, and the GPU
+/// adapters (as `lightgraph list` shows them).
+#[pyfunction(name = "list")]
+fn list_all(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    let scenes = PyDict::new(py);
+    for (name, path) in ::lightgraph::assets::scene_names() {
+        scenes.set_item(name, path)?;
+    }
+    d.set_item("scenes", scenes)?;
+    d.set_item("graphs", PyList::new(py, ::lightgraph::assets::graph_names())?)?;
+    let adapters: Vec<String> = lightgraph_engine::gpu::adapters()
+        .iter()
+        .enumerate()
+        .map(|(i, a)| lightgraph_engine::gpu::describe_adapter(i, a))
+        .collect();
+    d.set_item("adapters", PyList::new(py, adapters)?)?;
+    Ok(d)
+}
+
+/// Reads a film (an EXR from `render`, `reference` or `merge`): its mean image and a dict of
+/// its settings and statistics (the EXR's attributes, as text) with `samples` (per pixel),
+/// `frames` and `seconds`.
+#[pyfunction]
+fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyDict>)> {
+    let film = Reference::read(&path).map_err(err)?;
+    let d = PyDict::new(py);
+    for (k, v) in &film.info {
+        d.set_item(k, v)?;
+    }
+    d.set_item("samples", film.samples_per_pixel())?;
+    d.set_item("frames", film.frames)?;
+    d.set_item("seconds", film.seconds)?;
+    Ok((array(py, &film.mean(), film.size)?, d))
+}
+
+/// Runs a `lightgraph` command line (without the program name), e.g.
+/// `cli(["merge", "a.exr", "b.exr", "--out", "m.exr"])`; its output goes to the process's
+/// stdout and stderr.
+#[pyfunction]
+fn cli(py: Python<'_>, args: Vec<String>) -> PyResult<()> {
+    run(
+        py,
+        Argv(std::iter::once("lightgraph".to_string()).chain(args).collect()),
+    )
+}
+
+/// Parses and runs `argv` with the interpreter released.
+fn run(py: Python<'_>, argv: Argv) -> PyResult<()> {
+    let command = Cli::parse_from_args(argv.0).map_err(err)?;
+    py.detach(|| command.run()).map_err(err)
+}
+
+/// The module `lightgraph`.
+#[pymodule(name = "lightgraph")]
+fn lightgraph_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("Error", m.py().get_type::<Error>())?;
+    m.add_class::<Session>()?;
+    m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(reference, m)?)?;
+    m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(explain, m)?)?;
+    m.add_function(wrap_pyfunction!(list_all, m)?)?;
+    m.add_function(wrap_pyfunction!(read, m)?)?;
+    m.add_function(wrap_pyfunction!(cli, m)?)?;
+    Ok(())
+}
