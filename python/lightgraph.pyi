@@ -36,7 +36,7 @@ class Session:
         seed: int = 1,
         constants: Optional[Mapping[str, Constant]] = None,
         max_path_length: Optional[int] = None,
-        bvh: str = "cwbvh",
+        bvh: str = "auto",
         adapter: Optional[str] = None,
     ) -> None: ...
     def render(self, frames: int = 1, time: Optional[float] = None) -> None:
@@ -60,7 +60,7 @@ def render(
     time: Optional[float] = None,
     constants: Optional[Mapping[str, Constant]] = None,
     max_path_length: Optional[int] = None,
-    bvh: str = "cwbvh",
+    bvh: str = "auto",
     adapter: Optional[str] = None,
 ) -> Tuple[npt.NDArray[np.float32], dict[str, Any]]:
     """Renders ``frames`` frames (or for ``time`` seconds) and returns the mean image and
@@ -79,7 +79,7 @@ def reference(
     time: Optional[float] = None,
     constants: Optional[Mapping[str, Constant]] = None,
     max_path_length: Optional[int] = None,
-    bvh: str = "cwbvh",
+    bvh: str = "auto",
     adapter: Optional[str] = None,
     resume: Optional[Path] = None,
 ) -> npt.NDArray[np.float32]:

@@ -513,6 +513,11 @@ pub struct LayoutDecl {
     /// threshold); every iteration when absent.
     #[serde(default)]
     pub regenerate_at: Option<f32>,
+    /// Settings for the application that runs the graph, by name (lightgraph reads `bvh`:
+    /// the acceleration structure that measured fastest in this layout); the engine carries
+    /// them unread.
+    #[serde(default)]
+    pub hints: BTreeMap<String, String>,
 }
 
 /// How a chain with a loop keeps its threads busy (the paper's regeneration policies).
@@ -556,6 +561,7 @@ impl Default for LayoutDecl {
             policy: Policy::default(),
             threads: None,
             regenerate_at: None,
+            hints: BTreeMap::new(),
         }
     }
 }

@@ -153,9 +153,10 @@ impl Session {
         let c = &args.common;
         let gpu = gpu(c.adapter.as_deref())?;
         let graph = load_graph(args.graph.name()).map_err(err)?;
-        let scene = py.detach(|| load_scene_with(c.scene(), c.bvh)).map_err(err)?;
-        let opts = options(c, &scene, &graph.constants, args.seed).map_err(err)?;
         let (layout, decl) = named_layout(&graph, args.layout.as_deref()).map_err(err)?;
+        let kind = c.bvh.for_layout(&layout, &decl).map_err(err)?;
+        let scene = py.detach(|| load_scene_with(c.scene(), kind)).map_err(err)?;
+        let opts = options(c, &scene, &graph.constants, args.seed).map_err(err)?;
         let session = py
             .detach(|| RenderSession::with_layout(gpu, &graph, &layout, decl, &scene, opts))
             .map_err(err)?;
@@ -199,7 +200,7 @@ impl Session {
     /// `constants` maps graph constants to values (`--set`); `res` is (width, height).
     #[new]
     #[pyo3(signature = (scene = "cornell-mitsuba", graph = "pt", layout = None, spp = 1, res = None, seed = 1,
-        constants = None, max_path_length = None, bvh = "cwbvh", adapter = None))]
+        constants = None, max_path_length = None, bvh = "auto", adapter = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -266,7 +267,7 @@ impl Session {
 /// the same options and seed renders it.
 #[pyfunction]
 #[pyo3(signature = (scene = "cornell-mitsuba", graph = "pt", layout = None, spp = 1, res = None, seed = 1,
-    frames = 64, time = None, constants = None, max_path_length = None, bvh = "cwbvh", adapter = None))]
+    frames = 64, time = None, constants = None, max_path_length = None, bvh = "auto", adapter = None))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
@@ -306,7 +307,7 @@ fn render<'py>(
 #[pyfunction]
 #[pyo3(signature = (scene = "cornell-mitsuba", out = PathBuf::from("out/reference.exr"), graph = "pt", layout = None,
     spp = 1, res = None, seed = None, frames = None, time = None, constants = None, max_path_length = None,
-    bvh = "cwbvh", adapter = None, resume = None))]
+    bvh = "auto", adapter = None, resume = None))]
 #[allow(clippy::too_many_arguments)]
 fn reference<'py>(
     py: Python<'py>,
@@ -405,7 +406,7 @@ fn explain(
         spp,
         res,
         max_path_length: None,
-        bvh: "cwbvh",
+        bvh: "auto",
         adapter,
     };
     let Command::Explain(args) = s

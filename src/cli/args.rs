@@ -88,10 +88,11 @@ pub struct Common {
     /// Item state between split kernels: soa or aos (overrides the layout's).
     #[arg(long, value_parser = parse_state)]
     pub state: Option<StateStorage>,
-    /// Acceleration structure: bvh2 (binary, both children's boxes per node) or cwbvh
-    /// (compressed 8-wide, Ylitie et al. 2017).
-    #[arg(long, value_parser = parse_bvh, default_value = "cwbvh")]
-    pub bvh: BvhKind,
+    /// Acceleration structure: bvh2 (binary, both children's boxes per node), cwbvh
+    /// (compressed 8-wide, Ylitie et al. 2017), or auto: the one measured fastest in the
+    /// layout (its `bvh` hint; cwbvh where it has none).
+    #[arg(long, value_parser = parse_bvh_choice, default_value = "auto")]
+    pub bvh: BvhChoice,
     /// Compile every scene feature (all light kinds, BSDFs, textures, ...) into the kernels
     /// instead of only those the scene uses.
     #[arg(long)]
@@ -115,6 +116,80 @@ pub fn parse_bvh(s: &str) -> Result<BvhKind, String> {
         "bvh2" => Ok(BvhKind::Bvh2),
         "cwbvh" => Ok(BvhKind::Cwbvh),
         _ => Err(format!("'{s}' is not bvh2 or cwbvh")),
+    }
+}
+
+/// `--bvh`: a BVH kind, or `auto` (none named): the layout's measured choice.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BvhChoice(pub Option<BvhKind>);
+
+/// Parses `--bvh` with `auto`.
+pub fn parse_bvh_choice(s: &str) -> Result<BvhChoice, String> {
+    match s.to_lowercase().as_str() {
+        "auto" => Ok(BvhChoice(None)),
+        _ => parse_bvh(s)
+            .map(|k| BvhChoice(Some(k)))
+            .map_err(|e| format!("{e} or auto")),
+    }
+}
+
+impl BvhChoice {
+    /// The BVH of a layout: the one named, else the layout's `bvh` hint (graphs/*.ron, from
+    /// measurements on an H100: docs/performance.md), else the CWBVH.
+    pub fn for_layout(self, name: &str, decl: &LayoutDecl) -> Result<BvhKind> {
+        if let Some(kind) = self.0 {
+            return Ok(kind);
+        }
+        match decl.hints.get("bvh") {
+            None => Ok(BvhKind::Cwbvh),
+            Some(hint) => parse_bvh(hint).map_err(|e| anyhow!("layout '{name}': its hint bvh: {e}")),
+        }
+    }
+
+    /// The BVH when no layout decides (`--layout auto` measures layouts on one scene).
+    pub fn or_default(self) -> BvhKind {
+        self.0.unwrap_or(BvhKind::Cwbvh)
+    }
+}
+
+/// Scenes loaded with each BVH kind asked for, once each (layouts of one command may want
+/// different kinds).
+pub struct Scenes {
+    name: String,
+    loaded: Vec<(BvhKind, LoadedScene)>,
+}
+
+impl Scenes {
+    /// None loaded yet of scene `name`.
+    pub fn new(name: &str) -> Scenes {
+        Scenes {
+            name: name.to_string(),
+            loaded: Vec::new(),
+        }
+    }
+
+    /// Loads the scene with `kind` unless it is loaded already.
+    pub fn load(&mut self, kind: BvhKind) -> Result<()> {
+        if !self.loaded.iter().any(|(k, _)| *k == kind) {
+            self.loaded
+                .push((kind, lightgraph::render::load_scene_with(&self.name, kind)?));
+        }
+        Ok(())
+    }
+
+    /// The longest time one of the loads took (parsing and the BVH build), in seconds.
+    pub fn load_seconds(&self) -> f64 {
+        self.loaded.iter().map(|(_, s)| s.load_seconds).fold(0.0, f64::max)
+    }
+
+    /// The scene with `kind`, which [`Scenes::load`] loaded.
+    pub fn get(&self, kind: BvhKind) -> &LoadedScene {
+        &self
+            .loaded
+            .iter()
+            .find(|(k, _)| *k == kind)
+            .expect("loaded before use")
+            .1
     }
 }
 

@@ -3,8 +3,9 @@
 use super::args::*;
 use anyhow::{Result, anyhow};
 use clap::Args;
-use lightgraph::render::{load_graph, load_scene_with};
+use lightgraph::render::load_graph;
 use lightgraph_engine::{Gpu, Plan};
+use lightgraph_scenes::bvh::BvhKind;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -31,7 +32,6 @@ pub struct BenchArgs {
 
 pub fn bench(args: BenchArgs) -> Result<()> {
     let c = &args.common;
-    let scene = load_scene_with(c.scene(), c.bvh)?;
     let graph = load_graph(args.graph.name())?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
     let points: Vec<(u32, u32, u32)> = match &args.points {
@@ -64,12 +64,21 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         points.len(),
         args.time
     );
+    let mut scenes = Scenes::new(c.scene());
+    let kinds: Vec<BvhKind> = layouts
+        .iter()
+        .map(|(name, decl)| c.bvh.for_layout(name, decl))
+        .collect::<Result<_>>()?;
+    for &kind in &kinds {
+        scenes.load(kind)?;
+    }
     let mut results = Vec::new();
     for (w, h, spp) in points {
-        for (name, decl) in &layouts {
-            let mut opts = options(c, &scene, &graph.constants, 1)?;
+        for ((name, decl), &kind) in layouts.iter().zip(&kinds) {
+            let scene = scenes.get(kind);
+            let mut opts = options(c, scene, &graph.constants, 1)?;
             (opts.width, opts.height, opts.samples_per_frame) = (w, h, spp);
-            match lightgraph::bench::measure(&gpu, &graph, name, decl.clone(), &scene, opts, args.time) {
+            match lightgraph::bench::measure(&gpu, &graph, name, decl.clone(), scene, opts, args.time) {
                 Ok(m) => {
                     eprintln!(
                         "  {:>8.2} M paths  {:<20} {:>8.1} Mrays/s ({:>8.1} GPU) {:>8.1} Msamples/s {:>7.1} fps {:>8.1} MiB",

@@ -7,8 +7,9 @@ use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use lightgraph::compare::{ReportContext, RunResult, RunSpec, run, write_report};
 use lightgraph::reference::Reference;
-use lightgraph::render::{LoadedScene, SessionOptions, load_graph, load_scene_with};
+use lightgraph::render::{SessionOptions, load_graph};
 use lightgraph_engine::{Gpu, Graph};
+use lightgraph_scenes::bvh::BvhKind;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Duration;
@@ -84,7 +85,7 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
         bail!("--per-decade must be at least 1");
     }
     let specs = RunSpec::parse_list(&args.runs)?;
-    let scene = load_scene_with(c.scene(), c.bvh)?;
+    let mut scenes = Scenes::new(c.scene());
     let gpus = match &args.gpus {
         Some(spec) => open_gpus(spec)?,
         None => vec![Gpu::new(c.adapter.as_deref())?],
@@ -93,8 +94,10 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
     let mut runs = Vec::new();
     for spec in &specs {
         let graph = load_graph(&spec.graph)?;
-        let (layout, _) = named_layout(&graph, spec.layout.as_deref())?;
-        let opts = options(c, &scene, &graph.constants, args.seed)?;
+        let (layout, decl) = named_layout(&graph, spec.layout.as_deref())?;
+        let kind = c.bvh.for_layout(&layout, &decl)?;
+        scenes.load(kind)?;
+        let opts = options(c, scenes.get(kind), &graph.constants, args.seed)?;
         if constants_text(&opts.constants) != info("constants") {
             bail!(
                 "{}: the reference was made with constants '{}', run {} would use '{}'",
@@ -112,7 +115,7 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
             .chain(spec.sets.iter().cloned())
             .collect::<Vec<_>>()
             .join("@");
-        runs.push((label, graph, layout, opts));
+        runs.push((label, graph, layout, opts, kind));
     }
     let labels: Vec<&str> = runs.iter().map(|r| r.0.as_str()).collect();
     let baseline = match &args.baseline {
@@ -130,17 +133,17 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
         "{} | scene {} (loaded in {:.2} s) | {} runs of {:?} | reference {} spp",
         gpus.iter().map(Gpu::describe).collect::<Vec<_>>().join("; "),
         c.scene(),
-        scene.load_seconds,
+        scenes.load_seconds(),
         specs.len(),
         args.time,
         reference.samples_per_pixel()
     );
     let ref_mean = reference.mean();
-    let results = run_all(&gpus, &scene, runs, &args, &ref_mean)?;
+    let results = run_all(&gpus, &scenes, runs, &args, &ref_mean)?;
     let ctx = ReportContext {
         scene: c.scene(),
         device: &device,
-        load_seconds: scene.load_seconds,
+        load_seconds: scenes.load_seconds(),
         budget: args.time,
         reference_path: &args.reference,
         reference: &reference,
@@ -171,15 +174,15 @@ fn open_gpus(spec: &str) -> Result<Vec<Gpu>> {
     Ok(gpus)
 }
 
-/// One run of the comparison: its label, graph, layout and options.
-type Job = (String, Graph, String, SessionOptions);
+/// One run of the comparison: its label, graph, layout, options and BVH.
+type Job = (String, Graph, String, SessionOptions, BvhKind);
 
 /// Renders every run of `jobs`, each for `--time` on one of `gpus` (one thread per GPU, each
 /// taking the next run when its last one ends), with a progress bar per run; the results in
 /// the order of `jobs`. The first failure stops the GPUs from taking more runs.
 fn run_all(
     gpus: &[Gpu],
-    scene: &LoadedScene,
+    scenes: &Scenes,
     jobs: Vec<Job>,
     args: &CompareArgs,
     reference: &[[f32; 3]],
@@ -209,12 +212,12 @@ fn run_all(
         for gpu in gpus {
             scope.spawn(|| {
                 while let Some(i) = take() {
-                    let (label, graph, layout, opts) = &jobs[i];
+                    let (label, graph, layout, opts, kind) = &jobs[i];
                     let bar = &progress[i];
                     let mut view = args.tev.view(label, (opts.width, opts.height));
                     let result = run(
                         gpu,
-                        scene,
+                        scenes.get(*kind),
                         graph,
                         (layout, label.clone()),
                         opts.clone(),

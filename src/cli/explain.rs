@@ -3,8 +3,10 @@
 use super::args::*;
 use anyhow::{Context, Result};
 use clap::Args;
-use lightgraph::render::{Session, load_graph, load_scene_with};
+use lightgraph::render::{Session, load_graph};
+use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{Gpu, Plan, Program};
+use lightgraph_scenes::bvh::BvhKind;
 use std::fmt::Write;
 use std::path::PathBuf;
 
@@ -37,33 +39,45 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
     let mut out = String::new();
     let c = &args.common;
     let graph = load_graph(args.graph.name())?;
-    let scene = load_scene_with(c.scene(), c.bvh)?;
-    let opts = options(c, &scene, &graph.constants, 1)?;
-    let layouts: Vec<String> = match &args.layout {
-        Some(l) => vec![l.clone()],
-        None => graph.layouts.keys().cloned().collect(),
+    let layouts: Vec<(String, LayoutDecl)> = match &args.layout {
+        Some(l) => vec![named_layout(&graph, Some(l))?],
+        None => graph.layouts.iter().map(|(n, d)| (n.clone(), d.clone())).collect(),
     };
+    let mut scenes = Scenes::new(c.scene());
+    let mut kinds = Vec::new();
+    for (name, decl) in &layouts {
+        let kind = c.bvh.for_layout(name, decl)?;
+        scenes.load(kind)?;
+        kinds.push(kind);
+    }
     let gpu = Gpu::new(c.adapter.as_deref()).ok();
     let device = gpu.as_ref().map(|g| (lightgraph::render::device_flags(g), g.target()));
     let (device, mut target) = device.unwrap_or_default();
     target.alias_transients = !c.separate_memory;
-    let flags = lightgraph::render::kernel_flags(device, &scene, c.all_features);
-    features(&mut out, &flags)?;
-    let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
-    let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
-    let externals = scene.compiled.resources(&camera);
+    let first = scenes.get(kinds[0]);
+    let opts = options(c, first, &graph.constants, 1)?;
+    features(
+        &mut out,
+        &lightgraph::render::kernel_flags(device.clone(), first, c.all_features),
+    )?;
     writeln!(
         out,
         "layouts of graph '{}': {}\n",
         graph.name,
         graph.layouts.keys().cloned().collect::<Vec<_>>().join(", ")
     )?;
-    for layout in layouts {
+    for ((layout, _), kind) in layouts.into_iter().zip(kinds) {
+        let scene = scenes.get(kind);
+        writeln!(out, "layout {layout}: BVH {}", bvh_name(kind))?;
+        let flags = lightgraph::render::kernel_flags(device.clone(), scene, c.all_features);
+        let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
+        let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
+        let externals = scene.compiled.resources(&camera);
         let plan = Plan::new(&graph, &layout)?;
         // A graph with measured constants (LVC-BPT's average light sub-path length) is
         // measured by a session first, so that the sizes shown are those a render allocates.
         let session = match &gpu {
-            Some(g) if !graph.measured.is_empty() => Some(Session::new(g, &graph, &layout, &scene, opts.clone())?),
+            Some(g) if !graph.measured.is_empty() => Some(Session::new(g, &graph, &layout, scene, opts.clone())?),
             _ => None,
         };
         let compiled;
@@ -102,6 +116,14 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
         writeln!(out, "wrote {}", dot.display())?;
     }
     Ok(out)
+}
+
+/// The `--bvh` name of a BVH kind.
+fn bvh_name(kind: BvhKind) -> &'static str {
+    match kind {
+        BvhKind::Bvh2 => "bvh2",
+        BvhKind::Cwbvh => "cwbvh",
+    }
 }
 
 /// Lists the scene features compiled into the kernels and those left out.

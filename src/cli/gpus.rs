@@ -82,10 +82,10 @@ impl Setup {
         if args.layout.as_deref() == Some("auto") {
             bail!("--layout auto measures layouts on one GPU; name a layout with {how}");
         }
-        let scene = load_scene_with(c.scene(), c.bvh)?;
         let graph = load_graph(args.graph.name())?;
-        let opts = options(c, &scene, &graph.constants, args.seed)?;
         let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
+        let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
+        let opts = options(c, &scene, &graph.constants, args.seed)?;
         Ok(Setup {
             scene,
             graph,

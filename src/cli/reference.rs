@@ -131,11 +131,11 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         (None, Some(r)) => r.clone(),
         (None, None) => PathBuf::from("out/reference.exr"),
     };
-    let scene = load_scene_with(c.scene(), c.bvh)?;
     let graph = load_graph(args.graph.name())?;
+    let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
+    let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
     let seed = args.seed.unwrap_or(REFERENCE_SEED);
     let mut opts = options(c, &scene, &graph.constants, seed)?;
-    let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
     // One measurement for every GPU and for the film (a resumed film brings its own).
     let first_gpu = match &args.gpus {
         Some(spec) => gpu_selectors(spec)?.into_iter().next(),

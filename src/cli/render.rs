@@ -8,8 +8,9 @@ use lightgraph::aov::{Aov, AovRender};
 use lightgraph::metrics::image_error;
 use lightgraph::output;
 use lightgraph::reference::Reference;
-use lightgraph::render::{LoadedScene, Session, load_graph, load_scene_with};
-use lightgraph_engine::Gpu;
+use lightgraph::render::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
+use lightgraph_engine::ir::LayoutDecl;
+use lightgraph_engine::{Gpu, Graph};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -81,36 +82,22 @@ pub fn render(args: RenderArgs) -> Result<()> {
         return super::gpus::render_on_several_gpus(&args, spec);
     }
     let c = &args.common;
-    let scene = load_scene_with(c.scene(), c.bvh)?;
     let graph = load_graph(args.graph.name())?;
+    // A named layout chooses the BVH; `--layout auto` measures its layouts on one.
+    let named = match args.layout.as_deref() {
+        Some("auto") => None,
+        name => Some(named_layout(&graph, name)?),
+    };
+    let kind = match &named {
+        Some((name, decl)) => c.bvh.for_layout(name, decl)?,
+        None => c.bvh.or_default(),
+    };
+    let scene = load_scene_with(c.scene(), kind)?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
     let mut opts = options(c, &scene, &graph.constants, args.seed)?;
-    let (layout, decl) = match args.layout.as_deref() {
-        Some("auto") => {
-            eprintln!(
-                "--layout auto: measuring every legal layout of '{}' for {:?} each",
-                graph.name, args.tune_time
-            );
-            let trials = lightgraph::tune::autotune(&gpu, &graph, &scene, &opts, args.tune_time, |t| {
-                eprintln!("  {:>9.1} Msamples/s  {}", t.score() / 1e6, t.name);
-            })?;
-            let table = lightgraph::tune::table(&trials);
-            println!("{table}");
-            let report = args.out.with_extension("auto.md");
-            if let Some(dir) = report.parent() {
-                std::fs::create_dir_all(dir)?;
-            }
-            std::fs::write(&report, &table)?;
-            let best = &trials[0];
-            eprintln!(
-                "winner: {} ({:.1} Msamples/s); table in {}",
-                best.name,
-                best.score() / 1e6,
-                report.display()
-            );
-            (best.name.clone(), best.decl.clone())
-        }
-        name => named_layout(&graph, name)?,
+    let (layout, decl) = match named {
+        Some(named) => named,
+        None => tune_layout(&gpu, &graph, &scene, &opts, &args)?,
     };
     // Measured once, so that the film records the value (shards must share it to merge).
     let measured = lightgraph::render::measure_constants(&gpu, &graph, &layout, decl.clone(), &scene, &opts)?;
@@ -239,6 +226,39 @@ pub fn render(args: RenderArgs) -> Result<()> {
     }
     println!("wrote {} and {}", args.out.display(), png.display());
     Ok(())
+}
+
+/// `--layout auto`: measures every legal layout of `graph`, writes the table beside the
+/// output, and returns the fastest.
+fn tune_layout(
+    gpu: &Gpu,
+    graph: &Graph,
+    scene: &LoadedScene,
+    opts: &SessionOptions,
+    args: &RenderArgs,
+) -> Result<(String, LayoutDecl)> {
+    eprintln!(
+        "--layout auto: measuring every legal layout of '{}' for {:?} each",
+        graph.name, args.tune_time
+    );
+    let trials = lightgraph::tune::autotune(gpu, graph, scene, opts, args.tune_time, |t| {
+        eprintln!("  {:>9.1} Msamples/s  {}", t.score() / 1e6, t.name);
+    })?;
+    let table = lightgraph::tune::table(&trials);
+    println!("{table}");
+    let report = args.out.with_extension("auto.md");
+    if let Some(dir) = report.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(&report, &table)?;
+    let best = &trials[0];
+    eprintln!(
+        "winner: {} ({:.1} Msamples/s); table in {}",
+        best.name,
+        best.score() / 1e6,
+        report.display()
+    );
+    Ok((best.name.clone(), best.decl.clone()))
 }
 
 /// The feature buffers `list` names, over the frames `session` rendered (see lightgraph::aov).

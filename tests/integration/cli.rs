@@ -95,6 +95,42 @@ fn render_writes_exr_with_metadata_and_png() {
 }
 
 #[test]
+fn each_layout_gets_the_bvh_measured_fastest_in_it_unless_one_is_named() {
+    let text = |args: &[&str]| {
+        let out = lightgraph(args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    let auto = text(&["explain", "--graph", "lt", "--res", "16x16"]);
+    assert!(auto.contains("layout LTsk: BVH bvh2"), "{auto}");
+    assert!(auto.contains("layout LTmk: BVH cwbvh"), "{auto}");
+    let named = text(&[
+        "explain", "--graph", "lt", "--layout", "LTsk", "--res", "16x16", "--bvh", "cwbvh",
+    ]);
+    assert!(named.contains("layout LTsk: BVH cwbvh"), "{named}");
+    let (_, path) = pt_variant(
+        "bvh-hint",
+        "\"NaivePTsk\": (",
+        "\"NaivePTsk\": (\n            hints: {\"bvh\": \"octree\"},",
+    );
+    let graph = path.to_str().unwrap();
+    let err = fails(&["explain", "--graph", graph, "--layout", "NaivePTsk", "--res", "16x16"]);
+    assert!(err.contains("layout 'NaivePTsk'") && err.contains("octree"), "{err}");
+    // Named, the hint is not read.
+    text(&[
+        "explain",
+        "--graph",
+        graph,
+        "--layout",
+        "NaivePTsk",
+        "--res",
+        "16x16",
+        "--bvh",
+        "bvh2",
+    ]);
+}
+
+#[test]
 fn explain_prints_kernels_and_resources_of_each_layout() {
     let out = lightgraph(&["explain", "--graph", "pt", "--res", "32x32"]);
     let text = String::from_utf8_lossy(&out.stdout);
