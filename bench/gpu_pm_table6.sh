@@ -3,8 +3,11 @@
 # hash grid, rectified stochastic hash grid, kD-tree) for the same wall-clock time, and each
 # one's time to the error the baseline (full grid) ends at, against a path-traced reference
 # (PT reaches every path on these scenes): the glossy Cornell box with a point light at
-# 512x512 and ModernHall at 640x360. Run from the repo root with carry [".gpu"] after
-# `../shared/tools/gpu-bundle.sh --scene ModernHall`.
+# 512x512, ModernHall, VeachBidir, LivingRoom (white background for its sky) and Sponza
+# (r_0 = 0.03: the default finds almost no photon there) at 640x360. Run from the repo root
+# with carry [".gpu"] after `../shared/tools/gpu-bundle.sh --scene ModernHall --scene
+# VeachBidir --scene LivingRoom --scene CrytekSponza` (or fewer, with TABLES naming the
+# tables to make: any of cornell-glossy-point modern-hall veach-bidir living-room sponza).
 #   bash bench/gpu_pm_table6.sh LOG [SECONDS] [REFERENCE_SECONDS]
 set -uo pipefail
 log=${1:?usage: bash bench/gpu_pm_table6.sh LOG [SECONDS] [REFERENCE_SECONDS]}
@@ -13,9 +16,11 @@ ref_secs=${3:-90}
 exec > >(tee "$log") 2>&1
 out=${OUT:-$(mktemp -d)}
 source "$(dirname "$0")/gpu_common.sh"
-runs=ppm:PPMsk@PM_STRUCTURE=0,ppm:PPMsk@PM_STRUCTURE=1,ppm:PPMsk@PM_STRUCTURE=3
-table6() {
-  local name=$1 scene=$2 res=$3
+tables=${TABLES:-cornell-glossy-point modern-hall veach-bidir living-room sponza}
+table6() { # NAME SCENE RES [@NAME=VALUE, a setting of every run]
+  local name=$1 scene=$2 res=$3 set=${4:-}
+  [[ " $tables " == *" $name "* ]] || return 0
+  local runs=ppm:PPMsk@PM_STRUCTURE=0$set,ppm:PPMsk@PM_STRUCTURE=1$set,ppm:PPMsk@PM_STRUCTURE=3$set
   echo "== $name"
   lg reference --graph pt --layout StreamingPTmk2 --scene "$scene" --res "$res" --time "${ref_secs}s" \
     --out "$out/$name-ref.exr" 2>&1 | tail -2
@@ -25,3 +30,6 @@ table6() {
 }
 table6 cornell-glossy-point cornell-glossy-point 512x512
 table6 modern-hall .gpu/scenes/ModernHall/staircase2.gltf 640x360
+table6 veach-bidir .gpu/scenes/VeachBidir/veach-bidir.gltf 640x360
+table6 living-room .gpu/scenes/LivingRoom/living-room.gltf 640x360
+table6 sponza sponza 640x360 @PM_RADIUS=0.03
