@@ -2,9 +2,10 @@
 //! default scene, flattened with its node transform into [`Shape::Mesh`]es with their normals
 //! and texture coordinates; metallic-roughness materials ([`Pbr`]) with their base-colour,
 //! metallic-roughness and emissive textures (KHR_texture_transform), alpha mask,
-//! KHR_materials_emissive_strength, KHR_materials_transmission and KHR_materials_ior; and the
-//! perspective cameras the scene's nodes place, and the KHR_lights_punctual lights of its
-//! nodes ([`punctual_light`]).
+//! KHR_materials_emissive_strength, KHR_materials_transmission, KHR_materials_ior and
+//! KHR_materials_specular (as an index of refraction, `MaterialImport::specular_ior`); and
+//! the perspective cameras the scene's nodes place, and the KHR_lights_punctual lights of its
+//! nodes ([`punctual_light`]). Other extensions the file uses are reported as warnings.
 
 use crate::model::{Camera, FovAxis, Light, Look, Material, Pbr, Rgb, Shape};
 use crate::texture::{PbrTextures, Texture, TextureRef, Wrap};
@@ -173,14 +174,24 @@ fn check_accessor(a: &gltf::Accessor, types: &[DataType], dimensions: Dimensions
     Ok(())
 }
 
-/// Required glTF extensions the importer supports.
+/// The index of refraction whose dielectric reflectance at normal incidence is `f0` (< 1).
+fn ior_of_reflectance(f0: f32) -> f32 {
+    let r = f0.max(0.0).sqrt();
+    (1.0 + r) / (1.0 - r)
+}
+
+/// glTF extensions the importer reads.
 const SUPPORTED_REQUIRED: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_lights_punctual",
     "KHR_materials_transmission",
     "KHR_materials_ior",
+    "KHR_materials_specular",
     "KHR_texture_transform",
 ];
+
+/// Extensions that change nothing a render shows (metadata).
+const WITHOUT_EFFECT: &[&str] = &["KHR_xmp", "KHR_xmp_json_ld"];
 
 /// Imports `path`; errors name the file and the problem.
 pub fn import(path: &Path) -> Result<Imported, String> {
@@ -194,6 +205,13 @@ pub fn import(path: &Path) -> Result<Imported, String> {
         }
     }
     let mut out = Imported::default();
+    for used in document.extensions_used() {
+        if !SUPPORTED_REQUIRED.contains(&used) && !WITHOUT_EFFECT.contains(&used) {
+            out.warnings.push(format!(
+                "uses the glTF extension {used}, which lightgraph does not read: rendered without it"
+            ));
+        }
+    }
     let mut materials = MaterialImport {
         images: &images,
         image_texture: vec![None; images.len()],
@@ -505,6 +523,8 @@ impl MaterialImport<'_> {
                 "material '{name}': its textures read texture coordinate sets {sets:?}; all read set {uv_set}"
             ));
         }
+        let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+        let ior = self.specular_ior(&name, m, m.ior().unwrap_or(1.5), transmission);
         self.out.materials.insert(
             name.clone(),
             Material {
@@ -515,8 +535,8 @@ impl MaterialImport<'_> {
                     alpha_cutoff,
                     metallic: pbr.metallic_factor(),
                     roughness: pbr.roughness_factor(),
-                    transmission: m.transmission().map_or(0.0, |t| t.transmission_factor()),
-                    ior: m.ior().unwrap_or(1.5),
+                    transmission,
+                    ior,
                     emission,
                     textures,
                 }),
@@ -524,6 +544,41 @@ impl MaterialImport<'_> {
             },
         );
         Ok((name, emission, uv_set))
+    }
+
+    /// The index of refraction that renders KHR_materials_specular's strength and colour of
+    /// the dielectric specular layer: its reflectance at normal incidence
+    /// specular x min(F0(ior) x luminance(specular colour), 1), the extension's, through the
+    /// Fresnel curve of another index (specular 0, the pure Lambertian of Mitsuba's diffuse
+    /// in Bitterli's conversions, gives index 1: no layer). Approximations, each warned: a
+    /// coloured specular is rendered as its luminance, the textures are not read (their
+    /// factors are), and transmissive materials keep their index (it also bends their light).
+    fn specular_ior(&mut self, name: &str, m: &gltf::Material, ior: f32, transmission: f32) -> f32 {
+        let Some(s) = m.specular() else { return ior };
+        let (factor, color) = (s.specular_factor(), s.specular_color_factor());
+        if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
+            self.out.warnings.push(format!(
+                "material '{name}': KHR_materials_specular's textures are not read (their factors are)"
+            ));
+        }
+        if factor == 1.0 && color == [1.0; 3] {
+            return ior;
+        }
+        if transmission > 0.0 {
+            self.out.warnings.push(format!(
+                "material '{name}': KHR_materials_specular on a transmissive material is not rendered (its index of refraction stays {ior})"
+            ));
+            return ior;
+        }
+        let spread = color.iter().fold(f32::MIN, |a, &b| a.max(b)) - color.iter().fold(f32::MAX, |a, &b| a.min(b));
+        if spread > 1e-3 {
+            self.out.warnings.push(format!(
+                "material '{name}': KHR_materials_specular's colour {color:?} is rendered as its luminance"
+            ));
+        }
+        let luminance = 0.2126 * color[0] + 0.7152 * color[1] + 0.0722 * color[2];
+        let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+        ior_of_reflectance((factor * (f0 * luminance).min(1.0)).clamp(0.0, 0.99))
     }
 
     /// The reference a material slot makes to a texture, converting its image on first use.
@@ -649,6 +704,59 @@ mod tests {
     #[test]
     fn the_unedited_asset_loads() {
         assert_eq!(import_edited("unedited", |_, _| {}).unwrap().triangles, 36);
+    }
+
+    /// The first material of the Cornell box ('floor') with `extensions` added, and the
+    /// warnings.
+    fn with_material_extensions(test: &str, extensions: Value) -> (Pbr, Vec<String>) {
+        let imported = import_edited(test, |doc, _| {
+            doc["materials"][0]["extensions"] = extensions;
+            doc["extensionsUsed"] = json!(["KHR_materials_specular", "KHR_materials_ior", "KHR_materials_volume"]);
+        })
+        .unwrap();
+        let pbr = imported.materials["gltf:floor"].pbr.clone().unwrap();
+        (pbr, imported.warnings)
+    }
+
+    /// Normal-incidence reflectance of a dielectric of index `ior`.
+    fn f0(ior: f32) -> f32 {
+        ((ior - 1.0) / (ior + 1.0)).powi(2)
+    }
+
+    #[test]
+    fn khr_materials_specular_scales_the_specular_layer_through_the_index() {
+        // Specular 0: no layer (Mitsuba's pure Lambertian in Bitterli's conversions).
+        let (p, warnings) =
+            with_material_extensions("specular-0", json!({"KHR_materials_specular": {"specularFactor": 0.0}}));
+        assert_eq!(p.ior, 1.0);
+        assert!(
+            warnings.iter().any(|w| w.contains("KHR_materials_volume")),
+            "{warnings:?}"
+        );
+        assert!(
+            !warnings.iter().any(|w| w.contains("KHR_materials_specular")),
+            "{warnings:?}"
+        );
+        // Half strength at index 1.5: half its reflectance.
+        let (p, _) = with_material_extensions(
+            "specular-half",
+            json!({"KHR_materials_specular": {"specularFactor": 0.5}}),
+        );
+        assert!((f0(p.ior) - 0.5 * f0(1.5)).abs() < 1e-6, "{}", p.ior);
+        // A grey colour scales like the factor; with the index's own extension.
+        let (p, _) = with_material_extensions(
+            "specular-colour",
+            json!({"KHR_materials_specular": {"specularColorFactor": [2.0, 2.0, 2.0]}, "KHR_materials_ior": {"ior": 1.4}}),
+        );
+        assert!((f0(p.ior) - 2.0 * f0(1.4)).abs() < 1e-6, "{}", p.ior);
+        // A coloured one is its luminance, with a warning; full strength keeps the index.
+        let (_, warnings) = with_material_extensions(
+            "specular-tint",
+            json!({"KHR_materials_specular": {"specularColorFactor": [1.0, 0.5, 0.5]}}),
+        );
+        assert!(warnings.iter().any(|w| w.contains("luminance")), "{warnings:?}");
+        let (p, _) = with_material_extensions("specular-1", json!({"KHR_materials_specular": {"specularFactor": 1.0}}));
+        assert_eq!(p.ior, 1.5);
     }
 
     #[test]
