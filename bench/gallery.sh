@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The gallery of docs/gallery/: every scene file of scenes/cornell and scenes/gltf, and every
 # glTF asset of the shared scenes given bare on the command line (default camera, default
-# environment when it has no light), rendered with PT on the GPU machine from the repo root
+# environment when it has no light), and every Mitsuba scene file (scene.xml) of the shared
+# scenes, rendered with PT on the GPU machine from the repo root
 # with carry [".gpu"] after `../shared/tools/gpu-bundle.sh --scene NAME ...` for the assets.
 # PNG previews land in OUT_DIR; a failing scene is reported and the sweep goes on.
 #   bash bench/gallery.sh OUT_DIR [SECONDS]
@@ -28,5 +29,11 @@ for f in scenes/cornell/*.ron scenes/gltf/*.ron; do
 done
 for f in $(find .gpu/scenes -name '*.gltf' -o -name '*.glb' | sort); do
   name=$(basename "$f"); name=${name%.*}
+  [ -e "$out/$name.png" ] || shot "$name" --scene "$f"
+done
+# Mitsuba scene files (Bitterli's originals beside their glTF conversions), named after their
+# folder: VeachBidir-xml.png.
+for f in $(find .gpu/scenes -name 'scene.xml' | sort); do
+  name=$(basename "$(dirname "$f")")-xml
   [ -e "$out/$name.png" ] || shot "$name" --scene "$f"
 done
