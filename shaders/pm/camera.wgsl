@@ -28,10 +28,11 @@ fn pm_radius() -> f32 {
     return PM_RADIUS * scene.radius * pow(f32(frame.index) + 1.0, (PM_ALPHA - 1.0) * 0.5);
 }
 
-// The structures' contract (shaders/pm/photon.wgsl): built for this frame's radius, over the
-// cube around the scene's bounding sphere.
+// The structures' contract (shaders/pm/photon.wgsl): built for this frame's radius (times
+// PM_CELL_SCALE: the hash grids' cells have side 2 PM_CELL_SCALE r), over the cube around the
+// scene's bounding sphere.
 fn pm_cell_radius() -> f32 {
-    return pm_radius();
+    return pm_radius() * PM_CELL_SCALE;
 }
 
 fn pm_origin() -> vec3<f32> {

@@ -169,6 +169,34 @@ fn every_photon_mapping_layout_and_query_finds_the_same_photons() {
     }
 }
 
+#[test]
+fn smaller_cells_and_more_buckets_find_the_same_photons() {
+    // Cells of side below the query diameter make a query's box span 3 cells along an axis,
+    // whose buckets may coincide: each photon must still count once (in its own cell's visit).
+    let scene = load_scene("cornell-glossy-mirrorball").unwrap();
+    let run = |scale: f32, buckets: f32| {
+        let constants = [
+            ("PM_RADIUS", ConstValue::F32(0.05)),
+            ("PM_CELL_SCALE", ConstValue::F32(scale)),
+            ("PM_BUCKETS_PER_PATH", ConstValue::F32(buckets)),
+        ];
+        render(&scene, "ppm", "PPMsk", (SIZE, SIZE), 2, 2, 3, &constants)
+    };
+    let reference = run(1.0, 1.0);
+    for (scale, buckets) in [(0.5, 1.0), (0.7, 4.0), (1.0, 0.25), (0.3, 2.0)] {
+        let other = run(scale, buckets);
+        let worst = largest_relative_difference(&reference.image, &other.image);
+        assert!(
+            worst < 1e-5,
+            "cell scale {scale}, {buckets} buckets a path: differs by {worst:.2e}"
+        );
+        assert_eq!(
+            reference.counters, other.counters,
+            "cell scale {scale}, {buckets} buckets a path"
+        );
+    }
+}
+
 /// The diffuse Cornell box with walls of albedo 0.99 (the paper's Figure 8): each wall's
 /// albedo scaled so that its largest channel is 0.99, its colour kept. Long light sub-paths
 /// then carry the walls' colours almost undimmed, so a structure that favours them shows it.
