@@ -60,7 +60,8 @@ fn fresnel_dielectric(cos_incident: f32, ior: f32) -> vec2<f32> {
     return vec2<f32>(0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular), cos_t);
 }
 
-fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bsdf {
+fn bsdf_setup(material: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bsdf {
+    var m = material;
     var b: Bsdf;
     // A two-sided material scatters on the side the path arrives from.
     let two_sided = (m.flags & MATERIAL_TWO_SIDED) != 0u;
@@ -75,7 +76,11 @@ fn bsdf_setup(m: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bs
     }
 #if BSDF_PBR
     if ((m.flags & MATERIAL_PBR) != 0u) {
-        return pbr_setup(b);
+        if (!pbr_is_lambertian(m)) {
+            return pbr_setup(b);
+        }
+        m = pbr_lambertian(m);
+        b.m = m;
     }
 #endif
     let albedo_diffuse = luminance(m.diffuse);
@@ -341,7 +346,9 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
 
 #if BSDF_PBR
 // glTF 2.0 metallic-roughness, with KHR_materials_transmission and KHR_materials_ior.
-// Three lobes on a macro-surface of dielectric index `ior` (clamped to at least PBR_MIN_IOR):
+// Three lobes on a macro-surface of dielectric index `ior` (clamped to at least PBR_MIN_IOR;
+// a material with no metal, no transmission and an index of at most PBR_MIN_IOR has no
+// specular layer and is set up as a Lambertian, `pbr_is_lambertian`):
 // - specular reflection, GGX microfacets with height-correlated Smith masking-shadowing:
 //   D G2 / (4 |cos_o| |cos_i|) x (metallic Schlick(base colour, o.h) + (1 - metallic) F(o.h)),
 //   F the exact dielectric Fresnel reflectance; the metal part only on the outside (+z);
@@ -364,6 +371,24 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
 
 const PBR_SMOOTH_ALPHA: f32 = 1e-3;
 const PBR_MIN_IOR: f32 = 1.001;
+
+// Whether a PBR material is a Lambertian: no metal, no transmission, and no specular layer
+// (an index of refraction of at most PBR_MIN_IOR, which KHR_materials_specular 0 and the
+// Mitsuba import of a textured diffuse give). It is then set up as the Lambertian lobe of its
+// base colour (photon mapping's gathers evaluate the BSDF for every photon they find).
+fn pbr_is_lambertian(m: Material) -> bool {
+    return m.metallic == 0.0 && m.transmission == 0.0 && m.ior <= PBR_MIN_IOR;
+}
+
+// The Lambertian lobe of a PBR material's base colour (pbr_is_lambertian).
+fn pbr_lambertian(m: Material) -> Material {
+    var l = m;
+    l.flags &= ~MATERIAL_PBR;
+    l.phong = vec3<f32>(0.0);
+    l.mirror = vec3<f32>(0.0);
+    l.ior = -1.0;
+    return l;
+}
 
 fn pbr_setup(bsdf: Bsdf) -> Bsdf {
     var b = bsdf;

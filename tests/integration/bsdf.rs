@@ -251,6 +251,54 @@ fn chi2_smallvcm_glass() {
 }
 
 #[test]
+fn a_pbr_material_without_specular_layer_is_the_lambertian_of_its_base_colour() {
+    // Index of refraction 1, no metal, no transmission: KHR_materials_specular 0, Mitsuba's
+    // textured diffuse. Its f and pdf must be the Lambertian lobe's, to float rounding.
+    let directions = [
+        [0.3f32, -0.2, 0.93, 0.0],
+        [-0.7, 0.1, 0.2, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+        [0.5, 0.5, -0.5, 0.0],
+    ];
+    let lambertian = eval(
+        &material_scene("(diffuse: (0.8, 0.6, 0.4))"),
+        OBLIQUE,
+        Part::Whole,
+        &directions,
+    );
+    let layerless = "(pbr: (base_color: (0.8, 0.6, 0.4), roughness: 0.3, ior: 1.0))";
+    let pbr = eval(&material_scene(layerless), OBLIQUE, Part::Whole, &directions);
+    for ((l, p), d) in lambertian.iter().zip(&pbr).zip(&directions) {
+        for c in 0..3 {
+            assert!(
+                (l.0[c] - p.0[c]).abs() <= 1e-6 * l.0[c].abs().max(1e-6),
+                "{d:?}: f {:?} against {:?}",
+                p.0,
+                l.0
+            );
+        }
+        assert!(
+            (l.1 - p.1).abs() <= 1e-6 * l.1.abs().max(1e-6),
+            "{d:?}: pdf {} against {}",
+            p.1,
+            l.1
+        );
+    }
+    // With a specular layer (index 1.5) it stays the PBR model: at the mirror direction its
+    // glossy lobe adds several times the Lambertian's value.
+    let n = (OBLIQUE[0] * OBLIQUE[0] + OBLIQUE[1] * OBLIQUE[1] + OBLIQUE[2] * OBLIQUE[2]).sqrt();
+    let mirrored = [[-OBLIQUE[0] / n, -OBLIQUE[1] / n, OBLIQUE[2] / n, 0.0]];
+    let layered = "(pbr: (base_color: (0.8, 0.6, 0.4), roughness: 0.3, ior: 1.5))";
+    let glossy = eval(&material_scene(layered), OBLIQUE, Part::Whole, &mirrored);
+    assert!(
+        glossy[0].0[2] > 2.0 * lambertian[0].0[2],
+        "{:?} against {:?}",
+        glossy[0].0,
+        lambertian[0].0
+    );
+}
+
+#[test]
 fn chi2_pbr_rough_plastic() {
     let m = "(pbr: (base_color: (0.8, 0.8, 0.8), roughness: 1.0))";
     chi2_case("rough plastic", m, OBLIQUE, sphere());
