@@ -188,7 +188,12 @@ fn python_test() -> ExitCode {
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(command) = args.first() else { return usage() };
-    let rest = &args[1..];
+    // `cargo xtask render -- ARGS` means `cargo xtask render ARGS` (for `test`, `--` still
+    // separates cargo test's arguments from the test harness's).
+    let rest = match (command.as_str(), args.get(1).map(String::as_str)) {
+        ("render", Some("--")) => &args[2..],
+        _ => &args[1..],
+    };
     if !matches!(command.as_str(), "render" | "test" | "vulkan") {
         return usage();
     }
