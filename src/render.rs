@@ -28,9 +28,10 @@ pub fn load_scene(name: &str) -> Result<LoadedScene> {
     load_scene_with(name, BvhKind::Bvh2)
 }
 
-/// Loads a built-in scene by name, a scene file by path, a bare glTF file (`.gltf`,
-/// `.glb`; see [`LoadedScene::from_gltf`]) or a Mitsuba scene file (`.xml`), with a BVH of `kind`; the glTF assets of scene
-/// files come from [`crate::assets::asset_root`].
+/// Loads a built-in scene by name, a scene file by path, a bare glTF file (`.gltf`, `.glb`;
+/// see [`LoadedScene::from_gltf`]) or a Mitsuba scene file (`.xml`,
+/// [`LoadedScene::from_mitsuba`]), with a BVH of `kind`; the glTF assets of scene files come
+/// from [`crate::assets::asset_root`].
 pub fn load_scene_with(name: &str, kind: BvhKind) -> Result<LoadedScene> {
     let lower = name.to_ascii_lowercase();
     let bare_gltf = (lower.ends_with(".gltf") || lower.ends_with(".glb")) && std::path::Path::new(name).is_file();
@@ -41,20 +42,10 @@ pub fn load_scene_with(name: &str, kind: BvhKind) -> Result<LoadedScene> {
             LoadedScene::from_gltf(std::path::Path::new(name), kind)?,
         )
     } else if mitsuba {
-        // A Mitsuba scene file (see lightgraph_scenes::mitsuba).
-        let start = Instant::now();
-        let imported = lightgraph_scenes::mitsuba::load(std::path::Path::new(name))?;
-        for warning in &imported.warnings {
-            eprintln!("warning: {warning}");
-        }
-        let compiled = CompiledScene::with_bvh(&imported.scene, kind).map_err(|e| anyhow!("{name}: {e}"))?;
-        let scene = LoadedScene {
-            name: name.to_string(),
-            scene: imported.scene,
-            compiled,
-            load_seconds: start.elapsed().as_secs_f64(),
-        };
-        (name.to_string(), scene)
+        (
+            name.to_string(),
+            LoadedScene::from_mitsuba(std::path::Path::new(name), kind)?,
+        )
     } else {
         let (file, text) = crate::assets::scene_text(name).map_err(|e| anyhow!(e))?;
         let scene = LoadedScene::parse(&file, &text, kind, crate::assets::asset_root().as_deref())?;
@@ -78,13 +69,7 @@ impl LoadedScene {
         let start = Instant::now();
         let mut scene = parse_scene(file, text)?;
         lightgraph_scenes::resolve_gltf(&mut scene, file, assets)?;
-        let compiled = CompiledScene::with_bvh(&scene, kind).map_err(|e| anyhow!("{file}: {e}"))?;
-        Ok(LoadedScene {
-            name: file.to_string(),
-            scene,
-            compiled,
-            load_seconds: start.elapsed().as_secs_f64(),
-        })
+        Self::compile(file.to_string(), scene, kind, start)
     }
 
     /// Loads the bare glTF file at `path` with a BVH of `kind`: its first camera, else one
@@ -96,7 +81,23 @@ impl LoadedScene {
         for note in notes {
             eprintln!("note: {}: {note}", path.display());
         }
-        let file = path.display().to_string();
+        Self::compile(path.display().to_string(), scene, kind, start)
+    }
+
+    /// Loads the Mitsuba scene file at `path` (lightgraph_scenes::mitsuba) with a BVH of
+    /// `kind`; its warnings go to stderr.
+    pub fn from_mitsuba(path: &std::path::Path, kind: BvhKind) -> Result<LoadedScene> {
+        let start = Instant::now();
+        let imported = lightgraph_scenes::mitsuba::load(path)?;
+        for warning in &imported.warnings {
+            eprintln!("warning: {warning}");
+        }
+        Self::compile(path.display().to_string(), imported.scene, kind, start)
+    }
+
+    /// Compiles `scene` (named `file` in errors) with a BVH of `kind`; its load time counts
+    /// from `start`.
+    fn compile(file: String, scene: Scene, kind: BvhKind, start: Instant) -> Result<LoadedScene> {
         let compiled = CompiledScene::with_bvh(&scene, kind).map_err(|e| anyhow!("{file}: {e}"))?;
         Ok(LoadedScene {
             name: file,

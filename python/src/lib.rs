@@ -6,10 +6,10 @@
 //! meanwhile. Every call on one adapter shares one device, opened on first use and kept for
 //! the process's life.
 
-use ::lightgraph::cli::args::{named_layout, options};
+use ::lightgraph::cli::gpus::Setup;
 use ::lightgraph::cli::{Cli, Command};
 use ::lightgraph::reference::Reference;
-use ::lightgraph::render::{Session as RenderSession, load_graph, load_scene_with};
+use ::lightgraph::render::Session as RenderSession;
 use lightgraph_engine::Gpu;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::create_exception;
@@ -145,20 +145,18 @@ struct Session {
 }
 
 impl Session {
-    /// The session `render`'s command-line options describe.
+    /// The session `render`'s command-line options describe (loaded as the CLI loads a render
+    /// shared by GPUs: `--layout auto` is refused).
     fn open(py: Python<'_>, command: Command) -> PyResult<Session> {
         let Command::Render(args) = command else {
             unreachable!("a render command line")
         };
-        let c = &args.common;
-        let gpu = gpu(c.adapter.as_deref())?;
-        let graph = load_graph(args.graph.name()).map_err(err)?;
-        let (layout, decl) = named_layout(&graph, args.layout.as_deref()).map_err(err)?;
-        let kind = c.bvh.for_layout(&layout, &decl).map_err(err)?;
-        let scene = py.detach(|| load_scene_with(c.scene(), kind)).map_err(err)?;
-        let opts = options(c, &scene, &graph.constants, args.seed).map_err(err)?;
+        let gpu = gpu(args.common.adapter.as_deref())?;
         let session = py
-            .detach(|| RenderSession::with_layout(gpu, &graph, &layout, decl, &scene, opts))
+            .detach(|| {
+                let s = Setup::load(&args, "lightgraph.Session")?;
+                RenderSession::with_layout(gpu, &s.graph, &s.layout, s.decl, &s.scene, s.opts)
+            })
             .map_err(err)?;
         Ok(Session {
             session,

@@ -24,6 +24,14 @@ pub enum BvhKind {
 }
 
 impl BvhKind {
+    /// The kind's name on the command line (`--bvh`) and in layout hints.
+    pub fn name(self) -> &'static str {
+        match self {
+            BvhKind::Bvh2 => "bvh2",
+            BvhKind::Cwbvh => "cwbvh",
+        }
+    }
+
     /// The WGSL preprocessor flag that selects this kind's node struct and traversal.
     pub fn flag(self) -> Option<&'static str> {
         match self {

@@ -181,7 +181,7 @@ fn ior_of_reflectance(f0: f32) -> f32 {
 }
 
 /// glTF extensions the importer reads.
-const SUPPORTED_REQUIRED: &[&str] = &[
+const SUPPORTED: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_lights_punctual",
     "KHR_materials_transmission",
@@ -198,7 +198,7 @@ pub fn import(path: &Path) -> Result<Imported, String> {
     let shown = path.display();
     let (document, buffers, images) = load(path).map_err(|e| format!("{shown}: {e}"))?;
     for required in document.extensions_required() {
-        if !SUPPORTED_REQUIRED.contains(&required) {
+        if !SUPPORTED.contains(&required) {
             return Err(format!(
                 "{shown}: requires the glTF extension {required}, which lightgraph does not support"
             ));
@@ -206,7 +206,7 @@ pub fn import(path: &Path) -> Result<Imported, String> {
     }
     let mut out = Imported::default();
     for used in document.extensions_used() {
-        if !SUPPORTED_REQUIRED.contains(&used) && !WITHOUT_EFFECT.contains(&used) {
+        if !SUPPORTED.contains(&used) && !WITHOUT_EFFECT.contains(&used) {
             out.warnings.push(format!(
                 "uses the glTF extension {used}, which lightgraph does not read: rendered without it"
             ));
@@ -576,7 +576,7 @@ impl MaterialImport<'_> {
                 "material '{name}': KHR_materials_specular's colour {color:?} is rendered as its luminance"
             ));
         }
-        let luminance = 0.2126 * color[0] + 0.7152 * color[1] + 0.0722 * color[2];
+        let luminance = crate::alias::luminance(color) as f32;
         let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
         ior_of_reflectance((factor * (f0 * luminance).min(1.0)).clamp(0.0, 0.99))
     }

@@ -168,13 +168,15 @@ impl Scenes {
         }
     }
 
-    /// Loads the scene with `kind` unless it is loaded already.
-    pub fn load(&mut self, kind: BvhKind) -> Result<()> {
+    /// Loads the scene with the BVH `bvh` gives layout `name` (`decl`), unless it is loaded
+    /// already; returns that BVH.
+    pub fn load_for(&mut self, bvh: BvhChoice, name: &str, decl: &LayoutDecl) -> Result<BvhKind> {
+        let kind = bvh.for_layout(name, decl)?;
         if !self.loaded.iter().any(|(k, _)| *k == kind) {
             self.loaded
                 .push((kind, lightgraph::render::load_scene_with(&self.name, kind)?));
         }
-        Ok(())
+        Ok(kind)
     }
 
     /// The longest time one of the loads took (parsing and the BVH build), in seconds.
@@ -182,7 +184,7 @@ impl Scenes {
         self.loaded.iter().map(|(_, s)| s.load_seconds).fold(0.0, f64::max)
     }
 
-    /// The scene with `kind`, which [`Scenes::load`] loaded.
+    /// The scene with `kind`, which [`Scenes::load_for`] loaded.
     pub fn get(&self, kind: BvhKind) -> &LoadedScene {
         &self
             .loaded
@@ -318,8 +320,6 @@ pub fn measure_into(
     opts.constants.extend(measured);
     Ok(())
 }
-
-pub use lightgraph::reference::{constants_text, film_settings};
 
 /// A number with an SI prefix and a trailing space, e.g. "1.28 G".
 pub fn si(v: f64) -> String {

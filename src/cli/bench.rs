@@ -67,11 +67,8 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     let mut scenes = Scenes::new(c.scene());
     let kinds: Vec<BvhKind> = layouts
         .iter()
-        .map(|(name, decl)| c.bvh.for_layout(name, decl))
+        .map(|(name, decl)| scenes.load_for(c.bvh, name, decl))
         .collect::<Result<_>>()?;
-    for &kind in &kinds {
-        scenes.load(kind)?;
-    }
     let mut results = Vec::new();
     for (w, h, spp) in points {
         for ((name, decl), &kind) in layouts.iter().zip(&kinds) {

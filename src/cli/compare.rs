@@ -6,7 +6,7 @@ use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use lightgraph::compare::{ReportContext, RunResult, RunSpec, run, write_report};
-use lightgraph::reference::Reference;
+use lightgraph::reference::{Reference, constants_text};
 use lightgraph::render::{SessionOptions, load_graph};
 use lightgraph_engine::{Gpu, Graph};
 use lightgraph_scenes::bvh::BvhKind;
@@ -95,8 +95,7 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
     for spec in &specs {
         let graph = load_graph(&spec.graph)?;
         let (layout, decl) = named_layout(&graph, spec.layout.as_deref())?;
-        let kind = c.bvh.for_layout(&layout, &decl)?;
-        scenes.load(kind)?;
+        let kind = scenes.load_for(c.bvh, &layout, &decl)?;
         let opts = options(c, scenes.get(kind), &graph.constants, args.seed)?;
         if constants_text(&opts.constants) != info("constants") {
             bail!(

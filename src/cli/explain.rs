@@ -44,12 +44,10 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
         None => graph.layouts.iter().map(|(n, d)| (n.clone(), d.clone())).collect(),
     };
     let mut scenes = Scenes::new(c.scene());
-    let mut kinds = Vec::new();
-    for (name, decl) in &layouts {
-        let kind = c.bvh.for_layout(name, decl)?;
-        scenes.load(kind)?;
-        kinds.push(kind);
-    }
+    let kinds: Vec<BvhKind> = layouts
+        .iter()
+        .map(|(name, decl)| scenes.load_for(c.bvh, name, decl))
+        .collect::<Result<_>>()?;
     let gpu = Gpu::new(c.adapter.as_deref()).ok();
     let device = gpu.as_ref().map(|g| (lightgraph::render::device_flags(g), g.target()));
     let (device, mut target) = device.unwrap_or_default();
@@ -68,7 +66,7 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
     )?;
     for ((layout, _), kind) in layouts.into_iter().zip(kinds) {
         let scene = scenes.get(kind);
-        writeln!(out, "layout {layout}: BVH {}", bvh_name(kind))?;
+        writeln!(out, "layout {layout}: BVH {}", kind.name())?;
         let flags = lightgraph::render::kernel_flags(device.clone(), scene, c.all_features);
         let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
         let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
@@ -116,14 +114,6 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
         writeln!(out, "wrote {}", dot.display())?;
     }
     Ok(out)
-}
-
-/// The `--bvh` name of a BVH kind.
-fn bvh_name(kind: BvhKind) -> &'static str {
-    match kind {
-        BvhKind::Bvh2 => "bvh2",
-        BvhKind::Cwbvh => "cwbvh",
-    }
 }
 
 /// Lists the scene features compiled into the kernels and those left out.

@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::metrics::image_error;
 use lightgraph::multi::{Budget, Run, Share, render_on_gpus};
-use lightgraph::reference::Reference;
+use lightgraph::reference::{Reference, film_settings};
 use lightgraph::render::{LoadedScene, SessionOptions, load_graph, load_scene_with};
 use lightgraph_engine::Graph;
 use lightgraph_engine::ir::LayoutDecl;

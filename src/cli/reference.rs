@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::multi::{Budget, Run, render_on_gpus};
-use lightgraph::reference::Reference;
+use lightgraph::reference::{Reference, film_settings};
 use lightgraph::render::{Session, load_graph, load_scene_with};
 use lightgraph::tev::LiveView;
 use lightgraph_engine::Gpu;

@@ -7,7 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::aov::{Aov, AovRender};
 use lightgraph::metrics::image_error;
 use lightgraph::output;
-use lightgraph::reference::Reference;
+use lightgraph::reference::{Reference, film_settings};
 use lightgraph::render::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{Gpu, Graph};

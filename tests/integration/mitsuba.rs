@@ -118,28 +118,29 @@ fn compare(dir: &str, gltf: &str, size: (u32, u32), spp: u32, max_rel_se: f64) -
     ))
 }
 
+/// Asserts that `scene.xml` and `gltf` of folder `dir` agree within [`Z_LIMIT`] (see
+/// [`compare`]); a note when the assets are not there.
+fn agree(dir: &str, gltf: &str, size: (u32, u32), spp: u32, max_rel_se: f64) {
+    if let Some(z) = compare(dir, gltf, size, spp, max_rel_se) {
+        assert!(
+            z < Z_LIMIT,
+            "{dir}'s scene.xml and glTF differ by {z:.2} standard errors"
+        );
+    }
+}
+
 #[test]
 fn veach_bidir_agrees_with_its_gltf_conversion() {
     // Lit mostly through a glossy lamp shade and a caustic: noisy, so a block's combined
     // standard error may reach 15% of its mean.
-    if let Some(z) = compare("VeachBidir", "veach-bidir.gltf", (32, 32), 16, 0.15) {
-        assert!(
-            z < Z_LIMIT,
-            "VeachBidir's scene.xml and glTF differ by {z:.2} standard errors"
-        );
-    }
+    agree("VeachBidir", "veach-bidir.gltf", (32, 32), 16, 0.15);
 }
 
 #[test]
 fn modern_hall_agrees_with_its_gltf_conversion() {
     // 16:9 as both cameras (Mitsuba's 70 degrees across the width, glTF's 43 degrees
     // across the height) frame it; blocks of 16 x 9 pixels.
-    if let Some(z) = compare("ModernHall", "staircase2.gltf", (64, 36), 2, 0.05) {
-        assert!(
-            z < Z_LIMIT,
-            "ModernHall's scene.xml and glTF differ by {z:.2} standard errors"
-        );
-    }
+    agree("ModernHall", "staircase2.gltf", (64, 36), 2, 0.05);
 }
 
 #[test]

@@ -13,7 +13,7 @@
 //! radius the error falls from 12 to 48 frames.
 
 use crate::bpt::{mirror_and_floor, sds_scene};
-use crate::common::{largest_relative_difference, render};
+use crate::common::{Rendered, largest_relative_difference, render};
 use crate::frames::{Frames, render_frames, render_frames_with};
 use lightgraph::render::{LoadedScene, load_scene};
 use lightgraph_engine::ConstValue;
@@ -155,15 +155,10 @@ fn every_photon_mapping_layout_and_query_finds_the_same_photons() {
         let reference = run(sk, true);
         for (layout, while_query) in [(sk, false), (mk, true), (screen, false)] {
             let other = run(layout, while_query);
-            // Photons of a bucket are summed in the order their atomics gave them slots.
-            let worst = largest_relative_difference(&reference.image, &other.image);
-            assert!(
-                worst < 1e-5,
-                "{graph} {layout} (WhileQuery {while_query}): differs by {worst:.2e}"
-            );
-            assert_eq!(
-                reference.counters, other.counters,
-                "{graph} {layout}: different rays or photons"
+            assert_same_photons(
+                &reference,
+                &other,
+                &format!("{graph} {layout} (WhileQuery {while_query})"),
             );
         }
     }
@@ -185,16 +180,21 @@ fn smaller_cells_and_more_buckets_find_the_same_photons() {
     let reference = run(1.0, 1.0);
     for (scale, buckets) in [(0.5, 1.0), (0.7, 4.0), (1.0, 0.25), (0.3, 2.0)] {
         let other = run(scale, buckets);
-        let worst = largest_relative_difference(&reference.image, &other.image);
-        assert!(
-            worst < 1e-5,
-            "cell scale {scale}, {buckets} buckets a path: differs by {worst:.2e}"
-        );
-        assert_eq!(
-            reference.counters, other.counters,
-            "cell scale {scale}, {buckets} buckets a path"
+        assert_same_photons(
+            &reference,
+            &other,
+            &format!("cell scale {scale}, {buckets} buckets a path"),
         );
     }
+}
+
+/// `other` found the photons `reference` found and rendered its image: the same counters
+/// (rays, queries, photons found), and pixels equal to float rounding (the photons of a
+/// bucket are summed in the order their atomics gave them slots).
+fn assert_same_photons(reference: &Rendered, other: &Rendered, what: &str) {
+    let worst = largest_relative_difference(&reference.image, &other.image);
+    assert!(worst < 1e-5, "{what}: differs by {worst:.2e}");
+    assert_eq!(reference.counters, other.counters, "{what}: different rays or photons");
 }
 
 /// The diffuse Cornell box with walls of albedo 0.99 (the paper's Figure 8): each wall's
