@@ -27,10 +27,7 @@ pub fn sensor<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<(
         Some(&film) => film_size(ctx, film)?,
         None => (768, 576),
     };
-    let m = match props.get("to_world") {
-        Some(t) => transform::parse(ctx, t)?,
-        None => Mat4::IDENTITY,
-    };
+    let m = transform::to_world(ctx, &props)?;
     let left = m.transform_vector3(Vec3::X);
     let up = m.transform_vector3(Vec3::Y);
     let forward = m.transform_vector3(Vec3::Z);

@@ -2,7 +2,7 @@
 //! as in Mitsuba) and the lights of the scene model: `point`, `spot`, `directional`,
 //! `constant` and `envmap`. Every emitter's `scale` multiplies its value.
 
-use super::transform;
+use super::transform::to_world;
 use super::xml::{Color, Context, Props, Result};
 use crate::environment::EnvironmentMap;
 use crate::model::{Light, Rgb};
@@ -26,14 +26,6 @@ fn value<'a, 'i>(ctx: &mut Context<'a, 'i>, props: &Props<'a, 'i>, name: &str, d
         return Err(ctx.error(props.node(), format!("{name} {v:?} is not finite and non-negative")));
     }
     Ok(v)
-}
-
-/// The `to_world` transform of a plugin (identity without one).
-fn to_world(ctx: &mut Context, props: &Props) -> Result<Mat4> {
-    match props.get("to_world") {
-        Some(t) => transform::parse(ctx, t),
-        None => Ok(Mat4::IDENTITY),
-    }
 }
 
 /// The radiance of an `area` emitter nested in a shape.
@@ -136,10 +128,7 @@ fn direction(ctx: &Context, node: Node, m: Mat4) -> Result<[f32; 3]> {
 /// other rotations are unsupported.
 fn envmap(ctx: &mut Context, props: &Props) -> Result<Light> {
     let node = props.node();
-    let name = props
-        .string(ctx, "filename")?
-        .ok_or_else(|| ctx.error(node, "an envmap needs a filename"))?;
-    let path = ctx.existing_file(node, &name)?;
+    let path = props.file(ctx, "an envmap")?;
     let scale = props.float(ctx, "scale")?.unwrap_or(1.0);
     let m = to_world(ctx, props)?;
     let x = m.transform_vector3(Vec3::X).normalize_or_zero();

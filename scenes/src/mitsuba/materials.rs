@@ -107,14 +107,7 @@ impl Materials {
                 }
                 let ior = ratio_of_iors(ctx, &props, 1.5046)?;
                 let roughness = roughness(ctx, &props, kind == "roughdielectric")?;
-                let base_color = match props.color(ctx, "specular_transmittance")? {
-                    Some(Color::Rgb(c)) => c,
-                    None => [1.0; 3],
-                    Some(Color::Texture(t)) => {
-                        ctx.warn(t, "a textured transmittance is not supported: white is used");
-                        [1.0; 3]
-                    }
-                };
+                let base_color = rgb_or_white(ctx, &props, "specular_transmittance", "transmittance")?;
                 white_or_warn(ctx, &props, "specular_reflectance")?;
                 pbr(Pbr {
                     base_color,
@@ -126,14 +119,7 @@ impl Materials {
             }
             "conductor" | "roughconductor" => {
                 let f0 = conductor_f0(ctx, &props)?;
-                let tint = match props.color(ctx, "specular_reflectance")? {
-                    Some(Color::Rgb(c)) => c,
-                    None => [1.0; 3],
-                    Some(Color::Texture(t)) => {
-                        ctx.warn(t, "a textured specular reflectance is not supported: white is used");
-                        [1.0; 3]
-                    }
-                };
+                let tint = rgb_or_white(ctx, &props, "specular_reflectance", "specular reflectance")?;
                 let roughness = roughness(ctx, &props, kind == "roughconductor")?;
                 pbr(Pbr {
                     base_color: std::array::from_fn(|i| (f0[i] * tint[i]).clamp(0.0, 1.0)),
@@ -259,10 +245,7 @@ impl Materials {
             ctx.warn(node, "unsupported texture: a constant 0.5 is used");
             return Ok(None);
         }
-        let name = props
-            .string(ctx, "filename")?
-            .ok_or_else(|| ctx.error(node, "a bitmap needs a filename"))?;
-        let path = ctx.existing_file(node, &name)?;
+        let path = props.file(ctx, "a bitmap")?;
         if props.boolean(ctx, "raw")? == Some(true) {
             ctx.warn(node, "raw=true is not supported: the image is read as sRGB");
         }
@@ -311,6 +294,19 @@ fn as_pbr(m: &mut Material) -> &mut Pbr {
         base_color: diffuse,
         ior: 1.0,
         ..Default::default()
+    })
+}
+
+/// The colour property `name`: white when absent or textured (a texture, called `what` in
+/// the warning, is unsupported).
+fn rgb_or_white<'a, 'i>(ctx: &mut Context<'a, 'i>, props: &Props<'a, 'i>, name: &str, what: &str) -> Result<[f32; 3]> {
+    Ok(match props.color(ctx, name)? {
+        Some(Color::Rgb(c)) => c,
+        None => [1.0; 3],
+        Some(Color::Texture(t)) => {
+            ctx.warn(t, format!("a textured {what} is not supported: white is used"));
+            [1.0; 3]
+        }
     })
 }
 

@@ -178,11 +178,7 @@ fn shape<'a, 'i>(
     }
     let kind = ctx.plugin_type(node)?;
     let props = Props::new(node);
-    let m = parent
-        * match props.get("to_world") {
-            Some(t) => transform::parse(ctx, t)?,
-            None => Mat4::IDENTITY,
-        };
+    let m = parent * transform::to_world(ctx, &props)?;
     match kind.as_str() {
         // A group is drawn where instances place it.
         "shapegroup" if depth == 0 => return Ok(()),

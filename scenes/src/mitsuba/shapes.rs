@@ -172,10 +172,7 @@ pub fn sphere(center: Vec3, radius: f32) -> Mesh {
 
 fn obj(ctx: &mut Context, props: &Props) -> Result<Mesh> {
     let node = props.node();
-    let name = props
-        .string(ctx, "filename")?
-        .ok_or_else(|| ctx.error(node, "an obj shape needs a filename"))?;
-    let path = ctx.existing_file(node, &name)?;
+    let path = props.file(ctx, "an obj shape")?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -220,10 +217,7 @@ fn obj(ctx: &mut Context, props: &Props) -> Result<Mesh> {
 fn ply(ctx: &mut Context, props: &Props) -> Result<Mesh> {
     use ply_rs_bw::ply::Property;
     let node = props.node();
-    let name = props
-        .string(ctx, "filename")?
-        .ok_or_else(|| ctx.error(node, "a ply shape needs a filename"))?;
-    let path = ctx.existing_file(node, &name)?;
+    let path = props.file(ctx, "a ply shape")?;
     let shown = path.display().to_string();
     let mut file = std::fs::File::open(&path).map_err(|e| ctx.error(node, format!("{shown}: {e}")))?;
     let parser = ply_rs_bw::parser::Parser::<ply_rs_bw::ply::DefaultElement>::new();

@@ -2,7 +2,7 @@
 //! `<translate>`, `<rotate>`, `<scale>` and `<lookat>`, each applied after the ones before
 //! it (left-multiplied), as Mitsuba composes them.
 
-use super::xml::{Context, Result, numbers, point_of};
+use super::xml::{Context, Props, Result, numbers, point_of};
 use glam::{Mat3, Mat4, Vec3};
 use roxmltree::Node;
 
@@ -62,6 +62,14 @@ pub fn parse(ctx: &mut Context, node: Node) -> Result<Mat4> {
         return Err(ctx.error(node, "the transformation is not finite"));
     }
     Ok(m)
+}
+
+/// The `to_world` transform of a plugin (identity without one).
+pub fn to_world(ctx: &mut Context, props: &Props) -> Result<Mat4> {
+    match props.get("to_world") {
+        Some(t) => parse(ctx, t),
+        None => Ok(Mat4::IDENTITY),
+    }
 }
 
 /// Mitsuba's look-at frame: local +Z looks at `target`, +Y is up and +X is

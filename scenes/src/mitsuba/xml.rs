@@ -311,6 +311,15 @@ impl<'a, 'input> Props<'a, 'input> {
         }
     }
 
+    /// The existing file named by the `filename` property (relative to the scene's folder);
+    /// absent, an error "`what` needs a filename".
+    pub fn file(&self, ctx: &Context, what: &str) -> Result<PathBuf> {
+        let name = self
+            .string(ctx, "filename")?
+            .ok_or_else(|| ctx.error(self.node, format!("{what} needs a filename")))?;
+        ctx.existing_file(self.node, &name)
+    }
+
     /// A `<string>` property.
     pub fn string(&self, ctx: &Context, name: &str) -> Result<Option<String>> {
         Ok(self.value(ctx, name, &["string"])?.map(|(_, text)| text))
