@@ -977,6 +977,9 @@ mod tests {
         assert!(e.contains("radius"), "{e}");
         let e = error(&BASE.replace("fov_degrees: 40.0", "fov_degrees: 40.0,,"));
         assert!(e.starts_with("s.ron:2:"), "{e}");
+        // Spheres do not emit: a field a shape does not have is refused, not ignored.
+        let e = error(&BASE.replace("material: \"m\")", "material: \"m\", emission: (1.0, 1.0, 1.0))"));
+        assert!(e.starts_with("s.ron:4:") && e.contains("emission"), "{e}");
     }
 
     /// The errors of both BVH kinds for the base scene with `shape` first.

@@ -209,6 +209,7 @@ impl Default for Material {
 /// A piece of geometry. Triangles face the side their winding gives by the right-hand
 /// rule ((v1 - v0) x (v2 - v0)); diffuse and glossy surfaces are black from behind.
 #[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Shape {
     /// One triangle.
     Triangle {
