@@ -4,7 +4,7 @@
 
 fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
     var rng = rng_seed(frame.seed, frame.index, index);
-    (*p).camera = camera_subpath_start(index, &rng);
+    (*p).camera = camera_subpath_start(index % PIXELS, &rng);
     (*p).light_count = 0u;
     (*p).pad = 0u;
     var lp: LightPath;

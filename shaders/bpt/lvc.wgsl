@@ -27,10 +27,16 @@ fn lvc_light_generate(p: ptr<function, LightPath>, index: u32) -> bool {
 }
 
 // Pass `lvc_bounce` (Loop): at the light sub-path's new vertex, the t = 1 splat, the vertex
-// into the cache in arrival order, `lvc_staging` (counted as overflow when the cache is
-// full), with its sub-path (`lvc_owner`) and its rank along the sub-path (`lvc_rank`) for the
-// scatter that puts the cache in sub-path order, and the next direction.
+// into the cache (`lvc_store`), and the next direction.
 fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
+    return lvc_light_visit(p, mis_counts(lvc_eta()), 2u);
+}
+
+// A light sub-path of LVC-BPT or VCM at its new vertex, strategies counted as `counts`: the
+// vertex into the cache when a camera sub-path can still reach it with `reach` segments (2
+// for a connection, 1 for a merge), the t = 1 splat (with connections), and the next
+// direction; false when the sub-path ends.
+fn lvc_light_visit(p: ptr<function, LightPath>, counts: MisCounts, reach: u32) -> bool {
     let a = light_path_land(p);
     if (!a.alive) {
         return false;
@@ -39,23 +45,11 @@ fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
     let bsdf = a.bsdf;
     if (!bsdf.is_delta) {
         let v = light_vertex_at(*p, s);
-        if ((*p).length + 2u <= MAX_PATH_LENGTH) {
-            count(COUNTER_LVC_STORED, 1u);
-            if (!LVC_MEASURING) {
-                let i = atomicAdd(&lvc_count, 1u);
-                if (i < arrayLength(&lvc_staging)) {
-                    let rank = lvc_path_count[(*p).index];
-                    lvc_path_count[(*p).index] = rank + 1u;
-                    lvc_staging[i] = v;
-                    lvc_owner[i] = (*p).index;
-                    lvc_rank[i] = rank;
-                } else {
-                    count(COUNTER_LVC_OVERFLOW, 1u);
-                }
-            }
+        if ((*p).length + reach <= MAX_PATH_LENGTH) {
+            lvc_store(p, v);
         }
-        if (!LVC_MEASURING && (*p).length + 1u <= MAX_PATH_LENGTH) {
-            let ray = light_vertex_to_camera(v, bsdf);
+        if (counts.vc && !LVC_MEASURING && (*p).length + 1u <= MAX_PATH_LENGTH) {
+            let ray = light_vertex_to_camera(v, bsdf, counts);
             if (!is_black(ray.contribution)) {
                 emit_splat(ray);
             }
@@ -64,14 +58,35 @@ fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
     if ((*p).length + 2u > MAX_PATH_LENGTH) {
         return false;
     }
-    return light_path_scatter(p, s, bsdf, lvc_eta());
+    return light_path_scatter(p, s, bsdf, counts);
+}
+
+// Stores light vertex `v` of sub-path `p` in arrival order in `lvc_staging` (counted as
+// overflow when the cache is full), with its sub-path (`lvc_owner`) and its rank along the
+// sub-path (`lvc_rank`) for the scatter that puts the cache in sub-path order; the measuring
+// frame only counts it.
+fn lvc_store(p: ptr<function, LightPath>, v: LightVertex) {
+    count(COUNTER_LVC_STORED, 1u);
+    if (LVC_MEASURING) {
+        return;
+    }
+    let i = atomicAdd(&lvc_count, 1u);
+    if (i < arrayLength(&lvc_staging)) {
+        let rank = lvc_path_count[(*p).index];
+        lvc_path_count[(*p).index] = rank + 1u;
+        lvc_staging[i] = v;
+        lvc_owner[i] = (*p).index;
+        lvc_rank[i] = rank;
+    } else {
+        count(COUNTER_LVC_OVERFLOW, 1u);
+    }
 }
 
 // Pass `lvc_camera` (Start over PATHS): the camera ray of sample `index` (culled from the
 // measuring frame).
 fn lvc_camera(p: ptr<function, CameraSubpath>, index: u32) -> bool {
     var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
-    *p = camera_subpath_start(index, &rng);
+    *p = camera_subpath_start(camera_tiled_pixel(index % PIXELS), &rng);
     return true;
 }
 
@@ -85,35 +100,41 @@ fn lvc_trace(p: ptr<function, CameraSubpath>) -> bool {
 // light sampled directly (s = 1) and LVC_CONNECTIONS connections to cache vertices (s >= 2),
 // each MIS-weighted; then the next direction.
 fn lvc_vertex(p: ptr<function, CameraSubpath>) -> bool {
-    let eta = lvc_eta();
-    let visit = camera_visit(p, eta);
+    let counts = mis_counts(lvc_eta());
+    let visit = camera_visit(p, counts);
     if (!visit.alive) {
         return false;
     }
-    let s = visit.a.s;
-    let bsdf = visit.a.bsdf;
     var rng = visit.rng;
-    if (!bsdf.is_delta) {
-        let m = min(atomicLoad(&lvc_count), arrayLength(&lvc_cache));
-        let n = lvc_connections();
-        let scale = f32(m) / (f32(n) * f32(PATHS));
-        for (var k = 0u; k < n; k += 1u) {
-            let u = rng_f32(&rng);
-            if (m == 0u) {
-                continue;
-            }
-            let v = lvc_cache[min(u32(u * f32(m)), m - 1u)];
-            if (light_vertex_length(v) + 1u + (*p).length > MAX_PATH_LENGTH) {
-                continue;
-            }
-            var ray = bpt_connect(*p, s, bsdf, v, eta);
-            ray.contribution *= scale;
-            if (!is_black(ray.contribution)) {
-                emit_shadow(ray);
-            }
-        }
+    if (!visit.a.bsdf.is_delta) {
+        lvc_connect(*p, visit.a, counts, &rng);
     }
-    let alive = camera_scatter(p, visit.a, eta, &rng);
+    let alive = camera_scatter(p, visit.a, counts, &rng);
     (*p).rng = rng;
     return alive;
+}
+
+// Connects camera vertex `a` of sub-path `p` to `lvc_connections()` cache vertices picked
+// uniformly (one random number each, drawn even when the cache is empty), through the
+// `shadow` stream: a cache of M vertices from PATHS light sub-paths, sampled n times,
+// estimates one light sub-path's connections with weight M / (n PATHS).
+fn lvc_connect(p: CameraSubpath, a: Arrival, counts: MisCounts, rng: ptr<function, u32>) {
+    let m = min(atomicLoad(&lvc_count), arrayLength(&lvc_cache));
+    let n = lvc_connections();
+    let scale = f32(m) / (f32(n) * f32(PATHS));
+    for (var k = 0u; k < n; k += 1u) {
+        let u = rng_f32(rng);
+        if (m == 0u) {
+            continue;
+        }
+        let v = lvc_cache[min(u32(u * f32(m)), m - 1u)];
+        if (light_vertex_length(v) + 1u + p.length > MAX_PATH_LENGTH) {
+            continue;
+        }
+        var ray = bpt_connect(p, a.s, a.bsdf, v, counts);
+        ray.contribution *= scale;
+        if (!is_black(ray.contribution)) {
+            emit_shadow(ray);
+        }
+    }
 }

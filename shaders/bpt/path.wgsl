@@ -44,20 +44,20 @@ fn bpt_light_visit(lp: ptr<function, LightPath>, a: Arrival) -> LightVisit {
     r.store = false;
     if (!a.bsdf.is_delta) {
         r.vertex = light_vertex_at(*lp, a.s);
-        let ray = light_vertex_to_camera(r.vertex, a.bsdf);
+        let ray = light_vertex_to_camera(r.vertex, a.bsdf, mis_counts(1.0));
         if (!is_black(ray.contribution)) {
             emit_shadow(ray);
         }
         r.store = (*lp).length + 2u <= MAX_PATH_LENGTH;
     }
-    r.go_on = (*lp).length + 2u <= MAX_PATH_LENGTH && light_path_scatter(lp, a.s, a.bsdf, 1.0);
+    r.go_on = (*lp).length + 2u <= MAX_PATH_LENGTH && light_path_scatter(lp, a.s, a.bsdf, mis_counts(1.0));
     return r;
 }
 
-// The camera ray of sample `index` (pixel index % PIXELS, jittered) with its MIS quantity;
-// `rng` goes on in the sub-path.
-fn camera_subpath_start(index: u32, rng: ptr<function, u32>) -> CameraSubpath {
-    let pixel = index % PIXELS;
+// A camera ray through `pixel` with its MIS quantity; `rng` goes on in the sub-path. Sample
+// `index` takes pixel index % PIXELS in NaiveBPT and StreamingBPT, and that pixel in tile
+// order in LVC-BPT and VCM (as in photon mapping, so that a workgroup's vertices are close).
+fn camera_subpath_start(pixel: u32, rng: ptr<function, u32>) -> CameraSubpath {
     let direction = camera_jittered_direction(pixel, rng);
     let d_vcm = mis_clamp(mis_pow(f32(PIXELS) / camera_pdf_w(dot(direction, camera.forward))));
     return CameraSubpath(camera.position, pixel, direction, 0u, vec3<f32>(1.0), *rng, d_vcm, 0.0, 0.0, 0u, vec2<f32>(0.0));
@@ -74,10 +74,10 @@ fn camera_subpath_trace(c: ptr<function, CameraSubpath>) {
 }
 
 // Camera sub-path `c` arrives where its last ray went (hit_t < 0: it escaped). Adds the
-// emission found there (s = 0: the background or an area light), MIS-weighted with
-// connections counting `eta` (1 for NaiveBPT, LVC-BPT's ratio otherwise), to the film, and
-// at a surface brings the MIS quantities to the new vertex.
-fn camera_arrive(c: ptr<function, CameraSubpath>, eta: f32) -> Arrival {
+// emission found there (s = 0: the background or an area light), MIS-weighted with the
+// strategies counted as `counts`, to the film, and at a surface brings the MIS quantities
+// to the new vertex.
+fn camera_arrive(c: ptr<function, CameraSubpath>, counts: MisCounts) -> Arrival {
     var a: Arrival;
     a.alive = false;
     let direction = (*c).direction;
@@ -85,7 +85,7 @@ fn camera_arrive(c: ptr<function, CameraSubpath>, eta: f32) -> Arrival {
         let bg = background_radiance(direction);
         if (bg.w > 0.0) {
             let pmf = light_pmf(u32(scene.background));
-            let w = bpt_hit_weight(*c, bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, eta);
+            let w = bpt_hit_weight(*c, bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, counts);
             film_add((*c).pixel, (*c).throughput * w * bg.xyz);
         }
         return a;
@@ -104,7 +104,7 @@ fn camera_arrive(c: ptr<function, CameraSubpath>, eta: f32) -> Arrival {
         if (le.w > 0.0) {
             let pmf = light_pmf(u32(a.s.light));
             let cos_light = dot(lights[u32(a.s.light)].normal, -direction);
-            let w = bpt_hit_weight(*c, le.w * pmf, le.w * cos_light * INV_PI * pmf, eta);
+            let w = bpt_hit_weight(*c, le.w * pmf, le.w * cos_light * INV_PI * pmf, counts);
             film_add((*c).pixel, (*c).throughput * w * le.xyz);
         }
     }
@@ -119,26 +119,31 @@ struct CameraVisit {
     rng: u32,                   // random numbers for the connections and the scatter
 }
 
-// Camera sub-path `c` arrives at its next vertex (`camera_arrive`, connections counting
-// `eta`) and, at a non-delta vertex, samples a light (s = 1) through the `shadow` stream.
+// Camera sub-path `c` arrives at its next vertex (`camera_arrive`, strategies counted as
+// `counts`) and, at a non-delta vertex, samples a light (s = 1) through the `shadow` stream.
 // The light's random numbers are drawn even where unused, so every estimator built on this
-// consumes the same numbers per vertex.
-fn camera_visit(c: ptr<function, CameraSubpath>, eta: f32) -> CameraVisit {
+// consumes the same numbers per vertex; none without light sampling (`counts.vc` false:
+// photon mapping's numbers).
+fn camera_visit(c: ptr<function, CameraSubpath>, counts: MisCounts) -> CameraVisit {
     var v: CameraVisit;
-    v.a = camera_arrive(c, eta);
+    v.a = camera_arrive(c, counts);
     v.alive = false;
     if (!v.a.alive) {
         return v;
     }
     var rng = (*c).rng;
-    let light_u = rng_f32(&rng);
-    let light_uv = rng_vec2(&rng);
+    var light_u = 0.0;
+    var light_uv = vec2<f32>(0.0);
+    if (counts.vc) {
+        light_u = rng_f32(&rng);
+        light_uv = rng_vec2(&rng);
+    }
     v.rng = rng;
     if ((*c).length >= MAX_PATH_LENGTH) {
         return v;
     }
-    if (!v.a.bsdf.is_delta && scene.num_lights > 0u) {
-        let ray = bpt_direct(*c, v.a.s, v.a.bsdf, light_u, light_uv);
+    if (counts.vc && !v.a.bsdf.is_delta && scene.num_lights > 0u) {
+        let ray = bpt_direct(*c, v.a.s, v.a.bsdf, light_u, light_uv, counts);
         if (!is_black(ray.contribution)) {
             emit_shadow(ray);
         }
@@ -147,10 +152,10 @@ fn camera_visit(c: ptr<function, CameraSubpath>, eta: f32) -> CameraVisit {
     return v;
 }
 
-// Continues camera sub-path `c` from where it arrived (connections counting `eta`, see
+// Continues camera sub-path `c` from where it arrived (strategies counted as `counts`, see
 // `scatter`); false when it ends.
-fn camera_scatter(c: ptr<function, CameraSubpath>, a: Arrival, eta: f32, rng: ptr<function, u32>) -> bool {
-    let r = scatter(a.bsdf, a.s, (*c).throughput, (*c).d_vcm, (*c).d_vc, eta, rng);
+fn camera_scatter(c: ptr<function, CameraSubpath>, a: Arrival, counts: MisCounts, rng: ptr<function, u32>) -> bool {
+    let r = scatter(a.bsdf, a.s, (*c).throughput, (*c).d_vcm, (*c).d_vc, counts, rng);
     if (!r.alive) {
         return false;
     }
@@ -164,21 +169,25 @@ fn camera_scatter(c: ptr<function, CameraSubpath>, a: Arrival, eta: f32, rng: pt
 
 // MIS weight of the s = 0 strategy (the camera sub-path hits a light) with emission
 // densities (area or solid angle `direct_pdf`, `emission_pdf`) already including the pick.
-// `eta` is how many times a vertex connection (s >= 2, t >= 2) is sampled per camera
-// vertex relative to the other strategies (1 in NaiveBPT; see `scatter`): the light vertex
-// here was reached by a camera scatter, whose d_vcm counts eta, but the strategy that picks
-// the light point directly (s = 1) counts once.
-fn bpt_hit_weight(p: CameraSubpath, direct_pdf: f32, emission_pdf: f32, eta: f32) -> f32 {
+// The light vertex here was reached by a camera scatter, whose d_vcm counts the vertex
+// connections' `counts.connect` (see `scatter`), but the strategy that picks the light point
+// directly (s = 1) counts once. Without connections (`counts.vc` false, merging alone) the
+// light counts on paths left through delta lobes alone, whose dVM (d_vc) is still 0, and
+// merges take every other path.
+fn bpt_hit_weight(p: CameraSubpath, direct_pdf: f32, emission_pdf: f32, counts: MisCounts) -> f32 {
+    if (!counts.vc) {
+        return select(0.0, 1.0, p.d_vc == 0.0);
+    }
     if (p.length == 1u) {
         return 1.0;
     }
-    let w_camera = mis_pow(direct_pdf) * p.d_vcm / mis_pow(eta) + mis_pow(emission_pdf) * p.d_vc;
+    let w_camera = mis_pow(direct_pdf) * p.d_vcm / mis_pow(counts.connect) + mis_pow(emission_pdf) * p.d_vc;
     return 1.0 / (1.0 + w_camera);
 }
 
-// The s = 1 strategy: a shadow ray towards a light sampled from the camera vertex; a zero
-// contribution when there is none.
-fn bpt_direct(p: CameraSubpath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) -> ShadowRay {
+// The s = 1 strategy: a shadow ray towards a light sampled from the camera vertex, weighed
+// against the strategies counted as `counts`; a zero contribution when there is none.
+fn bpt_direct(p: CameraSubpath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>, counts: MisCounts) -> ShadowRay {
     var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
     let pick = pick_light(u);
     let ill = illuminate(pick.index, s.position, uv);
@@ -193,7 +202,7 @@ fn bpt_direct(p: CameraSubpath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) -
     let q = bsdf.continuation;
     let forward = select(e.pdf_forward * q, 0.0, ill.is_delta);
     let w_light = mis_pow(forward / (pick.probability * ill.pdf));
-    let w_camera = mis_pow(emission.x * e.cos_gen / (ill.pdf * emission.y)) * (p.d_vcm + p.d_vc * mis_pow(e.pdf_reverse * q));
+    let w_camera = mis_pow(emission.x * e.cos_gen / (ill.pdf * emission.y)) * (counts.merge + p.d_vcm + p.d_vc * mis_pow(e.pdf_reverse * q));
     let w = 1.0 / (w_light + 1.0 + w_camera);
     ray.contribution = p.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick.probability * ill.pdf));
     ray.origin = offset_ray_origin(s.position, side_normal(s.normal, ill.direction), s.extent);
@@ -203,8 +212,9 @@ fn bpt_direct(p: CameraSubpath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>) -
 }
 
 // The s >= 2 strategies: connects the camera vertex to a stored light vertex; the strategy
-// counts `eta` times against the others (see `bpt_hit_weight`).
-fn bpt_connect(p: CameraSubpath, s: Surface, bsdf: Bsdf, v: LightVertex, eta: f32) -> ShadowRay {
+// counts `counts.connect` times against the others (see `bpt_hit_weight`), a merge at
+// either end `counts.merge` times.
+fn bpt_connect(p: CameraSubpath, s: Surface, bsdf: Bsdf, v: LightVertex, counts: MisCounts) -> ShadowRay {
     var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
     let to_light = v.position - s.position;
     let distance2 = dot(to_light, to_light);
@@ -228,9 +238,9 @@ fn bpt_connect(p: CameraSubpath, s: Surface, bsdf: Bsdf, v: LightVertex, eta: f3
     let ql = lb.continuation;
     let camera_pdf_a = ec.pdf_forward * qc * el.cos_gen / distance2;
     let light_pdf_a = el.pdf_forward * ql * ec.cos_gen / distance2;
-    let w_light = mis_pow(camera_pdf_a) * (v.d_vcm + v.d_vc * mis_pow(el.pdf_reverse * ql));
-    let w_camera = mis_pow(light_pdf_a) * (p.d_vcm + p.d_vc * mis_pow(ec.pdf_reverse * qc));
-    let w = 1.0 / ((w_light + w_camera) / mis_pow(eta) + 1.0);
+    let w_light = mis_pow(camera_pdf_a) * (counts.merge + v.d_vcm + v.d_vc * mis_pow(el.pdf_reverse * ql));
+    let w_camera = mis_pow(light_pdf_a) * (counts.merge + p.d_vcm + p.d_vc * mis_pow(ec.pdf_reverse * qc));
+    let w = 1.0 / ((w_light + w_camera) / mis_pow(counts.connect) + 1.0);
     ray.contribution = p.throughput * v.throughput * ec.f * el.f * (w * ec.cos_gen * el.cos_gen / distance2);
     ray.origin = offset_ray_origin(s.position, side_normal(s.normal, direction), s.extent);
     ray.direction = direction;

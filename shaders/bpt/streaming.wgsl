@@ -43,7 +43,7 @@ struct VertexPair {
 // camera sub-path when there is no light to start from), with NaiveBPT's random numbers.
 fn sbpt_generate(p: ptr<function, StreamingSample>, index: u32) -> bool {
     var rng = rng_seed(frame.seed, frame.index, index);
-    (*p).camera = camera_subpath_start(index, &rng);
+    (*p).camera = camera_subpath_start(index % PIXELS, &rng);
     (*p).light_count = 0u;
     (*p).camera_count = 0u;
     (*p).pad = 0u;
@@ -108,7 +108,7 @@ fn sbpt_extend(p: ptr<function, StreamingSample>) -> bool {
 // The camera half of `sbpt_extend` (NaiveBPT's `bpt_vertex` with the connections deferred);
 // false when the camera sub-path ends.
 fn sbpt_camera_vertex(p: ptr<function, StreamingSample>, c: ptr<function, CameraSubpath>) -> bool {
-    let v = camera_visit(c, 1.0);
+    let v = camera_visit(c, mis_counts(1.0));
     if (!v.alive) {
         return false;
     }
@@ -121,7 +121,7 @@ fn sbpt_camera_vertex(p: ptr<function, StreamingSample>, c: ptr<function, Camera
         (*p).camera_count += 1u;
     }
     var rng = v.rng;
-    let alive = camera_scatter(c, v.a, 1.0, &rng);
+    let alive = camera_scatter(c, v.a, mis_counts(1.0), &rng);
     (*c).rng = rng;
     return alive;
 }
@@ -150,7 +150,7 @@ fn sbpt_connect(pair: ptr<function, VertexPair>) -> bool {
         cv.position, cv.pixel, -cv.towards, cv.length, cv.throughput, 0u, cv.d_vcm, cv.d_vc,
         0.0, 0u, vec2<f32>(0.0),
     );
-    let ray = bpt_connect(c, s, bsdf, (*pair).light, 1.0);
+    let ray = bpt_connect(c, s, bsdf, (*pair).light, mis_counts(1.0));
     if (!is_black(ray.contribution)) {
         emit_shadow(ray);
     }

@@ -5,7 +5,7 @@
 fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
     var camera = (*p).camera;
     let c = &camera;
-    let v = camera_visit(c, 1.0);
+    let v = camera_visit(c, mis_counts(1.0));
     if (!v.alive) {
         return false;
     }
@@ -15,14 +15,14 @@ fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
             if (light_vertex_length(lv) + 1u + (*c).length > MAX_PATH_LENGTH) {
                 break;
             }
-            let ray = bpt_connect(*c, v.a.s, v.a.bsdf, lv, 1.0);
+            let ray = bpt_connect(*c, v.a.s, v.a.bsdf, lv, mis_counts(1.0));
             if (!is_black(ray.contribution)) {
                 emit_shadow(ray);
             }
         }
     }
     var rng = v.rng;
-    let alive = camera_scatter(c, v.a, 1.0, &rng);
+    let alive = camera_scatter(c, v.a, mis_counts(1.0), &rng);
     (*c).rng = rng;
     (*p).camera = camera;
     return alive;

@@ -9,7 +9,7 @@ fn light_bounce(p: ptr<function, LightPath>) -> bool {
     let s = a.s;
     let bsdf = a.bsdf;
     if (!bsdf.is_delta && (*p).length + 1u <= MAX_PATH_LENGTH) {
-        let ray = light_vertex_to_camera(light_vertex_at(*p, s), bsdf);
+        let ray = light_vertex_to_camera(light_vertex_at(*p, s), bsdf, mis_counts(1.0));
         if (!is_black(ray.contribution)) {
             emit_shadow(ray);
         }
@@ -17,5 +17,5 @@ fn light_bounce(p: ptr<function, LightPath>) -> bool {
     if ((*p).length + 2u > MAX_PATH_LENGTH) {
         return false;
     }
-    return light_path_scatter(p, s, bsdf, 1.0);
+    return light_path_scatter(p, s, bsdf, mis_counts(1.0));
 }

@@ -1,6 +1,8 @@
 // Light sub-paths and the recursive MIS of bidirectional path tracing (Georgiev et al. 2012,
 // "Implementing vertex connection and merging", in the dVCM / dVC form; balance heuristic,
-// or the power heuristic with MIS_POWER). No merging here, so dVM is not carried. The
+// or the power heuristic with MIS_POWER). dVM is not carried: with connections and merging
+// (VCM) it is dVC / mis_pow(pi r^2 N_light) all along (the same recursion, Georgiev et al.'s
+// light and camera starts), and with merging alone d_vc carries it (see `MisCounts`). The
 // quantities are kept below MIS_LIMIT so that long glossy chains cannot overflow them into
 // infinities and NaNs; a weight whose sum overflows anyway is 1 / (1 + inf) = 0.
 //
@@ -10,6 +12,25 @@
 // Needs the constant LIGHT_TRACE_ONLY (true: the t = 1 strategy alone, weight 1).
 
 const MIS_LIMIT: f32 = 1e30;
+
+// How often each kind of strategy is sampled in the MIS (the balance heuristic over n_i p_i),
+// in units of a vertex connection sampled once per camera vertex, as Georgiev et al. count
+// them: `connect`, the vertex connections (s, t >= 2) per camera vertex (1 in NaiveBPT,
+// LVC-BPT's ratio `lvc_eta`); `merge`, mis_pow of a merge's count pi r^2 N_light (0 without
+// merging, VCM); `vc`, whether light sampling, light tracing and connections run at all (false:
+// VCM as PBPM, merging alone, where d_vc carries dVM and emission counts only on paths that
+// were left through delta lobes alone). The light sampling, light tracing and the emission a
+// camera sub-path hits count once.
+struct MisCounts {
+    connect: f32,
+    merge: f32,
+    vc: bool,
+}
+
+// The counts of bidirectional path tracing without merging, connections counting `connect`.
+fn mis_counts(connect: f32) -> MisCounts {
+    return MisCounts(connect, 0.0, true);
+}
 
 // MIS exponent applied to a density ratio.
 fn mis_pow(x: f32) -> f32 {
@@ -143,10 +164,16 @@ fn light_path_land(p: ptr<function, LightPath>) -> Arrival {
     return a;
 }
 
+// Where a light sub-path's vertex at surface `s` is stored (cache vertices and photons
+// alike): moved off the surface to the side it arrived from, `towards` its previous vertex.
+fn light_vertex_position(s: Surface, towards: vec3<f32>) -> vec3<f32> {
+    return offset_ray_origin(s.position, side_normal(s.normal, towards), s.extent);
+}
+
 // The vertex to store for a sub-path at surface `s` (after `light_path_arrive`).
 fn light_vertex_at(p: LightPath, s: Surface) -> LightVertex {
     let towards = -p.direction;
-    let position = offset_ray_origin(s.position, side_normal(s.normal, towards), s.extent);
+    let position = light_vertex_position(s, towards);
     return LightVertex(
         position, p.d_vcm, p.throughput, p.d_vc, encode_octahedral(s.normal), encode_octahedral(towards),
         min(s.material, 0xffffffu) | (min(p.length, 255u) << 24u), pack2x16unorm(fract(s.tex)),
@@ -166,10 +193,10 @@ fn light_vertex_bsdf(v: LightVertex) -> Bsdf {
     return bsdf;
 }
 
-// The t = 1 strategy: connects a light vertex to the camera. Returns the shadow ray towards
-// the camera with the contribution to its pixel; a zero contribution when the camera cannot
-// see the vertex.
-fn light_vertex_to_camera(v: LightVertex, bsdf: Bsdf) -> ShadowRay {
+// The t = 1 strategy: connects a light vertex to the camera, weighed against the other
+// strategies as `counts` count them. Returns the shadow ray towards the camera with the
+// contribution to its pixel; a zero contribution when the camera cannot see the vertex.
+fn light_vertex_to_camera(v: LightVertex, bsdf: Bsdf, counts: MisCounts) -> ShadowRay {
     var ray = ShadowRay(v.position, 0u, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
     let raster = camera_raster(v.position);
     if (raster.z <= 0.0 || !bsdf.valid) {
@@ -189,7 +216,7 @@ fn light_vertex_to_camera(v: LightVertex, bsdf: Bsdf) -> ShadowRay {
     var weight = 1.0;
     if (!LIGHT_TRACE_ONLY) {
         let reverse = e.pdf_reverse * bsdf.continuation;
-        let w_light = mis_pow(camera_pdf_a / n_light) * (v.d_vcm + v.d_vc * mis_pow(reverse));
+        let w_light = mis_pow(camera_pdf_a / n_light) * (counts.merge + v.d_vcm + v.d_vc * mis_pow(reverse));
         weight = 1.0 / (1.0 + w_light);
     }
     let pixel = min(u32(raster.y), u32(camera.height) - 1u) * WIDTH + min(u32(raster.x), WIDTH - 1u);
@@ -202,11 +229,12 @@ fn light_vertex_to_camera(v: LightVertex, bsdf: Bsdf) -> ShadowRay {
 
 // Samples the next direction with Russian roulette (continuation probability from the
 // albedo) and updates throughput and MIS quantities; false when the sub-path ends. Used by
-// light and camera sub-paths alike (`bsdf.adjoint` tells them apart). `eta` is the count of
-// the vertex-connection strategies (s >= 2, t >= 2) against the others in the balance
-// heuristic (sum of n_i p_i): 1 in NaiveBPT, connections per camera vertex over the average
-// cached vertices per light sub-path in LVC-BPT. d_vcm of the next vertex stands for the
-// strategy connecting the current vertex to it, always a vertex connection.
+// light and camera sub-paths alike (`bsdf.adjoint` tells them apart). d_vcm of the next
+// vertex stands for the strategy connecting the current vertex to it, always a vertex
+// connection (counted `counts.connect` times); d_vc gains the strategies that end at the
+// current vertex: the one d_vcm stood for and a merge there (`counts.merge`). Without
+// connections (`counts.vc` false) d_vc is VCM's dVM with merging alone, which gains 1, the
+// merge at the current vertex.
 struct Scatter {
     origin: vec3<f32>,
     direction: vec3<f32>,
@@ -216,7 +244,7 @@ struct Scatter {
     alive: bool,
 }
 
-fn scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vcm: f32, d_vc: f32, eta: f32, rng: ptr<function, u32>) -> Scatter {
+fn scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vcm: f32, d_vc: f32, counts: MisCounts, rng: ptr<function, u32>) -> Scatter {
     var r = Scatter(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
     let u = vec3<f32>(rng_vec2(rng), rng_f32(rng));
     let roulette_u = rng_f32(rng);
@@ -234,8 +262,9 @@ fn scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vcm: f32, d_vc: f32,
         r.d_vc = mis_clamp(d_vc * mis_pow(smp.cos_gen));
     } else {
         let reverse = bsdf_eval(bsdf, smp.direction).pdf_reverse * q;
-        r.d_vc = mis_clamp(mis_pow(smp.cos_gen / pdf) * (d_vc * mis_pow(reverse) + d_vcm));
-        r.d_vcm = mis_clamp(mis_pow(eta / pdf));
+        let ending_here = select(1.0, counts.merge + d_vcm, counts.vc);
+        r.d_vc = mis_clamp(mis_pow(smp.cos_gen / pdf) * (d_vc * mis_pow(reverse) + ending_here));
+        r.d_vcm = mis_clamp(mis_pow(counts.connect / pdf));
     }
     r.throughput = throughput * smp.f * (smp.cos_gen / pdf);
     r.origin = offset_ray_origin(s.position, side_normal(s.normal, smp.direction), s.extent);
@@ -244,11 +273,11 @@ fn scatter(bsdf: Bsdf, s: Surface, throughput: vec3<f32>, d_vcm: f32, d_vc: f32,
     return r;
 }
 
-// Continues a light sub-path from its current vertex (connections counting `eta`, see
+// Continues a light sub-path from its current vertex (strategies counted as `counts`, see
 // `scatter`); false when it ends.
-fn light_path_scatter(p: ptr<function, LightPath>, s: Surface, bsdf: Bsdf, eta: f32) -> bool {
+fn light_path_scatter(p: ptr<function, LightPath>, s: Surface, bsdf: Bsdf, counts: MisCounts) -> bool {
     var rng = (*p).rng;
-    let r = scatter(bsdf, s, (*p).throughput, (*p).d_vcm, (*p).d_vc, eta, &rng);
+    let r = scatter(bsdf, s, (*p).throughput, (*p).d_vcm, (*p).d_vc, counts, &rng);
     (*p).rng = rng;
     if (!r.alive) {
         return false;

@@ -43,9 +43,36 @@ fn pm_extent() -> f32 {
     return 2.0 * scene.radius;
 }
 
-// A camera sub-path between passes, with the density estimation pending at its last vertex:
-// the vertex, what its BSDF needs (material, texture coordinates, geometric normal and the
-// direction towards the previous vertex, octahedral), and the throughput and dVM there.
+// A density estimation left pending at a camera vertex for a gather pass (photon mapping's
+// and VCM's): the vertex, what its BSDF needs (material, texture coordinates, geometric
+// normal and the direction towards the previous vertex, octahedral), the camera sub-path's
+// throughput and dVM there, and its length (segments).
+struct PendingMerge {
+    position: vec3<f32>,
+    material: u32,
+    throughput: vec3<f32>,
+    d_vm: f32,
+    normal: u32,
+    fix: u32,
+    tex: u32,
+    length: u32,
+}
+
+// The estimation to leave pending at surface `s`, reached from `towards`.
+fn pending_merge_at(s: Surface, towards: vec3<f32>, throughput: vec3<f32>, d_vm: f32, length: u32) -> PendingMerge {
+    return PendingMerge(
+        s.position, s.material, throughput, d_vm, encode_octahedral(s.normal), encode_octahedral(towards),
+        pack2x16unorm(fract(s.tex)), length,
+    );
+}
+
+// The BSDF at a pending estimation's vertex.
+fn pending_merge_bsdf(m: PendingMerge) -> Bsdf {
+    let material = material_at(m.material, unpack2x16unorm(m.tex));
+    return bsdf_setup(material, decode_octahedral(m.normal), decode_octahedral(m.fix));
+}
+
+// A camera sub-path between passes, with the density estimation pending at its last vertex.
 struct MergePath {
     origin: vec3<f32>,
     pixel: u32,
@@ -58,14 +85,7 @@ struct MergePath {
     hit_t: f32,             // negative: the last ray escaped
     hit_primitive: u32,
     hit_uv: vec2<f32>,
-    merge_normal: u32,
-    merge_fix: u32,
-    merge_position: vec3<f32>,
-    merge_material: u32,
-    merge_throughput: vec3<f32>,
-    merge_d_vm: f32,
-    merge_tex: u32,
-    merge_length: u32,
+    merge: PendingMerge,
 }
 
 // A density estimation under way: the query and the sums of the photons it found.
@@ -140,31 +160,24 @@ fn pm_vertex(p: ptr<function, MergePath>) -> bool {
     var next = bsdf;
     if (PM_MODE == PM_SPPM) {
         if (bsdf_has_diffuse(bsdf)) {
-            merge_leave_pending(p, s, -direction);
+            merge_leave_pending(p, s);
         }
         go_on = bsdf_has_glossy(bsdf);
         next = bsdf_glossy_part(bsdf);
     } else if (!bsdf.is_delta) {
-        merge_leave_pending(p, s, -direction);
+        merge_leave_pending(p, s);
         go_on = PM_MODE == PM_PBPM;
     }
-    if (go_on && (*p).length + 1u < MAX_PATH_LENGTH) {
+    if (go_on) {
         merge_scatter(p, next, s);
     }
     return true;
 }
 
 // Leaves the density estimation at surface `s` pending for the gather pass.
-fn merge_leave_pending(p: ptr<function, MergePath>, s: Surface, towards: vec3<f32>) {
+fn merge_leave_pending(p: ptr<function, MergePath>, s: Surface) {
     (*p).flags |= MERGE_PENDING;
-    (*p).merge_position = s.position;
-    (*p).merge_normal = encode_octahedral(s.normal);
-    (*p).merge_fix = encode_octahedral(towards);
-    (*p).merge_material = s.material;
-    (*p).merge_tex = pack2x16unorm(fract(s.tex));
-    (*p).merge_throughput = (*p).throughput;
-    (*p).merge_d_vm = (*p).d_vm;
-    (*p).merge_length = (*p).length;
+    (*p).merge = pending_merge_at(s, -(*p).direction, (*p).throughput, (*p).d_vm, (*p).length);
 }
 
 // Continues the sub-path through `bsdf` (all of it, or SPPM's glossy part).
@@ -197,18 +210,18 @@ fn merge_begin(p: MergePath) -> Merge {
     if (!m.pending) {
         return m;
     }
-    count(COUNTER_PM_QUERIES, 1u);
-    m.position = p.merge_position;
-    m.radius = pm_radius();
-    let material = material_at(p.merge_material, unpack2x16unorm(p.merge_tex));
-    m.bsdf = bsdf_setup(material, decode_octahedral(p.merge_normal), decode_octahedral(p.merge_fix));
+    m = merge_query(p.merge);
     if (PM_MODE == PM_SPPM) {
         m.bsdf = bsdf_diffuse_part(m.bsdf);
     }
-    m.d_vm = p.merge_d_vm;
-    m.length = p.merge_length;
-    m.sum = vec3<f32>(0.0);
     return m;
+}
+
+// The density estimation of `pending` begun (counted as `pm_queries`), with this frame's
+// radius and nothing found yet.
+fn merge_query(pending: PendingMerge) -> Merge {
+    count(COUNTER_PM_QUERIES, 1u);
+    return Merge(pending.position, pm_radius(), true, pending_merge_bsdf(pending), pending.d_vm, pending.length, vec3<f32>(0.0));
 }
 
 // Adds a photon in range (counted as `pm_found`; the queries as `pm_queries`), standing for
@@ -235,12 +248,16 @@ fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
     (*m).sum += e.f * photon.throughput * w;
 }
 
+// The density estimation's kernel at `radius`: 1 / (pi r^2 PM_LIGHT_PATHS).
+fn merge_kernel(radius: f32) -> f32 {
+    return 1.0 / (PI * radius * radius * f32(PM_LIGHT_PATHS));
+}
+
 // Adds the finished estimation to the film: the sums over pi r^2 PM_LIGHT_PATHS.
 fn merge_end(p: ptr<function, MergePath>, m: Merge) {
     if (!m.pending) {
         return;
     }
     (*p).flags &= ~MERGE_PENDING;
-    let kernel = 1.0 / (PI * m.radius * m.radius * f32(PM_LIGHT_PATHS));
-    film_add((*p).pixel, (*p).merge_throughput * m.sum * kernel);
+    film_add((*p).pixel, (*p).merge.throughput * m.sum * merge_kernel(m.radius));
 }

@@ -67,7 +67,8 @@ fn pm_visit_light_vertex(p: ptr<function, PhotonPath>) -> bool {
             let i = atomicAdd(&pm_count, 1u);
             if (i < arrayLength(&pm_staging)) {
                 let towards = -(*p).light.direction;
-                pm_staging[i] = Photon(a.s.position, (*p).d_vm, (*p).light.throughput, photon_pack(towards, length));
+                let position = light_vertex_position(a.s, towards);
+                pm_staging[i] = Photon(position, (*p).d_vm, (*p).light.throughput, photon_pack(towards, length));
                 (*p).stored = i;
             } else {
                 count(COUNTER_PM_OVERFLOW, 1u);

@@ -19,7 +19,8 @@
 
 // Needs shaders/lib/scene.wgsl (the octahedral code of directions).
 
-// A photon (32 bytes): where it landed, PBPM's MIS quantity, the light sub-path's throughput
+// A photon (32 bytes): where it landed (moved off the surface to the side it arrived from, as
+// a cache vertex is: `light_vertex_position`), PBPM's MIS quantity, the light sub-path's throughput
 // there, and the direction it arrived from (octahedral, 12 bits a component) with the
 // segments from the light (8 bits).
 struct Photon {
@@ -34,17 +35,25 @@ struct PhotonSlot {
     index: u32,
 }
 
-// Packs the direction towards the previous vertex (the scene's octahedral code, each snorm16
-// component cut to its top 12 bits) and the sub-path's length.
+// A direction in 24 bits: its octahedral code (the scene's, two snorm16 components) with
+// each component cut to its top 12 bits.
+fn octahedral_24(code: u32) -> u32 {
+    return ((code >> 4u) & 0xfffu) | (((code >> 20u) & 0xfffu) << 12u);
+}
+
+// The unit direction of a 24-bit code (the bits above 24 are ignored).
+fn decode_octahedral_24(w: u32) -> vec3<f32> {
+    return decode_octahedral(((w & 0xfffu) << 4u) | (((w >> 12u) & 0xfffu) << 20u));
+}
+
+// Packs the direction towards the previous vertex (24 bits) and the sub-path's length.
 fn photon_pack(towards: vec3<f32>, length: u32) -> u32 {
-    let code = encode_octahedral(towards);
-    return ((code >> 4u) & 0xfffu) | (((code >> 20u) & 0xfffu) << 12u) | (min(length, 255u) << 24u);
+    return octahedral_24(encode_octahedral(towards)) | (min(length, 255u) << 24u);
 }
 
 // The direction towards the previous vertex of the light sub-path (unit length).
 fn photon_direction(p: Photon) -> vec3<f32> {
-    let w = p.direction_length;
-    return decode_octahedral(((w & 0xfffu) << 4u) | (((w >> 12u) & 0xfffu) << 20u));
+    return decode_octahedral_24(p.direction_length);
 }
 
 // Segments from the light to the photon.

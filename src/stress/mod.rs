@@ -26,8 +26,9 @@ pub const NOT_RADIANCE: [&str; 2] = ["ao", "aov"];
 /// each of MAX_PATH_LENGTH - 2 slots, too large for the emissive boxes' hundreds of bounces
 /// (StreamingBPT keeps both sub-paths' vertices). Photon mapping is consistent but biased at
 /// any finite radius, so the unbiased invariants' tolerances do not apply; its merge-radius
-/// cases (tiny and huge radii, the radius after 10^4 frames) are in tests/integration/pm.rs.
-pub const INCOMPLETE: [(&str, &str); 7] = [
+/// cases (tiny and huge radii, the radius after 10^4 frames) are in tests/integration/pm.rs;
+/// VCM merges too.
+pub const INCOMPLETE: [(&str, &str); 8] = [
     ("bpt-lvc", "new: not yet run through the stress suite"),
     (
         "bpt-naive",
@@ -49,6 +50,10 @@ pub const INCOMPLETE: [(&str, &str); 7] = [
     (
         "sppm",
         "biased at a finite merge radius: its stress cases are in tests/integration/pm.rs",
+    ),
+    (
+        "vcm",
+        "biased at a finite merge radius (its merges): its halves equal LVC-BPT and PBPM (tests/integration/vcm.rs)",
     ),
 ];
 

@@ -11,7 +11,7 @@
 const FRAMES: u32 = 48;
 
 use crate::common::{borrowed, largest_relative_difference, measured, render, render_with};
-use crate::frames::{Frames, block_means, render_frames, worst_z};
+use crate::frames::{Frames, block_means, render_frames, render_frames_with, worst_z};
 use lightgraph::render::{LoadedScene, load_graph, load_scene};
 use lightgraph_engine::ConstValue;
 
@@ -75,10 +75,27 @@ const SMALL: Sampling = Sampling {
 
 /// Every block `keep` selects of `scene`: `graph` in `layout` against path tracing.
 fn agrees_with_pt(scene_name: &str, graph: &str, layout: &str, sampling: Sampling, keep: impl Fn(usize) -> bool) {
+    agrees_with_pt_given(scene_name, (graph, layout, &[]), sampling, keep);
+}
+
+/// Every block of `scene`: `graph` in `layout` with `constants` against path tracing, with
+/// the sampling of LVC-BPT's tests.
+pub fn agrees_with_pt_under(scene_name: &str, graph: &str, layout: &str, constants: &[(&str, ConstValue)]) {
+    agrees_with_pt_given(scene_name, (graph, layout, constants), SMALL, |_| true);
+}
+
+/// [`agrees_with_pt`] for `run`, a graph, a layout and constants.
+fn agrees_with_pt_given(
+    scene_name: &str,
+    run: (&str, &str, &[(&str, ConstValue)]),
+    sampling: Sampling,
+    keep: impl Fn(usize) -> bool,
+) {
+    let (graph, layout, constants) = run;
     let scene = load_scene(scene_name).unwrap();
     let (size, n) = (sampling.size, 4);
     let pt = render_frames(&scene, "pt", "NaivePTsk", size, sampling.pt_spp, FRAMES, 17, n);
-    let other = render_frames(&scene, graph, layout, size, sampling.spp, FRAMES, 18, n);
+    let other = render_frames_with(&scene, graph, layout, (size, sampling.spp, FRAMES, 18, n), constants);
     let keep: Vec<bool> = (0..(n * n) as usize).map(keep).collect();
     let mut noisy = direct_light_blocks(&scene, size, n);
     for b in sampling.light_images {
@@ -201,7 +218,7 @@ fn every_lvc_bpt_layout_matches_lvc_bpt_sk() {
 
 /// Mean and combined standard error of `a` minus `b` in block `block`, channel `c`, in units of
 /// that standard error.
-fn excess_z(a: &Frames, b: &Frames, block: usize, c: usize) -> f64 {
+pub fn excess_z(a: &Frames, b: &Frames, block: usize, c: usize) -> f64 {
     let ((ma, sa), (mb, sb)) = (a.stat(block, c), b.stat(block, c));
     (ma - mb) / (sa * sa + sb * sb).sqrt()
 }

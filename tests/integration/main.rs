@@ -27,3 +27,4 @@ mod specialize;
 mod stress;
 mod tev;
 mod textures;
+mod vcm;

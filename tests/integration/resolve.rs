@@ -128,9 +128,13 @@ fn lvc_bpt_mk_shares_memory_and_renders_what_it_renders_without_sharing() {
 
 /// The reference image was rendered by LVC-BPTsk before the engine had operators (commit
 /// 6ae69d8, when three levels of one-thread scan passes put the cache in sub-path order), on
-/// lavapipe: 32 x 32, 2 samples per pixel, 3 frames, seed 11. The cache now goes through the
-/// engine's scan and scatter over the counted vertices, with the same random numbers; both
-/// layouts must render the same image, up to the float rounding of the film's atomic sums.
+/// lavapipe: 32 x 32, 2 samples per pixel, 3 frames, seed 11; the cache went through the
+/// engine's scan and scatter since, with the same random numbers. It was rendered again (the
+/// same command, `lightgraph render --graph bpt-lvc --layout LVC-BPTsk --scene
+/// cornell-glossy-background --res 32x32 --spp 2 --frames 3 --seed 11 --set
+/// LVC_AVERAGE_LENGTH=0.8007`) when camera samples started taking their pixels in tile order
+/// (VCM's halves equal LVC-BPT and PBPM, whose order it is). Both layouts must render it, up
+/// to the float rounding of the film's atomic sums.
 /// The average light sub-path length it was rendered with, 0.8007 (8007 vertices stored by the
 /// 10^4 sub-paths of the measuring frame), is given rather than measured again: on lavapipe the
 /// measuring frame's count can differ between sessions (README, Testing).

@@ -1,0 +1,172 @@
+// Vertex connection and merging (Georgiev et al. 2012), mapped to the GPU as Davidovic et al.
+// 2014 map it: LVC-BPT's light phase stores every non-delta light vertex in the Light Vertex
+// Cache (shaders/bpt/lvc.wgsl), the engine puts the cache in sub-path order for the
+// connections and builds the full hash grid over the same vertices for the merges
+// (graphs/vcm.ron), then each camera vertex makes LVC-BPT's connections and merges with the
+// vertices within this frame's radius (photon mapping's r_i, shaders/pm/camera.wgsl), all
+// weighted by one recursive MIS in which a merge counts pi r^2 N_light (`vcm_counts`).
+//
+// VCM_CONNECT and VCM_MERGE switch the two halves off. Without merging the passes do exactly
+// what LVC-BPT's do; without connections (no light sampling, light tracing or connections)
+// exactly what PBPM's do: the same random numbers, the same vertices (stored off the surface,
+// their direction read with the photons' 24 bits), the same weights. d_vc carries PBPM's dVM
+// then (see `MisCounts`).
+
+const VCM_PENDING: u32 = 1u;    // a merge waits at the vertex below (`merge`)
+const VCM_ALIVE: u32 = 2u;      // the sub-path goes on after this vertex
+
+// A camera sub-path of VCM between passes, with the merge pending at its last vertex (its
+// PendingMerge carries d_vc there, and `merge_d_vcm` d_vcm).
+struct VcmPath {
+    camera: CameraSubpath,
+    merge: PendingMerge,
+    merge_d_vcm: f32,
+    flags: u32,
+}
+
+// The strategies' counts: connections as LVC-BPT's, a merge pi r^2 N_light times a vertex
+// connection (0 without merging).
+fn vcm_counts() -> MisCounts {
+    var merge = 0.0;
+    if (VCM_MERGE) {
+        let r = pm_radius();
+        merge = mis_pow(PI * r * r * f32(PM_LIGHT_PATHS));
+    }
+    return MisCounts(lvc_eta(), merge, VCM_CONNECT);
+}
+
+// Pass `vcm_light_generate` (Start over the light sub-paths): LVC-BPT's start; without
+// connections dVM (d_vc) starts at 0, as PBPM's.
+fn vcm_light_generate(p: ptr<function, LightPath>, index: u32) -> bool {
+    let started = lvc_light_generate(p, index);
+    if (!VCM_CONNECT) {
+        (*p).d_vc = 0.0;
+    }
+    return started;
+}
+
+// Pass `vcm_bounce` (Loop): the light sub-path's new vertex into the cache (also when only a
+// merge can use it), the t = 1 splat, and the next direction.
+fn vcm_bounce(p: ptr<function, LightPath>) -> bool {
+    return lvc_light_visit(p, vcm_counts(), select(2u, 1u, VCM_MERGE));
+}
+
+// Pass `vcm_grid_keys` (Start over the stored vertices): the vertex's hash grid bucket.
+fn vcm_grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
+    grid_key[index] = cell_bucket(cell_of(lvc_staging[index].position));
+    return false;
+}
+
+// Pass `vcm_camera` (Start over PATHS): LVC-BPT's camera ray of sample `index`.
+fn vcm_camera(p: ptr<function, VcmPath>, index: u32) -> bool {
+    var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
+    (*p).camera = camera_subpath_start(camera_tiled_pixel(index % PIXELS), &rng);
+    (*p).flags = 0u;
+    return true;
+}
+
+// Pass `vcm_trace` (Loop): the closest hit of the camera sub-path's ray.
+fn vcm_trace(p: ptr<function, VcmPath>) -> bool {
+    var c = (*p).camera;
+    camera_subpath_trace(&c);
+    (*p).camera = c;
+    return true;
+}
+
+// Pass `vcm_vertex` (Loop): at the camera sub-path's new vertex, emission found (s = 0), a
+// light sampled (s = 1), LVC-BPT's connections, the merge left pending for `vcm_gather`, and
+// the next direction. Always true; `vcm_continue` ends the sub-path.
+fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
+    (*p).flags = 0u;
+    let counts = vcm_counts();
+    var c = (*p).camera;
+    let visit = camera_visit(&c, counts);
+    if (visit.alive) {
+        var rng = visit.rng;
+        if (!visit.a.bsdf.is_delta) {
+            if (VCM_CONNECT) {
+                lvc_connect(c, visit.a, counts, &rng);
+            }
+            if (VCM_MERGE) {
+                (*p).merge = pending_merge_at(visit.a.s, -c.direction, c.throughput, c.d_vc, c.length);
+                (*p).merge_d_vcm = c.d_vcm;
+                (*p).flags = VCM_PENDING;
+            }
+        }
+        if (camera_scatter(&c, visit.a, counts, &rng)) {
+            (*p).flags |= VCM_ALIVE;
+        }
+        c.rng = rng;
+    }
+    (*p).camera = c;
+    return true;
+}
+
+// Pass `vcm_gather` (Loop): the pending merge, with every cached vertex within the radius
+// (the full hash grid's NaiveQuery over `vcm_grid`, shaders/pm/grid.wgsl), over
+// pi r^2 N_light.
+fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
+    if (((*p).flags & VCM_PENDING) == 0u) {
+        return true;
+    }
+    var m = merge_query((*p).merge);
+    let counts = vcm_counts();
+    let box = cell_box(m.position, m.radius);
+    var walk = cell_walk(box);
+    loop {
+        let range = vcm_reached_bucket(walk.cell, m);
+        for (var i = range.x; i < range.y; i += 1u) {
+            let position = vcm_grid[i].position;
+            if (pm_in_range(position, m.position, m.radius) && cell_owns(box, walk.cell, position)) {
+                vcm_merge_vertex(&m, vcm_grid[i], (*p).merge_d_vcm, counts);
+            }
+        }
+        if (!cell_walk_next(&walk)) {
+            break;
+        }
+    }
+    film_add((*p).camera.pixel, (*p).merge.throughput * m.sum * merge_kernel(m.radius));
+    return true;
+}
+
+// Pass `vcm_continue` (Loop, last): ends the sub-path when `vcm_vertex` said so.
+fn vcm_continue(p: ptr<function, VcmPath>) -> bool {
+    return ((*p).flags & VCM_ALIVE) != 0u;
+}
+
+// The vertices in `vcm_grid` of the bucket of `cell`, or none when the cell is out of the
+// merge's reach.
+fn vcm_reached_bucket(cell: vec3<i32>, m: Merge) -> vec2<u32> {
+    if (!cell_reaches(cell, m.position, m.radius)) {
+        return vec2<u32>(0u);
+    }
+    let b = cell_bucket(cell);
+    if (b + 1u < PM_CELLS) {
+        return vec2<u32>(grid_first[b], grid_first[b + 1u]);
+    }
+    return vec2<u32>(grid_first[b], min(atomicLoad(&lvc_count), arrayLength(&vcm_grid)));
+}
+
+// Adds cached vertex `v`, in range of merge `m` (counted as `pm_found`), to it: the BSDF for
+// the direction the light sub-path arrived from times its throughput, with VCM's weight
+// (Georgiev et al.: the light side's dVCM / eta + dVM p, the camera side's likewise, where
+// dVM = dVC / eta; PBPM's dVM alone without connections). Vertices that would make the path
+// longer than MAX_PATH_LENGTH are left out.
+fn vcm_merge_vertex(m: ptr<function, Merge>, v: LightVertex, camera_d_vcm: f32, counts: MisCounts) {
+    count(COUNTER_PM_FOUND, 1u);
+    if (light_vertex_length(v) + (*m).length > MAX_PATH_LENGTH) {
+        return;
+    }
+    let towards = decode_octahedral_24(octahedral_24(v.fix));
+    let e = bsdf_eval((*m).bsdf, towards);
+    if (is_black(e.f)) {
+        return;
+    }
+    var w_light = v.d_vc * mis_pow(e.pdf_forward * (*m).bsdf.continuation);
+    var w_camera = (*m).d_vm * mis_pow(e.pdf_reverse * bsdf_continuation_towards((*m).bsdf, towards));
+    if (counts.vc) {
+        w_light = (v.d_vcm + w_light) / counts.merge;
+        w_camera = (camera_d_vcm + w_camera) / counts.merge;
+    }
+    (*m).sum += e.f * v.throughput * (1.0 / (w_light + 1.0 + w_camera));
+}
