@@ -25,5 +25,6 @@ mod scenes;
 mod shards;
 mod specialize;
 mod stress;
+mod study;
 mod tev;
 mod textures;
