@@ -20,6 +20,7 @@ use lightgraph_engine::Gpu;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+/// The arguments of `lightgraph study`.
 #[derive(Args)]
 pub struct StudyArgs {
     #[command(flatten)]
@@ -85,6 +86,8 @@ pub struct StudyArgs {
 /// How often a reference being rendered is written, so a stopped study keeps its samples.
 const REFERENCE_CHECKPOINT: Duration = Duration::from_secs(300);
 
+/// Runs the study: every scene in turn (reference, layouts, comparison), the summary
+/// rewritten after each.
 pub fn study(args: StudyArgs) -> Result<()> {
     if let Some(scene) = &args.common.scene {
         bail!("study renders the scenes of --scenes, not --scene {scene}: name it there");
