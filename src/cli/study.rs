@@ -180,22 +180,7 @@ fn study_scene(
 ) -> Result<SceneRuns> {
     let path = reference_path(&references_dir(args), folder);
     let (reference, source) = ensure_reference(args, scene, &path)?;
-    let mut compare = CompareArgs {
-        common: Common {
-            scene: Some(scene.to_string()),
-            ..args.common.clone()
-        },
-        runs: String::new(),
-        reference: path.clone(),
-        time: args.time,
-        baseline: None,
-        per_decade: args.per_decade,
-        seed: args.seed,
-        tev: args.tev.clone(),
-        out: args.out.join(folder),
-        exposure: args.exposure,
-        gpus: args.gpus.clone(),
-    };
+    let mut compare = compare_args(args, (scene, folder), &path);
     defaults_from_reference(&mut compare.common, &reference);
     // As `compare` will check them, before the layouts are measured.
     check_reference(&compare, &reference)?;
@@ -227,20 +212,45 @@ fn study_scene(
             samples: result.samples,
         })
         .collect();
-    let info = |k: &str| reference.info.get(k).cloned().unwrap_or_default();
     Ok(SceneRuns {
         scene: scene.to_string(),
         folder: folder.to_string(),
-        reference: ReferenceNote {
-            path: path.display().to_string(),
-            graph: info("graph"),
-            samples_per_pixel: reference.samples_per_pixel(),
-            seconds: reference.seconds,
-            noise_rmse: reference.noise_floor_mse().sqrt(),
-            source,
-        },
+        reference: reference_note(&reference, &path, source),
         runs,
     })
+}
+
+/// The arguments of the scene's comparison (`lightgraph compare`) against the reference at
+/// `path`, its runs still to be named.
+fn compare_args(args: &StudyArgs, (scene, folder): (&str, &str), path: &Path) -> CompareArgs {
+    CompareArgs {
+        common: Common {
+            scene: Some(scene.to_string()),
+            ..args.common.clone()
+        },
+        runs: String::new(),
+        reference: path.to_path_buf(),
+        time: args.time,
+        baseline: None,
+        per_decade: args.per_decade,
+        seed: args.seed,
+        tev: args.tev.clone(),
+        out: args.out.join(folder),
+        exposure: args.exposure,
+        gpus: args.gpus.clone(),
+    }
+}
+
+/// What the summary says of the reference at `path`.
+fn reference_note(reference: &Reference, path: &Path, source: ReferenceSource) -> ReferenceNote {
+    ReferenceNote {
+        path: path.display().to_string(),
+        graph: reference.info.get("graph").cloned().unwrap_or_default(),
+        samples_per_pixel: reference.samples_per_pixel(),
+        seconds: reference.seconds,
+        noise_rmse: reference.noise_floor_mse().sqrt(),
+        source,
+    }
 }
 
 /// The layout `spec` runs in on this scene: the one it names, else the one of its graph's
