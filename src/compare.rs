@@ -55,6 +55,17 @@ impl RunSpec {
     }
 }
 
+/// The inverse of [`RunSpec::parse_list`] for one run: `graph[:layout][@NAME=VALUE...]`.
+impl std::fmt::Display for RunSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.graph)?;
+        if let Some(layout) = &self.layout {
+            write!(f, ":{layout}")?;
+        }
+        self.sets.iter().try_for_each(|set| write!(f, "@{set}"))
+    }
+}
+
 /// The error of a run at one moment.
 #[derive(Debug, Clone, Copy)]
 pub struct ErrorSample {
@@ -427,10 +438,11 @@ fn summary(ctx: &ReportContext, runs: &[RunResult]) -> Result<String> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn curve(points: &[(f64, f64)]) -> Vec<ErrorSample> {
+    /// A curve of error samples at `(seconds, RMSE)` points.
+    pub(crate) fn curve(points: &[(f64, f64)]) -> Vec<ErrorSample> {
         points
             .iter()
             .map(|&(t, e)| ErrorSample {
@@ -462,6 +474,8 @@ mod tests {
         assert_eq!(set[0].sets, ["PM_STRUCTURE=3", "PM_ALPHA=1"]);
         assert_eq!((set[1].graph.as_str(), set[1].layout.as_ref()), ("ppm", None));
         assert_eq!(set[1].sets, ["PM_STRUCTURE=1"]);
+        let text: Vec<String> = set.iter().map(RunSpec::to_string).collect();
+        assert_eq!(text, ["ppm:PPMsk@PM_STRUCTURE=3@PM_ALPHA=1", "ppm@PM_STRUCTURE=1"]);
     }
 
     #[test]

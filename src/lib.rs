@@ -20,5 +20,6 @@ pub mod plot;
 pub mod reference;
 pub mod render;
 pub mod stress;
+pub mod study;
 pub mod tev;
 pub mod tune;

@@ -57,13 +57,88 @@ pub struct CompareArgs {
 
 pub fn compare(mut args: CompareArgs) -> Result<()> {
     let reference = Reference::read(&args.reference)?;
+    defaults_from_reference(&mut args.common, &reference);
+    let gpus = open_gpus_or_adapter(args.gpus.as_deref(), args.common.adapter.as_deref())?;
+    let mut scenes = Scenes::new(args.common.scene());
+    let (summary, _) = compare_with(&args, &reference, &gpus, &mut scenes)?;
+    println!(
+        "{summary}\nwrote {}/curves.csv, rmse_vs_time.png, summary.md and each run's EXR and PNG",
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// Fills the scene, resolution and constants that `common` does not give with the
+/// reference's own.
+pub(super) fn defaults_from_reference(common: &mut Common, reference: &Reference) {
     let info = |k: &str| reference.info.get(k).cloned().unwrap_or_default();
-    let c = &mut args.common;
-    c.scene.get_or_insert_with(|| info("scene"));
-    c.res.get_or_insert(reference.size);
-    if c.set.is_empty() && c.max_path_length.is_none() {
-        c.set = info("constants").split_whitespace().map(String::from).collect();
+    common.scene.get_or_insert_with(|| info("scene"));
+    common.res.get_or_insert(reference.size);
+    if common.set.is_empty() && common.max_path_length.is_none() {
+        common.set = info("constants").split_whitespace().map(String::from).collect();
     }
+}
+
+/// The GPUs `--gpus` names, else the one `--adapter` names.
+pub(super) fn open_gpus_or_adapter(gpus: Option<&str>, adapter: Option<&str>) -> Result<Vec<Gpu>> {
+    match gpus {
+        Some(spec) => open_gpus(spec),
+        None => Ok(vec![Gpu::new(adapter)?]),
+    }
+}
+
+/// Checks the runs of `args` against `reference` (scene, seed, constants, size), renders them
+/// on `gpus` with the scene from `scenes` and writes the report into `--out`; returns the
+/// summary and the runs' results in the order of `--runs`.
+pub(super) fn compare_with(
+    args: &CompareArgs,
+    reference: &Reference,
+    gpus: &[Gpu],
+    scenes: &mut Scenes,
+) -> Result<(String, Vec<RunResult>)> {
+    check_reference(args, reference)?;
+    let c = &args.common;
+    let runs = jobs(args, reference, scenes)?;
+    let labels: Vec<&str> = runs.iter().map(|r| r.0.as_str()).collect();
+    let baseline = match &args.baseline {
+        None => 0,
+        Some(b) => match labels.iter().position(|l| l == b || l.ends_with(&format!(":{b}"))) {
+            Some(i) => i,
+            None => bail!("--baseline {b} is none of the runs ({})", labels.join(", ")),
+        },
+    };
+    let device = match gpus.len() {
+        1 => gpus[0].info.name.clone(),
+        n => format!("{} x{n}", gpus[0].info.name),
+    };
+    eprintln!(
+        "{} | scene {} (loaded in {:.2} s) | {} runs of {:?} | reference {} spp",
+        gpus.iter().map(Gpu::describe).collect::<Vec<_>>().join("; "),
+        c.scene(),
+        scenes.load_seconds(),
+        runs.len(),
+        args.time,
+        reference.samples_per_pixel()
+    );
+    let ref_mean = reference.mean();
+    let results = run_all(gpus, scenes, runs, args, &ref_mean)?;
+    let ctx = ReportContext {
+        scene: c.scene(),
+        device: &device,
+        load_seconds: scenes.load_seconds(),
+        budget: args.time,
+        reference_path: &args.reference,
+        reference,
+        baseline,
+    };
+    let summary = write_report(&args.out, &ctx, &results, args.exposure)?;
+    Ok((summary, results))
+}
+
+/// Checks that the reference shows the scene of the runs and was rendered with other random
+/// numbers than theirs.
+pub(super) fn check_reference(args: &CompareArgs, reference: &Reference) -> Result<()> {
+    let info = |k: &str| reference.info.get(k).cloned().unwrap_or_default();
     let c = &args.common;
     if c.scene() != info("scene") {
         bail!(
@@ -84,13 +159,15 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
     if args.per_decade == 0 {
         bail!("--per-decade must be at least 1");
     }
+    Ok(())
+}
+
+/// The runs of `--runs`, each checked against the reference (constants, size) before any
+/// renders: a typo should not cost the others' time. Loads the scene with each run's BVH.
+fn jobs(args: &CompareArgs, reference: &Reference, scenes: &mut Scenes) -> Result<Vec<Job>> {
+    let info = |k: &str| reference.info.get(k).cloned().unwrap_or_default();
+    let c = &args.common;
     let specs = RunSpec::parse_list(&args.runs)?;
-    let mut scenes = Scenes::new(c.scene());
-    let gpus = match &args.gpus {
-        Some(spec) => open_gpus(spec)?,
-        None => vec![Gpu::new(c.adapter.as_deref())?],
-    };
-    // Every run is checked before any renders: a typo should not cost the others' time.
     let mut runs = Vec::new();
     for spec in &specs {
         let graph = load_graph(&spec.graph)?;
@@ -106,7 +183,7 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
                 constants_text(&opts.constants)
             );
         }
-        check_size(&reference, &args.reference, (opts.width, opts.height))?;
+        check_size(reference, &args.reference, (opts.width, opts.height))?;
         // The run's own settings come after the check: they choose the estimator, not the image.
         let mut opts = opts;
         opts.constants.extend(parse_sets(&spec.sets, &graph.constants)?);
@@ -116,44 +193,7 @@ pub fn compare(mut args: CompareArgs) -> Result<()> {
             .join("@");
         runs.push((label, graph, layout, opts, kind));
     }
-    let labels: Vec<&str> = runs.iter().map(|r| r.0.as_str()).collect();
-    let baseline = match &args.baseline {
-        None => 0,
-        Some(b) => match labels.iter().position(|l| l == b || l.ends_with(&format!(":{b}"))) {
-            Some(i) => i,
-            None => bail!("--baseline {b} is none of the runs ({})", labels.join(", ")),
-        },
-    };
-    let device = match gpus.len() {
-        1 => gpus[0].info.name.clone(),
-        n => format!("{} x{n}", gpus[0].info.name),
-    };
-    eprintln!(
-        "{} | scene {} (loaded in {:.2} s) | {} runs of {:?} | reference {} spp",
-        gpus.iter().map(Gpu::describe).collect::<Vec<_>>().join("; "),
-        c.scene(),
-        scenes.load_seconds(),
-        specs.len(),
-        args.time,
-        reference.samples_per_pixel()
-    );
-    let ref_mean = reference.mean();
-    let results = run_all(&gpus, &scenes, runs, &args, &ref_mean)?;
-    let ctx = ReportContext {
-        scene: c.scene(),
-        device: &device,
-        load_seconds: scenes.load_seconds(),
-        budget: args.time,
-        reference_path: &args.reference,
-        reference: &reference,
-        baseline,
-    };
-    let summary = write_report(&args.out, &ctx, &results, args.exposure)?;
-    println!(
-        "{summary}\nwrote {}/curves.csv, rmse_vs_time.png, summary.md and each run's EXR and PNG",
-        args.out.display()
-    );
-    Ok(())
+    Ok(runs)
 }
 
 /// Opens the GPUs `spec` names (as `render --gpus`); they must be of one model.

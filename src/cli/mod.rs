@@ -14,6 +14,7 @@ pub mod operators;
 pub mod reference;
 pub mod render;
 pub mod stress;
+pub mod study;
 
 use bench::BenchArgs;
 use clap::{Parser, Subcommand};
@@ -24,6 +25,7 @@ use operators::OperatorsArgs;
 use reference::ReferenceArgs;
 use render::RenderArgs;
 use stress::StressArgs;
+use study::StudyArgs;
 
 /// The command line: one of the commands with its arguments.
 #[derive(Parser)]
@@ -50,6 +52,10 @@ pub enum Command {
     /// Render several estimators and layouts for the same time and plot their error against
     /// a reference over time.
     Compare(CompareArgs),
+    /// Run the best layout of each estimator on a list of scenes for equal wall-clock budgets
+    /// against a reference per scene: error against time per scene and one summary of the
+    /// time each takes to the best final error, and the winner.
+    Study(StudyArgs),
     /// Run the numerical stress suite: extreme scenes with every estimator, each checked
     /// against its invariant.
     Stress(StressArgs),
@@ -80,6 +86,7 @@ impl Cli {
             Command::Render(a) => a.common.assets.clone(),
             Command::Reference(a) => a.common.assets.clone(),
             Command::Compare(a) => a.common.assets.clone(),
+            Command::Study(a) => a.common.assets.clone(),
             Command::Explain(a) => a.common.assets.clone(),
             Command::Bench(a) => a.common.assets.clone(),
             Command::List | Command::Stress(_) | Command::Operators(_) | Command::Merge(_) => None,
@@ -93,6 +100,7 @@ impl Cli {
             Command::Reference(a) => reference::reference(a),
             Command::Merge(a) => merge::merge(a),
             Command::Compare(a) => compare::compare(a),
+            Command::Study(a) => study::study(a),
             Command::Explain(a) => explain::explain(a),
             Command::Bench(a) => bench::bench(a),
             Command::List => list::list(),

@@ -25,6 +25,7 @@ mod scenes;
 mod shards;
 mod specialize;
 mod stress;
+mod study;
 mod tev;
 mod textures;
 mod vcm;

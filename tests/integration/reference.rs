@@ -8,7 +8,8 @@ use std::path::Path;
 
 const SCENE: [&str; 6] = ["--scene", "cornell-diffuse", "--res", "16x12", "--spp", "2"];
 
-fn reference(args: &[&str], out: &Path) -> Reference {
+/// Renders a reference of [`SCENE`] with `args` into `out`; returns it.
+pub(crate) fn reference(args: &[&str], out: &Path) -> Reference {
     let run = lightgraph(&[&["reference"], &SCENE[..], args, &["--out", out.to_str().unwrap()]].concat());
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     Reference::read(out).expect("a reference was written")
