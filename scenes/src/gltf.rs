@@ -537,6 +537,8 @@ impl MaterialImport<'_> {
                     roughness: pbr.roughness_factor(),
                     transmission,
                     ior,
+                    // Solid: KHR_materials_volume is not read yet.
+                    thin_walled: false,
                     emission,
                     textures,
                 }),
