@@ -20,6 +20,10 @@ pub const ALL: &[(&str, &str)] = &[
         "glTF metallic-roughness: GGX microfacets, rough and smooth transmission",
     ),
     (
+        "BSDF_THIN_WALLED",
+        "thin-walled transmission of glTF materials: unbent, through a slab",
+    ),
+    (
         "TEXTURES",
         "texture lookups (base colour, metallic-roughness, emission)",
     ),
@@ -65,6 +69,13 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
     add(
         "BSDF_PBR",
         scene.materials.iter().any(|m| m.flags & material_flags::PBR != 0),
+    );
+    add(
+        "BSDF_THIN_WALLED",
+        scene
+            .materials
+            .iter()
+            .any(|m| m.flags & material_flags::PBR != 0 && m.flags & material_flags::THIN_WALLED != 0),
     );
     add(
         "TEXTURES",

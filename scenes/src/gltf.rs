@@ -2,7 +2,8 @@
 //! default scene, flattened with its node transform into [`Shape::Mesh`]es with their normals
 //! and texture coordinates; metallic-roughness materials ([`Pbr`]) with their base-colour,
 //! metallic-roughness and emissive textures (KHR_texture_transform), alpha mask,
-//! KHR_materials_emissive_strength, KHR_materials_transmission, KHR_materials_ior and
+//! KHR_materials_emissive_strength, KHR_materials_transmission (thin-walled, or through a solid
+//! volume with KHR_materials_volume: `MaterialImport::thin_walled`), KHR_materials_ior and
 //! KHR_materials_specular (as an index of refraction, `MaterialImport::specular_ior`); and
 //! the perspective cameras the scene's nodes place, and the KHR_lights_punctual lights of its
 //! nodes ([`punctual_light`]). Other extensions the file uses are reported as warnings.
@@ -187,6 +188,7 @@ const SUPPORTED: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_specular",
+    "KHR_materials_volume",
     "KHR_texture_transform",
 ];
 
@@ -525,6 +527,7 @@ impl MaterialImport<'_> {
         }
         let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
         let ior = self.specular_ior(&name, m, m.ior().unwrap_or(1.5), transmission);
+        let thin_walled = self.thin_walled(&name, m, transmission);
         self.out.materials.insert(
             name.clone(),
             Material {
@@ -537,6 +540,7 @@ impl MaterialImport<'_> {
                     roughness: pbr.roughness_factor(),
                     transmission,
                     ior,
+                    thin_walled,
                     emission,
                     textures,
                 }),
@@ -579,6 +583,29 @@ impl MaterialImport<'_> {
         let luminance = crate::alias::luminance(color) as f32;
         let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
         ior_of_reflectance((factor * (f0 * luminance).min(1.0)).clamp(0.0, 0.99))
+    }
+
+    /// Whether transmissive material `m` is thin-walled: glTF's transmission without
+    /// KHR_materials_volume, or with thickness 0, passes through an infinitely thin sheet; a
+    /// positive thickness makes the mesh the boundary of a solid volume, which refracts. The
+    /// thickness's value and texture serve renderers that do not trace the volume's geometry
+    /// (lightgraph does); its attenuation (Beer-Lambert absorption inside the volume) is not
+    /// rendered: warned, the volume is clear.
+    fn thin_walled(&mut self, name: &str, m: &gltf::Material, transmission: f32) -> bool {
+        if transmission <= 0.0 {
+            return false;
+        }
+        let Some(volume) = m.volume() else { return true };
+        if volume.thickness_factor() <= 0.0 {
+            return true;
+        }
+        let (color, distance) = (volume.attenuation_color(), volume.attenuation_distance());
+        if distance.is_finite() && color != [1.0; 3] {
+            self.out.warnings.push(format!(
+                "material '{name}': KHR_materials_volume's attenuation (colour {color:?} at distance {distance}) is not rendered: the volume is clear"
+            ));
+        }
+        false
     }
 
     /// The reference a material slot makes to a texture, converting its image on first use.
@@ -711,7 +738,13 @@ mod tests {
     fn with_material_extensions(test: &str, extensions: Value) -> (Pbr, Vec<String>) {
         let imported = import_edited(test, |doc, _| {
             doc["materials"][0]["extensions"] = extensions;
-            doc["extensionsUsed"] = json!(["KHR_materials_specular", "KHR_materials_ior", "KHR_materials_volume"]);
+            doc["extensionsUsed"] = json!([
+                "KHR_materials_specular",
+                "KHR_materials_ior",
+                "KHR_materials_transmission",
+                "KHR_materials_volume",
+                "KHR_materials_sheen"
+            ]);
         })
         .unwrap();
         let pbr = imported.materials["gltf:floor"].pbr.clone().unwrap();
@@ -730,7 +763,7 @@ mod tests {
             with_material_extensions("specular-0", json!({"KHR_materials_specular": {"specularFactor": 0.0}}));
         assert_eq!(p.ior, 1.0);
         assert!(
-            warnings.iter().any(|w| w.contains("KHR_materials_volume")),
+            warnings.iter().any(|w| w.contains("KHR_materials_sheen")),
             "{warnings:?}"
         );
         assert!(
@@ -757,6 +790,61 @@ mod tests {
         assert!(warnings.iter().any(|w| w.contains("luminance")), "{warnings:?}");
         let (p, _) = with_material_extensions("specular-1", json!({"KHR_materials_specular": {"specularFactor": 1.0}}));
         assert_eq!(p.ior, 1.5);
+    }
+
+    #[test]
+    fn transmission_is_thin_walled_unless_a_volume_has_thickness() {
+        let transmission = json!({"transmissionFactor": 1.0});
+        let thin = |extensions: Value| {
+            let (p, warnings) = with_material_extensions("volume", extensions);
+            assert!(
+                !warnings.iter().any(|w| w.contains("KHR_materials_volume")),
+                "{warnings:?}"
+            );
+            p.thin_walled
+        };
+        // glTF: without KHR_materials_volume, or with thickness 0 (its default), thin-walled.
+        assert!(thin(json!({"KHR_materials_transmission": transmission})));
+        assert!(thin(
+            json!({"KHR_materials_transmission": transmission, "KHR_materials_volume": {"thicknessFactor": 0.0}})
+        ));
+        assert!(thin(
+            json!({"KHR_materials_transmission": transmission, "KHR_materials_volume": {}})
+        ));
+        // A positive thickness: the surface of a solid volume.
+        let solid =
+            json!({"KHR_materials_transmission": transmission, "KHR_materials_volume": {"thicknessFactor": 0.5}});
+        assert!(!thin(solid));
+        // No transmission: neither (the flag is transmission's).
+        assert!(!thin(json!({})));
+        assert!(!thin(json!({"KHR_materials_volume": {"thicknessFactor": 0.0}})));
+    }
+
+    #[test]
+    fn a_volume_attenuation_is_warned_about_naming_the_material() {
+        let volume = |attenuation: Value| {
+            let mut v = json!({"thicknessFactor": 0.1});
+            v.as_object_mut()
+                .unwrap()
+                .extend(attenuation.as_object().unwrap().clone());
+            let extensions =
+                json!({"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_volume": v});
+            let (p, warnings) = with_material_extensions("attenuation", extensions);
+            assert!(!p.thin_walled);
+            warnings
+                .into_iter()
+                .filter(|w| w.contains("KHR_materials_volume"))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            volume(json!({"attenuationColor": [0.5, 0.8, 1.0], "attenuationDistance": 0.2})),
+            [
+                "material 'gltf:floor': KHR_materials_volume's attenuation (colour [0.5, 0.8, 1.0] at distance 0.2) is not rendered: the volume is clear"
+            ]
+        );
+        // No absorption: a white colour, or an infinite distance (the defaults).
+        assert!(volume(json!({"attenuationDistance": 0.2})).is_empty());
+        assert!(volume(json!({"attenuationColor": [0.5, 0.8, 1.0]})).is_empty());
     }
 
     #[test]

@@ -28,6 +28,9 @@ pub mod material_flags {
     pub const PBR: u32 = 2;
     /// Alpha below `alpha_cutoff` is a hole that rays pass through (glTF `MASK`).
     pub const ALPHA_MASK: u32 = 4;
+    /// A transmissive PBR material is a thin sheet: light passes straight through it, and its
+    /// dielectric reflects as a slab of two faces.
+    pub const THIN_WALLED: u32 = 8;
 }
 
 /// Primitive kinds, as `Primitive::kind` stores them.

@@ -787,10 +787,15 @@ fn gpu_material(
             } else {
                 0
             };
+            let thin = if p.thin_walled && p.transmission > 0.0 {
+                gpu::material_flags::THIN_WALLED
+            } else {
+                0
+            };
             GpuMaterial {
                 diffuse: p.base_color,
                 ior: p.ior,
-                flags: two_sided | gpu::material_flags::PBR | mask,
+                flags: two_sided | gpu::material_flags::PBR | mask | thin,
                 emission: p.emission,
                 metallic: p.metallic,
                 roughness: p.roughness,

@@ -131,7 +131,8 @@ pub struct Material {
 }
 
 /// glTF 2.0's metallic-roughness material: a diffuse base under a GGX microfacet specular
-/// layer, metals tinted by the base colour, and optional transmission through a dielectric.
+/// layer, metals tinted by the base colour, and optional transmission through a dielectric:
+/// the surface of a solid volume (refracting), or a thin-walled sheet (`thin_walled`).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Pbr {
@@ -150,6 +151,12 @@ pub struct Pbr {
     /// Index of refraction of the dielectric (KHR_materials_ior).
     #[serde(default = "default_ior")]
     pub ior: f32,
+    /// Whether a transmissive material is an infinitely thin sheet (glTF's transmission
+    /// without KHR_materials_volume, or with thickness 0) rather than the surface of a solid
+    /// volume: light passes straight through it, unbent, and its dielectric reflects as a
+    /// slab of two faces. Without transmission it changes nothing.
+    #[serde(default)]
+    pub thin_walled: bool,
     /// Emitted radiance (glTF emissiveFactor times KHR_materials_emissive_strength).
     #[serde(default)]
     pub emission: Rgb,
@@ -180,6 +187,7 @@ impl Default for Pbr {
             roughness: 1.0,
             transmission: 0.0,
             ior: default_ior(),
+            thin_walled: false,
             emission: [0.0; 3],
             alpha: 1.0,
             alpha_cutoff: None,

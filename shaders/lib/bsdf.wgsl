@@ -126,12 +126,13 @@ fn smallvcm_continuation(b: Bsdf) -> f32 {
 fn bsdf_continuation_towards(b: Bsdf, towards: vec3<f32>) -> f32 {
     var l = b;
     l.fix = to_local(b.frame, towards);
-    l.fresnel = fresnel_dielectric(l.fix.z, b.m.ior).x;
 #if BSDF_PBR
     if (b.pbr) {
+        l.fresnel = pbr_fresnel(b.m, l.fix.z).x;
         return pbr_continuation(l);
     }
 #endif
+    l.fresnel = fresnel_dielectric(l.fix.z, b.m.ior).x;
     return smallvcm_continuation(l);
 }
 
@@ -353,7 +354,13 @@ fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
 //   D G2 / (4 |cos_o| |cos_i|) x (metallic Schlick(base colour, o.h) + (1 - metallic) F(o.h)),
 //   F the exact dielectric Fresnel reflectance; the metal part only on the outside (+z);
 // - specular transmission through the same microfacets (Walter et al. 2007), tinted by
-//   (1 - metallic) transmission base colour, with (1 - F(o.h)), on both sides;
+//   (1 - metallic) transmission base colour, with (1 - F(o.h)), on both sides; through a
+//   thin-walled sheet (MATERIAL_THIN_WALLED, compiled in with BSDF_THIN_WALLED) the light
+//   is not bent: smooth, it leaves along -fix; rough, along the GGX reflection at the
+//   sampled microfacet mirrored through the surface plane, so that its value, pdfs and
+//   sampling are reflection's with (1 - F) tint for the colour, and, with no change of
+//   medium, nothing scales it by eta^2. A sheet's F is that of a slab of two faces
+//   (`pbr_fresnel`), in every lobe;
 // - diffuse on the outside only: (1 - metallic) (1 - transmission) base / pi, scaled by
 //   (1 - F(cos_o)) (1 - F(cos_i)), the light that enters and leaves through a smooth
 //   interface: symmetric, so reciprocal, and with reflection never above 1 (the light the
@@ -390,6 +397,29 @@ fn pbr_lambertian(m: Material) -> Material {
     return l;
 }
 
+// Whether the material is a thin-walled sheet (its light passes through unbent).
+fn pbr_thin(m: Material) -> bool {
+#if BSDF_THIN_WALLED
+    return (m.flags & MATERIAL_THIN_WALLED) != 0u;
+#else
+    return false;
+#endif
+}
+
+// The dielectric's reflectance for a direction of local z `cos_w` (or a microfacet seen at
+// that cosine, signed by the side), and the cosine of the transmitted direction (0: none):
+// those of a solid interface (`fresnel_dielectric`), or of a thin sheet, the same on both
+// sides: a slab of two faces of reflectance R each, among which light reflects back and
+// forth unabsorbed, reflects R + (1 - R)^2 R / (1 - R^2) = 2R / (1 + R), and lets the rest
+// through at the angle it came in.
+fn pbr_fresnel(m: Material, cos_w: f32) -> vec2<f32> {
+    if (pbr_thin(m)) {
+        let r = fresnel_dielectric(abs(cos_w), m.ior).x;
+        return vec2<f32>(2.0 * r / (1.0 + r), abs(cos_w));
+    }
+    return fresnel_dielectric(cos_w, m.ior);
+}
+
 fn pbr_setup(bsdf: Bsdf) -> Bsdf {
     var b = bsdf;
     let m = b.m;
@@ -397,7 +427,7 @@ fn pbr_setup(bsdf: Bsdf) -> Bsdf {
     b.m.ior = max(m.ior, PBR_MIN_IOR);
     let roughness = clamp(m.roughness, 0.0, 1.0);
     b.alpha = select(roughness * roughness, 0.0, roughness * roughness < PBR_SMOOTH_ALPHA);
-    let fresnel = fresnel_dielectric(b.fix.z, b.m.ior);
+    let fresnel = pbr_fresnel(b.m, b.fix.z);
     b.fresnel = fresnel.x;
     b.cos_t = fresnel.y;
     let lobes = pbr_lobe_probs(b, b.fix.z);
@@ -461,7 +491,7 @@ fn pbr_lobe_probs(b: Bsdf, cos_w: f32) -> vec2<f32> {
         return vec2<f32>(0.0);
     }
     let m = b.m;
-    let f = fresnel_dielectric(cos_w, m.ior).x;
+    let f = pbr_fresnel(m, cos_w).x;
     let w = pbr_spec_weights(b, cos_w > 0.0, abs(cos_w), f);
     var diffuse = 0.0;
     if (cos_w > 0.0) {
@@ -519,8 +549,8 @@ fn pbr_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     // the diffuse one; a part's renormalised).
     let lobes_o = vec2<f32>(b.spec_prob, b.diffuse_prob);
     let lobes_i = pbr_lobe_probs(b, gen.z);
-    let f_o = fresnel_dielectric(o.z, m.ior).x;
-    let f_i = fresnel_dielectric(gen.z, m.ior).x;
+    let f_o = pbr_fresnel(m, o.z).x;
+    let f_i = pbr_fresnel(m, gen.z).x;
     if (outside_o && outside_i && (m.flags & BSDF_NO_DIFFUSE) == 0u) {
         let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * (1.0 - f_o) * (1.0 - f_i) * INV_PI;
         e.f += m.diffuse * diffuse;
@@ -530,26 +560,14 @@ fn pbr_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     if (b.alpha == 0.0 || (m.flags & BSDF_NO_GLOSSY) != 0u) {
         return e;
     }
+    if (outside_o == outside_i || pbr_thin(m)) {
+        return pbr_eval_mirrored(b, gen, e, lobes_i.x);
+    }
     // The frame mirrored so that `fix` is above the surface; `eta` = ior below / ior above.
     let s = select(-1.0, 1.0, outside_o);
     let wo = vec3<f32>(o.xy, s * o.z);
     let wi = vec3<f32>(gen.xy, s * gen.z);
     let alpha = b.alpha;
-    if (outside_o == outside_i) {
-        let h = normalize(wo + wi);
-        let c = dot(wo, h);
-        if (c <= 0.0) {
-            return e;
-        }
-        let f = fresnel_dielectric(s * c, m.ior).x;
-        let d = ggx_d(h, alpha);
-        e.f += pbr_spec_color(b, outside_o, c, f) * (d * ggx_g2(wo, wi, alpha) / (4.0 * wo.z * wi.z));
-        let p_reflect = pbr_reflect_prob(pbr_spec_weights(b, outside_o, c, f));
-        // Reflection keeps the side, so both directions choose alike.
-        e.pdf_forward += lobes_o.x * p_reflect * ggx_visible_pdf(wo, h, alpha) / (4.0 * c);
-        e.pdf_reverse += lobes_i.x * p_reflect * ggx_visible_pdf(wi, h, alpha) / (4.0 * c);
-        return e;
-    }
     // Refraction: the generalised half vector, on the side of `fix`.
     let eta = select(1.0 / m.ior, m.ior, outside_o);
     let hv = wo + eta * wi;
@@ -580,6 +598,36 @@ fn pbr_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     return e;
 }
 
+// `e` (the diffuse lobe's part at `e`'s direction, `gen`) plus the rough specular lobe's
+// reflection, or, through a thin sheet, transmission, which is reflection mirrored through the
+// surface plane: both directions are taken to the side of `fix`, where they meet at the
+// microfacet normal h of a reflection. `spec_i` is the rough specular lobe's probability
+// for a path arriving from `gen`.
+fn pbr_eval_mirrored(b: Bsdf, gen: vec3<f32>, e: BsdfEval, spec_i: f32) -> BsdfEval {
+    var r = e;
+    let outside_o = b.fix.z > 0.0;
+    let outside_i = gen.z > 0.0;
+    let transmits = outside_o != outside_i;
+    let s = select(-1.0, 1.0, outside_o);
+    let wo = vec3<f32>(b.fix.xy, s * b.fix.z);
+    let wi = vec3<f32>(gen.xy, abs(gen.z));
+    let h = normalize(wo + wi);
+    let c = dot(wo, h);
+    if (c <= 0.0) {
+        return r;
+    }
+    let f = pbr_fresnel(b.m, s * c).x;
+    let lobe = ggx_d(h, b.alpha) * ggx_g2(wo, wi, b.alpha) / (4.0 * wo.z * wi.z);
+    let tint = (1.0 - b.m.metallic) * b.m.transmission * b.m.diffuse;
+    r.f += select(pbr_spec_color(b, outside_o, c, f), (1.0 - f) * tint, transmits) * lobe;
+    // Each direction picks reflection or transmission with the weights of its own side.
+    let p_o = pbr_reflect_prob(pbr_spec_weights(b, outside_o, c, f));
+    let p_i = pbr_reflect_prob(pbr_spec_weights(b, outside_i, c, f));
+    r.pdf_forward += b.spec_prob * select(p_o, 1.0 - p_o, transmits) * ggx_visible_pdf(wo, h, b.alpha) / (4.0 * c);
+    r.pdf_reverse += spec_i * select(p_i, 1.0 - p_i, transmits) * ggx_visible_pdf(wi, h, b.alpha) / (4.0 * c);
+    return r;
+}
+
 fn pbr_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
     var s = BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0, false);
     let o = b.fix;
@@ -603,6 +651,8 @@ fn pbr_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
                 eta = m.ior;
                 cos_t = b.cos_t;
             }
+            // A thin sheet's cos_t is |o.z|: the light leaves along -o, in the same medium.
+            eta = select(eta, 1.0, pbr_thin(m));
             gen = vec3<f32>(-eta * o.x, -eta * o.y, cos_t);
             s.pdf = b.refract_prob;
             let tint = (1.0 - m.metallic) * m.transmission * m.diffuse;
@@ -624,16 +674,18 @@ fn pbr_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
         if (c <= 0.0) {
             return s;
         }
-        let f = fresnel_dielectric(side * c, m.ior).x;
+        let f = pbr_fresnel(m, side * c).x;
         let p_reflect = pbr_reflect_prob(pbr_spec_weights(b, outside, c, f));
         // The lobe's share of u.z, rescaled to [0, 1), picks reflection or refraction.
         let v = (u.z - b.diffuse_prob) / max(b.spec_prob, 1e-30);
         var wi: vec3<f32>;
-        if (v < p_reflect) {
+        if (v < p_reflect || pbr_thin(m)) {
             wi = 2.0 * c * h - wo;
             if (wi.z <= 0.0) {
                 return s;
             }
+            // Through a thin sheet, transmission is that reflection mirrored to the other side.
+            wi.z = select(wi.z, -wi.z, v >= p_reflect);
         } else {
             let eta = select(1.0 / m.ior, m.ior, outside);      // ior below / ior above
             let sin2_t = (1.0 - c * c) / (eta * eta);

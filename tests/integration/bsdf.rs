@@ -2,7 +2,9 @@
 //! directions against the pdfs (chi-square), the pdfs' integrals and lost samples, albedo
 //! (white furnace), reciprocity, forward/reverse pdf consistency; the same of the BSDF's
 //! diffuse and glossy parts (`bsdf_diffuse_part`, `bsdf_glossy_part`), which must add up to
-//! the whole BSDF; and a PBR scene that must render its exact radiance.
+//! the whole BSDF; and a PBR scene that must render its exact radiance. Thin-walled glTF
+//! transmission gets the same checks, and a render: a thin pane in front of a light neither
+//! moves its image nor dims it by more than the slab's reflectance.
 //!
 //! The BSDF sits on a surface with normal +z (the local frame is the world frame); `fix` is
 //! the direction towards the previous vertex.
@@ -14,7 +16,7 @@ use lightgraph::render::LoadedScene;
 use lightgraph_engine::ConstValue;
 
 /// The chi-square tests in this file, for the Šidák-corrected significance of each.
-const CHI2_TESTS: u32 = 23;
+const CHI2_TESTS: u32 = 30;
 /// Samples per chi-square test: with 24 × 48 bins, a smooth lobe expects about 200 per bin.
 /// Bins where a pdf's support ends (rough refraction's) need the fine sub-grid: at 4 × 4
 /// points the midpoint rule misses enough of their mass to fail the test.
@@ -107,8 +109,8 @@ fn probe(item: ptr<function, ProbeItem>, index: u32) -> bool {
 }
 ";
 
-/// A scene whose material 0 is `material` (RON).
-fn material_scene(material: &str) -> LoadedScene {
+/// A scene whose material 0 is `material` (RON): a unit sphere under a white background.
+pub(crate) fn material_scene(material: &str) -> LoadedScene {
     scene(&format!(
         r#"Scene(
             camera: (position: (0, -4, 0), look: Target((0, 0, 0)), up: (0, 0, 1), fov_degrees: 40.0),
@@ -343,6 +345,59 @@ fn chi2_pbr_smooth_dielectric() {
     chi2_case("smooth glass inside", m, BELOW, sphere());
 }
 
+/// A white thin-walled glass of index 1.5 and `roughness`.
+fn thin_glass(roughness: f32) -> String {
+    format!("(pbr: (base_color: (1, 1, 1), roughness: {roughness}, transmission: 1.0, ior: 1.5, thin_walled: true))")
+}
+
+#[test]
+fn chi2_pbr_thin_walled() {
+    for roughness in [0.0, 0.4] {
+        let m = thin_glass(roughness);
+        chi2_case(&format!("thin glass {roughness} outside"), &m, OBLIQUE, sphere());
+        chi2_case(&format!("thin glass {roughness} inside"), &m, BELOW, sphere());
+    }
+    // A narrow lobe: tested in a cap of 10 alpha around the straight-through direction.
+    let alpha = 0.1f64 * 0.1;
+    let through = OBLIQUE.map(|c| -c as f64);
+    let grid = SphereBins::cap(through, (10.0 * alpha).cos(), 12, 24);
+    chi2_case("thin glass 0.1 through", &thin_glass(0.1), OBLIQUE, grid);
+}
+
+#[test]
+fn smooth_thin_walled_glass_lets_light_through_unbent_with_the_slab_transmittance() {
+    // Delta refraction leaves along -fix with weight 1 (white, radiance: no eta^2, as no
+    // medium changes), picked with probability 1 - R', R' = 2R / (1 + R) the slab's
+    // reflectance: within 4 binomial standard errors of 200,000 samples.
+    let s = material_scene(&thin_glass(0.0));
+    for fix in [OBLIQUE, BELOW] {
+        let n = (fix[0] * fix[0] + fix[1] * fix[1] + fix[2] * fix[2]).sqrt();
+        let through = fix.map(|c| -c / n);
+        let sampled = sample(&s, fix, false, Part::Whole, SAMPLES);
+        let mut transmitted = 0;
+        for (d, w) in sampled.samples.iter().zip(&sampled.weights) {
+            assert!(d[3] == 2.0 || d[3] == 3.0, "{fix:?}: a sample of kind {}", d[3]);
+            assert!(w.iter().all(|&c| (c - 1.0).abs() < 1e-5), "{fix:?}: weight {w:?}");
+            if d[3] == 3.0 {
+                transmitted += 1;
+                assert!(
+                    (0..3).all(|c| (d[c] - through[c]).abs() < 1e-5),
+                    "{fix:?}: {d:?} against {through:?}"
+                );
+            }
+        }
+        let r = fresnel((fix[2] / n).abs() as f64, 1.5);
+        let expected = 1.0 - 2.0 * r / (1.0 + r);
+        let share = transmitted as f64 / SAMPLES as f64;
+        let se = (expected * (1.0 - expected) / SAMPLES as f64).sqrt();
+        eprintln!("{fix:?}: {share} transmitted, slab {expected} +- {se}");
+        assert!(
+            (share - expected).abs() <= 4.0 * se,
+            "{fix:?}: {share} transmitted, the slab lets {expected} through (+- {se})"
+        );
+    }
+}
+
 #[test]
 fn chi2_pbr_mixture() {
     // Every lobe at once: metal, dielectric reflection, diffuse and transmission.
@@ -357,6 +412,9 @@ const SMALLVCM_MIX: &str =
 const PBR_MIX: &str = "(pbr: (base_color: (0.7, 0.8, 0.9), metallic: 0.3, roughness: 0.5, transmission: 0.5))";
 /// A smooth glTF dielectric over a diffuse base: its glossy part is delta.
 const PBR_SMOOTH_MIX: &str = "(pbr: (base_color: (0.7, 0.8, 0.9), roughness: 0.0, transmission: 0.5))";
+/// Every glTF lobe at once, rough, transmission through a thin wall.
+const PBR_THIN_MIX: &str =
+    "(pbr: (base_color: (0.7, 0.8, 0.9), metallic: 0.3, roughness: 0.5, transmission: 0.5, thin_walled: true))";
 
 #[test]
 fn chi2_smallvcm_parts() {
@@ -371,6 +429,14 @@ fn chi2_pbr_parts() {
     chi2_part_case("mixture glossy part inside", PBR_MIX, Part::Glossy, BELOW, sphere());
     chi2_part_case("smooth diffuse part", PBR_SMOOTH_MIX, Part::Diffuse, OBLIQUE, sphere());
     chi2_part_case("smooth glossy part", PBR_SMOOTH_MIX, Part::Glossy, OBLIQUE, sphere());
+    chi2_part_case(
+        "thin glossy part outside",
+        PBR_THIN_MIX,
+        Part::Glossy,
+        OBLIQUE,
+        sphere(),
+    );
+    chi2_part_case("thin glossy part inside", PBR_THIN_MIX, Part::Glossy, BELOW, sphere());
 }
 
 /// Mean and standard error of the albedo estimate f cos / pdf (largest channel).
@@ -411,7 +477,8 @@ fn white_furnace() {
     // reaches 60-70% (Heitz et al. 2016 show the same for their single-scattering baseline).
     // The lower bounds are those losses with a margin: they catch a lobe that loses more.
     // A white dielectric with transmission conserves energy (adjoint form: integrated over
-    // the directions light leaves in) up to the same loss; a smooth one exactly. The diffuse
+    // the directions light leaves in) up to the same loss; a smooth one exactly; thin-walled
+    // ones alike (their transmission is mirrored reflection). The diffuse
     // base of plastic loses 1 - F_avg (9% at ior 1.5). The continuation probability is at
     // least the albedo.
     let normal = [0.0, 0.0, 1.0];
@@ -427,6 +494,26 @@ fn white_furnace() {
         ("(pbr: (roughness: 0.0, transmission: 1.0))", BELOW, 1.0),
         ("(pbr: (roughness: 0.3, transmission: 1.0))", OBLIQUE, 0.95),
         ("(pbr: (roughness: 0.3, transmission: 1.0))", BELOW, 0.95),
+        (
+            "(pbr: (roughness: 0.0, transmission: 1.0, thin_walled: true))",
+            OBLIQUE,
+            1.0,
+        ),
+        (
+            "(pbr: (roughness: 0.0, transmission: 1.0, thin_walled: true))",
+            BELOW,
+            1.0,
+        ),
+        (
+            "(pbr: (roughness: 0.3, transmission: 1.0, thin_walled: true))",
+            OBLIQUE,
+            0.95,
+        ),
+        (
+            "(pbr: (roughness: 0.3, transmission: 1.0, thin_walled: true))",
+            BELOW,
+            0.95,
+        ),
         ("(pbr: (roughness: 0.5))", OBLIQUE, 0.85),
     ];
     for &(material, fix, lower) in cases {
@@ -461,7 +548,7 @@ fn parts_share_the_albedo_and_continue_with_at_least_their_own() {
     // reflects and transmits everything, so the mix with Phong reflects more than 1).
     let grazing = [0.94, 0.0, 0.342];
     let metal = "(pbr: (base_color: (0.9, 0.6, 0.3), metallic: 0.5, roughness: 0.3))";
-    for material in [SMALLVCM_MIX, PBR_MIX, PBR_SMOOTH_MIX, metal] {
+    for material in [SMALLVCM_MIX, PBR_MIX, PBR_SMOOTH_MIX, PBR_THIN_MIX, metal] {
         let s = material_scene(material);
         for fix in [OBLIQUE, BELOW, grazing] {
             let n = 100_000;
@@ -596,6 +683,18 @@ fn refraction_is_reciprocal_up_to_eta_squared_and_pdfs_are_consistent() {
 }
 
 #[test]
+fn thin_walled_transmission_is_reciprocal_and_pdfs_are_consistent() {
+    // Through a thin wall the medium does not change: f(a, b) = f(b, a) on every pair of
+    // sides (an index of 1 on both sides for check_pairs' eta^2).
+    let glass = "(pbr: (base_color: (0.9, 0.8, 1.0), metallic: 0.2, roughness: 0.4, transmission: 0.8, ior: 1.5, thin_walled: true))";
+    for (side_a, side_b) in [(1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0)] {
+        check_pairs(glass, Part::Whole, side_a, side_b, 1.0);
+    }
+    check_pairs(PBR_THIN_MIX, Part::Glossy, 1.0, -1.0, 1.0);
+    check_pairs(PBR_THIN_MIX, Part::Diffuse, 1.0, 1.0, 1.0);
+}
+
+#[test]
 fn parts_are_reciprocal_and_their_pdfs_consistent() {
     check_pairs(PBR_MIX, Part::Diffuse, 1.0, 1.0, 1.5);
     check_pairs(PBR_MIX, Part::Glossy, 1.0, 1.0, 1.5);
@@ -619,14 +718,16 @@ struct RandomMaterial {
     roughness: f64,
     transmission: f64,
     ior: f64,
+    /// glTF: transmission through a thin wall.
+    thin_walled: bool,
 }
 
 impl RandomMaterial {
     /// Lobes present or absent at random, colours in [0.05, 0.95]; glTF roughness 0 or 0.02
     /// (smooth: alpha below 1e-3) half the time, metallic and transmission 0 or 1 two thirds
-    /// of the time.
+    /// of the time, thin-walled half the time.
     fn new(pbr: bool, rng: &mut crate::common::SplitMix64) -> Self {
-        let u: [f64; 14] = std::array::from_fn(|_| rng.next_f64());
+        let u: [f64; 15] = std::array::from_fn(|_| rng.next_f64());
         let colour = |k: usize, on: bool| {
             let c = [u[k], u[k + 1], u[k + 2]].map(|x| 0.05 + 0.9 * x);
             if on { c } else { [0.0; 3] }
@@ -639,8 +740,9 @@ impl RandomMaterial {
             let transmission = [0.0, 1.0, u[7]][(u[8] * 3.0) as usize];
             let ior = 1.2 + 0.8 * u[9];
             let diffuse = colour(0, true);
+            let thin_walled = u[14] < 0.5;
             let ron = format!(
-                "(pbr: (base_color: {}, metallic: {metallic}, roughness: {roughness}, transmission: {transmission}, ior: {ior}))",
+                "(pbr: (base_color: {}, metallic: {metallic}, roughness: {roughness}, transmission: {transmission}, ior: {ior}, thin_walled: {thin_walled}))",
                 rgb(diffuse)
             );
             RandomMaterial {
@@ -653,6 +755,7 @@ impl RandomMaterial {
                 roughness,
                 transmission,
                 ior,
+                thin_walled,
             }
         } else {
             let diffuse = colour(0, u[9] < 0.75);
@@ -677,6 +780,7 @@ impl RandomMaterial {
                 roughness: 0.0,
                 transmission: 0.0,
                 ior,
+                thin_walled: false,
             }
         }
     }
@@ -687,7 +791,7 @@ impl RandomMaterial {
             return [0.0; 3];
         }
         let scale = if self.pbr {
-            self.diffuse_share(a) * (1.0 - fresnel(b[2] as f64, self.ior.max(1.001)))
+            self.diffuse_share(a) * (1.0 - self.fresnel(b[2] as f64))
         } else {
             1.0
         };
@@ -700,8 +804,19 @@ impl RandomMaterial {
         if !self.pbr {
             return 1.0;
         }
-        let f = fresnel(a[2] as f64, self.ior.max(1.001));
+        let f = self.fresnel(a[2] as f64);
         (1.0 - self.metallic) * (1.0 - self.transmission) * (1.0 - f)
+    }
+
+    /// glTF's dielectric reflectance seen from outside at cosine `cos` > 0: the interface's,
+    /// or with transmission through a thin wall the slab's, 2R / (1 + R).
+    fn fresnel(&self, cos: f64) -> f64 {
+        let r = fresnel(cos, self.ior.max(1.001));
+        if self.thin_walled && self.transmission > 0.0 {
+            2.0 * r / (1.0 + r)
+        } else {
+            r
+        }
     }
 }
 
@@ -906,13 +1021,20 @@ fn pbr_spheres_under_uniform_background() {
     // A lossless smooth dielectric sphere in a uniform environment: every path leaves with
     // the background's radiance whatever it does inside, each path's weight is exactly 1
     // (no noise), so the pixels are 1 up to rounding and paths cut at 64 bounces.
-    let (mean, _) = sphere_in_furnace("(pbr: (roughness: 0.0, transmission: 1.0))", 1, 1);
-    assert!(mean.iter().all(|c| (c - 1.0).abs() < 1e-3), "smooth glass: {mean:?}");
+    // So is a thin-walled one.
+    for m in [
+        "(pbr: (roughness: 0.0, transmission: 1.0))",
+        "(pbr: (roughness: 0.0, transmission: 1.0, thin_walled: true))",
+    ] {
+        let (mean, _) = sphere_in_furnace(m, 1, 1);
+        assert!(mean.iter().all(|c| (c - 1.0).abs() < 1e-3), "{m}: {mean:?}");
+    }
     // Rough white glass and metal lose the light of multiple scattering between microfacets
     // but never gain any: at most 1 within 4 standard errors, and not far below (white
     // furnace bounds above).
     for m in [
         "(pbr: (roughness: 0.4, transmission: 1.0))",
+        "(pbr: (roughness: 0.4, transmission: 1.0, thin_walled: true))",
         "(pbr: (metallic: 1.0, roughness: 0.5))",
     ] {
         let (mean, se) = sphere_in_furnace(m, 4, 4);
@@ -920,4 +1042,99 @@ fn pbr_spheres_under_uniform_background() {
             assert!(mean[c] <= 1.0 + 4.0 * se[c] && mean[c] > 0.8, "{m}: {mean:?} +- {se:?}");
         }
     }
+}
+
+/// A 32 x 32 image of a unit square light (radiance 1, black around it) 9 units in front of
+/// the camera, seen through a 4 x 4 pane of `pane` (a material, or none) turned 45 degrees
+/// about the vertical, halfway: the pane's reflection sees only the black surroundings.
+fn light_behind_pane(pane: Option<&str>) -> lightgraph::render::Image {
+    let (material, shape) = match pane {
+        Some(m) => (
+            format!(r#""pane": {m},"#),
+            r#"Quad(corners: ((-2, -2, 2), (2, -2, -2), (2, 2, -2), (-2, 2, 2)), material: "pane"),"#,
+        ),
+        None => (String::new(), ""),
+    };
+    let s = scene(&format!(
+        r#"Scene(
+            camera: (position: (0, 0, 6), look: Target((0, 0, 0)), up: (0, 1, 0), fov_degrees: 30.0),
+            materials: {{{material} "black": (diffuse: (0, 0, 0))}},
+            shapes: [
+                {shape}
+                Quad(corners: ((-0.5, -0.5, -3), (0.5, -0.5, -3), (0.5, 0.5, -3), (-0.5, 0.5, -3)),
+                     material: "black", emission: Some((1, 1, 1))),
+            ],
+            integrator: (max_path_length: 4, russian_roulette: Albedo, mis: Balance),
+        )"#
+    ));
+    let r = render(&s, "pt", "NaivePTsk", (32, 32), 16, 16, 3, &[]);
+    crate::common::assert_finite(&r.image, pane.unwrap_or("no pane"));
+    r.image
+}
+
+/// The image's centroid along x (red channel), with its standard error: sum x v / sum v,
+/// whose variance is sum (x - c)^2 var(v) / (sum v)^2 to first order, pixels independent.
+fn centroid_x(image: &lightgraph::render::Image) -> (f64, f64) {
+    let pixel = |i: usize| {
+        let x = (i % image.width as usize) as f64 + 0.5;
+        (
+            x,
+            image.mean[i][0] as f64,
+            image.variance[i][0] as f64 / image.frames as f64,
+        )
+    };
+    let (mut moment, mut total) = (0.0, 0.0);
+    for i in 0..image.mean.len() {
+        let (x, v, _) = pixel(i);
+        moment += x * v;
+        total += v;
+    }
+    let c = moment / total;
+    let var: f64 = (0..image.mean.len())
+        .map(|i| {
+            let (x, _, var) = pixel(i);
+            (x - c) * (x - c) * var
+        })
+        .sum();
+    (c, var.sqrt() / total)
+}
+
+#[test]
+fn a_thin_walled_pane_neither_moves_nor_dims_a_light_beyond_its_slab_reflectance() {
+    // Through a smooth thin pane of index 1.5 at 45 degrees the light's image stays where it
+    // is and keeps T = 1 - R' of its radiance, R' = 2R / (1 + R) = 0.0957 the slab's
+    // reflectance (a single interface's R = 0.0503 would keep 0.950, 9 standard errors away).
+    // Each camera path through the pane is a Bernoulli trial (radiance 1 with probability T,
+    // else 0), so the ratio of the image sums is T within 4 standard errors (0.005, from the
+    // frames' variances: 256 samples over the light's 44 pixels, and the bare image's edge
+    // pixels), and the centroids agree within 4 standard errors (about 0.015 pixel) plus 0.05
+    // pixel. A solid pane of the same glass refracts the rays by 17 degrees: its image moves
+    // by about 5 pixels, which the same comparison must catch.
+    let bare = light_behind_pane(None);
+    let thin = light_behind_pane(Some(&thin_glass(0.0)));
+    let solid = light_behind_pane(Some("(pbr: (roughness: 0.0, transmission: 1.0, ior: 1.5))"));
+    let all = |_: u32, _: u32| true;
+    let ((b, b_se, _), (t, t_se, _)) = (region(&bare, all), region(&thin, all));
+    let ratio = t[0] / b[0];
+    let ratio_se = ratio * ((t_se[0] / t[0]).powi(2) + (b_se[0] / b[0]).powi(2)).sqrt();
+    let r = fresnel(std::f64::consts::FRAC_1_SQRT_2, 1.5);
+    let expected = 1.0 - 2.0 * r / (1.0 + r);
+    eprintln!("thin pane: transmittance {ratio} +- {ratio_se}, slab {expected}");
+    assert!(
+        (ratio - expected).abs() <= 4.0 * ratio_se,
+        "the thin pane keeps {ratio} +- {ratio_se} of the light, the slab {expected}"
+    );
+    let (c_bare, se_bare) = centroid_x(&bare);
+    let (c_thin, se_thin) = centroid_x(&thin);
+    let (c_solid, se_solid) = centroid_x(&solid);
+    eprintln!("centroids: bare {c_bare} +- {se_bare}, thin {c_thin} +- {se_thin}, solid {c_solid} +- {se_solid}");
+    let shift = |c: f64, se: f64| (c - c_bare).abs() - 4.0 * (se * se + se_bare * se_bare).sqrt();
+    assert!(
+        shift(c_thin, se_thin) <= 0.05,
+        "the thin pane moves the light's image from x = {c_bare} to {c_thin}"
+    );
+    assert!(
+        shift(c_solid, se_solid) > 2.0,
+        "a solid pane should move the light's image, from x = {c_bare}; it is at {c_solid}"
+    );
 }

@@ -80,3 +80,20 @@ fn specialised_and_all_features_kernels_render_the_same_image() {
         );
     }
 }
+
+#[test]
+fn only_scenes_with_thin_walled_transmission_compile_it_in() {
+    let thin_code = "MATERIAL_THIN_WALLED) != 0u";
+    for (material, thin) in [
+        ("(pbr: (transmission: 1.0, thin_walled: true))", true),
+        ("(pbr: (transmission: 1.0))", false),
+        // Without transmission the flag changes nothing: no code for it.
+        ("(pbr: (thin_walled: true))", false),
+    ] {
+        let scene = crate::bsdf::material_scene(material);
+        let used = lightgraph_scenes::features::used(&scene.compiled);
+        assert_eq!(used.contains("BSDF_THIN_WALLED"), thin, "{material}: {used:?}");
+        let source = kernel_source(&scene, false);
+        assert_eq!(source.contains(thin_code), thin, "{material}");
+    }
+}

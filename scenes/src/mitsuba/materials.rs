@@ -1,7 +1,7 @@
 //! Mitsuba BSDFs as lightgraph materials (the mapping is written down in docs/mitsuba.md):
 //! `diffuse` as the SmallVCM Lambertian lobe (the [`Pbr`] model with an index of refraction
-//! of 1, a bare Lambertian, when a bitmap gives the reflectance); dielectrics, conductors and
-//! plastics as [`Pbr`] materials; `twosided`, `mask` and `bumpmap` as wrappers. `bitmap`
+//! of 1, a bare Lambertian, when a bitmap gives the reflectance); dielectrics (`thindielectric`
+//! thin-walled), conductors and plastics as [`Pbr`] materials; `twosided`, `mask` and `bumpmap` as wrappers. `bitmap`
 //! textures become [`Texture`]s.
 
 use super::xml::{Color, Context, Props, Result};
@@ -99,12 +99,6 @@ impl Materials {
                 self.diffuse(ctx, reflectance)?
             }
             "dielectric" | "thindielectric" | "roughdielectric" => {
-                if kind == "thindielectric" {
-                    ctx.warn(
-                        node,
-                        "rendered as a solid dielectric: lightgraph has no thin-sheet model",
-                    );
-                }
                 let ior = ratio_of_iors(ctx, &props, 1.5046)?;
                 let roughness = roughness(ctx, &props, kind == "roughdielectric")?;
                 let base_color = rgb_or_white(ctx, &props, "specular_transmittance", "transmittance")?;
@@ -114,6 +108,7 @@ impl Materials {
                     transmission: 1.0,
                     roughness,
                     ior,
+                    thin_walled: kind == "thindielectric",
                     ..Default::default()
                 })
             }
@@ -461,7 +456,17 @@ mod tests {
             "<bsdf type=\"dielectric\"><float name=\"intIOR\" value=\"1.5\"/><float name=\"extIOR\" value=\"1\"/></bsdf>",
         );
         let p = m.unwrap().pbr.unwrap();
-        assert_eq!((p.transmission, p.roughness, p.ior, p.metallic), (1.0, 0.0, 1.5, 0.0));
+        assert_eq!(
+            (p.transmission, p.roughness, p.ior, p.metallic, p.thin_walled),
+            (1.0, 0.0, 1.5, 0.0, false)
+        );
+        // Mitsuba's thin sheet (a slab's Fresnel, light unbent): thin-walled, without warning.
+        let (m, w) = convert(
+            "<bsdf type=\"thindielectric\"><float name=\"int_ior\" value=\"1.33\"/><float name=\"ext_ior\" value=\"1\"/></bsdf>",
+        );
+        let p = m.unwrap().pbr.unwrap();
+        assert_eq!((p.transmission, p.ior, p.thin_walled), (1.0, 1.33, true));
+        assert!(w.is_empty(), "{w:?}");
         let (m, _) = convert("<bsdf type=\"roughdielectric\"><string name=\"int_ior\" value=\"water\"/></bsdf>");
         let p = m.unwrap().pbr.unwrap();
         assert!((p.ior - 1.333 / 1.000277).abs() < 1e-5 && (p.roughness - 0.1f32.sqrt()).abs() < 1e-6);
