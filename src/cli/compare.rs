@@ -5,7 +5,7 @@ use super::gpus::gpu_selectors;
 use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
-use lightgraph::compare::{ReportContext, RunResult, RunSpec, run, write_report};
+use lightgraph::compare::{ReportContext, RunBudget, RunResult, RunSpec, run, write_report};
 use lightgraph::reference::{Reference, constants_text};
 use lightgraph::render::{SessionOptions, load_graph};
 use lightgraph_engine::{Gpu, Graph};
@@ -29,6 +29,10 @@ pub struct CompareArgs {
     /// Wall-clock budget of each run.
     #[arg(long, value_parser = humantime::parse_duration, default_value = "10s")]
     pub time: Duration,
+    /// Start each run's clock after its set-up (pipeline creation, buffers), which is then
+    /// reported beside it; by default the set-up counts on the budget.
+    #[arg(long)]
+    pub setup_off_clock: bool,
     /// The run the others are measured against [default: the first].
     #[arg(long)]
     pub baseline: Option<String>,
@@ -126,7 +130,7 @@ pub(super) fn compare_with(
         scene: c.scene(),
         device: &device,
         load_seconds: scenes.load_seconds(),
-        budget: args.time,
+        budget: budget(args),
         reference_path: &args.reference,
         reference,
         baseline,
@@ -260,7 +264,7 @@ fn run_all(
                         graph,
                         (layout, label.clone()),
                         opts.clone(),
-                        args.time,
+                        budget(args),
                         reference,
                         args.per_decade,
                         |t, e, image| {
@@ -284,4 +288,12 @@ fn run_all(
     });
     // Runs are left untaken only after a failure, which `?` then returns.
     results.into_inner().expect("results").into_iter().flatten().collect()
+}
+
+/// Each run's budget.
+fn budget(args: &CompareArgs) -> RunBudget {
+    RunBudget {
+        time: args.time,
+        setup_on_clock: !args.setup_off_clock,
+    }
 }

@@ -8,6 +8,7 @@ use super::reference::ReferenceArgs;
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use lightgraph::compare::RunBudget;
 use lightgraph::compare::RunSpec;
 use lightgraph::reference::Reference;
 use lightgraph::render::load_graph;
@@ -34,9 +35,12 @@ pub struct StudyArgs {
     /// `@NAME=VALUE` constants of its own (as `compare --runs`).
     #[arg(long, default_value = DEFAULT_ESTIMATORS)]
     pub estimators: String,
-    /// Wall-clock budget of each estimator on each scene (set-up included).
+    /// Wall-clock budget of each estimator on each scene (rendering: its set-up is off the clock unless `--setup-on-clock`).
     #[arg(long, value_parser = humantime::parse_duration, default_value = "20s")]
     pub time: Duration,
+    /// Count each run's set-up (pipeline creation, buffers) on its budget, as `compare` does.
+    #[arg(long)]
+    pub setup_on_clock: bool,
     /// Time each layout renders when the study measures a graph's layouts (after a warm-up
     /// frame, so pipeline creation is not measured).
     #[arg(long, value_parser = humantime::parse_duration, default_value = "500ms")]
@@ -112,7 +116,10 @@ pub fn study(args: StudyArgs) -> Result<()> {
     };
     let ctx = StudyContext {
         device: &device,
-        budget: args.time,
+        budget: RunBudget {
+            time: args.time,
+            setup_on_clock: args.setup_on_clock,
+        },
         layout_time: args.layout_time,
         estimators: &names,
         scene_count: args.scenes.len(),
@@ -231,6 +238,7 @@ fn compare_args(args: &StudyArgs, (scene, folder): (&str, &str), path: &Path) ->
         runs: String::new(),
         reference: path.to_path_buf(),
         time: args.time,
+        setup_off_clock: !args.setup_on_clock,
         baseline: None,
         per_decade: args.per_decade,
         seed: args.seed,

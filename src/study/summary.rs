@@ -3,7 +3,7 @@
 //! that reached it first; written as `summary.md`, `summary.csv` and `layouts.csv`.
 
 use super::layouts::LayoutChoice;
-use crate::compare::{ErrorSample, time_to_error};
+use crate::compare::{ErrorSample, RunBudget, time_to_error};
 use anyhow::{Context, Result};
 use std::fmt::Write;
 use std::path::Path;
@@ -116,7 +116,7 @@ pub struct StudyContext<'a> {
     /// GPU description.
     pub device: &'a str,
     /// Budget of each run.
-    pub budget: Duration,
+    pub budget: RunBudget,
     /// Time each layout was measured for when a layout was chosen by measurement.
     pub layout_time: Duration,
     /// The estimators, in the order of the table's columns.
@@ -167,11 +167,7 @@ fn markdown(ctx: &StudyContext, scenes: &[SceneRuns]) -> Result<String> {
         writeln!(s, "**{} of {} scenes done so far.**\n", scenes.len(), ctx.scene_count)?;
     }
     writeln!(s, "- device: {}", ctx.device)?;
-    writeln!(
-        s,
-        "- budget: {:?} per estimator and scene (set-up on the clock, error evaluation off it)",
-        ctx.budget
-    )?;
+    writeln!(s, "- budget: {} per estimator and scene", ctx.budget.describe())?;
     writeln!(
         s,
         "- layouts: as named (`graph:Layout`), else the most samples per second of the graph's \
@@ -464,7 +460,10 @@ mod tests {
         let estimators = ["pt".to_string(), "ppm:X".into()];
         let ctx = StudyContext {
             device: "GPU",
-            budget: Duration::from_secs(10),
+            budget: RunBudget {
+                time: Duration::from_secs(10),
+                setup_on_clock: false,
+            },
             layout_time: Duration::from_millis(500),
             estimators: &estimators,
             scene_count: 3,

@@ -72,6 +72,8 @@ fn a_study_writes_a_comparison_per_scene_and_one_summary() {
     for name in scenes.iter().chain(&estimators) {
         assert!(md.contains(name), "summary.md does not name {name}:\n{md}");
     }
+    // A study's runs render for their budget after their set-up (`--setup-on-clock` not given).
+    assert!(md.contains("set-up off the clock"), "summary.md:\n{md}");
     let rows = csv(&out.join("summary.csv"));
     assert_eq!(rows.len(), scenes.len() * estimators.len());
     let layouts = csv(&out.join("layouts.csv"));
