@@ -101,6 +101,24 @@ def compare(
     ``time`` seconds against the reference film, writes curves.csv, rmse_vs_time.png,
     summary.md and each run's image into ``out``, and returns the summary (Markdown)."""
 
+def study(
+    scenes: Sequence[str],
+    estimators: Optional[Sequence[str]] = None,
+    time: float = 20.0,
+    reference_time: float = 120.0,
+    reference_graph: str = "vcm",
+    res: Optional[Tuple[int, int]] = None,
+    seed: int = 1,
+    out: Path = "out/study",
+    adapter: Optional[str] = None,
+) -> str:
+    """Runs each of ``estimators`` (a graph for its fastest layout on each scene, or
+    ``graph:Layout``; default PT, LVC-BPT, PPM, SPPM, PBPM and VCM) for ``time`` seconds of
+    rendering on each of ``scenes`` against a reference per scene (found in, resumed into or
+    rendered into ``out/references`` with ``reference_graph`` for ``reference_time``
+    seconds), writes each scene's comparison and summary.md, summary.csv and layouts.csv
+    into ``out``, and returns the summary (Markdown)."""
+
 def explain(
     graph: str = "pt",
     layout: Optional[str] = None,

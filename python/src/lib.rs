@@ -380,6 +380,43 @@ fn compare(
     std::fs::read_to_string(&summary).map_err(|e| Error::new_err(format!("{}: {e}", summary.display())))
 }
 
+/// Runs `lightgraph study`: each of `estimators` (`graph` for its fastest layout on each
+/// scene, or `graph:Layout`) for `time` seconds of rendering on each of `scenes` against a
+/// reference per scene (found in, resumed into or rendered into `out/references` with
+/// `reference_graph` for `reference_time` seconds), writes each scene's comparison and the
+/// summary files into `out`, and returns the summary (Markdown).
+#[pyfunction]
+#[pyo3(signature = (scenes, estimators = None, time = 20.0, reference_time = 120.0, reference_graph = "vcm",
+    res = None, seed = 1, out = PathBuf::from("out/study"), adapter = None))]
+#[allow(clippy::too_many_arguments)]
+fn study(
+    py: Python<'_>,
+    scenes: Vec<String>,
+    estimators: Option<Vec<String>>,
+    time: f64,
+    reference_time: f64,
+    reference_graph: &str,
+    res: Option<(u32, u32)>,
+    seed: u32,
+    out: PathBuf,
+    adapter: Option<&str>,
+) -> PyResult<String> {
+    let millis = |t: f64| format!("{}ms", (t * 1e3).round() as u64);
+    let cli = Argv::new("study")
+        .opt("scenes", Some(scenes.join(",")))
+        .opt("estimators", estimators.map(|e| e.join(",")))
+        .opt("time", Some(millis(time)))
+        .opt("reference-time", Some(millis(reference_time)))
+        .opt("reference-graph", Some(reference_graph))
+        .opt("res", res.map(|(w, h)| format!("{w}x{h}")))
+        .opt("seed", Some(seed))
+        .opt("out", Some(out.display()))
+        .opt("adapter", adapter);
+    run(py, cli)?;
+    let summary = out.join("summary.md");
+    std::fs::read_to_string(&summary).map_err(|e| Error::new_err(format!("{}: {e}", summary.display())))
+}
+
 /// The kernels, schedule and resources of `graph`'s layouts (all of them, or `layout`) for
 /// `scene`, as `lightgraph explain` prints them.
 #[pyfunction]
@@ -478,6 +515,7 @@ fn lightgraph_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(reference, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(study, m)?)?;
     m.add_function(wrap_pyfunction!(explain, m)?)?;
     m.add_function(wrap_pyfunction!(list_all, m)?)?;
     m.add_function(wrap_pyfunction!(read, m)?)?;

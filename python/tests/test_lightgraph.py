@@ -111,3 +111,21 @@ def test_compare_explain_and_list(tmp_path):
     listed = lightgraph.list()
     assert "pt" in listed["graphs"] and "cornell-mitsuba" in listed["scenes"]
     assert listed["adapters"], "no adapter listed, yet the renders ran"
+
+
+def test_a_study_sums_up_its_scenes(tmp_path):
+    summary = lightgraph.study(
+        ["cornell-diffuse"],
+        estimators=["pt:NaivePTsk", "pt:NaivePTmk"],
+        time=1.0,
+        reference_time=2.0,
+        reference_graph="pt",
+        res=RES,
+        out=tmp_path / "study",
+    )
+    assert "cornell-diffuse" in summary and "NaivePTmk" in summary
+    rows = (tmp_path / "study" / "summary.csv").read_text().splitlines()
+    assert len(rows) == 3, rows  # the header and one row per estimator
+    assert (tmp_path / "study" / "references" / "cornell-diffuse.exr").exists()
+    with pytest.raises(lightgraph.Error, match="no-such-scene"):
+        lightgraph.study(["no-such-scene"], out=tmp_path / "bad")
