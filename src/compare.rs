@@ -90,7 +90,8 @@ pub struct RunResult {
     pub setup_seconds: f64,
     /// Error samples in time order; the last is at the end of the budget.
     pub samples: Vec<ErrorSample>,
-    /// Camera samples (paths) per second over the run, set-up included.
+    /// Camera samples (paths) per second over the run's clock (set-up on it or not, as its
+    /// budget says).
     pub samples_per_second: f64,
     /// The final image.
     pub image: Image,
@@ -351,9 +352,15 @@ pub fn write_report(dir: &Path, ctx: &ReportContext, runs: &[RunResult], exposur
         })
         .collect();
     let title = format!("RMSE vs time: {} on {}", ctx.scene, ctx.device);
+    let setup = if ctx.budget.setup_on_clock {
+        "included"
+    } else {
+        "excluded"
+    };
+    let x_label = format!("time [s] (set-up {setup}, error evaluation excluded)");
     let axes = Axes {
         title: &title,
-        x_label: "time [s] (set-up included, error evaluation excluded)",
+        x_label: &x_label,
         y_label: "RMSE (linear radiance)",
         log_x: true,
         log_y: true,
