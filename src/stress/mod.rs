@@ -53,7 +53,7 @@ pub const INCOMPLETE: [(&str, &str); 8] = [
     ),
     (
         "vcm",
-        "biased at a finite merge radius (its merges): its halves equal LVC-BPT and PBPM (tests/integration/vcm.rs)",
+        "biased at a finite merge radius: its merge-radius cases are in tests/integration/pm.rs",
     ),
 ];
 

@@ -285,14 +285,25 @@ fn merge_radii_from_a_millionth_to_ten_times_the_scene_stay_finite() {
     // scene (almost no photon merges; what emission alone shows stays), 10 times the scene
     // (every photon merges everywhere: blurred, finite), and the progressive radius after
     // 10^4 frames. The grid's buckets follow the light sub-paths, not the cells, so its memory
-    // is the same at every radius.
+    // is the same at every radius. VCM too: its merges count pi r^2 N_light in the MIS, from
+    // about 1e-8 to 1e6 here, and no sample may come out NaN or infinite (the film would
+    // reject it silently).
     let scene = load_scene("cornell-diffuse").unwrap();
-    for (graph, layout) in [("ppm", "PPMsk"), ("sppm", "SPPMsk"), ("pbpm", "PBPMsk")] {
+    for (graph, layout) in [
+        ("ppm", "PPMsk"),
+        ("sppm", "SPPMsk"),
+        ("pbpm", "PBPMsk"),
+        ("vcm", "VCMsk"),
+    ] {
         let mut memory = Vec::new();
         for r0 in [1e-6f32, 10.0] {
             let constants = [("PM_RADIUS", ConstValue::F32(r0)), ("PM_ALPHA", ConstValue::F32(1.0))];
             let rendered = render(&scene, graph, layout, (16, 16), 1, 4, 9, &constants);
             crate::common::assert_finite(&rendered.image, &format!("{graph} at radius {r0}"));
+            assert_eq!(
+                rendered.counters["samples_rejected"], 0,
+                "{graph} at radius {r0}: NaN, infinite or negative samples"
+            );
             let total: f64 = rendered.image.mean.iter().map(|p| p[1] as f64).sum();
             assert!(total > 0.0, "{graph} at radius {r0}: a black image");
             memory.push(rendered.memory_bytes);
