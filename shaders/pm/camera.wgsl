@@ -88,16 +88,12 @@ struct MergePath {
     merge: PendingMerge,
 }
 
-// A density estimation under way: the query, the sums of the photons it found, and the BSDF
-// at the query, set up from `source` at the first photon in range (`merge_bsdf`): most
-// queries find none (on Sponza 99%), and the set-up reads the material's textures.
+// A density estimation under way: the query and the sums of the photons it found.
 struct Merge {
     position: vec3<f32>,
     radius: f32,
     pending: bool,
-    source: PendingMerge,
     bsdf: Bsdf,
-    bsdf_ready: bool,
     d_vm: f32,
     length: u32,
     sum: vec3<f32>,
@@ -214,36 +210,18 @@ fn merge_begin(p: MergePath) -> Merge {
     if (!m.pending) {
         return m;
     }
-    return merge_query(p.merge);
+    m = merge_query(p.merge);
+    if (PM_MODE == PM_SPPM) {
+        m.bsdf = bsdf_diffuse_part(m.bsdf);
+    }
+    return m;
 }
 
 // The density estimation of `pending` begun (counted as `pm_queries`), with this frame's
 // radius and nothing found yet.
 fn merge_query(pending: PendingMerge) -> Merge {
     count(COUNTER_PM_QUERIES, 1u);
-    var m: Merge;
-    m.position = pending.position;
-    m.radius = pm_radius();
-    m.pending = true;
-    m.source = pending;
-    m.bsdf_ready = false;
-    m.d_vm = pending.d_vm;
-    m.length = pending.length;
-    m.sum = vec3<f32>(0.0);
-    return m;
-}
-
-// The BSDF at the query (SPPM's diffuse part of it), set up the first time it is needed.
-fn merge_bsdf(m: ptr<function, Merge>) -> Bsdf {
-    if (!(*m).bsdf_ready) {
-        var b = pending_merge_bsdf((*m).source);
-        if (PM_MODE == PM_SPPM) {
-            b = bsdf_diffuse_part(b);
-        }
-        (*m).bsdf = b;
-        (*m).bsdf_ready = true;
-    }
-    return (*m).bsdf;
+    return Merge(pending.position, pm_radius(), true, pending_merge_bsdf(pending), pending.d_vm, pending.length, vec3<f32>(0.0));
 }
 
 // Adds a photon in range (counted as `pm_found`; the queries as `pm_queries`), standing for
@@ -257,15 +235,14 @@ fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
         return;
     }
     let towards = photon_direction(photon);
-    let bsdf = merge_bsdf(m);
-    let e = bsdf_eval(bsdf, towards);
+    let e = bsdf_eval((*m).bsdf, towards);
     if (is_black(e.f)) {
         return;
     }
     var w = weight;
     if (PM_MODE == PM_PBPM) {
-        let w_light = photon.d_vm * mis_pow(e.pdf_forward * bsdf.continuation);
-        let w_camera = (*m).d_vm * mis_pow(e.pdf_reverse * bsdf_continuation_towards(bsdf, towards));
+        let w_light = photon.d_vm * mis_pow(e.pdf_forward * (*m).bsdf.continuation);
+        let w_camera = (*m).d_vm * mis_pow(e.pdf_reverse * bsdf_continuation_towards((*m).bsdf, towards));
         w /= w_light + 1.0 + w_camera;
     }
     (*m).sum += e.f * photon.throughput * w;

@@ -158,13 +158,12 @@ fn vcm_merge_vertex(m: ptr<function, Merge>, v: LightVertex, camera_d_vcm: f32, 
         return;
     }
     let towards = decode_octahedral_24(octahedral_24(v.fix));
-    let bsdf = merge_bsdf(m);
-    let e = bsdf_eval(bsdf, towards);
+    let e = bsdf_eval((*m).bsdf, towards);
     if (is_black(e.f)) {
         return;
     }
-    var w_light = v.d_vc * mis_pow(e.pdf_forward * bsdf.continuation);
-    var w_camera = (*m).d_vm * mis_pow(e.pdf_reverse * bsdf_continuation_towards(bsdf, towards));
+    var w_light = v.d_vc * mis_pow(e.pdf_forward * (*m).bsdf.continuation);
+    var w_camera = (*m).d_vm * mis_pow(e.pdf_reverse * bsdf_continuation_towards((*m).bsdf, towards));
     if (counts.vc) {
         w_light = (v.d_vcm + w_light) / counts.merge;
         w_camera = (camera_d_vcm + w_camera) / counts.merge;
