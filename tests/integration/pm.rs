@@ -126,15 +126,21 @@ fn photon_mapping_renders_the_caustic_seen_in_a_mirror() {
             5,
             &[("PM_RADIUS", ConstValue::F32(0.02))],
         );
-        let (m_mirror, m_floor) = mirror_and_floor(&pm.image);
-        eprintln!("{graph}: floor {m_floor:.4}, floor seen in the mirror {m_mirror:.4}");
-        assert!(m_floor > 1e-3, "{graph}: the floor is not lit ({m_floor})");
-        // BPT leaves the mirror below 1e-3 of the floor; photon mapping finds some 12%.
-        assert!(
-            m_mirror > 0.02 * m_floor,
-            "{graph}: the caustic seen in the mirror is missing ({m_mirror} vs {m_floor})"
-        );
+        assert_the_mirror_shows_the_caustic(&pm.image, graph);
     }
+}
+
+/// In an image of the specular-diffuse-specular scene (bpt.rs) by `what`: the floor is lit,
+/// and the mirror shows its caustic. BPT leaves the mirror below 1e-3 of the floor; photon
+/// mapping finds some 12%, so the bound is 2%.
+pub fn assert_the_mirror_shows_the_caustic(image: &lightgraph::render::Image, what: &str) {
+    let (m_mirror, m_floor) = mirror_and_floor(image);
+    eprintln!("{what}: floor {m_floor:.4}, floor seen in the mirror {m_mirror:.4}");
+    assert!(m_floor > 1e-3, "{what}: the floor is not lit ({m_floor})");
+    assert!(
+        m_mirror > 0.02 * m_floor,
+        "{what}: the caustic seen in the mirror is missing ({m_mirror} vs {m_floor})"
+    );
 }
 
 #[test]
