@@ -61,6 +61,12 @@ pub struct GraphFile {
     /// `f32` constants the host measures before rendering, by a run of the graph itself.
     #[serde(default)]
     pub measured: BTreeMap<String, MeasuredDecl>,
+    /// The most loop iterations an item runs, by item type: a count expression over the
+    /// constants (e.g. `"MAX_PATH_LENGTH"`). A host-driven loop whose items all start in its
+    /// first iteration then runs exactly that many iterations with no read-back in between;
+    /// an item still alive after them is an error when the batch is read back.
+    #[serde(default)]
+    pub loop_bounds: BTreeMap<String, String>,
     /// Named kernel layouts.
     pub layouts: BTreeMap<String, LayoutDecl>,
     /// The layout used when none is asked for.

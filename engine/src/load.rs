@@ -357,6 +357,7 @@ impl Declared {
         self.check_ops()?;
         self.check_resources(file)?;
         self.check_streams(file)?;
+        self.check_loop_bounds(file)?;
         self.check_measured(file)?;
         self.check_parameters(file)?;
         let g = &self.file;
@@ -621,6 +622,20 @@ impl Declared {
                     }
                 }
                 PerCall::Number(_) => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Each loop bound names the item of a pass and parses as a count expression.
+    fn check_loop_bounds(&self, file: &str) -> Result<()> {
+        for (item, e) in &self.file.loop_bounds {
+            let err = |message: String| self.sources.at_key(file, item, message);
+            if !self.passes.iter().any(|p| &p.decl.item == item) {
+                return Err(err(format!("loop_bounds: no pass runs over items of type '{item}'")));
+            }
+            if let Err(why) = Expr::parse(e) {
+                return Err(err(format!("loop_bounds of '{item}': {why}")));
             }
         }
         Ok(())

@@ -158,6 +158,8 @@ pub struct Resolved {
     pub memory: MemoryPlan<BufferRef>,
     /// Transient resources set to zero before each frame step, by step.
     pub clears: BTreeMap<usize, Vec<String>>,
+    /// The most loop iterations an item of a chain runs, where the graph bounds them.
+    pub loop_bounds: BTreeMap<ChainId, u32>,
 }
 
 /// Binding numbers: engine buffers, resources, stored chains, queues, boundaries.
@@ -244,6 +246,7 @@ impl Resolved {
             bindings: bindings(plan),
             memory: MemoryPlan::default(),
             clears: BTreeMap::new(),
+            loop_bounds: BTreeMap::new(),
         }
     }
 
@@ -260,6 +263,7 @@ impl Resolved {
         resolved.operators(plan, &vars, target)?;
         resolved.memory = resolved.plan_memory(plan, target)?;
         resolved.clears = resolved.transient_clears(plan);
+        resolved.loop_bounds = loop_bounds(plan, &vars)?;
         Ok(resolved)
     }
 
@@ -613,6 +617,27 @@ fn item_words(plan: &Plan, reflection: &naga::Module) -> Result<BTreeMap<String,
         );
     }
     Ok(words)
+}
+
+/// The graph's loop bounds, evaluated with the constants, for its chains with a loop.
+fn loop_bounds(plan: &Plan, vars: &BTreeMap<String, f64>) -> Result<BTreeMap<ChainId, u32>> {
+    let g = &plan.graph;
+    let mut bounds = BTreeMap::new();
+    for (item, e) in &g.declared.file.loop_bounds {
+        let n = Expr::parse(e)
+            .and_then(|e| e.count(vars))
+            .map_err(|why| g.error_at(item, format!("loop_bounds of '{item}': {why}")))?;
+        let n = u32::try_from(n)
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| g.error_at(item, format!("loop_bounds of '{item}': {n} is not 1 to 2^32 - 1")))?;
+        for (c, chain) in g.chains.iter().enumerate() {
+            if &chain.item == item && chain.loop_start.is_some() {
+                bounds.insert(ChainId(c), n);
+            }
+        }
+    }
+    Ok(bounds)
 }
 
 /// Each stream's per_call, evaluated with the constants.

@@ -258,3 +258,84 @@ fn regeneration_behind_a_gate_walks_every_number_once() {
     .to_string();
     assert!(e.contains("regenerate_at 1.5 is not in (0, 1]"), "{e}");
 }
+
+/// The Collatz graph with `loop_bounds: {"<item>": "<bound>"}` and a constant `BOUND`.
+fn graph_with_loop_bound(item: &str, bound: &str) -> Result<Graph, String> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let text = std::fs::read_to_string(dir.join("collatz.ron"))
+        .unwrap()
+        .replace("\"BINS\": U32(64) }", "\"BINS\": U32(64), \"BOUND\": U32(1) }")
+        .replace(
+            "    layouts: {",
+            &format!("    loop_bounds: {{\"{item}\": \"{bound}\"}},\n    layouts: {{"),
+        );
+    Graph::from_text(&Vfs::new(vec![Layer::Dir(dir)]), "collatz.ron", &text).map_err(|e| e.to_string())
+}
+
+/// One frame over 1..=n with the constant BOUND: the walks' steps and the host-loop
+/// iterations, or the frame's error.
+fn run_bounded(g: &Graph, name: &str, decl: LayoutDecl, n: u32, bound: u32) -> Result<(Vec<u32>, u32), String> {
+    let plan = Plan::with_decl(g, name, decl).unwrap();
+    let spec = Specialization {
+        constants: [
+            ("N".to_string(), ConstValue::U32(n)),
+            ("BOUND".to_string(), ConstValue::U32(bound)),
+        ]
+        .into_iter()
+        .collect(),
+        ..Default::default()
+    };
+    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
+    let stats = instance.run_frame(0, 0).map_err(|e| e.to_string())?;
+    let steps = bytemuck::pod_collect_to_vec(&instance.read("steps").unwrap());
+    Ok((steps, stats.host_iterations))
+}
+
+/// With a loop bound, a host loop whose items all start at once runs exactly the bound's
+/// iterations (no read-back between them) and computes the same walks; one iteration too few
+/// is an error naming the bound; a pool smaller than the chunk falls back to read-backs.
+#[test]
+fn bounded_host_loops_run_their_bound_and_catch_a_short_one() {
+    let n = 300;
+    let expected = cpu_steps(n);
+    // The loop pass runs once more than a walk's steps: the last call finds 1.
+    let needed = expected.iter().max().unwrap() + 1;
+    let g = graph_with_loop_bound("Walk", "BOUND").unwrap();
+    let mut host = 0;
+    for (name, decl) in lightgraph_engine::auto::legal_layouts(&g, &Default::default()) {
+        if decl.loops != LoopMode::Host {
+            continue;
+        }
+        host += 1;
+        let (steps, iterations) = run_bounded(&g, &name, decl.clone(), n, needed).unwrap();
+        assert_eq!(steps, expected, "layout {name}");
+        assert!(
+            iterations > 0 && iterations % needed == 0,
+            "layout {name}: {iterations} host iterations, not whole runs of the bound {needed}"
+        );
+        let e = run_bounded(&g, &name, decl.clone(), n, needed - 1).expect_err("a bound one short is caught");
+        assert!(
+            e.contains(&format!(
+                "still alive after {} loop iterations, the graph's loop_bounds for 'Walk'",
+                needed - 1
+            )),
+            "layout {name}: {e}"
+        );
+        if decl.policy != Policy::Naive {
+            // 37 threads for 300 walks: items start over many iterations, so the host reads
+            // back as before, and the short bound does not apply.
+            let small = LayoutDecl {
+                threads: Some(37),
+                ..decl
+            };
+            let (steps, _) = run_bounded(&g, &name, small, n, needed - 1).unwrap();
+            assert_eq!(steps, expected, "layout {name} with 37 threads");
+        }
+    }
+    assert!(host > 2, "too few host-loop layouts: {host}");
+    let e = graph_with_loop_bound("Nope", "BOUND").expect_err("an unknown item is refused");
+    assert!(e.contains("loop_bounds: no pass runs over items of type 'Nope'"), "{e}");
+    let e = graph_with_loop_bound("Walk", "BOUND +").expect_err("a malformed bound is refused");
+    assert!(e.contains("loop_bounds of 'Walk':"), "{e}");
+}

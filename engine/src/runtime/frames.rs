@@ -33,6 +33,28 @@ pub struct FrameState {
     pub totals: Vec<u64>,
     /// Host loop iterations the previous frame needed, per loop (the next frame's first batch).
     last_iterations: BTreeMap<usize, u32>,
+    /// Copies of the control words (and boundary headers) after each bounded loop of the
+    /// batch, read back with the batch.
+    check_buffer: wgpu::Buffer,
+    /// The bounded loops of the batch, each with its copy in `check_buffer`.
+    checks: Vec<LoopCheck>,
+}
+
+/// Checks a bounded loop can record per batch before it falls back to a host read-back.
+const MAX_CHECKS: u64 = 256;
+
+/// A bounded host loop whose end the batch's read-back checks.
+#[derive(Debug, Clone)]
+struct LoopCheck {
+    chain: ChainId,
+    /// The record of the chunk the loop ran for.
+    record: usize,
+    /// Iterations it ran.
+    bound: u32,
+    /// Byte offset of its copy of the control words in the check buffer.
+    at: u64,
+    /// Byte offsets of its copies of the chain's boundary headers.
+    headers: Vec<u64>,
 }
 
 /// What one record of a batch runs.
@@ -85,6 +107,12 @@ impl FrameState {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let check_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("loop checks"),
+            size: MAX_CHECKS * check_bytes(program),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         FrameState {
             records_buffer,
             frame_group,
@@ -93,8 +121,17 @@ impl FrameState {
             readback,
             totals: vec![0; ncounters as usize],
             last_iterations: BTreeMap::new(),
+            check_buffer,
+            checks: Vec::new(),
         }
     }
+}
+
+/// The most bytes one loop check takes: the control words and every boundary header.
+fn check_bytes(program: &Program) -> u64 {
+    let sides: u64 = program.plan.boundaries.iter().map(|b| 1 + b.pingpong as u64).sum();
+    // The control words' slot is at least 16 bytes (see `Buffers`).
+    (4 * program.resolved.control.len as u64).max(16).next_multiple_of(8) + 8 * sides
 }
 
 fn records_buffer(device: &wgpu::Device, records: usize) -> wgpu::Buffer {
@@ -135,6 +172,7 @@ impl Instance<'_> {
                 "a batch runs 1 to {MAX_BATCH} frames, not {count}"
             )));
         }
+        self.frames.checks.clear();
         let runs = self.write_records(first, count, seed)?;
         let scope = self.gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut rec = Recorder::new(&self.gpu.device);
@@ -425,23 +463,28 @@ impl Instance<'_> {
         Ok(())
     }
 
-    /// A host-driven loop: the body in growing batches of iterations, until no item of the
-    /// chain is alive.
+    /// A host-driven loop: with a loop bound and every item starting in the first
+    /// iteration, the bound's iterations with no read-back (checked with the batch);
+    /// otherwise the body in growing batches of iterations, until no item of the chain is
+    /// alive.
     fn run_loop(&mut self, rec: &mut Recorder, chain: ChainId, body: &[Step], record: usize, i: usize) -> Result<()> {
+        rec.parity = 0;
+        if let Some(bound) = self.bounded_iterations(chain, record) {
+            for _ in 0..bound {
+                self.run_iteration(rec, chain, body, record)?;
+            }
+            rec.host_iterations += bound;
+            return self.check_loop(rec, chain, record, bound);
+        }
         // The same loop of every frame of a batch learns from the last one.
         let records = &self.frames.records;
         let per_frame = records.iter().filter(|r| r[0] == records[0][0]).count();
         let key = (record % per_frame.max(1)) * 64 + i;
         let mut batch = self.frames.last_iterations.get(&key).copied().unwrap_or(2).max(1);
         let mut done = 0u32;
-        rec.parity = 0;
         loop {
             for _ in 0..batch {
-                if let Some(word) = self.program.resolved.control.alive.get(&chain) {
-                    self.dispatch(rec, &self.kernels.zeros[word], record, Dispatch::Single);
-                }
-                self.run_steps(rec, body, record)?;
-                rec.parity ^= 1;
+                self.run_iteration(rec, chain, body, record)?;
             }
             done += batch;
             rec.host_iterations += batch;
@@ -460,20 +503,55 @@ impl Instance<'_> {
         Ok(())
     }
 
-    /// Submits what is recorded and reads back whether the loop over `chain` has work left:
-    /// items alive in slots, items appended to its boundaries, or indices not yet taken.
-    fn loop_goes_on(&self, rec: &mut Recorder, chain: ChainId, record: usize) -> Result<bool> {
+    /// One iteration of a host-driven loop: the alive count reset, the body.
+    fn run_iteration(&mut self, rec: &mut Recorder, chain: ChainId, body: &[Step], record: usize) -> Result<()> {
+        if let Some(word) = self.program.resolved.control.alive.get(&chain) {
+            self.dispatch(rec, &self.kernels.zeros[word], record, Dispatch::Single);
+        }
+        self.run_steps(rec, body, record)?;
+        rec.parity ^= 1;
+        Ok(())
+    }
+
+    /// The iterations the loop over `chain` runs with no read-back: its graph's bound,
+    /// where every item of the chunk starts in the first iteration (no pool, or a pool that
+    /// holds the whole chunk) and the batch has room for one more check.
+    fn bounded_iterations(&self, chain: ChainId, record: usize) -> Option<u32> {
+        let bound = *self.program.resolved.loop_bounds.get(&chain)?;
+        let items = self.frames.records[record][3] as u64;
+        let at_once = self
+            .program
+            .resolved
+            .pools
+            .get(&chain)
+            .is_none_or(|&pool| pool >= items);
+        (at_once && (self.frames.checks.len() as u64) < MAX_CHECKS).then_some(bound)
+    }
+
+    /// Copies what tells whether the bounded loop over `chain` left work (the control words
+    /// and its boundaries' headers) for the batch's read-back.
+    fn check_loop(&mut self, rec: &mut Recorder, chain: ChainId, record: usize, bound: u32) -> Result<()> {
+        let at = self.frames.checks.len() as u64 * check_bytes(&self.program);
+        let buffer = &self.frames.check_buffer;
         rec.end_pass();
+        let headers = self.copy_loop_words(rec, chain, buffer, at);
+        self.frames.checks.push(LoopCheck {
+            chain,
+            record,
+            bound,
+            at,
+            headers,
+        });
+        Ok(())
+    }
+
+    /// Records copies of the control words to `buffer` at `at` and of `chain`'s boundary
+    /// headers behind them; returns the headers' offsets.
+    fn copy_loop_words(&self, rec: &mut Recorder, chain: ChainId, buffer: &wgpu::Buffer, at: u64) -> Vec<u64> {
         let control = self.buffers.slot(&BufferRef::Control);
-        let control_bytes = control.size;
-        rec.encoder.copy_buffer_to_buffer(
-            self.buffers.buffer(control),
-            control.offset,
-            &self.frames.readback,
-            0,
-            control_bytes,
-        );
-        let mut at = control_bytes;
+        rec.encoder
+            .copy_buffer_to_buffer(self.buffers.buffer(control), control.offset, buffer, at, control.size);
+        let mut next = at + control.size.next_multiple_of(8);
         let mut headers = Vec::new();
         for (b, boundary) in self.program.plan.boundaries.iter().enumerate() {
             if boundary.chain != chain {
@@ -482,44 +560,69 @@ impl Instance<'_> {
             for side in 0..1 + boundary.pingpong as usize {
                 let slot = self.buffers.slot(&BufferRef::Boundary(crate::ids::BoundaryId(b), side));
                 rec.encoder
-                    .copy_buffer_to_buffer(self.buffers.buffer(slot), slot.offset, &self.frames.readback, at, 8);
-                headers.push(at);
-                at += 8;
+                    .copy_buffer_to_buffer(self.buffers.buffer(slot), slot.offset, buffer, next, 8);
+                headers.push(next);
+                next += 8;
             }
         }
+        headers
+    }
+
+    /// Submits what is recorded and reads back whether the loop over `chain` has work left.
+    fn loop_goes_on(&self, rec: &mut Recorder, chain: ChainId, record: usize) -> Result<bool> {
+        rec.end_pass();
+        let headers = self.copy_loop_words(rec, chain, &self.frames.readback, 0);
+        let end = headers
+            .last()
+            .map_or(self.buffers.slot(&BufferRef::Control).size, |h| h + 8);
         let encoder = std::mem::replace(
             &mut rec.encoder,
             self.gpu.device.create_command_encoder(&Default::default()),
         );
         self.gpu.queue.submit([encoder.finish()]);
-        let bytes = self.map_readback(at)?;
-        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        let bytes = map_buffer(self.gpu, &self.frames.readback, end)?;
+        Ok(self.work_left(&bytes, 0, &headers, chain, record))
+    }
+
+    /// Whether a loop over `chain` has work left, from the copy at byte `at` of `bytes`
+    /// of the control words and its boundary headers (at `headers`): items alive in slots,
+    /// items appended to its boundaries, or indices not yet taken.
+    fn work_left(&self, bytes: &[u8], at: u64, headers: &[u64], chain: ChainId, record: usize) -> bool {
+        let words: &[u32] = bytemuck::cast_slice(bytes);
+        let word = |w: u32| words[at as usize / 4 + w as usize];
         let control = &self.program.resolved.control;
-        let alive = control.alive.get(&chain).map_or(0, |&w| words[w as usize]);
+        let alive = control.alive.get(&chain).map_or(0, |&w| word(w));
         // Counts of consumed boundaries are stale; waiting items are the appended ones.
         let pending: u64 = headers.iter().map(|&h| words[h as usize / 4 + 1] as u64).sum();
         let phase = self.program.plan.graph.phase_of_chain(chain);
         let items = match control.domain.get(&phase) {
-            Some(&w) => words[w as usize] as u64,
+            Some(&w) => word(w) as u64,
             None => self.frames.records[record][3] as u64,
         };
-        let untaken = control
-            .next
-            .get(&chain)
-            .is_some_and(|&w| (words[w as usize] as u64) < items);
-        Ok(alive > 0 || pending > 0 || untaken)
+        let untaken = control.next.get(&chain).is_some_and(|&w| (word(w) as u64) < items);
+        alive > 0 || pending > 0 || untaken
     }
 
-    fn map_readback(&self, size: u64) -> Result<Vec<u8>> {
-        let slice = self.frames.readback.slice(0..size.next_multiple_of(8));
-        slice.map_async(wgpu::MapMode::Read, |_| {});
-        self.gpu.wait()?;
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| Error::Gpu(format!("mapping the readback buffer failed: {e}")))?
-            .to_vec();
-        self.frames.readback.unmap();
-        Ok(data)
+    /// An error for the first bounded loop of the batch that left work.
+    fn check_bounded_loops(&self) -> Result<()> {
+        let Some(last) = self.frames.checks.last() else {
+            return Ok(());
+        };
+        let end = last
+            .headers
+            .last()
+            .map_or(last.at + check_bytes(&self.program), |h| h + 8);
+        let bytes = map_buffer(self.gpu, &self.frames.check_buffer, end)?;
+        for c in &self.frames.checks {
+            if self.work_left(&bytes, c.at, &c.headers, c.chain, c.record) {
+                let item = &self.program.plan.graph.chains[c.chain].item;
+                return Err(Error::Runtime(format!(
+                    "items of '{item}' still alive after {} loop iterations, the graph's loop_bounds for '{item}': a loop pass runs longer than its bound",
+                    c.bound
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// Submits the batch and reads back control words, counter totals and timestamps.
@@ -555,9 +658,10 @@ impl Instance<'_> {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!("running a frame failed: {e}")));
         }
-        let data = self.map_readback(ts_at + 16 * pairs)?;
+        let data = map_buffer(self.gpu, &self.frames.readback, ts_at + 16 * pairs)?;
         let words: &[u32] = bytemuck::cast_slice(&data[..control_bytes as usize]);
         self.check_overflows(words)?;
+        self.check_bounded_loops()?;
         let mut stats = FrameStats {
             host_iterations: rec.host_iterations,
             loops_capped: words[self.program.resolved.control.loop_capped as usize],
@@ -607,4 +711,17 @@ impl Instance<'_> {
         }
         Ok(())
     }
+}
+
+/// Maps the first `size` bytes of `buffer` (rounded up to 8), waits, and copies them out.
+fn map_buffer(gpu: &Gpu, buffer: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
+    let slice = buffer.slice(0..size.next_multiple_of(8));
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    gpu.wait()?;
+    let data = slice
+        .get_mapped_range()
+        .map_err(|e| Error::Gpu(format!("mapping a read-back buffer failed: {e}")))?
+        .to_vec();
+    buffer.unmap();
+    Ok(data)
 }
