@@ -18,6 +18,9 @@ use std::collections::BTreeMap;
 
 /// Host loop iterations after which a loop is declared stuck.
 const MAX_HOST_ITERATIONS: u32 = 1 << 20;
+/// Dispatches after which a batch being recorded is submitted, so that the GPU runs its
+/// first frames while the host records the rest.
+const SUBMIT_EVERY: u32 = 512;
 
 /// The per-instance state of running frames.
 pub struct FrameState {
@@ -193,6 +196,9 @@ impl Instance<'_> {
                     self.clear_transients(&mut rec, step);
                     self.run_operator(&mut rec, op, n, record);
                 }
+            }
+            if rec.unsubmitted >= SUBMIT_EVERY {
+                rec.submit(&self.gpu.device, &self.gpu.queue);
             }
         }
         rec.resolve(&self.frames.queries);
@@ -370,6 +376,7 @@ impl Instance<'_> {
         let max = self.program.target.max_workgroups_per_dimension as u64;
         let args = self.buffers.buffer(self.buffers.slot(&BufferRef::Args));
         let frame_group = &self.frames.frame_group;
+        rec.unsubmitted += 1;
         let pass = rec.pass();
         if let (Some(i), Some(set)) = (query, set) {
             pass.write_timestamp(set, i);
@@ -575,11 +582,7 @@ impl Instance<'_> {
         let end = headers
             .last()
             .map_or(self.buffers.slot(&BufferRef::Control).size, |h| h + 8);
-        let encoder = std::mem::replace(
-            &mut rec.encoder,
-            self.gpu.device.create_command_encoder(&Default::default()),
-        );
-        self.gpu.queue.submit([encoder.finish()]);
+        rec.submit(&self.gpu.device, &self.gpu.queue);
         let bytes = map_buffer(self.gpu, &self.frames.readback, end)?;
         Ok(self.work_left(&bytes, 0, &headers, chain, record))
     }

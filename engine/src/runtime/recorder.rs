@@ -20,6 +20,8 @@ pub struct Recorder {
     pub host_iterations: u32,
     /// Iteration parity of the running host loop (selects ping-pong buffers).
     pub parity: usize,
+    /// Dispatches recorded since the last submission.
+    pub unsubmitted: u32,
 }
 
 impl Recorder {
@@ -31,7 +33,17 @@ impl Recorder {
             resolved: 0,
             host_iterations: 0,
             parity: 0,
+            unsubmitted: 0,
         }
+    }
+
+    /// Submits what is recorded so far and goes on in a new encoder: the GPU starts on it
+    /// while the rest of the batch is recorded.
+    pub fn submit(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) {
+        self.end_pass();
+        let encoder = std::mem::replace(&mut self.encoder, device.create_command_encoder(&Default::default()));
+        queue.submit([encoder.finish()]);
+        self.unsubmitted = 0;
     }
 
     /// The open compute pass (opened when none is).
