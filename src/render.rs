@@ -146,14 +146,21 @@ pub struct LayoutOverrides {
     /// Give every transient buffer memory of its own (no sharing between buffers whose
     /// lifetimes do not overlap).
     pub separate_memory: bool,
+    /// Compile without subgroup operations even where the adapter has them (per-item
+    /// appends, workgroup-memory scans).
+    pub no_subgroups: bool,
 }
 
 impl LayoutOverrides {
     /// The compilation target of `gpu` with these overrides.
     pub fn target(&self, gpu: &Gpu) -> lightgraph_engine::Target {
-        lightgraph_engine::Target {
+        let target = lightgraph_engine::Target {
             alias_transients: !self.separate_memory,
             ..gpu.target()
+        };
+        match self.no_subgroups {
+            true => target.without_subgroups(),
+            false => target,
         }
     }
 }

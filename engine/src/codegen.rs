@@ -18,6 +18,9 @@ pub struct CodegenContext<'a> {
     pub resolved: &'a Resolved,
     /// Cap on iterations of an in-kernel loop.
     pub max_loop_iterations: u32,
+    /// Whether appends to queues and compaction boundaries take one atomic per subgroup
+    /// (the target has subgroup operations) instead of one per item.
+    pub subgroup_appends: bool,
 }
 
 /// The frame record's declaration: group 1, bound with a dynamic offset per chunk.
@@ -29,6 +32,22 @@ fn parameter_field_type(v: &ConstValue) -> &'static str {
         ConstValue::Bool(_) => "u32",
         other => other.wgsl_type(),
     }
+}
+
+/// WGSL statements that set `lg_slot` to the slot an append of one item claims from the
+/// atomic counter `counter`. Per item: one atomic each. Per subgroup: the invocations that
+/// reach the append together (any subset of the subgroup, in any control flow) are ranked by
+/// an exclusive sum over the active invocations; the first of them (rank 0, the lowest active
+/// invocation) adds the subgroup's total in one atomic, and `subgroupBroadcastFirst` hands
+/// its base to the others. The slots claimed are the same set either way, so the counter's
+/// final value, and with it the count of items past a capacity, is exact.
+fn claim_slot(counter: &str, subgroup: bool) -> String {
+    if !subgroup {
+        return format!("    let lg_slot = atomicAdd(&{counter}, 1u);\n");
+    }
+    format!(
+        "    let lg_rank = subgroupExclusiveAdd(1u);\n    let lg_total = subgroupAdd(1u);\n    var lg_base = 0u;\n    if (lg_rank == 0u) {{ lg_base = atomicAdd(&{counter}, lg_total); }}\n    let lg_slot = subgroupBroadcastFirst(lg_base) + lg_rank;\n"
+    )
 }
 
 impl CodegenContext<'_> {
@@ -248,11 +267,12 @@ impl CodegenContext<'_> {
                 s.push_str("}\n");
                 let _ = writeln!(s, "fn emit_{name}(item: {}) {{ lg_chain_{fc}(item); }}", st.item);
             } else if queues.contains(name) && !matches!(&kp.root, Root::Queue(q) if q == name) {
+                let counter = format!("lg_control[{}]", self.resolved.control.queue_append[name]);
                 let _ = writeln!(
                     s,
-                    "fn emit_{name}(item: {}) {{\n    let i = atomicAdd(&lg_control[{}], 1u);\n    if (i < LG_CAP_{}) {{ lg_store_queue_{name}(i, item); }} else {{ atomicAdd(&lg_control[{}], 1u); }}\n}}",
+                    "fn emit_{name}(item: {}) {{\n{}    if (lg_slot < LG_CAP_{}) {{ lg_store_queue_{name}(lg_slot, item); }} else {{ atomicAdd(&lg_control[{}], 1u); }}\n}}",
                     st.item,
-                    self.resolved.control.queue_append[name],
+                    claim_slot(&counter, self.subgroup_appends),
                     name.to_uppercase(),
                     self.resolved.control.queue_overflow[name]
                 );
@@ -306,8 +326,9 @@ impl CodegenContext<'_> {
                 };
                 let _ = writeln!(
                     s,
-                    "fn lg_append(v: {}) {{\n    lg_store_out({behind}atomicAdd(&lg_out.append, 1u), v);\n}}",
-                    chain.item
+                    "fn lg_append(v: {}) {{\n{}    lg_store_out({behind}lg_slot, v);\n}}",
+                    chain.item,
+                    claim_slot("lg_out.append", self.subgroup_appends)
                 );
             }
         }

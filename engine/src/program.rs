@@ -148,6 +148,7 @@ impl Program {
             plan: &plan,
             resolved: &begun,
             max_loop_iterations: target.max_loop_iterations,
+            subgroup_appends: target.subgroups(),
         };
         let mut reflection = ModuleSource::default();
         reflection.push("<generated prelude>", &ctx.prelude());
@@ -220,6 +221,7 @@ fn pass_kernels(
         plan,
         resolved,
         max_loop_iterations: target.max_loop_iterations,
+        subgroup_appends: target.subgroups(),
     };
     let prelude = ctx.prelude();
     let mut kernels = Vec::new();

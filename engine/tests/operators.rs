@@ -14,23 +14,11 @@ use lightgraph_engine::radix::SORT_TILE;
 use lightgraph_engine::resolve::BufferRef;
 use lightgraph_engine::selfcheck::sort::{Keys, Sorter, compare};
 use lightgraph_engine::selfcheck::{Pattern, check, run};
-use lightgraph_engine::{Gpu, Graph, Plan, Program, Target, Vfs};
-use std::sync::OnceLock;
+use lightgraph_engine::{Graph, Plan, Program, Target, Vfs};
 
-fn gpu() -> &'static Gpu {
-    static GPU: OnceLock<Gpu> = OnceLock::new();
-    GPU.get_or_init(|| Gpu::new(None).expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)"))
-}
-
-/// The adapter's target, and the same without subgroup operations when it has them.
-fn targets() -> Vec<(&'static str, Target)> {
-    let with = gpu().target();
-    let mut out = vec![("adapter", with.clone())];
-    if with.subgroups() {
-        out.push(("no subgroups", with.without_subgroups()));
-    }
-    out
-}
+#[path = "common/gpu.rs"]
+mod gpu_common;
+use gpu_common::{gpu, targets};
 
 fn check_all(target: &Target, what: &str, lengths: &[u64]) {
     for &n in lengths {

@@ -101,6 +101,11 @@ pub struct Common {
     /// buffers whose lifetimes do not overlap (to measure or rule out the sharing).
     #[arg(long)]
     pub separate_memory: bool,
+    /// Use no subgroup operations even where the adapter has them: queue and compaction
+    /// appends take one atomic per item instead of one per subgroup, and the operators use
+    /// their workgroup-memory scans (to measure what subgroups buy).
+    #[arg(long)]
+    pub no_subgroups: bool,
 }
 
 impl Common {
@@ -255,6 +260,7 @@ pub fn options(
         state: common.state,
         all_features: common.all_features,
         separate_memory: common.separate_memory,
+        no_subgroups: common.no_subgroups,
     };
     Ok(SessionOptions {
         width,

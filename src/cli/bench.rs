@@ -97,7 +97,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         }
     }
     let title = format!(
-        "{} on {}, {} ({})",
+        "{} on {}, {} ({}{})",
         graph.name,
         c.scene(),
         gpu.info.name,
@@ -105,7 +105,8 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             "every legal layout"
         } else {
             "named layouts"
-        }
+        },
+        if c.no_subgroups { ", no subgroups" } else { "" }
     );
     let md = lightgraph::bench::write_reports(&args.out, &title, &results)?;
     println!(

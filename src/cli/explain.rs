@@ -52,6 +52,9 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
     let device = gpu.as_ref().map(|g| (lightgraph::render::device_flags(g), g.target()));
     let (device, mut target) = device.unwrap_or_default();
     target.alias_transients = !c.separate_memory;
+    if c.no_subgroups {
+        target = target.without_subgroups();
+    }
     let first = scenes.get(kinds[0]);
     let opts = options(c, first, &graph.constants, 1)?;
     features(

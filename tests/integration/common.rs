@@ -209,6 +209,16 @@ pub fn largest_relative_difference(a: &Image, b: &Image) -> f64 {
     worst
 }
 
+/// Asserts that `b` traced the rays `a` traced and renders `a`'s image to float rounding
+/// (relative differences below 1e-5: the order of the film's atomic additions), with `what`
+/// naming the runs.
+pub fn assert_same_render(a: &Rendered, b: &Rendered, what: &str) {
+    assert_eq!(a.counters, b.counters, "{what}: different rays");
+    let worst = largest_relative_difference(&a.image, &b.image);
+    eprintln!("{what}: largest relative difference {worst:.2e}");
+    assert!(worst < 1e-5, "{what}: differs by {worst:.2e}, more than float rounding");
+}
+
 /// A seeded SplitMix64 generator of uniform numbers in [0, 1) (consecutive outputs of a plain
 /// 64-bit LCG are too correlated for pairs of numbers).
 pub struct SplitMix64(pub u64);

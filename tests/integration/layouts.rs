@@ -2,7 +2,7 @@
 //! the layouts run the same pass functions on the same random streams, and only the order of
 //! the film's atomic additions differs. They also trace exactly the same rays.
 
-use crate::common::{largest_relative_difference, render};
+use crate::common::{assert_same_render, largest_relative_difference, render};
 use lightgraph::render::{load_graph, load_scene};
 
 #[test]
@@ -18,16 +18,7 @@ fn every_pt_layout_matches_naive_pt_sk() {
         let reference = render(&scene, "pt", "NaivePTsk", (24, 24), 2, 2, 42, &[]);
         for layout in &layouts {
             let other = render(&scene, "pt", layout, (24, 24), 2, 2, 42, &[]);
-            assert_eq!(
-                reference.counters, other.counters,
-                "{name}, {layout}: the layouts trace different rays"
-            );
-            let worst = largest_relative_difference(&reference.image, &other.image);
-            eprintln!("{name}, {layout}: largest relative difference {worst:.2e}");
-            assert!(
-                worst < 1e-5,
-                "{name}, {layout}: differs from NaivePTsk by {worst:.2e}, more than float rounding"
-            );
+            assert_same_render(&reference, &other, &format!("{name}, {layout} against NaivePTsk"));
         }
     }
 }

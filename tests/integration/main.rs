@@ -26,6 +26,7 @@ mod shards;
 mod specialize;
 mod stress;
 mod study;
+mod subgroups;
 mod tev;
 mod textures;
 mod vcm;
