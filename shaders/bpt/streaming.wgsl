@@ -1,26 +1,10 @@
 // StreamingBPT (van Antwerpen 2011): a pool of samples, each tracing its light sub-path and
 // then its camera sub-path one ray per iteration, keeping every vertex a connection can use
 // (up to MAX_PATH_LENGTH - 2 per sub-path) in the vertex buffers at its slot (`lg_slot`),
-// out of the item, so that an iteration moves only the sub-paths' state. A finished sample hands each
-// (camera vertex, light vertex) pair to the connection stage, one thread per pair; the t = 1
-// splats and the s = 1 light samples go out as shadow rays on the way. The estimator, random
+// out of the item, so that an iteration moves only the sub-paths' state. A finished sample
+// hands each (camera vertex, light vertex) pair to the connection stage, one thread per pair;
+// the t = 1 splats and the s = 1 light samples go out as shadow rays on the way. The estimator, random
 // numbers included, is NaiveBPT's, so the two give the same image for the same seed.
-
-// A camera sub-path vertex kept for the connection stage: what `bpt_connect` needs of the
-// sub-path, the surface and the BSDF there.
-struct CameraVertex {
-    position: vec3<f32>,
-    extent: f32,
-    throughput: vec3<f32>,
-    d_vcm: f32,
-    normal: vec3<f32>,
-    d_vc: f32,
-    towards: vec3<f32>,         // towards the previous vertex
-    material: u32,
-    tex: vec2<f32>,
-    pixel: u32,
-    length: u32,
-}
 
 // StreamingBPT's item: both sub-paths in flight and how many vertices each has stored.
 struct StreamingSample {
