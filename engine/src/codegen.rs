@@ -2,6 +2,7 @@
 //! the parameters, constants, counters, resource bindings) and each kernel's own part (emit
 //! functions, item load/store, the wrapper that calls the pass functions, the entry point).
 
+use crate::access::Access;
 use crate::graph::Graph;
 use crate::ids::{ChainId, KernelId};
 use crate::ir::{ConstValue, Scope, StateStorage};
@@ -23,8 +24,57 @@ pub struct CodegenContext<'a> {
     pub subgroup_appends: bool,
 }
 
+/// The words of a stored item a kernel moves through its slot, by index in the item's
+/// flattened words: loaded before its passes run, stored after. Words a pass may write are
+/// loaded too, so that a word a pass writes only on some paths keeps its stored value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SlotTraffic {
+    /// Words loaded: those the passes may read or write.
+    pub load: Vec<usize>,
+    /// Words stored: those the passes may write.
+    pub store: Vec<usize>,
+    /// Words of the item.
+    pub words: usize,
+}
+
+/// What kernel `k` moves of an item that stays in its slot (state kernels, and the items a
+/// regenerating kernel continues); `None` where it moves whole items or none.
+pub fn slot_traffic(plan: &Plan, resolved: &Resolved, k: KernelId) -> Option<SlotTraffic> {
+    let g = &plan.graph;
+    let kp = &plan.kernels[k];
+    let chain = &g.chains[kp.chain];
+    if !plan.stored_chains.contains(&kp.chain) {
+        return None;
+    }
+    let positions = match kp.root {
+        Root::State => kp.segment.clone(),
+        Root::Start if kp.regenerates && !kp.loop_in_kernel => {
+            chain.loop_start.unwrap_or(chain.passes.len()).max(kp.segment.start)..kp.segment.end
+        }
+        _ => return None,
+    };
+    if positions.is_empty() {
+        return None;
+    }
+    let mut access = Access::default();
+    for pos in positions {
+        access.union(&resolved.access[g.passes[chain.passes[pos]].function()]);
+    }
+    let load = access.read.union(&access.write).map(|&w| w as usize).collect();
+    Some(SlotTraffic {
+        load,
+        store: access.write.iter().map(|&w| w as usize).collect(),
+        words: resolved.words[&chain.item].len(),
+    })
+}
+
 /// The frame record's declaration: group 1, bound with a dynamic offset per chunk.
 pub const FRAME_BINDING: &str = "@group(1) @binding(0) var<uniform> frame: Frame;\n";
+
+/// `lg_slot`, which passes may read: the slot the thread's item holds in its chain's state
+/// buffer (below `ITEM_SLOTS`, which a resource's count may use) in kernels of a chain stored
+/// between kernels; the thread's index in others.
+pub const SLOT_DECLARATION: &str = "var<private> lg_slot: u32;\n";
 
 /// The WGSL type a parameter's field of the frame record has (a `bool` is held as `u32`).
 fn parameter_field_type(v: &ConstValue) -> &'static str {
@@ -93,6 +143,7 @@ impl CodegenContext<'_> {
         );
         s.push_str(&self.frame_record());
         s.push_str(FRAME_BINDING);
+        s.push_str(SLOT_DECLARATION);
         let _ = writeln!(
             s,
             "@group(0) @binding({}) var<storage, read_write> lg_counters: array<atomic<u32>>;",
@@ -151,19 +202,29 @@ impl CodegenContext<'_> {
         }
     }
 
+    /// `lg_load_<suffix>` and `lg_store_<suffix>`, moving every word of an item.
     fn load_store(&self, suffix: &str, buffer: &str, item: &str, cap: &str) -> String {
+        let all: Vec<usize> = (0..self.resolved.words[item].len()).collect();
+        self.load_store_words(suffix, buffer, item, cap, [&all, &all])
+    }
+
+    /// `lg_load_<suffix>` moving the words `moved[0]` (the others stay zero) and
+    /// `lg_store_<suffix>` moving the words `moved[1]`.
+    fn load_store_words(&self, suffix: &str, buffer: &str, item: &str, cap: &str, moved: [&[usize]; 2]) -> String {
         let words = &self.resolved.words[item];
         let storage = self.plan.layout.state;
         let mut s = String::new();
         let _ = writeln!(s, "fn lg_load_{suffix}(slot: u32) -> {item} {{\n    var v: {item};");
-        for (w, word) in words.iter().enumerate() {
+        for &w in moved[0] {
             let idx = self.index_expr(storage, w, words.len(), "slot", cap);
+            let word = &words[w];
             let _ = writeln!(s, "    v{} = bitcast<{}>({buffer}[{idx}]);", word.path, word.scalar);
         }
         s.push_str("    return v;\n}\n");
         let _ = writeln!(s, "fn lg_store_{suffix}(slot: u32, v: {item}) {{");
-        for (w, word) in words.iter().enumerate() {
+        for &w in moved[1] {
             let idx = self.index_expr(storage, w, words.len(), "slot", cap);
+            let word = &words[w];
             let _ = writeln!(s, "    {buffer}[{idx}] = bitcast<u32>(v{});", word.path);
         }
         s.push_str("}\n");
@@ -296,6 +357,10 @@ impl CodegenContext<'_> {
                 self.binding(&BufferRef::Alive(c))
             );
             s.push_str(&self.load_store(&format!("state_{c}"), &format!("lg_state_{c}"), &chain.item, &cap));
+            if let Some(t) = slot_traffic(self.plan, self.resolved, k) {
+                let (suffix, buffer) = (format!("state_{c}_part"), format!("lg_state_{c}"));
+                s.push_str(&self.load_store_words(&suffix, &buffer, &chain.item, &cap, [&t.load, &t.store]));
+            }
         }
         if let Some(pool) = self.resolved.pools.get(&c) {
             let _ = writeln!(s, "const LG_POOL: u32 = {pool}u;");
@@ -356,7 +421,7 @@ impl CodegenContext<'_> {
         } else {
             String::new()
         };
-        s.push_str("fn lg_run(lg_i: u32) {\n");
+        s.push_str("fn lg_run(lg_i: u32) {\n    lg_slot = lg_i;\n");
         match &kp.root {
             Root::Queue(q) => {
                 let _ = writeln!(s, "    var it = lg_load_queue_{q}(lg_i);");
@@ -370,11 +435,11 @@ impl CodegenContext<'_> {
             Root::State => {
                 let _ = writeln!(
                     s,
-                    "    if (lg_alive_{c}[lg_i] == 0u) {{ return; }}\n    var it = lg_load_state_{c}(lg_i);"
+                    "    if (lg_alive_{c}[lg_i] == 0u) {{ return; }}\n    var it = lg_load_state_{c}_part(lg_i);"
                 );
                 s.push_str(&self.run_passes(c, kp.segment.clone(), kp.loop_in_kernel, &kill));
                 if !ends_chain || !kp.loop_in_kernel && chain.loop_start.is_some() {
-                    let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);");
+                    let _ = writeln!(s, "    lg_store_state_{c}_part(lg_i, it);");
                     s.push_str(&count_alive);
                 }
             }
@@ -426,10 +491,16 @@ impl CodegenContext<'_> {
                 // of the loop passes the kernel holds.
                 let _ = writeln!(s, "    var it: {};", chain.item);
                 let has_loop = !loop_range.is_empty();
+                // A continued item moves only what the loop passes touch; a fresh one is
+                // stored whole.
+                let continued = stored && has_loop;
+                if continued {
+                    s.push_str("    var lg_fresh = false;\n");
+                }
                 if stored {
                     let _ = writeln!(s, "    if (lg_alive_{c}[lg_i] != 0u) {{");
                     if has_loop {
-                        let _ = writeln!(s, "        it = lg_load_state_{c}(lg_i);");
+                        let _ = writeln!(s, "        it = lg_load_state_{c}_part(lg_i);");
                     } else {
                         s.push_str("        return;\n");
                     }
@@ -451,11 +522,20 @@ impl CodegenContext<'_> {
                     );
                 }
                 s.push_str(&claim("return;"));
+                if continued {
+                    s.push_str("    lg_fresh = true;\n");
+                }
                 let _ = writeln!(s, "    if (!{start}(&it, frame.base + index)) {{ return; }}");
                 s.push_str(&self.guarded_calls(c, 1..steps_end, "return;"));
                 s.push_str("    }\n");
                 s.push_str(&self.guarded_calls(c, loop_range.clone(), &format!("{kill}return;")));
-                if stored {
+                if continued {
+                    let _ = writeln!(
+                        s,
+                        "    if (lg_fresh) {{ lg_store_state_{c}(lg_i, it); }} else {{ lg_store_state_{c}_part(lg_i, it); }}\n    lg_alive_{c}[lg_i] = 1u;"
+                    );
+                    s.push_str(&count_alive);
+                } else if stored {
                     let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);\n    lg_alive_{c}[lg_i] = 1u;");
                     s.push_str(&count_alive);
                 } else {

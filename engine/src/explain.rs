@@ -2,6 +2,7 @@
 //! phases, kernels, the schedule, resources with their lifetimes, which buffers share memory,
 //! and peak memory.
 
+use crate::codegen::slot_traffic;
 use crate::graph::FrameStep;
 use crate::ids::PhaseId;
 use crate::ir::Scope;
@@ -192,6 +193,15 @@ fn kernels(program: &Program, out: &mut String) {
             text.len(),
             bindings.join(", ")
         );
+        if let Some(t) = slot_traffic(plan, &program.resolved, k) {
+            let _ = writeln!(
+                out,
+                "    item in its slot: loads {} and stores {} of its {} words",
+                t.load.len(),
+                t.store.len(),
+                t.words
+            );
+        }
     }
     let _ = writeln!(out, "\nschedule per chunk:");
     for (ph, steps) in plan.schedule.iter().enumerate() {

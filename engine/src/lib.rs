@@ -10,6 +10,7 @@
 //! shared memory ([`resolve`]) → generate and validate WGSL ([`Program::compile`],
 //! [`codegen`], [`collective`], [`radix`]) → execute ([`Instance::new`], [`Instance::run_frame`]).
 
+pub mod access;
 pub mod auto;
 pub mod codegen;
 pub mod collective;

@@ -2,6 +2,7 @@
 //! resource sizes (from naga's layouter), each phase's domain and chunks, thread pools and
 //! queue capacities, the lifetime of every buffer, and which transient buffers share memory.
 
+use crate::access::Access;
 use crate::collective::{scratch_name, scratch_words};
 use crate::error::Result;
 use crate::expr::Expr;
@@ -23,6 +24,9 @@ const MAX_DEFAULT_IN_FLIGHT: u64 = 1 << 22;
 /// iteration (about 8 times the threads an H100 keeps resident) to amortise each iteration's
 /// dispatches.
 pub const DEFAULT_POOL: u64 = 1 << 20;
+/// The name a resource's count uses for [`Resolved::item_slots`].
+pub const ITEM_SLOTS: &str = "ITEM_SLOTS";
+
 /// Bytes of a boundary buffer's header (count, append, two spare words).
 pub const BOUNDARY_HEADER: u64 = 16;
 
@@ -138,6 +142,8 @@ pub struct Resolved {
     pub used: BTreeSet<String>,
     /// Words per item of stored chains and queued streams, by item type.
     pub words: BTreeMap<String, Vec<Word>>,
+    /// Words of its item each pass of a stored chain may read and write, by pass function.
+    pub access: BTreeMap<String, Access>,
     /// Each phase's items.
     pub domains: Vec<PhaseDomain>,
     /// Thread pool of each regenerating chain (also the capacity of its boundaries).
@@ -236,6 +242,7 @@ impl Resolved {
             sizes: BTreeMap::new(),
             used: BTreeSet::new(),
             words: BTreeMap::new(),
+            access: BTreeMap::new(),
             domains: Vec::new(),
             pools: BTreeMap::new(),
             state_capacity: BTreeMap::new(),
@@ -257,14 +264,22 @@ impl Resolved {
         let mut resolved = self;
         let vars = resolved.variables();
         resolved.used = used_resources(plan);
-        resolved.sizes = resource_sizes(plan, reflection, &vars)?;
         resolved.words = item_words(plan, reflection)?;
+        resolved.access = pass_access(plan, reflection, &resolved.words);
         resolved.capacities(plan, target, &vars)?;
+        let mut vars = vars;
+        vars.insert(ITEM_SLOTS.to_string(), resolved.item_slots() as f64);
+        resolved.sizes = resource_sizes(plan, reflection, &vars)?;
         resolved.operators(plan, &vars, target)?;
         resolved.memory = resolved.plan_memory(plan, target)?;
         resolved.clears = resolved.transient_clears(plan);
         resolved.loop_bounds = loop_bounds(plan, &vars)?;
         Ok(resolved)
+    }
+
+    /// The most slots of any stored chain (at least 1): what `lg_slot` stays below.
+    pub fn item_slots(&self) -> u64 {
+        self.state_capacity.values().copied().max().unwrap_or(1).max(1)
     }
 
     /// The constants and the parameters' defaults, as numbers for count expressions.
@@ -638,6 +653,30 @@ fn loop_bounds(plan: &Plan, vars: &BTreeMap<String, f64>) -> Result<BTreeMap<Cha
         }
     }
     Ok(bounds)
+}
+
+/// What each pass of a stored chain may read and write of its item (every word where the
+/// analysis finds no item pointer).
+fn pass_access(
+    plan: &Plan,
+    reflection: &naga::Module,
+    words: &BTreeMap<String, Vec<Word>>,
+) -> BTreeMap<String, Access> {
+    let g = &plan.graph;
+    let mut analysis = crate::access::Analysis::new(reflection);
+    let mut out = BTreeMap::new();
+    for &c in &plan.stored_chains {
+        let all: BTreeSet<u32> = (0..words[&g.chains[c].item].len() as u32).collect();
+        for &p in &g.chains[c].passes {
+            let f = g.passes[p].function();
+            let access = analysis.pass(f).unwrap_or_else(|| Access {
+                read: all.clone(),
+                write: all.clone(),
+            });
+            out.insert(f.to_string(), access);
+        }
+    }
+    out
 }
 
 /// Each stream's per_call, evaluated with the constants.

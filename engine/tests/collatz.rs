@@ -339,3 +339,46 @@ fn bounded_host_loops_run_their_bound_and_catch_a_short_one() {
     let e = graph_with_loop_bound("Walk", "BOUND +").expect_err("a malformed bound is refused");
     assert!(e.contains("loop_bounds of 'Walk':"), "{e}");
 }
+
+/// The text of function `name` in `wgsl`, from its `fn` line to its closing brace.
+fn function_text<'a>(wgsl: &'a str, name: &str) -> &'a str {
+    let start = wgsl
+        .find(&format!("fn {name}("))
+        .unwrap_or_else(|| panic!("no function {name}"));
+    let end = start + wgsl[start..].find("\n}\n").expect("a closing brace");
+    &wgsl[start..end]
+}
+
+/// `step` reads every word of `Walk` (index, value, steps) but writes only `value` and
+/// `steps`: in the split layout its kernel loads three words and stores two, and the
+/// layout still computes the CPU's walks (`every_legal_layout_computes_the_same_walks`).
+#[test]
+fn a_state_kernel_stores_only_the_words_its_passes_write() {
+    let g = graph();
+    let plan = Plan::with_decl(&g, "split", g.layouts["split"].clone()).unwrap();
+    let spec = Specialization {
+        constants: [("N".to_string(), ConstValue::U32(10))].into_iter().collect(),
+        ..Default::default()
+    };
+    let program = Program::compile(&plan, &spec, &lightgraph_engine::Target::default()).unwrap();
+    let k = plan
+        .kernel_ids()
+        .find(|&k| plan.kernels[k].name.contains("step"))
+        .unwrap();
+    let traffic = lightgraph_engine::codegen::slot_traffic(&program.plan, &program.resolved, k).unwrap();
+    assert_eq!(
+        (traffic.load, traffic.store, traffic.words),
+        (vec![0, 1, 2], vec![1, 2], 3)
+    );
+    let text = program.kernels[k.0].source.text();
+    let store = function_text(text, "lg_store_state_0_part");
+    let stored: Vec<&str> = store.lines().filter(|l| l.contains("lg_state_0[")).collect();
+    assert_eq!(stored.len(), 2, "{store}");
+    assert!(stored.iter().all(|l| !l.contains("v.index")), "{store}");
+    let load = function_text(text, "lg_load_state_0_part");
+    assert_eq!(load.lines().filter(|l| l.contains("lg_state_0[")).count(), 3, "{load}");
+    assert!(
+        !text.contains("fn lg_store_state_0("),
+        "the whole-item store is left out"
+    );
+}

@@ -247,3 +247,21 @@ fn bpt_connect(p: CameraSubpath, s: Surface, bsdf: Bsdf, v: LightVertex, counts:
     ray.distance = shadow_distance(ray.origin, v.position);
     return ray;
 }
+
+// A camera sub-path vertex StreamingBPT keeps for its connection stage: what `bpt_connect`
+// needs of the sub-path, the surface and the BSDF there. Declared with the catalog's library
+// since the catalog's `sbpt_camera_vertices` holds it (graphs that include the catalog whole,
+// such as vcm, declare that buffer too).
+struct CameraVertex {
+    position: vec3<f32>,
+    extent: f32,
+    throughput: vec3<f32>,
+    d_vcm: f32,
+    normal: vec3<f32>,
+    d_vc: f32,
+    towards: vec3<f32>,         // towards the previous vertex
+    material: u32,
+    tex: vec2<f32>,
+    pixel: u32,
+    length: u32,
+}

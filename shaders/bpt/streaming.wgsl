@@ -1,27 +1,12 @@
 // StreamingBPT (van Antwerpen 2011): a pool of samples, each tracing its light sub-path and
 // then its camera sub-path one ray per iteration, keeping every vertex a connection can use
-// (up to MAX_PATH_LENGTH - 2 per sub-path) in its own slot. A finished sample hands each
-// (camera vertex, light vertex) pair to the connection stage, one thread per pair; the t = 1
-// splats and the s = 1 light samples go out as shadow rays on the way. The estimator, random
+// (up to MAX_PATH_LENGTH - 2 per sub-path) in the vertex buffers at its slot (`lg_slot`),
+// out of the item, so that an iteration moves only the sub-paths' state. A finished sample
+// hands each (camera vertex, light vertex) pair to the connection stage, one thread per pair;
+// the t = 1 splats and the s = 1 light samples go out as shadow rays on the way. The estimator, random
 // numbers included, is NaiveBPT's, so the two give the same image for the same seed.
 
-// A camera sub-path vertex kept for the connection stage: what `bpt_connect` needs of the
-// sub-path, the surface and the BSDF there.
-struct CameraVertex {
-    position: vec3<f32>,
-    extent: f32,
-    throughput: vec3<f32>,
-    d_vcm: f32,
-    normal: vec3<f32>,
-    d_vc: f32,
-    towards: vec3<f32>,         // towards the previous vertex
-    material: u32,
-    tex: vec2<f32>,
-    pixel: u32,
-    length: u32,
-}
-
-// StreamingBPT's item: both sub-paths in flight and their stored vertices.
+// StreamingBPT's item: both sub-paths in flight and how many vertices each has stored.
 struct StreamingSample {
     camera: CameraSubpath,
     light_path: LightPath,
@@ -29,8 +14,12 @@ struct StreamingSample {
     light_count: u32,
     camera_count: u32,
     pad: u32,
-    light: array<LightVertex, LIGHT_VERTEX_SLOTS>,
-    cameras: array<CameraVertex, LIGHT_VERTEX_SLOTS>,
+}
+
+// Where vertex `i` of the sample in slot `lg_slot` lies in `sbpt_light_vertices` and
+// `sbpt_camera_vertices`.
+fn sbpt_vertex_at(i: u32) -> u32 {
+    return lg_slot * LIGHT_VERTEX_SLOTS + i;
 }
 
 // One connection of the connection stage.
@@ -84,7 +73,7 @@ fn sbpt_extend(p: ptr<function, StreamingSample>) -> bool {
         if (a.alive) {
             let visit = bpt_light_visit(&lp, a);
             if (visit.store) {
-                (*p).light[(*p).light_count] = visit.vertex;
+                sbpt_light_vertices[sbpt_vertex_at((*p).light_count)] = visit.vertex;
                 (*p).light_count += 1u;
             }
             go_on = visit.go_on;
@@ -114,7 +103,7 @@ fn sbpt_camera_vertex(p: ptr<function, StreamingSample>, c: ptr<function, Camera
     }
     let s = v.a.s;
     if (!v.a.bsdf.is_delta && (*c).length + 2u <= MAX_PATH_LENGTH && (*p).light_count > 0u) {
-        (*p).cameras[(*p).camera_count] = CameraVertex(
+        sbpt_camera_vertices[sbpt_vertex_at((*p).camera_count)] = CameraVertex(
             s.position, s.extent, (*c).throughput, (*c).d_vcm, s.normal, (*c).d_vc,
             -(*c).direction, s.material, s.tex, (*c).pixel, (*c).length,
         );
@@ -130,9 +119,9 @@ fn sbpt_camera_vertex(p: ptr<function, StreamingSample>, c: ptr<function, Camera
 // the connection stage's queue.
 fn sbpt_emit_pairs(p: ptr<function, StreamingSample>) {
     for (var i = 0u; i < (*p).camera_count; i += 1u) {
-        let cv = (*p).cameras[i];
+        let cv = sbpt_camera_vertices[sbpt_vertex_at(i)];
         for (var j = 0u; j < (*p).light_count; j += 1u) {
-            let lv = (*p).light[j];
+            let lv = sbpt_light_vertices[sbpt_vertex_at(j)];
             if (light_vertex_length(lv) + 1u + cv.length > MAX_PATH_LENGTH) {
                 break;
             }
