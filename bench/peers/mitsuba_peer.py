@@ -445,6 +445,16 @@ def read_jsonl(path):
     return rows
 
 
+def last_lightgraph_line(path):
+    """The match of lightgraph render's last summary line (LG_LINE) in the log at `path`, or None."""
+    found = None
+    if path and os.path.isfile(path):
+        with open(path, errors='replace') as f:
+            for line in f:
+                found = LG_LINE.search(line) or found
+    return found
+
+
 def fmt(v, spec):
     return '–' if v is None else format(v, spec)
 
@@ -453,14 +463,11 @@ def cmd_summary(a):
     width, height = a.res
     entries = {}  # name -> {samples_per_second, seconds, spp}
     lg = None
-    if a.lightgraph_log and os.path.isfile(a.lightgraph_log):
-        with open(a.lightgraph_log, errors='replace') as f:
-            for line in f:
-                m = LG_LINE.search(line)
-                if m:
-                    frames, spp, secs = int(m.group(1)), int(m.group(2)), float(m.group(3))
-                    lg = {'frames': frames, 'spp': spp, 'seconds': secs,
-                          'samples_per_second': width * height * spp / secs, 'line': line.strip()}
+    m = last_lightgraph_line(a.lightgraph_log)
+    if m:
+        frames, spp, secs = int(m.group(1)), int(m.group(2)), float(m.group(3))
+        lg = {'frames': frames, 'spp': spp, 'seconds': secs,
+              'samples_per_second': width * height * spp / secs, 'line': m.string.strip()}
     if lg:
         entries['lightgraph'] = lg
     for path in a.mitsuba_json:
@@ -476,14 +483,11 @@ def cmd_summary(a):
     md += [f'{width}x{height}, max depth {a.max_depth} (segments), Russian roulette from depth {a.rr_depth}, '
            f'box pixel filter; lightgraph layout `{a.layout}`; equal time {a.seconds:g} s.', '']
     ref_spp = None
-    if a.reference_log and os.path.isfile(a.reference_log):
-        with open(a.reference_log, errors='replace') as f:
-            for line in f:
-                m = LG_LINE.search(line)
-                if m:
-                    ref_spp = int(m.group(2))
-                    md += [f'Reference: lightgraph `{a.layout}`, {ref_spp} spp in {float(m.group(3)):.0f} s '
-                           '(its own seed, independent of the equal-time runs).', '']
+    m = last_lightgraph_line(a.reference_log)
+    if m:
+        ref_spp = int(m.group(2))
+        md += [f'Reference: lightgraph `{a.layout}`, {ref_spp} spp in {float(m.group(3)):.0f} s '
+               '(its own seed, independent of the equal-time runs).', '']
     md += ['| renderer | spp | seconds | Msamples/s | lightgraph / this | RMSE | RMSE at exactly '
            f'{a.seconds:g} s | RMSE w/o light pixels | relMSE | mean rel. diff vs reference (R, G, B) |',
            '|---|---|---|---|---|---|---|---|---|---|']
