@@ -509,3 +509,72 @@ fn list(v: [f32; 3]) -> String {
 fn xyz(v: [f32; 3]) -> String {
     format!("x=\"{}\" y=\"{}\" z=\"{}\"", v[0], v[1], v[2])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// cornell-mitsuba as written in its scene file.
+    fn cornell() -> Scene {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/cornell/cornell-mitsuba.ron");
+        crate::parse_scene(path, &std::fs::read_to_string(path).unwrap()).unwrap()
+    }
+
+    #[test]
+    fn cornell_mitsuba_exports_without_notes_and_imports_back() {
+        let scene = cornell();
+        let dir = std::env::temp_dir().join(format!("lightgraph-export-unit-{}", std::process::id()));
+        let notes = write(&scene, (64, 36), &dir).unwrap();
+        assert!(
+            notes.is_empty(),
+            "Mitsuba can render cornell-mitsuba as it is: {notes:?}"
+        );
+        let back = super::super::load(&dir.join("scene.xml")).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let triangles = |s: &Scene| -> usize {
+            s.shapes
+                .iter()
+                .map(|shape| match shape {
+                    Shape::Triangle { .. } => 1,
+                    Shape::Quad { .. } => 2,
+                    Shape::Mesh { indices, .. } => indices.len(),
+                    Shape::Sphere { .. } => 0,
+                })
+                .sum()
+        };
+        assert_eq!(triangles(&back.scene), triangles(&scene));
+        assert_eq!(back.scene.resolution, (64, 36));
+        assert_eq!(back.scene.integrator.max_path_length, 8);
+        let camera = back.scene.camera.unwrap();
+        assert_eq!(camera.position, [0.0, 0.0, 3.9]);
+        assert_eq!(camera.fov_axis, FovAxis::Smaller);
+        assert_eq!(back.scene.shapes.iter().filter(|s| s.emits()).count(), 1, "the light");
+        let unread: Vec<_> = back.warnings.iter().filter(|w| !w.contains("rr_depth")).collect();
+        assert!(
+            unread.is_empty(),
+            "the importer reads all of it but rr_depth: {unread:?}"
+        );
+    }
+
+    #[test]
+    fn what_mitsuba_cannot_render_is_noted_or_refused() {
+        let mut scene = cornell();
+        scene.integrator.russian_roulette = RussianRoulette::Albedo;
+        scene.materials.get_mut("white").unwrap().phong = [0.5; 3];
+        let notes = export(&scene, (8, 8)).unwrap().notes;
+        assert!(notes.iter().any(|n| n.contains("Albedo")), "{notes:?}");
+        assert!(
+            notes.iter().any(|n| n.contains("'white'") && n.contains("Phong")),
+            "{notes:?}"
+        );
+        scene.lights.push(Light::Spot {
+            position: [0.0; 3],
+            direction: [0.0, -1.0, 0.0],
+            intensity: [1.0; 3],
+            inner_cone_degrees: 0.0,
+            outer_cone_degrees: 45.0,
+        });
+        let e = export(&scene, (8, 8)).unwrap_err();
+        assert!(e.contains("spot"), "{e}");
+    }
+}
