@@ -128,7 +128,7 @@ run_lightgraph lightgraph "$secs" 1
 for mode in megakernel wavefront; do
   step "(c) Mitsuba $VARIANT $mode at equal time: ${secs} s in passes of $SPP_PER_PASS spp"
   if [ $mitsuba_ok = 1 ]; then
-    "$PYTHON" "$script" render "${mi_scene[@]}" --variant "$VARIANT" --mode "$mode" --res "$RES" --spp-per-pass "$SPP_PER_PASS" \
+    "$PYTHON" "$script" render ${mi_scene[@]+"${mi_scene[@]}"} --variant "$VARIANT" --mode "$mode" --res "$RES" --spp-per-pass "$SPP_PER_PASS" \
       --seconds "$secs" --out "$work/mitsuba-$mode.exr" >"$work/mitsuba-$mode.json"
     rc=$?
     cat "$work/mitsuba-$mode.json"
