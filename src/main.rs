@@ -1,4 +1,4 @@
-//! The `lightgraph` command line: render, reference, merge, compare, study, stress, explain, bench,
+//! The `lightgraph` command line: render, reference, merge, compare, study, stress, explain, export, bench,
 //! operators, list (the commands live in `lightgraph::cli`).
 
 use clap::Parser;

@@ -69,9 +69,9 @@ cp "$mitsuba_slim" "$drjit_full" "$root/.whl/"
 others=$(cd "$root/.whl" && ls | grep -v -e '^mitsuba-' -e '^drjit-' || true)
 [ -z "$others" ] || echo "prepare_wheels: warning: .whl/ also holds (left as they are, installed too): $others" >&2
 
-exclude=$root/.git/info/exclude
-if [ -d "$root/.git/info" ] || [ -d "$root/.git" ]; then
-  mkdir -p "$root/.git/info"
+# git's exclude file (in a worktree, the main repository's: .git is then a file)
+if exclude=$(cd "$root" && git rev-parse --path-format=absolute --git-path info/exclude 2>/dev/null); then
+  mkdir -p "$(dirname "$exclude")"
   grep -qx '/.whl/' "$exclude" 2>/dev/null || echo '/.whl/' >> "$exclude"
 fi
 

@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
-# lightgraph vs Mitsuba 3 on Mitsuba's Cornell box, the whole comparison in one run on the GPU
-# machine (see bench/peers/README.md). From the repo root, with carry [".gpu", ".whl"]:
+# lightgraph vs Mitsuba 3 on Mitsuba's Cornell box (SCENE=cornell) or on Crytek Sponza
+# (SCENE=sponza), the whole comparison in one run on the GPU machine (see bench/peers/README.md).
+# From the repo root, with carry [".gpu", ".whl"], or [".peers.tar.xz"] made by bench/peers/pack.sh
+# (Sponza: the .gpu bundle with --scene CrytekSponza, which only fits packed):
 #
 #   bash bench/peers/run_gpu.sh $OUT 10
+#   SCENE=sponza bash bench/peers/run_gpu.sh $OUT 10
 #
 #   $1  output folder (default $OUT)        $2  equal-time budget in seconds (default 10)
 # Environment: LAYOUT (lightgraph layout, default NaivePTsk), REF_SECONDS (reference length,
@@ -10,7 +13,11 @@
 # the two are independent), LG_SPP (lightgraph spp per frame, default 4), SPP_PER_PASS (Mitsuba
 # spp per pass, default 16), RES (default 1280x720), VARIANT (Mitsuba variant, default
 # cuda_ad_rgb; another only to test the script elsewhere), KEEP_EXR (1: move the four EXRs into the
-# output folder, default 1), WORK (scratch folder, default /tmp/peers-work).
+# output folder, default 1), WORK (scratch folder, default /tmp/peers-work), SCENE (cornell: Mitsuba's
+# mi.cornell_box() against lightgraph's cornell-mitsuba; sponza: lightgraph's sponza-mitsuba, exported
+# to Mitsuba XML on this machine from the bundled glTF), LG (the command that runs lightgraph,
+# default "bash .gpu/run.sh lightgraph"; e.g. target/release/lightgraph to test the script here),
+# PYTHON (default python3).
 #
 # The output folder gets at most 8 files (what the device tool brings back): summary.md,
 # results.json, run.log, reference.png, and with KEEP_EXR=1 reference.exr, lightgraph.exr,
@@ -31,6 +38,16 @@ RES=${RES:-1280x720}
 VARIANT=${VARIANT:-cuda_ad_rgb}
 KEEP_EXR=${KEEP_EXR:-1}
 work=${WORK:-/tmp/peers-work}
+SCENE=${SCENE:-cornell}
+LG=${LG:-bash .gpu/run.sh lightgraph}
+PYTHON=${PYTHON:-python3}
+read -r -a lg <<< "$LG"
+case $SCENE in
+  # lightgraph's scene, Mitsuba's scene arguments, light-pixel threshold, max depth, rr depth
+  cornell) lg_scene=cornell-mitsuba; mi_scene=(); threshold=1.0; max_depth=8; rr_depth=5 ;;
+  sponza) lg_scene=sponza-mitsuba; mi_scene=(--scene-xml "$work/export/scene.xml"); threshold=inf; max_depth=10; rr_depth=5 ;;
+  *) echo "run_gpu.sh: SCENE must be cornell or sponza, got '$SCENE'" >&2; exit 2 ;;
+esac
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -38,22 +55,32 @@ cd "$root" || exit 1
 mkdir -p "$out" || exit 1
 out=$(cd "$out" && pwd)
 mkdir -p "$work" || exit 1
-rm -f "$work"/*.exr "$work"/*.png "$work"/*.log "$work"/*.json "$work"/*.jsonl
+rm -rf "$work"/*.exr "$work"/*.png "$work"/*.log "$work"/*.json "$work"/*.jsonl "$work/export"
 export PYTHONUNBUFFERED=1 PIP_ROOT_USER_ACTION=ignore PIP_DISABLE_PIP_VERSION_CHECK=1
-script=bench/peers/mitsuba_cornell.py
+script=bench/peers/mitsuba_peer.py
 failed=()
 step() { echo; echo "=== $* ($(date -u +%H:%M:%S))"; }
 t_start=$(date +%s)
 
 main() {
 step "setup"
-[ -f .gpu/run.sh ] || { echo "run_gpu.sh: .gpu/run.sh missing: bundle with ../shared/tools/gpu-bundle.sh and carry .gpu" >&2; return 1; }
+if [ -f .peers.tar.xz ]; then
+  # bench/peers/pack.sh: the .gpu bundle and the unpacked wheels in one tarball
+  rm -rf .gpu .peers-site
+  tar -xJf .peers.tar.xz || { echo "run_gpu.sh: cannot unpack .peers.tar.xz" >&2; return 1; }
+  echo "unpacked .peers.tar.xz"
+fi
+[ "$LG" != "bash .gpu/run.sh lightgraph" ] || [ -f .gpu/run.sh ] || { echo "run_gpu.sh: .gpu/run.sh missing: bundle with ../shared/tools/gpu-bundle.sh and carry .gpu" >&2; return 1; }
 device=$(nvidia-smi --query-gpu=name,driver_version,clocks.max.sm --format=csv,noheader 2>/dev/null | head -1)
-echo "device: ${device:-unknown}; layout $LAYOUT; $RES; equal time ${secs} s; reference ${REF_SECONDS} s (seed $REF_SEED)"
+echo "device: ${device:-unknown}; scene $SCENE ($lg_scene); layout $LAYOUT; $RES; equal time ${secs} s; reference ${REF_SECONDS} s (seed $REF_SEED)"
 
 mitsuba_ok=1
-if ls .whl/*.whl >/dev/null 2>&1; then
-  if python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl; then
+if "$PYTHON" -c 'import mitsuba, drjit' 2>/dev/null; then
+  echo "mitsuba is already importable by $PYTHON: .whl/ not installed"
+elif [ -d .peers-site/mitsuba ]; then
+  export PYTHONPATH=$root/.peers-site${PYTHONPATH:+:$PYTHONPATH}
+elif ls .whl/*.whl >/dev/null 2>&1; then
+  if "$PYTHON" -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl; then
     export PYTHONPATH=/tmp/site${PYTHONPATH:+:$PYTHONPATH}
   else
     echo "run_gpu.sh: installing the wheels from .whl/ failed: Mitsuba runs skipped" >&2
@@ -78,8 +105,14 @@ if [ -z "${DRJIT_LIBOPTIX_PATH:-}" ] && [ -z "$(find_lib '^libnvoptix[.]so[.]1$'
   [ -n "$lib" ] && export DRJIT_LIBOPTIX_PATH=$lib && echo "DRJIT_LIBOPTIX_PATH=$lib"
 fi
 
+if [ "$SCENE" = sponza ]; then
+  step "export $lg_scene to Mitsuba 3 at $RES"
+  "${lg[@]}" export --format mitsuba --scene "$lg_scene" --res "$RES" --out "$work/export" \
+    || { failed+=("export"); mitsuba_ok=0; }
+fi
+
 run_lightgraph() { # $1 = name, $2 = seconds, $3 = seed
-  bash .gpu/run.sh lightgraph render --scene cornell-mitsuba --res "$RES" --layout "$LAYOUT" \
+  "${lg[@]}" render --scene "$lg_scene" --res "$RES" --layout "$LAYOUT" \
     --spp "$LG_SPP" --time "${2}s" --seed "$3" --out "$work/$1.exr" 2>"$work/$1.log"
   local rc=$?
   cat "$work/$1.log"
@@ -95,7 +128,7 @@ run_lightgraph lightgraph "$secs" 1
 for mode in megakernel wavefront; do
   step "(c) Mitsuba $VARIANT $mode at equal time: ${secs} s in passes of $SPP_PER_PASS spp"
   if [ $mitsuba_ok = 1 ]; then
-    python3 "$script" render --variant "$VARIANT" --mode "$mode" --res "$RES" --spp-per-pass "$SPP_PER_PASS" \
+    "$PYTHON" "$script" render ${mi_scene[@]+"${mi_scene[@]}"} --variant "$VARIANT" --mode "$mode" --res "$RES" --spp-per-pass "$SPP_PER_PASS" \
       --seconds "$secs" --out "$work/mitsuba-$mode.exr" >"$work/mitsuba-$mode.json"
     rc=$?
     cat "$work/mitsuba-$mode.json"
@@ -109,14 +142,15 @@ for name in lightgraph mitsuba-megakernel mitsuba-wavefront; do
   [ -f "$work/$name.exr" ] && images+=(--image "$name=$work/$name.exr")
 done
 if [ $mitsuba_ok = 1 ] && [ -f "$work/reference.exr" ] && [ ${#images[@]} -gt 0 ]; then
-  python3 "$script" rmse --reference "$work/reference.exr" "${images[@]}" | tee "$work/rmse.jsonl"
+  "$PYTHON" "$script" rmse --emitter-threshold "$threshold" --reference "$work/reference.exr" "${images[@]}" | tee "$work/rmse.jsonl"
   [ "${PIPESTATUS[0]}" = 0 ] || failed+=("rmse")
 else
   echo "skipped: needs the wheels (mitsuba reads the EXRs), the reference and at least one image"
 fi
 
 step "(e) summary"
-python3 "$script" summary --res "$RES" --seconds "$secs" --layout "$LAYOUT" \
+"$PYTHON" "$script" summary --res "$RES" --seconds "$secs" --layout "$LAYOUT" \
+  --title "lightgraph vs Mitsuba 3 on $lg_scene" --max-depth "$max_depth" --rr-depth "$rr_depth" \
   --lightgraph-log "$work/lightgraph.log" --reference-log "$work/reference.log" \
   --mitsuba-json "$work/mitsuba-megakernel.json" --mitsuba-json "$work/mitsuba-wavefront.json" \
   --rmse-json "$work/rmse.jsonl" --device "${device:-unknown}" \

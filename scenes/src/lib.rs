@@ -149,6 +149,9 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
             )));
         }
         add_gltf(scene, &path).map_err(err)?;
+        if scene.gltf_diffuse {
+            make_diffuse(scene);
+        }
     }
     for light in &mut scene.lights {
         if let Light::Environment { file: image, map, .. } = light
@@ -171,6 +174,18 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
     }
     check_lights(&scene.lights).map_err(|(_, message)| err(message))?;
     check_resolved(scene).map_err(err)
+}
+
+/// Makes every glTF material of `scene` (named `gltf:...`) a pure Lambertian: no specular
+/// layer (index of refraction 1), no metal, no transmission; base colour and alpha stay.
+fn make_diffuse(scene: &mut Scene) {
+    let gltf = scene.materials.iter_mut().filter(|(name, _)| name.starts_with("gltf:"));
+    for p in gltf.filter_map(|(_, m)| m.pbr.as_mut()) {
+        p.ior = 1.0;
+        p.metallic = 0.0;
+        p.transmission = 0.0;
+        p.textures.metallic_roughness = None;
+    }
 }
 
 /// Checks that a scene with its glTF asset imported has geometry and light.
@@ -255,6 +270,7 @@ pub fn scene_from_gltf(path: &std::path::Path) -> Result<(Scene, Vec<String>), S
         lights: Vec::new(),
         integrator: Default::default(),
         gltf: Some(file.clone()),
+        gltf_diffuse: false,
         textures: Vec::new(),
     };
     let cameras = add_gltf(&mut scene, path).map_err(err)?;

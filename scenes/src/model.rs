@@ -45,6 +45,11 @@ pub struct Scene {
     /// `gltf:NAME` (see [`crate::gltf`]).
     #[serde(default)]
     pub gltf: Option<String>,
+    /// Render the glTF asset's materials as pure Lambertians of their base colour (and
+    /// alpha): no specular layer (index of refraction 1), no metal, no transmission, as
+    /// Mitsuba's `diffuse` (the scene files compared with Mitsuba set it).
+    #[serde(default)]
+    pub gltf_diffuse: bool,
     /// Images the materials' textures refer to (filled by the glTF import).
     #[serde(skip)]
     pub textures: Vec<Texture>,

@@ -5,6 +5,7 @@ pub mod args;
 pub mod bench;
 pub mod compare;
 pub mod explain;
+pub mod export;
 pub mod gpus;
 pub mod list;
 pub mod merge;
@@ -20,6 +21,7 @@ use bench::BenchArgs;
 use clap::{Parser, Subcommand};
 use compare::CompareArgs;
 use explain::ExplainArgs;
+use export::ExportArgs;
 use merge::MergeArgs;
 use operators::OperatorsArgs;
 use reference::ReferenceArgs;
@@ -61,6 +63,8 @@ pub enum Command {
     Stress(StressArgs),
     /// Print the kernels, schedule and resources of a graph's layouts.
     Explain(ExplainArgs),
+    /// Write a scene in another renderer's format (Mitsuba 3: XML, PLY meshes, PNG textures).
+    Export(ExportArgs),
     /// Measure layouts over a sweep of paths per frame: Markdown table, CSV and PNG plot.
     Bench(BenchArgs),
     /// Check the engine's collective operators (scan, counting sort) against the CPU and
@@ -88,6 +92,7 @@ impl Cli {
             Command::Compare(a) => a.common.assets.clone(),
             Command::Study(a) => a.common.assets.clone(),
             Command::Explain(a) => a.common.assets.clone(),
+            Command::Export(a) => a.assets.clone(),
             Command::Bench(a) => a.common.assets.clone(),
             Command::List | Command::Stress(_) | Command::Operators(_) | Command::Merge(_) => None,
         }
@@ -102,6 +107,7 @@ impl Cli {
             Command::Compare(a) => compare::compare(a),
             Command::Study(a) => study::study(a),
             Command::Explain(a) => explain::explain(a),
+            Command::Export(a) => export::export(a),
             Command::Bench(a) => bench::bench(a),
             Command::List => list::list(),
             Command::Stress(a) => stress::stress(a),

@@ -69,6 +69,7 @@ fn textured_plane() -> LoadedScene {
         lights: vec![],
         integrator: Integrator::default(),
         gltf: None,
+        gltf_diffuse: false,
         textures: vec![texture],
     };
     LoadedScene {

@@ -164,6 +164,7 @@ fn scene_of(shapes: Vec<Shape>) -> Scene {
         }],
         integrator: Integrator::default(),
         gltf: None,
+        gltf_diffuse: false,
         textures: Vec::new(),
     }
 }

@@ -32,6 +32,7 @@ fn scene(
         lights,
         integrator: Integrator::default(),
         gltf: None,
+        gltf_diffuse: false,
         textures,
     }
 }

@@ -6,7 +6,7 @@
 
 use super::xml::{Color, Context, Props, Result};
 use crate::model::{Material, Pbr};
-use crate::texture::{Texture, TextureRef};
+use crate::texture::{Texture, TextureRef, Wrap};
 use roxmltree::Node;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -172,7 +172,9 @@ impl Materials {
                         p.alpha_cutoff = Some(0.5);
                     }
                     Some(Color::Texture(t)) => {
-                        ctx.warn(t, "a textured opacity is not supported: the surface is opaque");
+                        if let Some(r) = self.texture(ctx, t, true)? {
+                            self.alpha_from(ctx, t, &mut m, r);
+                        }
                     }
                     None => {}
                 }
@@ -222,7 +224,7 @@ impl Materials {
                     ior: 1.0,
                     ..Default::default()
                 };
-                match self.texture(ctx, t)? {
+                match self.texture(ctx, t, false)? {
                     Some(r) => p.textures.base_color = Some(r),
                     None => p.base_color = [0.5; 3],
                 }
@@ -231,9 +233,45 @@ impl Materials {
         })
     }
 
+    /// Makes the textured opacity `opacity` (bitmap `node`, its first channel) the alpha of
+    /// material `m` with a cut-off at 0.5: a copy of its base colour texture with that alpha
+    /// (white without one). A base colour texture of another size or transform keeps the
+    /// surface opaque (warned).
+    fn alpha_from(&mut self, ctx: &mut Context, node: Node, m: &mut Material, opacity: TextureRef) {
+        let p = as_pbr(m);
+        let alpha = &self.textures[opacity.texture as usize];
+        let mut combined = match p.textures.base_color {
+            Some(base) => {
+                let t = &self.textures[base.texture as usize];
+                if (t.width, t.height) != (alpha.width, alpha.height) || base.transform != opacity.transform {
+                    ctx.warn(
+                        node,
+                        "an opacity bitmap of another size or uv transform than the base colour's is not supported: the surface is opaque",
+                    );
+                    return;
+                }
+                t.clone()
+            }
+            None => Texture {
+                texels: vec![0x00ff_ffff; alpha.texels.len()],
+                ..alpha.clone()
+            },
+        };
+        for (c, a) in combined.texels.iter_mut().zip(&alpha.texels) {
+            *c = (*c & 0x00ff_ffff) | (a & 0xff) << 24;
+        }
+        combined.name = format!("{} with the alpha of {}", combined.name, alpha.name);
+        self.textures.push(combined);
+        let mut r = p.textures.base_color.unwrap_or(opacity);
+        r.texture = self.textures.len() as u32 - 1;
+        p.textures.base_color = Some(r);
+        p.alpha_cutoff = Some(0.5);
+    }
+
     /// The texture of a `<texture type="bitmap">`, each file loaded once; other texture types
-    /// are warned about (`None`: the caller uses a constant).
-    fn texture(&mut self, ctx: &mut Context, node: Node) -> Result<Option<TextureRef>> {
+    /// are warned about (`None`: the caller uses a constant). An `alpha` (opacity) bitmap's
+    /// values are linear (`raw`); a colour bitmap is read as sRGB.
+    fn texture(&mut self, ctx: &mut Context, node: Node, alpha: bool) -> Result<Option<TextureRef>> {
         let kind = ctx.plugin_type(node)?;
         let props = Props::new(node);
         if kind != "bitmap" {
@@ -241,10 +279,16 @@ impl Materials {
             return Ok(None);
         }
         let path = props.file(ctx, "a bitmap")?;
-        if props.boolean(ctx, "raw")? == Some(true) {
+        if props.boolean(ctx, "raw")? == Some(true) && !alpha {
             ctx.warn(node, "raw=true is not supported: the image is read as sRGB");
         }
         let mut r = TextureRef::new(0);
+        r.wrap = [wrap_mode(ctx, &props)?; 2];
+        if let Some(filter) = props.string(ctx, "filter_type")?
+            && filter != "bilinear"
+        {
+            ctx.warn(node, format!("filter_type {filter} is rendered bilinear"));
+        }
         let scale = [props.float(ctx, "u_scale")?, props.float(ctx, "v_scale")?];
         let uvscale = props.float(ctx, "uvscale")?;
         let [su, sv] = scale.map(|s| s.or(uvscale).unwrap_or(1.0));
@@ -271,6 +315,21 @@ impl Materials {
         props.finish(ctx);
         Ok(Some(r))
     }
+}
+
+/// A bitmap's `wrap_mode` (Mitsuba's default: repeat).
+fn wrap_mode(ctx: &Context, props: &Props) -> Result<Wrap> {
+    Ok(match props.string(ctx, "wrap_mode")?.as_deref() {
+        None | Some("repeat") => Wrap::Repeat,
+        Some("mirror") => Wrap::MirroredRepeat,
+        Some("clamp") => Wrap::ClampToEdge,
+        Some(other) => {
+            return Err(ctx.error(
+                props.node(),
+                format!("wrap_mode '{other}' is not repeat, mirror or clamp"),
+            ));
+        }
+    })
 }
 
 fn pbr(p: Pbr) -> Material {

@@ -11,6 +11,7 @@
 
 pub mod camera;
 pub mod emitters;
+pub mod export;
 pub mod materials;
 pub mod shapes;
 pub mod transform;
@@ -121,6 +122,7 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         lights,
         integrator,
         gltf: None,
+        gltf_diffuse: false,
         textures: builder.materials.textures,
     };
     scene.materials = builder.materials.materials;

@@ -1,19 +1,23 @@
 #!/usr/bin/env python3
-"""Mitsuba 3 as a side-by-side peer of lightgraph on Mitsuba's own Cornell box.
+"""Mitsuba 3 as a side-by-side peer of lightgraph: on Mitsuba's own Cornell box, or on a
+scene lightgraph exported (`lightgraph export --format mitsuba`, e.g. Sponza).
 
 Self-contained: Python 3.12 + numpy + mitsuba 3.9.1 + drjit 1.5.0 (see bench/peers/README.md).
 
-  render   render mi.cornell_box() (box pixel filter, path integrator, max_depth 8, rr_depth 5)
-           in passes of --spp-per-pass samples per pixel until --seconds of timed rendering
-           have accumulated; write the average as a float32 RGB EXR; print one JSON line.
+  render   render mi.cornell_box() (box pixel filter, path integrator, max_depth 8, rr_depth 5),
+           or with --scene-xml an exported scene as its XML says (film, integrator), in passes
+           of --spp-per-pass samples per pixel until --seconds of timed rendering have
+           accumulated; write the average as a float32 RGB EXR; print one JSON line.
   rmse     RMSE and relative MSE of one or more EXRs against a reference EXR (JSON lines and a
            Markdown table).
   summary  the Markdown summary of a whole comparison run (used by run_gpu.sh).
 
 Examples:
-  python3 bench/peers/mitsuba_cornell.py render --mode megakernel --res 1280x720 \\
+  python3 bench/peers/mitsuba_peer.py render --mode megakernel --res 1280x720 \\
       --spp-per-pass 16 --seconds 10 --out /tmp/mi.exr
-  python3 bench/peers/mitsuba_cornell.py rmse --reference ref.exr --image mitsuba=/tmp/mi.exr
+  python3 bench/peers/mitsuba_peer.py render --scene-xml /tmp/sponza/scene.xml --res 1280x720 \\
+      --seconds 10 --out /tmp/mi-sponza.exr
+  python3 bench/peers/mitsuba_peer.py rmse --reference ref.exr --image mitsuba=/tmp/mi.exr
 """
 import argparse
 import json
@@ -43,11 +47,11 @@ RR_DEPTH = 5
 
 
 def fail(msg):
-    sys.exit(f'mitsuba_cornell.py: error: {msg}')
+    sys.exit(f'mitsuba_peer.py: error: {msg}')
 
 
 def log(msg):
-    print(f'[mitsuba_cornell] {msg}', file=sys.stderr, flush=True)
+    print(f'[mitsuba_peer] {msg}', file=sys.stderr, flush=True)
 
 
 def installed_variants(mi):
@@ -185,6 +189,30 @@ def check_camera_rays(mi, scene, width, height):
     return worst
 
 
+def load_exported(mi, path, width, height):
+    """A scene `lightgraph export --format mitsuba` wrote, whose film must be `width` x `height`
+    (export it with --res); returns the scene and its integrator's max_depth and rr_depth."""
+    import xml.etree.ElementTree as ET
+    if not os.path.isfile(path):
+        fail(f'no such file: {path} (write it with: lightgraph export --format mitsuba --res WxH --out DIR)')
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as e:
+        fail(f'{path}: {e}')
+    integrator = root.find('integrator')
+    if integrator is None or integrator.get('type') != 'path':
+        fail(f'{path}: expected a <integrator type="path">, as lightgraph export writes')
+    settings = {c.get('name'): int(c.get('value')) for c in integrator if c.tag == 'integer'}
+    try:
+        scene = mi.load_file(path)
+    except Exception as e:
+        fail(f'{path}: mitsuba cannot load it: {e}')
+    size = tuple(int(v) for v in scene.sensors()[0].film().size())
+    if size != (width, height):
+        fail(f'{path}: its film is {size[0]}x{size[1]}, not --res {width}x{height}: export it with --res {width}x{height}')
+    return scene, {k: settings.get(k) for k in ('max_depth', 'rr_depth')}
+
+
 def cmd_render(a):
     width, height = a.res
     if a.spp_per_pass < 1:
@@ -202,11 +230,17 @@ def cmd_render(a):
         dr.set_flag(dr.JitFlag.SymbolicLoops, True)  # Mitsuba's default: a megakernel
 
     t0 = time.perf_counter()
-    scene = mi.load_dict(scene_dict(mi, width, height, a.spp_per_pass))
-    load_s = time.perf_counter() - t0
-    ray_err = check_camera_rays(mi, scene, width, height)
-    log(f'{a.variant} {a.mode}: scene loaded in {load_s:.2f} s; camera rays match the resolved '
-        f'parameters (max direction error {ray_err:.1e})')
+    if a.scene_xml:
+        scene, settings = load_exported(mi, a.scene_xml, width, height)
+        load_s = time.perf_counter() - t0
+        log(f'{a.variant} {a.mode}: {a.scene_xml} loaded in {load_s:.2f} s; integrator {settings}')
+    else:
+        scene = mi.load_dict(scene_dict(mi, width, height, a.spp_per_pass))
+        settings = {'max_depth': MAX_DEPTH, 'rr_depth': RR_DEPTH}
+        load_s = time.perf_counter() - t0
+        ray_err = check_camera_rays(mi, scene, width, height)
+        log(f'{a.variant} {a.mode}: scene loaded in {load_s:.2f} s; camera rays match the resolved '
+            f'parameters (max direction error {ray_err:.1e})')
 
     def seed_of(k):
         # An opaque seed, so that no seed value is baked into the kernel (mitsuba 3.9 already
@@ -288,6 +322,8 @@ def cmd_render(a):
         'mean_rgb': [round(float(x), 6) for x in mean.reshape(-1, 3).mean(axis=0)],
         'finite': finite,
         'out': a.out,
+        'scene': a.scene_xml or 'mi.cornell_box()',
+        **settings,
         **probe,
     }
     if not finite:
@@ -331,7 +367,7 @@ def metadata_value(meta, key):
         return None
 
 
-def image_metrics(x, ref):
+def image_metrics(x, ref, emitter_threshold=EMITTER_THRESHOLD):
     import numpy as np
     x64, r64 = x.astype(np.float64), ref.astype(np.float64)
     d2 = (x64 - r64) ** 2
@@ -340,7 +376,7 @@ def image_metrics(x, ref):
     ref_mean = r64.reshape(-1, 3).mean(axis=0)
     # Pixels that see the light (radiance ~18; lit walls stay under ~1): with a box filter its
     # edge pixels vary between 0 and 18 from sample to sample and can dominate the RMSE.
-    emitter = r64.max(axis=-1) >= EMITTER_THRESHOLD
+    emitter = r64.max(axis=-1) >= emitter_threshold
     rest = d2[~emitter]
     return {
         'rmse': float(math.sqrt(d2.mean())),
@@ -367,7 +403,8 @@ def cmd_rmse(a):
         if x.shape != ref.shape:
             fail(f'{path} is {x.shape[1]}x{x.shape[0]} but the reference {a.reference} is '
                  f'{ref.shape[1]}x{ref.shape[0]}')
-        row = {'image': name, 'path': path, 'reference': a.reference, **image_metrics(x, ref)}
+        row = {'image': name, 'path': path, 'reference': a.reference,
+               **image_metrics(x, ref, a.emitter_threshold)}
         spp = metadata_value(meta, 'lightgraph.samples_per_pixel')
         if spp is not None:
             row['lightgraph_spp'] = int(spp)
@@ -381,8 +418,8 @@ def cmd_rmse(a):
         diff = ', '.join(f'{100 * v:+.2f}%' for v in r['mean_rel_diff_rgb'])
         out.append(f"| {r['image']} | {r['rmse']:.5f} | {fmt(r.get('rmse_excl_emitter'), '.5f')} | "
                    f"{r['relmse']:.3e} | {diff} |")
-    if rows:
-        out.append(f"\n{rows[0]['emitter_pixels']} pixels see the light (reference >= {EMITTER_THRESHOLD}); "
+    if rows and rows[0]['emitter_pixels']:
+        out.append(f"\n{rows[0]['emitter_pixels']} pixels see the light (reference >= {a.emitter_threshold}); "
                    'their share of the squared error: '
                    + ', '.join(f"{r['image']} {100 * r['emitter_share_of_squared_error']:.0f}%" for r in rows))
     print('\n'.join(out), flush=True)
@@ -408,6 +445,16 @@ def read_jsonl(path):
     return rows
 
 
+def last_lightgraph_line(path):
+    """The match of lightgraph render's last summary line (LG_LINE) in the log at `path`, or None."""
+    found = None
+    if path and os.path.isfile(path):
+        with open(path, errors='replace') as f:
+            for line in f:
+                found = LG_LINE.search(line) or found
+    return found
+
+
 def fmt(v, spec):
     return '–' if v is None else format(v, spec)
 
@@ -416,14 +463,11 @@ def cmd_summary(a):
     width, height = a.res
     entries = {}  # name -> {samples_per_second, seconds, spp}
     lg = None
-    if a.lightgraph_log and os.path.isfile(a.lightgraph_log):
-        with open(a.lightgraph_log, errors='replace') as f:
-            for line in f:
-                m = LG_LINE.search(line)
-                if m:
-                    frames, spp, secs = int(m.group(1)), int(m.group(2)), float(m.group(3))
-                    lg = {'frames': frames, 'spp': spp, 'seconds': secs,
-                          'samples_per_second': width * height * spp / secs, 'line': line.strip()}
+    m = last_lightgraph_line(a.lightgraph_log)
+    if m:
+        frames, spp, secs = int(m.group(1)), int(m.group(2)), float(m.group(3))
+        lg = {'frames': frames, 'spp': spp, 'seconds': secs,
+              'samples_per_second': width * height * spp / secs, 'line': m.string.strip()}
     if lg:
         entries['lightgraph'] = lg
     for path in a.mitsuba_json:
@@ -436,17 +480,14 @@ def cmd_summary(a):
     md = [f'# {title}', '']
     if a.device:
         md += [f'Device: {a.device}', '']
-    md += [f'{width}x{height}, max depth 8 (segments), Russian roulette from depth 5, box pixel filter; '
-           f'lightgraph layout `{a.layout}`; equal time {a.seconds:g} s.', '']
+    md += [f'{width}x{height}, max depth {a.max_depth} (segments), Russian roulette from depth {a.rr_depth}, '
+           f'box pixel filter; lightgraph layout `{a.layout}`; equal time {a.seconds:g} s.', '']
     ref_spp = None
-    if a.reference_log and os.path.isfile(a.reference_log):
-        with open(a.reference_log, errors='replace') as f:
-            for line in f:
-                m = LG_LINE.search(line)
-                if m:
-                    ref_spp = int(m.group(2))
-                    md += [f'Reference: lightgraph `{a.layout}`, {ref_spp} spp in {float(m.group(3)):.0f} s '
-                           '(its own seed, independent of the equal-time runs).', '']
+    m = last_lightgraph_line(a.reference_log)
+    if m:
+        ref_spp = int(m.group(2))
+        md += [f'Reference: lightgraph `{a.layout}`, {ref_spp} spp in {float(m.group(3)):.0f} s '
+               '(its own seed, independent of the equal-time runs).', '']
     md += ['| renderer | spp | seconds | Msamples/s | lightgraph / this | RMSE | RMSE at exactly '
            f'{a.seconds:g} s | RMSE w/o light pixels | relMSE | mean rel. diff vs reference (R, G, B) |',
            '|---|---|---|---|---|---|---|---|---|---|']
@@ -504,7 +545,7 @@ def cmd_summary(a):
                      f'the reference\'s own noise adds about {100 * lg_run["spp"] / ref_spp:.0f}% of '
                      'lightgraph\'s equal-time variance to every MSE above.')
     shares = [f"{n} {100 * r['emitter_share_of_squared_error']:.0f}%" for n, r in rmse.items()
-              if r.get('emitter_share_of_squared_error') is not None]
+              if r.get('emitter_share_of_squared_error') is not None and r.get('emitter_pixels')]
     if shares:
         first = next(iter(rmse.values()))
         notes.append(f"{first.get('emitter_pixels')} pixels see the light (reference >= {EMITTER_THRESHOLD}); "
@@ -551,12 +592,18 @@ def main():
     r.add_argument('--passes', type=int, default=None, help='render exactly this many passes instead')
     r.add_argument('--seed', type=int, default=1000, help='seed of the first timed pass (then +1 per pass)')
     r.add_argument('--out', default=None, help='write the average as a float32 RGB EXR here')
+    r.add_argument('--scene-xml', default=None,
+                   help='render this exported scene (lightgraph export --format mitsuba --res WxH) '
+                        'instead of mi.cornell_box(); its integrator and film come from the file')
     r.set_defaults(func=cmd_render)
 
     m = sub.add_parser('rmse', help='RMSE / relMSE of EXRs against a reference EXR')
     m.add_argument('--reference', required=True, help='reference EXR')
     m.add_argument('--image', action='append', required=True, metavar='NAME=PATH.exr',
                    help='image to compare (repeatable)')
+    m.add_argument('--emitter-threshold', type=float, default=EMITTER_THRESHOLD,
+                   help='reference radiance (max channel) from which a pixel counts as the light\'s and '
+                        f'is left out of "RMSE without light pixels" (default {EMITTER_THRESHOLD}; inf: none)')
     m.add_argument('--variant', default=None,
                    help='mitsuba variant used only to read EXRs (default: scalar_rgb if the build has '
                         'it, else cuda_ad_rgb or llvm_ad_rgb)')
@@ -572,6 +619,8 @@ def main():
     s.add_argument('--rmse-json', help='JSON lines of rmse')
     s.add_argument('--device', default=None)
     s.add_argument('--title', default=None)
+    s.add_argument('--max-depth', type=int, default=MAX_DEPTH, help='for the header line')
+    s.add_argument('--rr-depth', type=int, default=RR_DEPTH, help='for the header line')
     s.add_argument('--out', help='write the Markdown here')
     s.add_argument('--json-out', help='write all numbers as JSON here')
     s.set_defaults(func=cmd_summary)
