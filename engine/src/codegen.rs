@@ -288,25 +288,40 @@ impl CodegenContext<'_> {
     pub fn kernel(&self, k: KernelId) -> String {
         let g = self.graph();
         let kp = &self.plan.kernels[k];
-        let chain = &g.chains[kp.chain];
-        let c = kp.chain;
-        let wg = self.plan.layout.workgroup_size;
-        let mut s = String::new();
         let names: Vec<&String> = self
             .plan
             .kernel_passes(k)
             .iter()
             .map(|&p| &g.passes[p].decl.name)
             .collect();
-        let _ = writeln!(s, "// Kernel {}: chain of '{}', passes {names:?}.", kp.name, chain.item);
+        let mut s = format!(
+            "// Kernel {}: chain of '{}', passes {names:?}.\n",
+            kp.name, g.chains[kp.chain].item
+        );
+        let queues = self.kernel_queues(k);
+        s.push_str(&self.queue_storage(&queues));
+        s.push_str(&self.emit_functions(k, &queues));
+        s.push_str(&self.item_storage(k));
+        s.push_str(&self.run_wrapper(k));
+        s.push_str(&self.counter_flush());
+        s.push_str(&self.entry_point(k));
+        s
+    }
 
-        // Queues this kernel touches: emitted into, or consumed.
+    /// Queues kernel `k` touches: emitted into, or consumed.
+    fn kernel_queues(&self, k: KernelId) -> Vec<String> {
         let mut queues: Vec<String> = self.plan.queued_emits(k);
-        if let Root::Queue(q) = &kp.root {
+        if let Root::Queue(q) = &self.plan.kernels[k].root {
             queues.push(q.clone());
         }
-        for q in &queues {
-            let item = &g.streams[q].item;
+        queues
+    }
+
+    /// Capacity, binding and item load/store of each queue in `queues`.
+    fn queue_storage(&self, queues: &[String]) -> String {
+        let mut s = String::new();
+        for q in queues {
+            let item = &self.graph().streams[q].item;
             let cap = format!("LG_CAP_{}", q.to_uppercase());
             let _ = writeln!(s, "const {cap}: u32 = {}u;", self.resolved.queue_capacity[q]);
             let _ = writeln!(
@@ -316,7 +331,14 @@ impl CodegenContext<'_> {
             );
             s.push_str(&self.load_store(&format!("queue_{q}"), &format!("lg_queue_{q}"), item, &cap));
         }
-        // Emit functions: direct calls for fused consumers, appends for queues, no-ops otherwise.
+        s
+    }
+
+    /// Emit functions: direct calls for fused consumers, appends for queues, no-ops otherwise.
+    fn emit_functions(&self, k: KernelId, queues: &[String]) -> String {
+        let g = self.graph();
+        let kp = &self.plan.kernels[k];
+        let mut s = String::new();
         for (name, st) in &g.streams {
             let fused = kp
                 .fused_chains
@@ -341,9 +363,17 @@ impl CodegenContext<'_> {
                 let _ = writeln!(s, "fn emit_{name}(item: {}) {{}}", st.item);
             }
         }
-        // Item storage: slots of a stored chain, a regeneration pool, compaction boundaries.
-        let stored = self.plan.stored_chains.contains(&c);
-        if stored {
+        s
+    }
+
+    /// Item storage of kernel `k`'s chain: slots of a stored chain, a regeneration pool,
+    /// compaction boundaries.
+    fn item_storage(&self, k: KernelId) -> String {
+        let kp = &self.plan.kernels[k];
+        let c = kp.chain;
+        let item = &self.graph().chains[c].item;
+        let mut s = String::new();
+        if self.plan.stored_chains.contains(&c) {
             let cap = format!("LG_SLOTS_{c}");
             let _ = writeln!(s, "const {cap}: u32 = {}u;", self.resolved.state_capacity[&c]);
             let _ = writeln!(
@@ -356,72 +386,66 @@ impl CodegenContext<'_> {
                 "@group(0) @binding({}) var<storage, read_write> lg_alive_{c}: array<u32>;",
                 self.binding(&BufferRef::Alive(c))
             );
-            s.push_str(&self.load_store(&format!("state_{c}"), &format!("lg_state_{c}"), &chain.item, &cap));
+            s.push_str(&self.load_store(&format!("state_{c}"), &format!("lg_state_{c}"), item, &cap));
             if let Some(t) = slot_traffic(self.plan, self.resolved, k) {
                 let (suffix, buffer) = (format!("state_{c}_part"), format!("lg_state_{c}"));
-                s.push_str(&self.load_store_words(&suffix, &buffer, &chain.item, &cap, [&t.load, &t.store]));
+                s.push_str(&self.load_store_words(&suffix, &buffer, item, &cap, [&t.load, &t.store]));
             }
         }
         if let Some(pool) = self.resolved.pools.get(&c) {
             let _ = writeln!(s, "const LG_POOL: u32 = {pool}u;");
         }
         if kp.input.is_some() || kp.output.is_some() {
-            s.push_str("struct LgBoundary {\n    count: atomic<u32>,\n    append: atomic<u32>,\n    pad0: u32,\n    pad1: u32,\n    words: array<u32>,\n}\n");
-            if kp.input.is_some() {
-                let _ = writeln!(
-                    s,
-                    "@group(0) @binding({}) var<storage, read_write> lg_in: LgBoundary;",
-                    self.binding(&BufferRef::BoundaryIn)
-                );
-                s.push_str(&self.load_store("in", "lg_in.words", &chain.item, "LG_POOL"));
-            }
-            if kp.output.is_some() {
-                let _ = writeln!(
-                    s,
-                    "@group(0) @binding({}) var<storage, read_write> lg_out: LgBoundary;",
-                    self.binding(&BufferRef::BoundaryOut)
-                );
-                s.push_str(&self.load_store("out", "lg_out.words", &chain.item, "LG_POOL"));
-                // A pure regeneration kernel appends behind the survivors its boundary's count
-                // holds; every other kernel appends to a boundary whose count was consumed.
-                let behind = if kp.input.is_none() {
-                    "atomicLoad(&lg_out.count) + "
-                } else {
-                    ""
-                };
-                let _ = writeln!(
-                    s,
-                    "fn lg_append(v: {}) {{\n{}    lg_store_out({behind}lg_slot, v);\n}}",
-                    chain.item,
-                    claim_slot("lg_out.append", self.subgroup_appends)
-                );
-            }
+            s.push_str(&self.boundary_storage(k));
         }
-        // The per-invocation wrapper.
-        let ls = chain.loop_start.unwrap_or(chain.passes.len());
-        let steps_end = kp.segment.end.min(ls);
-        let loop_range = ls.max(kp.segment.start)..kp.segment.end;
-        let start = g.passes[chain.passes[0]].function();
-        let ends_chain = kp.segment.end == chain.passes.len();
-        let kill = if stored {
-            format!("lg_alive_{c}[lg_i] = 0u; ")
-        } else {
-            String::new()
-        };
-        // Items of the chunk: the record's count, or the GPU count of a counted phase.
-        let items = self.resolved.domain_count_wgsl(kp.phase);
-        let claim = |fail: &str| {
-            format!(
-                "    let index = atomicAdd(&lg_control[{}], 1u);\n    if (index >= {items}) {{ {fail} }}\n",
-                self.resolved.control.next.get(&c).copied().unwrap_or(0)
-            )
-        };
-        let count_alive = if kp.ends_iteration && stored {
-            format!("    atomicAdd(&lg_control[{}], 1u);\n", self.resolved.control.alive[&c])
-        } else {
-            String::new()
-        };
-        s.push_str("fn lg_run(lg_i: u32) {\n    lg_slot = lg_i;\n");
+        s
+    }
+
+    /// The compaction boundaries kernel `k` reads and appends to.
+    fn boundary_storage(&self, k: KernelId) -> String {
+        let kp = &self.plan.kernels[k];
+        let item = &self.graph().chains[kp.chain].item;
+        let mut s = String::from(
+            "struct LgBoundary {\n    count: atomic<u32>,\n    append: atomic<u32>,\n    pad0: u32,\n    pad1: u32,\n    words: array<u32>,\n}\n",
+        );
+        if kp.input.is_some() {
+            let _ = writeln!(
+                s,
+                "@group(0) @binding({}) var<storage, read_write> lg_in: LgBoundary;",
+                self.binding(&BufferRef::BoundaryIn)
+            );
+            s.push_str(&self.load_store("in", "lg_in.words", item, "LG_POOL"));
+        }
+        if kp.output.is_some() {
+            let _ = writeln!(
+                s,
+                "@group(0) @binding({}) var<storage, read_write> lg_out: LgBoundary;",
+                self.binding(&BufferRef::BoundaryOut)
+            );
+            s.push_str(&self.load_store("out", "lg_out.words", item, "LG_POOL"));
+            // A pure regeneration kernel appends behind the survivors its boundary's count
+            // holds; every other kernel appends to a boundary whose count was consumed.
+            let behind = if kp.input.is_none() {
+                "atomicLoad(&lg_out.count) + "
+            } else {
+                ""
+            };
+            let _ = writeln!(
+                s,
+                "fn lg_append(v: {}) {{\n{}    lg_store_out({behind}lg_slot, v);\n}}",
+                item,
+                claim_slot("lg_out.append", self.subgroup_appends)
+            );
+        }
+        s
+    }
+
+    /// The per-invocation wrapper `lg_run`: where the item comes from, the passes, where it
+    /// goes.
+    fn run_wrapper(&self, k: KernelId) -> String {
+        let w = Wrapper::new(self, k);
+        let (kp, chain, c) = (w.kp, w.chain, w.kp.chain);
+        let mut s = String::from("fn lg_run(lg_i: u32) {\n    lg_slot = lg_i;\n");
         match &kp.root {
             Root::Queue(q) => {
                 let _ = writeln!(s, "    var it = lg_load_queue_{q}(lg_i);");
@@ -437,115 +461,135 @@ impl CodegenContext<'_> {
                     s,
                     "    if (lg_alive_{c}[lg_i] == 0u) {{ return; }}\n    var it = lg_load_state_{c}_part(lg_i);"
                 );
-                s.push_str(&self.run_passes(c, kp.segment.clone(), kp.loop_in_kernel, &kill));
-                if !ends_chain || !kp.loop_in_kernel && chain.loop_start.is_some() {
+                s.push_str(&self.run_passes(c, kp.segment.clone(), kp.loop_in_kernel, &w.kill));
+                if !w.ends_chain || !kp.loop_in_kernel && chain.loop_start.is_some() {
                     let _ = writeln!(s, "    lg_store_state_{c}_part(lg_i, it);");
-                    s.push_str(&count_alive);
+                    s.push_str(&w.count_alive);
                 }
             }
             Root::Start if !kp.regenerates => {
                 let _ = writeln!(
                     s,
-                    "    var it: {};\n    if (!{start}(&it, frame.base + lg_i)) {{ {kill}return; }}",
-                    chain.item
+                    "    var it: {};\n    if (!{}(&it, frame.base + lg_i)) {{ {}return; }}",
+                    chain.item, w.start, w.kill
                 );
-                s.push_str(&self.run_passes(c, 1..kp.segment.end, kp.loop_in_kernel, &kill));
-                if stored && (!ends_chain || !kp.loop_in_kernel && chain.loop_start.is_some()) {
+                s.push_str(&self.run_passes(c, 1..kp.segment.end, kp.loop_in_kernel, &w.kill));
+                if w.stored && (!w.ends_chain || !kp.loop_in_kernel && chain.loop_start.is_some()) {
                     let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);\n    lg_alive_{c}[lg_i] = 1u;");
                 }
             }
-            Root::Start if kp.loop_in_kernel => {
-                // Persistent threads: take the next item whenever the current one is done.
-                let body: Vec<String> = loop_range
-                    .clone()
-                    .map(|pos| format!("{}(&it)", g.passes[chain.passes[pos]].function()))
-                    .collect();
-                let _ = writeln!(
-                    s,
-                    "    var it: {};\n    var alive = false;\n    var lg_iterations = 0u;\n    loop {{\n        if (!alive) {{",
-                    chain.item
-                );
-                let _ = writeln!(
-                    s,
-                    "            let index = atomicAdd(&lg_control[{}], 1u);\n            if (index >= {items}) {{ break; }}",
-                    self.resolved.control.next[&c]
-                );
-                let _ = writeln!(s, "            alive = {start}(&it, frame.base + index);");
-                for pos in 1..steps_end {
-                    let _ = writeln!(
-                        s,
-                        "            alive = alive && {}(&it);",
-                        g.passes[chain.passes[pos]].function()
-                    );
-                }
-                let _ = writeln!(
-                    s,
-                    "            lg_iterations = 0u;\n            continue;\n        }}\n        if (lg_iterations >= {}u) {{ atomicAdd(&lg_control[{}], 1u); alive = false; continue; }}\n        lg_iterations += 1u;\n        alive = {};\n    }}",
-                    self.max_loop_iterations,
-                    self.resolved.control.loop_capped,
-                    body.join(" && ")
-                );
-            }
-            Root::Start => {
-                // Regenerate into an idle slot or a compaction boundary, then run one iteration
-                // of the loop passes the kernel holds.
-                let _ = writeln!(s, "    var it: {};", chain.item);
-                let has_loop = !loop_range.is_empty();
-                // A continued item moves only what the loop passes touch; a fresh one is
-                // stored whole.
-                let continued = stored && has_loop;
-                if continued {
-                    s.push_str("    var lg_fresh = false;\n");
-                }
-                if stored {
-                    let _ = writeln!(s, "    if (lg_alive_{c}[lg_i] != 0u) {{");
-                    if has_loop {
-                        let _ = writeln!(s, "        it = lg_load_state_{c}_part(lg_i);");
-                    } else {
-                        s.push_str("        return;\n");
-                    }
-                    s.push_str("    } else {\n");
-                } else if kp.input.is_some() {
-                    s.push_str(
-                        "    if (lg_i < atomicLoad(&lg_in.count)) {\n        it = lg_load_in(lg_i);\n    } else {\n",
-                    );
-                } else {
-                    s.push_str("    let queued = atomicLoad(&lg_out.count);\n    if (lg_i >= LG_POOL - min(queued, LG_POOL)) { return; }\n    {\n");
-                }
-                if let (Some(&held), Some(at)) = (self.resolved.control.held.get(&c), self.plan.layout.regenerate_at) {
-                    // Refill only once enough of the pool is idle.
-                    let pool = self.resolved.pools[&c];
-                    let idle = ((at as f64 * pool as f64).ceil() as u64).clamp(1, pool);
-                    let _ = writeln!(
-                        s,
-                        "    if (LG_POOL - min(atomicLoad(&lg_control[{held}]), LG_POOL) < {idle}u) {{ return; }}"
-                    );
-                }
-                s.push_str(&claim("return;"));
-                if continued {
-                    s.push_str("    lg_fresh = true;\n");
-                }
-                let _ = writeln!(s, "    if (!{start}(&it, frame.base + index)) {{ return; }}");
-                s.push_str(&self.guarded_calls(c, 1..steps_end, "return;"));
-                s.push_str("    }\n");
-                s.push_str(&self.guarded_calls(c, loop_range.clone(), &format!("{kill}return;")));
-                if continued {
-                    let _ = writeln!(
-                        s,
-                        "    if (lg_fresh) {{ lg_store_state_{c}(lg_i, it); }} else {{ lg_store_state_{c}_part(lg_i, it); }}\n    lg_alive_{c}[lg_i] = 1u;"
-                    );
-                    s.push_str(&count_alive);
-                } else if stored {
-                    let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);\n    lg_alive_{c}[lg_i] = 1u;");
-                    s.push_str(&count_alive);
-                } else {
-                    s.push_str("    lg_append(it);\n");
-                }
-            }
+            Root::Start if kp.loop_in_kernel => s.push_str(&self.persistent_threads(&w)),
+            Root::Start => s.push_str(&self.regeneration(&w)),
         }
         s.push_str("}\n");
-        // Counter flush: per-thread sums, reduced in workgroup memory, one atomic per workgroup.
-        let n = g.counters.len();
+        s
+    }
+
+    /// Persistent threads: take the next item whenever the current one is done.
+    fn persistent_threads(&self, w: &Wrapper) -> String {
+        let g = self.graph();
+        let (chain, c) = (w.chain, w.kp.chain);
+        let body: Vec<String> = w
+            .loop_range
+            .clone()
+            .map(|pos| format!("{}(&it)", g.passes[chain.passes[pos]].function()))
+            .collect();
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "    var it: {};\n    var alive = false;\n    var lg_iterations = 0u;\n    loop {{\n        if (!alive) {{",
+            chain.item
+        );
+        let _ = writeln!(
+            s,
+            "            let index = atomicAdd(&lg_control[{}], 1u);\n            if (index >= {}) {{ break; }}",
+            self.resolved.control.next[&c], w.items
+        );
+        let _ = writeln!(s, "            alive = {}(&it, frame.base + index);", w.start);
+        for pos in 1..w.steps_end {
+            let _ = writeln!(
+                s,
+                "            alive = alive && {}(&it);",
+                g.passes[chain.passes[pos]].function()
+            );
+        }
+        let _ = writeln!(
+            s,
+            "            lg_iterations = 0u;\n            continue;\n        }}\n        if (lg_iterations >= {}u) {{ atomicAdd(&lg_control[{}], 1u); alive = false; continue; }}\n        lg_iterations += 1u;\n        alive = {};\n    }}",
+            self.max_loop_iterations,
+            self.resolved.control.loop_capped,
+            body.join(" && ")
+        );
+        s
+    }
+
+    /// Regenerate into an idle slot or a compaction boundary, then run one iteration of the
+    /// loop passes the kernel holds.
+    fn regeneration(&self, w: &Wrapper) -> String {
+        let (kp, c) = (w.kp, w.kp.chain);
+        let mut s = String::new();
+        let _ = writeln!(s, "    var it: {};", w.chain.item);
+        let has_loop = !w.loop_range.is_empty();
+        // A continued item moves only what the loop passes touch; a fresh one is stored whole.
+        let continued = w.stored && has_loop;
+        if continued {
+            s.push_str("    var lg_fresh = false;\n");
+        }
+        if w.stored {
+            let _ = writeln!(s, "    if (lg_alive_{c}[lg_i] != 0u) {{");
+            if has_loop {
+                let _ = writeln!(s, "        it = lg_load_state_{c}_part(lg_i);");
+            } else {
+                s.push_str("        return;\n");
+            }
+            s.push_str("    } else {\n");
+        } else if kp.input.is_some() {
+            s.push_str("    if (lg_i < atomicLoad(&lg_in.count)) {\n        it = lg_load_in(lg_i);\n    } else {\n");
+        } else {
+            s.push_str("    let queued = atomicLoad(&lg_out.count);\n    if (lg_i >= LG_POOL - min(queued, LG_POOL)) { return; }\n    {\n");
+        }
+        if let (Some(&held), Some(at)) = (self.resolved.control.held.get(&c), self.plan.layout.regenerate_at) {
+            // Refill only once enough of the pool is idle.
+            let pool = self.resolved.pools[&c];
+            let idle = ((at as f64 * pool as f64).ceil() as u64).clamp(1, pool);
+            let _ = writeln!(
+                s,
+                "    if (LG_POOL - min(atomicLoad(&lg_control[{held}]), LG_POOL) < {idle}u) {{ return; }}"
+            );
+        }
+        let _ = writeln!(
+            s,
+            "    let index = atomicAdd(&lg_control[{}], 1u);\n    if (index >= {}) {{ return; }}",
+            self.resolved.control.next.get(&c).copied().unwrap_or(0),
+            w.items
+        );
+        if continued {
+            s.push_str("    lg_fresh = true;\n");
+        }
+        let _ = writeln!(s, "    if (!{}(&it, frame.base + index)) {{ return; }}", w.start);
+        s.push_str(&self.guarded_calls(c, 1..w.steps_end, "return;"));
+        s.push_str("    }\n");
+        s.push_str(&self.guarded_calls(c, w.loop_range.clone(), &format!("{}return;", w.kill)));
+        if continued {
+            let _ = writeln!(
+                s,
+                "    if (lg_fresh) {{ lg_store_state_{c}(lg_i, it); }} else {{ lg_store_state_{c}_part(lg_i, it); }}\n    lg_alive_{c}[lg_i] = 1u;"
+            );
+            s.push_str(&w.count_alive);
+        } else if w.stored {
+            let _ = writeln!(s, "    lg_store_state_{c}(lg_i, it);\n    lg_alive_{c}[lg_i] = 1u;");
+            s.push_str(&w.count_alive);
+        } else {
+            s.push_str("    lg_append(it);\n");
+        }
+        s
+    }
+
+    /// Counter flush: per-thread sums, reduced in workgroup memory, one atomic per workgroup.
+    fn counter_flush(&self) -> String {
+        let n = self.graph().counters.len();
+        let wg = self.plan.layout.workgroup_size;
+        let mut s = String::new();
         if n > 0 {
             let _ = writeln!(s, "var<workgroup> lg_wg_counts: array<atomic<u32>, {n}>;");
             s.push_str("fn lg_flush(lid: u32) {\n");
@@ -560,27 +604,87 @@ impl CodegenContext<'_> {
                 "    workgroupBarrier();\n    for (var c = lid; c < {n}u; c += {wg}u) {{\n        let v = atomicLoad(&lg_wg_counts[c]);\n        if (v != 0u) {{ atomicAdd(&lg_counters[c], v); }}\n    }}\n}}"
             );
         }
-        let pooled = self.resolved.pools.contains_key(&c);
+        s
+    }
+
+    /// The entry point: one invocation per item below the kernel's limit.
+    fn entry_point(&self, k: KernelId) -> String {
+        let kp = &self.plan.kernels[k];
+        let wg = self.plan.layout.workgroup_size;
         let limit = match &kp.root {
             Root::Queue(q) => format!("atomicLoad(&lg_control[{}])", self.resolved.control.queue_count[q]),
             Root::Boundary => "atomicLoad(&lg_in.count)".to_string(),
-            _ if pooled => "LG_POOL".to_string(),
-            _ => items.clone(),
+            _ if self.resolved.pools.contains_key(&kp.chain) => "LG_POOL".to_string(),
+            _ => self.resolved.domain_count_wgsl(kp.phase),
         };
         let parameters = if self.resolved.parameters.is_empty() {
             ""
         } else {
             "    lg_parameters();\n"
         };
+        let mut s = String::new();
         let _ = writeln!(
             s,
             "@compute @workgroup_size({wg})\nfn {}(@builtin(workgroup_id) lg_wid: vec3<u32>, @builtin(num_workgroups) lg_nwg: vec3<u32>, @builtin(local_invocation_index) lg_lid: u32) {{\n{parameters}    let lg_i = (lg_wid.y * lg_nwg.x + lg_wid.x) * {wg}u + lg_lid;\n    if (lg_i < {limit}) {{ lg_run(lg_i); }}",
             kp.name
         );
-        if n > 0 {
+        if !self.graph().counters.is_empty() {
             s.push_str("    lg_flush(lg_lid);\n");
         }
         s.push_str("}\n");
         s
+    }
+}
+
+/// What the wrapper of a kernel knows of its chain and segment.
+struct Wrapper<'a> {
+    kp: &'a crate::plan::KernelPlan,
+    chain: &'a crate::graph::Chain,
+    /// Whether the chain's items live in slots.
+    stored: bool,
+    /// What ends an item early: its alive flag cleared, for stored chains.
+    kill: String,
+    /// Items of the chunk: the record's count, or the GPU count of a counted phase.
+    items: String,
+    /// The alive count of an iteration-ending kernel of a stored chain.
+    count_alive: String,
+    /// The chain's start pass.
+    start: &'a str,
+    /// End of the kernel's step passes (before the loop).
+    steps_end: usize,
+    /// The kernel's loop passes.
+    loop_range: std::ops::Range<usize>,
+    /// Whether the kernel runs the chain's last pass.
+    ends_chain: bool,
+}
+
+impl<'a> Wrapper<'a> {
+    fn new(ctx: &'a CodegenContext, k: KernelId) -> Wrapper<'a> {
+        let g = ctx.graph();
+        let kp = &ctx.plan.kernels[k];
+        let c = kp.chain;
+        let chain = &g.chains[c];
+        let stored = ctx.plan.stored_chains.contains(&c);
+        let ls = chain.loop_start.unwrap_or(chain.passes.len());
+        Wrapper {
+            kp,
+            chain,
+            stored,
+            kill: if stored {
+                format!("lg_alive_{c}[lg_i] = 0u; ")
+            } else {
+                String::new()
+            },
+            items: ctx.resolved.domain_count_wgsl(kp.phase),
+            count_alive: if kp.ends_iteration && stored {
+                format!("    atomicAdd(&lg_control[{}], 1u);\n", ctx.resolved.control.alive[&c])
+            } else {
+                String::new()
+            },
+            start: g.passes[chain.passes[0]].function(),
+            steps_end: kp.segment.end.min(ls),
+            loop_range: ls.max(kp.segment.start)..kp.segment.end,
+            ends_chain: kp.segment.end == chain.passes.len(),
+        }
     }
 }
