@@ -2,6 +2,7 @@
 
 use crate::render::Image;
 use anyhow::{Context, Result, anyhow};
+use lightgraph_scenes::texture::linear_to_srgb8;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -109,23 +110,13 @@ pub fn read_exr(path: &Path) -> Result<ExrFile> {
     })
 }
 
-fn srgb_encode(linear: f32) -> u8 {
-    let v = linear.clamp(0.0, 1.0);
-    let s = if v <= 0.0031308 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
-}
-
 /// Writes an 8-bit sRGB preview, the radiance scaled by 2^`exposure` and clamped.
 pub fn write_png(path: &Path, image: &Image, exposure: f32) -> Result<()> {
     let scale = exposure.exp2();
     let bytes: Vec<u8> = image
         .mean
         .iter()
-        .flat_map(|c| c.map(|v| srgb_encode(v * scale)))
+        .flat_map(|c| c.map(|v| linear_to_srgb8(v * scale)))
         .collect();
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -141,9 +132,9 @@ mod tests {
 
     #[test]
     fn srgb_curve_end_points() {
-        assert_eq!(srgb_encode(0.0), 0);
-        assert_eq!(srgb_encode(1.0), 255);
-        assert_eq!(srgb_encode(2.0), 255);
-        assert_eq!(srgb_encode(0.5), 188);
+        assert_eq!(linear_to_srgb8(0.0), 0);
+        assert_eq!(linear_to_srgb8(1.0), 255);
+        assert_eq!(linear_to_srgb8(2.0), 255);
+        assert_eq!(linear_to_srgb8(0.5), 188);
     }
 }

@@ -121,12 +121,23 @@ impl TextureRef {
 }
 
 /// The linear value of an sRGB-encoded one in [0, 1].
-fn srgb_to_linear(c: f32) -> f32 {
+pub fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {
         ((c + 0.055) / 1.055).powf(2.4)
     }
+}
+
+/// The 8-bit sRGB encoding of a linear value, clamped to [0, 1].
+pub fn linear_to_srgb8(linear: f32) -> u8 {
+    let v = linear.clamp(0.0, 1.0);
+    let c = if v <= 0.0031308 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    };
+    (c * 255.0).round() as u8
 }
 
 /// The textures of a metallic-roughness material.

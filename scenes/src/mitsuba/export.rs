@@ -12,7 +12,7 @@
 //! (the texels' alpha against the cut-off).
 
 use crate::model::{Camera, FovAxis, Light, Look, Material, Rgb, RussianRoulette, Scene, Shape, Vec3};
-use crate::texture::{Texture, TextureRef, Wrap};
+use crate::texture::{Texture, TextureRef, Wrap, linear_to_srgb8, srgb_to_linear};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -433,7 +433,7 @@ fn png_rgb(t: &Texture, factor: Rgb) -> Result<Vec<u8>, String> {
                 if factor[k] == 1.0 {
                     byte
                 } else {
-                    linear_to_srgb8(srgb8_to_linear(byte) * factor[k])
+                    linear_to_srgb8(srgb_to_linear(byte as f32 / 255.0) * factor[k])
                 }
             })
         })
@@ -447,25 +447,6 @@ fn png(width: u32, height: u32, color: image::ColorType, pixels: &[u8]) -> Resul
     let encoder = image::codecs::png::PngEncoder::new(&mut out);
     image::ImageEncoder::write_image(encoder, pixels, width, height, color.into()).map_err(|e| e.to_string())?;
     Ok(out)
-}
-
-fn srgb8_to_linear(byte: u8) -> f32 {
-    let c = byte as f32 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-fn linear_to_srgb8(v: f32) -> u8 {
-    let v = v.clamp(0.0, 1.0);
-    let c = if v <= 0.0031308 {
-        v * 12.92
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
-    (c * 255.0).round() as u8
 }
 
 /// Mitsuba's `wrap_mode` of a texture reference (one mode for both axes: a reference with two

@@ -4,6 +4,7 @@
 //! as Mitsuba 3's snake_case ones. Every property a converter does not read is reported as a
 //! warning when the plugin is finished ([`Props::finish`]).
 
+use crate::texture::srgb_to_linear;
 use roxmltree::{Document, Node};
 use std::cell::Cell;
 use std::collections::HashMap;
@@ -404,15 +405,6 @@ pub fn point_of(ctx: &Context, node: Node, missing: f32) -> Result<[f32; 3]> {
         }
     }
     Ok(p)
-}
-
-/// sRGB's transfer function undone.
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
 }
 
 #[cfg(test)]
