@@ -481,7 +481,8 @@ impl Instance<'_> {
                 self.run_iteration(rec, chain, body, record)?;
             }
             rec.host_iterations += bound;
-            return self.check_loop(rec, chain, record, bound);
+            self.check_loop(rec, chain, record, bound);
+            return Ok(());
         }
         // The same loop of every frame of a batch learns from the last one.
         let records = &self.frames.records;
@@ -537,7 +538,7 @@ impl Instance<'_> {
 
     /// Copies what tells whether the bounded loop over `chain` left work (the control words
     /// and its boundaries' headers) for the batch's read-back.
-    fn check_loop(&mut self, rec: &mut Recorder, chain: ChainId, record: usize, bound: u32) -> Result<()> {
+    fn check_loop(&mut self, rec: &mut Recorder, chain: ChainId, record: usize, bound: u32) {
         let at = self.frames.checks.len() as u64 * check_bytes(&self.program);
         let buffer = &self.frames.check_buffer;
         rec.end_pass();
@@ -549,7 +550,6 @@ impl Instance<'_> {
             at,
             headers,
         });
-        Ok(())
     }
 
     /// Records copies of the control words to `buffer` at `at` and of `chain`'s boundary
@@ -608,13 +608,10 @@ impl Instance<'_> {
 
     /// An error for the first bounded loop of the batch that left work.
     fn check_bounded_loops(&self) -> Result<()> {
-        let Some(last) = self.frames.checks.last() else {
+        if self.frames.checks.is_empty() {
             return Ok(());
-        };
-        let end = last
-            .headers
-            .last()
-            .map_or(last.at + check_bytes(&self.program), |h| h + 8);
+        }
+        let end = self.frames.checks.len() as u64 * check_bytes(&self.program);
         let bytes = map_buffer(self.gpu, &self.frames.check_buffer, end)?;
         for c in &self.frames.checks {
             if self.work_left(&bytes, c.at, &c.headers, c.chain, c.record) {
