@@ -15,7 +15,6 @@ use crate::render::{LoadedScene, Session, SessionOptions, load_graph};
 use anyhow::{Result, bail};
 use lightgraph_engine::{ConstValue, Gpu};
 use std::collections::BTreeMap;
-use std::time::Duration;
 
 /// A feature buffer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -119,8 +118,9 @@ impl<'g> AovRender<'g> {
         for (_, session) in &mut self.sessions {
             session.first_frame = first;
             while session.frames < count {
-                session.render_for(Duration::from_secs(1), count - session.frames)?;
+                session.render_for(None, count - session.frames)?;
             }
+            session.settle()?;
         }
         Ok(())
     }

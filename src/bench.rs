@@ -76,8 +76,9 @@ pub fn measure(
     let frames0 = session.frames;
     while session.frames == frames0 || start.elapsed() < budget {
         let left = budget.saturating_sub(start.elapsed());
-        session.render_for(left.min(Duration::from_millis(100)), u32::MAX)?;
+        session.render_for(Some(left), u32::MAX)?;
     }
+    session.settle()?;
     let seconds = start.elapsed().as_secs_f64();
     let frames = session.frames - frames0;
     let kernel_ms: BTreeMap<String, f64> = session

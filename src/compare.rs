@@ -163,7 +163,9 @@ pub fn run(
     let budget = budget.time.as_secs_f64();
     let mut samples: Vec<ErrorSample> = Vec::new();
     // The error now, measured with the clock stopped.
-    let mut measure = |session: &Session, clock: &mut Stopwatch, samples: &mut Vec<ErrorSample>| -> Result<()> {
+    // The batch in flight is waited for on the clock.
+    let mut measure = |session: &mut Session, clock: &mut Stopwatch, samples: &mut Vec<ErrorSample>| -> Result<()> {
+        session.settle()?;
         let seconds = clock.seconds();
         clock.pause();
         let image = session.image()?;
@@ -179,19 +181,20 @@ pub fn run(
         Ok(())
     };
     session.render_frame()?;
-    measure(&session, &mut clock, &mut samples)?;
+    measure(&mut session, &mut clock, &mut samples)?;
     let times = sample_times(clock.seconds(), budget, per_decade);
     let mut next = times.iter().copied().peekable();
     while clock.seconds() < budget {
         let until = next.peek().copied().unwrap_or(budget).min(budget);
-        let step = (until - clock.seconds()).clamp(1e-3, 0.1);
-        session.render_for(Duration::from_secs_f64(step), u32::MAX)?;
+        let left = (until - clock.seconds()).max(1e-3);
+        session.render_for(Some(Duration::from_secs_f64(left)), u32::MAX)?;
         let now = clock.seconds();
         if next.peek().is_some_and(|&t| now >= t) || now >= budget {
             while next.next_if(|&t| t <= now).is_some() {}
-            measure(&session, &mut clock, &mut samples)?;
+            measure(&mut session, &mut clock, &mut samples)?;
         }
     }
+    session.settle()?;
     let seconds = clock.seconds();
     let image = session.image()?;
     let paths = session.samples_per_pixel() as f64 * image.mean.len() as f64;

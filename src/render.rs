@@ -3,13 +3,17 @@
 
 use anyhow::{Context, Result, anyhow, bail};
 use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::runtime::MAX_BATCH;
+use lightgraph_engine::runtime::{IN_FLIGHT, MAX_BATCH};
 use lightgraph_engine::{ConstValue, FrameStats, Gpu, Graph, Instance, Plan, Program, Specialization};
 use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::model::{MisHeuristic, RussianRoulette, Scene};
 use lightgraph_scenes::{CompiledScene, parse_scene};
 use std::collections::{BTreeMap, BTreeSet};
-use std::time::Instant;
+use std::time::{Duration, Instant};
+
+/// GPU time of one batch of frames in [`Session::render_for`]: short enough for a live
+/// progress line and preview, long enough that recording and reading back stay small.
+pub const BATCH_TIME: Duration = Duration::from_millis(100);
 
 /// A scene loaded, validated and prepared for the GPU.
 pub struct LoadedScene {
@@ -274,17 +278,22 @@ pub struct Session<'g> {
     instance: Instance<'g>,
     /// Options of the session.
     pub options: SessionOptions,
-    /// Frames rendered.
+    /// Frames rendered (submitted to the GPU; [`Session::settled`] of them read back).
     pub frames: u32,
+    /// Frames whose statistics are in `counters` and `kernel_seconds`: the frames
+    /// rendered less those of the batches still in flight.
+    pub settled: u32,
+    /// Frames of each batch submitted and not yet read back, oldest first.
+    in_flight: std::collections::VecDeque<u32>,
     /// Frame index of the session's first frame: a resumed render continues the random
     /// streams where the earlier one stopped instead of repeating them.
     pub first_frame: u32,
     /// The frame indices rendered since [`Session::take_accumulation`] last emptied the GPU
     /// accumulation (what it holds), adjacent ones joined.
     pending: Vec<(u64, u64)>,
-    /// Counter totals.
+    /// Counter totals of the settled frames.
     pub counters: BTreeMap<String, u64>,
-    /// GPU time per kernel, summed over frames.
+    /// GPU time per kernel, summed over the settled frames.
     pub kernel_seconds: BTreeMap<String, f64>,
     /// Loops stopped by the iteration cap (must stay 0).
     pub loops_capped: u64,
@@ -329,6 +338,8 @@ impl<'g> Session<'g> {
             instance,
             options,
             frames: 0,
+            settled: 0,
+            in_flight: Default::default(),
             first_frame: 0,
             pending: Vec::new(),
             counters: BTreeMap::new(),
@@ -357,19 +368,82 @@ impl<'g> Session<'g> {
     }
 
     /// Renders `count` more frames (at most [`MAX_BATCH`]) recorded together, with one
-    /// read-back of statistics; returns the batch's statistics.
+    /// read-back of statistics, and waits for them (and any batch still in flight); returns
+    /// the statistics of the frames it waited for.
     pub fn render_frames(&mut self, count: u32) -> Result<FrameStats> {
+        self.submit(count)?;
+        self.settle()
+    }
+
+    /// Renders toward a budget, keeping the GPU busy: submits a batch of about
+    /// [`BATCH_TIME`] of frames (at most `max`, and no more than fills the `left` time of a
+    /// timed run, counting the batch still running), then reads back the batch before it,
+    /// so that the host records and reads back while the GPU runs. Returns the statistics
+    /// read back (none after the first call; [`Session::settle`] reads the rest). Until a
+    /// frame's GPU time is known it renders one frame and waits for it.
+    pub fn render_for(&mut self, left: Option<Duration>, max: u32) -> Result<FrameStats> {
+        let per_frame = self.kernel_seconds.values().sum::<f64>() / self.settled.max(1) as f64;
+        if self.settled == 0 || per_frame <= 0.0 {
+            return self.render_frames(1);
+        }
+        let queued = self.in_flight.iter().sum::<u32>() as f64 * per_frame;
+        let room = left.map_or(f64::INFINITY, |t| t.as_secs_f64() - queued);
+        let wanted = (room.min(BATCH_TIME.as_secs_f64()) / per_frame).clamp(0.0, MAX_BATCH as f64) as u32;
+        let count = match wanted.min(max) {
+            // A timed run with less than a frame left still renders one, unless the batch in
+            // flight ends it.
+            0 if self.in_flight.is_empty() => max.min(1),
+            n => n,
+        };
+        if count > 0 {
+            self.submit(count)?;
+        }
+        let mut stats = FrameStats::default();
+        while self.in_flight.len() > (count > 0) as usize {
+            stats.add(&self.collect()?);
+        }
+        Ok(stats)
+    }
+
+    /// Reads back every batch still in flight (waiting for them); returns their statistics.
+    /// Counters and GPU times cover every frame rendered after it.
+    pub fn settle(&mut self) -> Result<FrameStats> {
+        let mut stats = FrameStats::default();
+        while !self.in_flight.is_empty() {
+            stats.add(&self.collect()?);
+        }
+        Ok(stats)
+    }
+
+    /// Submits `count` frames (at most [`MAX_BATCH`]) as one batch; at most one other batch
+    /// stays in flight (an older one is read back first).
+    fn submit(&mut self, count: u32) -> Result<()> {
         if self.first_frame as u64 + self.frames as u64 + count as u64 > u32::MAX as u64 {
             bail!("the frame index would pass 2^32; continue with another seed");
         }
+        while self.in_flight.len() >= IN_FLIGHT {
+            self.collect()?;
+        }
         let first = self.first_frame + self.frames;
-        let stats = self.instance.run_frames(first, count, self.options.seed)?;
+        self.instance.submit_frames(first, count, self.options.seed)?;
+        self.in_flight.push_back(count);
         self.frames += count;
         let range = (first as u64, first as u64 + count as u64);
         match self.pending.last_mut() {
             Some(last) if last.1 == range.0 => last.1 = range.1,
             _ => self.pending.push(range),
         }
+        Ok(())
+    }
+
+    /// Waits for the oldest batch in flight and adds its statistics to the session's.
+    fn collect(&mut self) -> Result<FrameStats> {
+        let stats = self
+            .instance
+            .collect_frames()?
+            .ok_or_else(|| anyhow!("no batch of frames in flight"))?;
+        let count = self.in_flight.pop_front().expect("a batch in flight");
+        self.settled += count;
         for (k, v) in &stats.counters {
             *self.counters.entry(k.clone()).or_insert(0) += v;
         }
@@ -378,18 +452,6 @@ impl<'g> Session<'g> {
         }
         self.loops_capped += stats.loops_capped as u64;
         Ok(stats)
-    }
-
-    /// Renders about `target` worth of frames, at most `max`, in one batch sized from the GPU
-    /// time of the frames so far (one frame when nothing is known yet).
-    pub fn render_for(&mut self, target: std::time::Duration, max: u32) -> Result<FrameStats> {
-        let per_frame = self.kernel_seconds.values().sum::<f64>() / self.frames.max(1) as f64;
-        let count = if self.frames == 0 || per_frame <= 0.0 {
-            1
-        } else {
-            (target.as_secs_f64() / per_frame).clamp(1.0, MAX_BATCH as f64) as u32
-        };
-        self.render_frames(count.min(max).max(1))
     }
 
     /// GPU memory of the session: the buffers the layout allocates (transient ones sharing
@@ -437,6 +499,7 @@ impl<'g> Session<'g> {
     /// Reads the GPU accumulation and empties it, so a host accumulator (in f64) can take
     /// the sums over and the f32 sums on the GPU stay short.
     pub fn take_accumulation(&mut self) -> Result<Accumulation> {
+        self.settle()?;
         let taken = self.accumulation()?;
         for name in ["accum", "accum_comp", "accum_sq"] {
             self.instance.clear(name)?;

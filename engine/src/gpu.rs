@@ -183,8 +183,21 @@ impl Gpu {
 
     /// Waits until the queue is idle.
     pub fn wait(&self) -> Result<()> {
+        self.poll(wgpu::PollType::wait_indefinitely())
+    }
+
+    /// Blocks until `submission` has run (later submissions may still be running) and its
+    /// callbacks (buffer maps) have been called.
+    pub fn wait_for(&self, submission: wgpu::SubmissionIndex) -> Result<()> {
+        self.poll(wgpu::PollType::Wait {
+            submission_index: Some(submission),
+            timeout: None,
+        })
+    }
+
+    fn poll(&self, poll: wgpu::PollType) -> Result<()> {
         self.device
-            .poll(wgpu::PollType::wait_indefinitely())
+            .poll(poll)
             .map(|_| ())
             .map_err(|e| Error::Gpu(format!("device poll failed: {e}")))
     }

@@ -1,7 +1,7 @@
 //! Running a compiled program on a GPU: buffers placed as the memory plan says (transient
 //! buffers sharing arenas), pipelines, per-frame parameters, and frames made of dispatches
 //! (direct, indirect from queue, boundary and GPU counters, and host-driven loops) with GPU
-//! timestamps and counters read back once per batch of frames.
+//! timestamps and counters read back once per batch of frames, while the next batch runs.
 
 mod buffers;
 mod frames;
@@ -21,6 +21,9 @@ use std::collections::BTreeMap;
 /// Most frames [`Instance::run_frames`] records together.
 pub const MAX_BATCH: u32 = 64;
 
+/// Most batches [`Instance::submit_frames`] keeps in flight before one is collected.
+pub const IN_FLIGHT: usize = 2;
+
 /// Statistics of one frame.
 #[derive(Debug, Clone, Default)]
 pub struct FrameStats {
@@ -39,6 +42,18 @@ impl FrameStats {
     /// Total GPU time of the frame's kernels.
     pub fn gpu_seconds(&self) -> f64 {
         self.kernel_seconds.values().sum()
+    }
+
+    /// Adds the statistics of `other` (frames run besides these) to these.
+    pub fn add(&mut self, other: &FrameStats) {
+        for (k, v) in &other.counters {
+            *self.counters.entry(k.clone()).or_insert(0) += v;
+        }
+        for (k, v) in &other.kernel_seconds {
+            *self.kernel_seconds.entry(k.clone()).or_insert(0.0) += v;
+        }
+        self.host_iterations += other.host_iterations;
+        self.loops_capped += other.loops_capped;
     }
 }
 

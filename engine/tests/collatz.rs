@@ -275,6 +275,14 @@ fn graph_with_loop_bound(item: &str, bound: &str) -> Result<Graph, String> {
 /// One frame over 1..=n with the constant BOUND: the walks' steps and the host-loop
 /// iterations, or the frame's error.
 fn run_bounded(g: &Graph, name: &str, decl: LayoutDecl, n: u32, bound: u32) -> Result<(Vec<u32>, u32), String> {
+    let mut instance = bounded_instance(g, name, decl, n, bound);
+    let stats = instance.run_frame(0, 0).map_err(|e| e.to_string())?;
+    let steps = bytemuck::pod_collect_to_vec(&instance.read("steps").unwrap());
+    Ok((steps, stats.host_iterations))
+}
+
+/// The instance of layout `decl` (named `name`) over 1..=n with the constant BOUND.
+fn bounded_instance(g: &Graph, name: &str, decl: LayoutDecl, n: u32, bound: u32) -> Instance<'static> {
     let plan = Plan::with_decl(g, name, decl).unwrap();
     let spec = Specialization {
         constants: [
@@ -286,10 +294,7 @@ fn run_bounded(g: &Graph, name: &str, decl: LayoutDecl, n: u32, bound: u32) -> R
         ..Default::default()
     };
     let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
-    let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
-    let stats = instance.run_frame(0, 0).map_err(|e| e.to_string())?;
-    let steps = bytemuck::pod_collect_to_vec(&instance.read("steps").unwrap());
-    Ok((steps, stats.host_iterations))
+    Instance::new(gpu(), program, &BTreeMap::new()).unwrap()
 }
 
 /// With a loop bound, a host loop whose items all start at once runs exactly the bound's
@@ -338,6 +343,42 @@ fn bounded_host_loops_run_their_bound_and_catch_a_short_one() {
     assert!(e.contains("loop_bounds: no pass runs over items of type 'Nope'"), "{e}");
     let e = graph_with_loop_bound("Walk", "BOUND +").expect_err("a malformed bound is refused");
     assert!(e.contains("loop_bounds of 'Walk':"), "{e}");
+}
+
+/// Two batches in flight at once: each is collected in order with its own counters and
+/// loop iterations, a third is refused until one is collected, and an error of a batch
+/// (here a loop bound one short) surfaces when that batch is collected.
+#[test]
+fn batches_in_flight_are_collected_in_order_with_their_own_statistics() {
+    let n = 300;
+    let expected = cpu_steps(n);
+    let needed = expected.iter().max().unwrap() + 1;
+    let g = graph_with_loop_bound("Walk", "BOUND").unwrap();
+    let split = || g.layouts["split"].clone();
+    let mut instance = bounded_instance(&g, "split", split(), n, needed);
+    let single = instance.run_frame(0, 0).unwrap();
+    instance.submit_frames(1, 1, 0).unwrap();
+    instance.submit_frames(2, 2, 0).unwrap();
+    assert_eq!(instance.frames_in_flight(), 2);
+    let e = instance.submit_frames(4, 1, 0).unwrap_err().to_string();
+    assert!(e.contains("2 batches are in flight already"), "{e}");
+    let first = instance.collect_frames().unwrap().expect("the first batch");
+    let second = instance.collect_frames().unwrap().expect("the second batch");
+    assert!(instance.collect_frames().unwrap().is_none());
+    assert!(!single.counters.is_empty());
+    assert_eq!(first.counters, single.counters, "one frame");
+    for (name, &v) in &single.counters {
+        assert_eq!(second.counters[name], 2 * v, "counter {name} over two frames");
+    }
+    assert_eq!((first.host_iterations, second.host_iterations), (needed, 2 * needed));
+    let steps: Vec<u32> = bytemuck::pod_collect_to_vec(&instance.read("steps").unwrap());
+    assert_eq!(steps, expected);
+
+    let mut short = bounded_instance(&g, "split", split(), n, needed - 1);
+    short.submit_frames(0, 1, 0).unwrap();
+    short.submit_frames(1, 1, 0).unwrap();
+    let e = short.collect_frames().unwrap_err().to_string();
+    assert!(e.contains("still alive after"), "{e}");
 }
 
 /// The text of function `name` in `wgsl`, from its `fn` line to its closing brace.

@@ -174,14 +174,16 @@ impl Session {
             Some(t) => {
                 let budget = Duration::from_secs_f64(t.max(0.0));
                 while started.elapsed() < budget {
-                    session.render_for(budget - started.elapsed(), u32::MAX)?;
+                    session.render_for(Some(budget - started.elapsed()), u32::MAX)?;
                 }
+                session.settle()?;
                 anyhow::Ok(())
             }
             None => {
                 while session.frames < frames {
-                    session.render_for(Duration::from_millis(200), frames - session.frames)?;
+                    session.render_for(None, frames - session.frames)?;
                 }
+                session.settle()?;
                 Ok(())
             }
         })

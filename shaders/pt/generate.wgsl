@@ -1,8 +1,11 @@
-// Pass `generate` (Start over PATHS): path `index` samples pixel index % PIXELS, jittered
-// uniformly inside the pixel.
+// Pass `generate` (Start over PATHS): path `index` samples pixel index % PIXELS (in 8x8
+// tiles with TILED_PIXELS, camera_tiled_pixel), jittered uniformly inside the pixel.
 
 fn generate(path: ptr<function, CameraPath>, index: u32) -> bool {
-    let pixel = index % PIXELS;
+    var pixel = index % PIXELS;
+    if (TILED_PIXELS) {
+        pixel = camera_tiled_pixel(pixel);
+    }
     var rng = rng_seed(frame.seed, frame.index, index);
     let jitter = rng_vec2(&rng);
     let x = f32(pixel % WIDTH) + jitter.x;

@@ -224,14 +224,14 @@ fn on_one_gpu(args: &ReferenceArgs, run: &Run, target: &mut Target) -> Result<()
     let (mut absorbed_at, mut saved_at) = (Instant::now(), Instant::now());
     let mut seconds_saved = 0.0;
     loop {
-        let (step, max) = match (args.time, args.frames) {
-            (Some(t), _) => (t.saturating_sub(start.elapsed()), u32::MAX),
-            (None, frames) => (Duration::MAX, frames.unwrap_or(0).saturating_sub(session.frames)),
+        let (left, max) = match (args.time, args.frames) {
+            (Some(t), _) => (Some(t.saturating_sub(start.elapsed())), u32::MAX),
+            (None, frames) => (None, frames.unwrap_or(0).saturating_sub(session.frames)),
         };
-        if step.is_zero() || max == 0 {
+        if left.is_some_and(|l| l.is_zero()) || max == 0 {
             break;
         }
-        session.render_for(step.min(Duration::from_millis(100)), max)?;
+        session.render_for(left, max)?;
         if absorbed_at.elapsed() >= ABSORB_EVERY || saved_at.elapsed() >= args.checkpoint {
             film.absorb(&session.take_accumulation()?)?;
             absorbed_at = Instant::now();

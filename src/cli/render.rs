@@ -136,11 +136,12 @@ pub fn render(args: RenderArgs) -> Result<()> {
             break;
         }
         match args.time {
-            Some(t) => session.render_for(t.saturating_sub(elapsed).min(Duration::from_millis(100)), u32::MAX)?,
-            None => session.render_for(Duration::from_millis(100), args.frames - session.frames)?,
+            Some(t) => session.render_for(Some(t.saturating_sub(elapsed)), u32::MAX)?,
+            None => session.render_for(None, args.frames - session.frames)?,
         };
+        // Rates of the frames read back (one batch may still be running).
         let secs = start.elapsed().as_secs_f64();
-        let samples = session.samples_per_pixel() as f64 * (w as f64 * h as f64);
+        let samples = session.settled as f64 * session.options.samples_per_frame as f64 * (w as f64 * h as f64);
         if let Some(r) = &reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
@@ -161,6 +162,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             None => bar.set_position(session.frames as u64),
         }
     }
+    session.settle()?;
     bar.finish();
     let seconds = start.elapsed().as_secs_f64();
     let rejected = session.counters.get("samples_rejected").copied().unwrap_or(0);

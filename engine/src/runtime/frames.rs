@@ -1,11 +1,12 @@
 //! Running batches of frames: the frame records (chunk and parameters), the frame's steps
 //! (phases chunk by chunk, operators), host-driven loops, and the read-back of control
-//! words, counters and timestamps.
+//! words, counters and timestamps, which a caller may collect while the next batch runs
+//! (two batches in flight, each with its own records and read-back buffers).
 
 use super::Instance;
 use super::pipelines::{Kernel, RECORD_STRIDE, kernel_seconds, physical};
 use super::recorder::{MAX_QUERIES, MAX_TIMED, Recorder};
-use super::{FrameStats, MAX_BATCH};
+use super::{FrameStats, IN_FLIGHT, MAX_BATCH};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::graph::FrameStep;
@@ -14,7 +15,7 @@ use crate::operator::OpKind;
 use crate::plan::{Port, Root, Step};
 use crate::program::Program;
 use crate::resolve::{BOUNDARY_HEADER, BufferRef};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 
 /// Host loop iterations after which a loop is declared stuck.
 const MAX_HOST_ITERATIONS: u32 = 1 << 20;
@@ -24,23 +25,48 @@ const SUBMIT_EVERY: u32 = 512;
 
 /// The per-instance state of running frames.
 pub struct FrameState {
+    /// The buffers of each batch that can be in flight.
+    slots: [BatchSlot; IN_FLIGHT],
+    /// The slot of the batch being recorded.
+    current: usize,
+    /// The records of the batch being recorded: index, seed, base, count, parameters.
+    records: Vec<Vec<u32>>,
+    /// Where host loops read back whether work is left.
+    loop_readback: wgpu::Buffer,
+    /// Counter totals since the instance was created, as of the last batch collected.
+    pub totals: Vec<u64>,
+    /// Host loop iterations the previous frame needed, per loop (the next frame's first batch).
+    last_iterations: BTreeMap<usize, u32>,
+    /// The bounded loops of the batch being recorded, each with its copy in the slot's
+    /// check buffer.
+    checks: Vec<LoopCheck>,
+    /// Batches submitted and not yet collected, oldest first.
+    in_flight: VecDeque<Pending>,
+}
+
+/// The buffers one batch in flight uses: its frame records, timestamp queries and read-backs.
+struct BatchSlot {
     /// Frame records, one per chunk of a phase and per operator of each frame of a batch.
     records_buffer: wgpu::Buffer,
     /// The frame record's bind group (group 1).
     frame_group: wgpu::BindGroup,
-    /// The records of the batch being run: index, seed, base, count, parameters.
-    records: Vec<Vec<u32>>,
     queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
+    /// Control words, counter totals and timestamps at the batch's end.
     readback: wgpu::Buffer,
-    /// Counter totals since the instance was created.
-    pub totals: Vec<u64>,
-    /// Host loop iterations the previous frame needed, per loop (the next frame's first batch).
-    last_iterations: BTreeMap<usize, u32>,
     /// Copies of the control words (and boundary headers) after each bounded loop of the
-    /// batch, read back with the batch.
+    /// batch.
     check_buffer: wgpu::Buffer,
-    /// The bounded loops of the batch, each with its copy in `check_buffer`.
+}
+
+/// A submitted batch whose read-back waits to be collected.
+struct Pending {
+    slot: usize,
+    /// The batch's last submission: its read-back is ready once this one has run.
+    submission: wgpu::SubmissionIndex,
     checks: Vec<LoopCheck>,
+    /// Timing slot of each timestamp pair the batch wrote.
+    timed: Vec<usize>,
+    host_iterations: u32,
 }
 
 /// Checks a bounded loop can record per batch before it falls back to a host read-back.
@@ -50,10 +76,10 @@ const MAX_CHECKS: u64 = 256;
 #[derive(Debug, Clone)]
 struct LoopCheck {
     chain: ChainId,
-    /// The record of the chunk the loop ran for.
-    record: usize,
     /// Iterations it ran.
     bound: u32,
+    /// Items of the chunk the loop ran for.
+    items: u64,
     /// Byte offset of its copy of the control words in the check buffer.
     at: u64,
     /// Byte offsets of its copies of the chain's boundary headers.
@@ -85,6 +111,35 @@ enum Dispatch {
 impl FrameState {
     pub fn new(gpu: &Gpu, program: &Program, layout: &wgpu::BindGroupLayout) -> FrameState {
         let device = &gpu.device;
+        let readback = Readback::of(program);
+        let slots = [0, 1].map(|_| BatchSlot::new(gpu, program, layout, &readback));
+        let loop_readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("loop readback"),
+            size: check_bytes(program),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        FrameState {
+            slots,
+            current: 0,
+            records: Vec::new(),
+            loop_readback,
+            totals: vec![0; program.plan.graph.counters.len()],
+            last_iterations: BTreeMap::new(),
+            checks: Vec::new(),
+            in_flight: VecDeque::new(),
+        }
+    }
+
+    /// The timestamp queries of the batch being recorded.
+    fn queries(&self) -> &Option<(wgpu::QuerySet, wgpu::Buffer)> {
+        &self.slots[self.current].queries
+    }
+}
+
+impl BatchSlot {
+    fn new(gpu: &Gpu, program: &Program, layout: &wgpu::BindGroupLayout, readback: &Readback) -> BatchSlot {
+        let device = &gpu.device;
         let records_buffer = records_buffer(device, 64);
         let frame_group = frame_group(device, layout, &records_buffer);
         let timing = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES;
@@ -102,11 +157,9 @@ impl FrameState {
             });
             (set, resolve)
         });
-        let ncounters = program.plan.graph.counters.len() as u64;
-        let readback_words = program.resolved.control.len as u64 + 4 * program.plan.boundaries.len() as u64 * 2;
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: (4 * readback_words + 8 * ncounters + 16 * MAX_TIMED as u64 + 8).next_multiple_of(8),
+            size: readback.bytes(MAX_TIMED as u64),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -116,17 +169,39 @@ impl FrameState {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        FrameState {
+        BatchSlot {
             records_buffer,
             frame_group,
-            records: Vec::new(),
             queries,
             readback,
-            totals: vec![0; ncounters as usize],
-            last_iterations: BTreeMap::new(),
             check_buffer,
-            checks: Vec::new(),
         }
+    }
+}
+
+/// Where a batch's read-back holds what: the control words first, then the counter totals
+/// (8 bytes each), then the timestamp pairs (16 bytes each).
+struct Readback {
+    control_bytes: u64,
+    totals_at: u64,
+    ts_at: u64,
+}
+
+impl Readback {
+    fn of(program: &Program) -> Readback {
+        let control_bytes = (4 * program.resolved.control.len as u64).max(16);
+        let totals_at = control_bytes.next_multiple_of(8);
+        let ts_at = totals_at + 8 * program.plan.graph.counters.len() as u64;
+        Readback {
+            control_bytes,
+            totals_at,
+            ts_at,
+        }
+    }
+
+    /// Bytes used with `pairs` timestamp pairs.
+    fn bytes(&self, pairs: u64) -> u64 {
+        (self.ts_at + 16 * pairs).next_multiple_of(8)
     }
 }
 
@@ -168,13 +243,39 @@ impl Instance<'_> {
     }
 
     /// Runs frames `first .. first + count` (at most [`MAX_BATCH`]) with `seed`, recorded
-    /// together and read back once: the statistics are the batch's.
+    /// together and read back once, and waits for them: the statistics are the batch's,
+    /// with those of any batch submitted before and not yet collected.
     pub fn run_frames(&mut self, first: u32, count: u32, seed: u32) -> Result<FrameStats> {
+        self.submit_frames(first, count, seed)?;
+        let mut stats = FrameStats::default();
+        while let Some(s) = self.collect_frames()? {
+            stats.add(&s);
+        }
+        Ok(stats)
+    }
+
+    /// Batches submitted and not yet collected.
+    pub fn frames_in_flight(&self) -> usize {
+        self.frames.in_flight.len()
+    }
+
+    /// Records frames `first .. first + count` (at most [`MAX_BATCH`]) with `seed` and submits
+    /// them without waiting; [`Instance::collect_frames`] reads their statistics back later,
+    /// so the host can record the next batch while the GPU runs this one. At most
+    /// [`IN_FLIGHT`] batches can be in flight. Host loops without a loop bound still wait for
+    /// the GPU within the batch.
+    pub fn submit_frames(&mut self, first: u32, count: u32, seed: u32) -> Result<()> {
         if count == 0 || count > MAX_BATCH {
             return Err(Error::Runtime(format!(
                 "a batch runs 1 to {MAX_BATCH} frames, not {count}"
             )));
         }
+        if self.frames.in_flight.len() >= IN_FLIGHT {
+            return Err(Error::Runtime(format!(
+                "{IN_FLIGHT} batches are in flight already: collect one first"
+            )));
+        }
+        self.frames.current = self.frames.in_flight.back().map_or(0, |p| (p.slot + 1) % IN_FLIGHT);
         self.frames.checks.clear();
         let runs = self.write_records(first, count, seed)?;
         let scope = self.gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -201,9 +302,21 @@ impl Instance<'_> {
                 rec.submit(&self.gpu.device, &self.gpu.queue);
             }
         }
-        rec.resolve(&self.frames.queries);
-        let stats = self.read_back(rec, scope)?;
-        Ok(stats)
+        let slot = self.frames.current;
+        rec.resolve(&self.frames.slots[slot].queries);
+        self.copy_read_back(&mut rec);
+        let submission = self.gpu.queue.submit([rec.encoder.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu(format!("running a frame failed: {e}")));
+        }
+        self.frames.in_flight.push_back(Pending {
+            slot,
+            submission,
+            checks: std::mem::take(&mut self.frames.checks),
+            timed: rec.timed,
+            host_iterations: rec.host_iterations,
+        });
+        Ok(())
     }
 
     /// The records of the batch (written to the GPU) and what each runs.
@@ -256,16 +369,17 @@ impl Instance<'_> {
                 }
             }
         }
-        if records.len() * RECORD_STRIDE as usize > self.frames.records_buffer.size() as usize {
+        let slot = &mut self.frames.slots[self.frames.current];
+        if records.len() * RECORD_STRIDE as usize > slot.records_buffer.size() as usize {
             let device = &self.gpu.device;
-            self.frames.records_buffer = records_buffer(device, records.len().next_power_of_two());
-            self.frames.frame_group = frame_group(device, &self.kernels.frame_layout, &self.frames.records_buffer);
+            slot.records_buffer = records_buffer(device, records.len().next_power_of_two());
+            slot.frame_group = frame_group(device, &self.kernels.frame_layout, &slot.records_buffer);
         }
         let mut bytes = vec![0u8; records.len() * RECORD_STRIDE as usize];
         for (i, r) in records.iter().enumerate() {
             bytes[i * RECORD_STRIDE as usize..][..4 * r.len()].copy_from_slice(bytemuck::cast_slice(r));
         }
-        self.gpu.queue.write_buffer(&self.frames.records_buffer, 0, &bytes);
+        self.gpu.queue.write_buffer(&slot.records_buffer, 0, &bytes);
         self.frames.records = records;
         Ok(runs)
     }
@@ -369,13 +483,13 @@ impl Instance<'_> {
     }
 
     fn dispatch(&self, rec: &mut Recorder, k: &Kernel, record: usize, groups: Dispatch) {
-        let query = k.timing.and_then(|slot| rec.next_query(&self.frames.queries, slot));
+        let query = k.timing.and_then(|slot| rec.next_query(self.frames.queries(), slot));
         let offset = [(record as u64 * RECORD_STRIDE) as u32];
         let bind_group = &k.bind_groups[rec.parity % k.bind_groups.len()];
-        let set = self.frames.queries.as_ref().map(|(set, _)| set);
+        let set = self.frames.queries().as_ref().map(|(set, _)| set);
         let max = self.program.target.max_workgroups_per_dimension as u64;
         let args = self.buffers.buffer(self.buffers.slot(&BufferRef::Args));
-        let frame_group = &self.frames.frame_group;
+        let frame_group = &self.frames.slots[self.frames.current].frame_group;
         rec.unsubmitted += 1;
         let pass = rec.pass();
         if let (Some(i), Some(set)) = (query, set) {
@@ -540,12 +654,12 @@ impl Instance<'_> {
     /// and its boundaries' headers) for the batch's read-back.
     fn check_loop(&mut self, rec: &mut Recorder, chain: ChainId, record: usize, bound: u32) {
         let at = self.frames.checks.len() as u64 * check_bytes(&self.program);
-        let buffer = &self.frames.check_buffer;
+        let buffer = &self.frames.slots[self.frames.current].check_buffer;
         rec.end_pass();
         let headers = self.copy_loop_words(rec, chain, buffer, at);
         self.frames.checks.push(LoopCheck {
             chain,
-            record,
+            items: self.frames.records[record][3] as u64,
             bound,
             at,
             headers,
@@ -578,19 +692,19 @@ impl Instance<'_> {
     /// Submits what is recorded and reads back whether the loop over `chain` has work left.
     fn loop_goes_on(&self, rec: &mut Recorder, chain: ChainId, record: usize) -> Result<bool> {
         rec.end_pass();
-        let headers = self.copy_loop_words(rec, chain, &self.frames.readback, 0);
+        let headers = self.copy_loop_words(rec, chain, &self.frames.loop_readback, 0);
         let end = headers
             .last()
             .map_or(self.buffers.slot(&BufferRef::Control).size, |h| h + 8);
-        rec.submit(&self.gpu.device, &self.gpu.queue);
-        let bytes = map_buffer(self.gpu, &self.frames.readback, end)?;
-        Ok(self.work_left(&bytes, 0, &headers, chain, record))
+        let submission = rec.submit(&self.gpu.device, &self.gpu.queue);
+        let bytes = map_buffer(self.gpu, &self.frames.loop_readback, end, submission)?;
+        Ok(self.work_left(&bytes, 0, &headers, chain, self.frames.records[record][3] as u64))
     }
 
     /// Whether a loop over `chain` has work left, from the copy at byte `at` of `bytes`
     /// of the control words and its boundary headers (at `headers`): items alive in slots,
-    /// items appended to its boundaries, or indices not yet taken.
-    fn work_left(&self, bytes: &[u8], at: u64, headers: &[u64], chain: ChainId, record: usize) -> bool {
+    /// items appended to its boundaries, or indices not yet taken (of the chunk's `items`).
+    fn work_left(&self, bytes: &[u8], at: u64, headers: &[u64], chain: ChainId, items: u64) -> bool {
         let words: &[u32] = bytemuck::cast_slice(bytes);
         let word = |w: u32| words[at as usize / 4 + w as usize];
         let control = &self.program.resolved.control;
@@ -600,21 +714,22 @@ impl Instance<'_> {
         let phase = self.program.plan.graph.phase_of_chain(chain);
         let items = match control.domain.get(&phase) {
             Some(&w) => word(w) as u64,
-            None => self.frames.records[record][3] as u64,
+            None => items,
         };
         let untaken = control.next.get(&chain).is_some_and(|&w| (word(w) as u64) < items);
         alive > 0 || pending > 0 || untaken
     }
 
-    /// An error for the first bounded loop of the batch that left work.
-    fn check_bounded_loops(&self) -> Result<()> {
-        if self.frames.checks.is_empty() {
+    /// An error for the first bounded loop of the batch `p` that left work.
+    fn check_bounded_loops(&self, p: &Pending) -> Result<()> {
+        if p.checks.is_empty() {
             return Ok(());
         }
-        let end = self.frames.checks.len() as u64 * check_bytes(&self.program);
-        let bytes = map_buffer(self.gpu, &self.frames.check_buffer, end)?;
-        for c in &self.frames.checks {
-            if self.work_left(&bytes, c.at, &c.headers, c.chain, c.record) {
+        let end = p.checks.len() as u64 * check_bytes(&self.program);
+        let buffer = &self.frames.slots[p.slot].check_buffer;
+        let bytes = map_buffer(self.gpu, buffer, end, p.submission.clone())?;
+        for c in &p.checks {
+            if self.work_left(&bytes, c.at, &c.headers, c.chain, c.items) {
                 let item = &self.program.plan.graph.chains[c.chain].item;
                 return Err(Error::Runtime(format!(
                     "items of '{item}' still alive after {} loop iterations, the graph's loop_bounds for '{item}': a loop pass runs longer than its bound",
@@ -625,61 +740,71 @@ impl Instance<'_> {
         Ok(())
     }
 
-    /// Submits the batch and reads back control words, counter totals and timestamps.
-    fn read_back(&mut self, mut rec: Recorder, scope: wgpu::ErrorScopeGuard) -> Result<FrameStats> {
+    /// Records the copies of the control words, counter totals and timestamps into the
+    /// batch's read-back buffer.
+    fn copy_read_back(&self, rec: &mut Recorder) {
+        let layout = Readback::of(&self.program);
+        let slot = &self.frames.slots[self.frames.current];
         let control = self.buffers.slot(&BufferRef::Control);
-        let control_bytes = control.size;
-        let ncounters = self.frames.totals.len() as u64;
-        let totals_at = control_bytes.next_multiple_of(8);
-        let ts_at = totals_at + 8 * ncounters;
+        rec.end_pass();
         rec.encoder.copy_buffer_to_buffer(
             self.buffers.buffer(control),
             control.offset,
-            &self.frames.readback,
+            &slot.readback,
             0,
-            control_bytes,
+            layout.control_bytes,
         );
+        let ncounters = self.frames.totals.len() as u64;
         if ncounters > 0 {
             let totals = self.buffers.slot(&BufferRef::Totals);
             rec.encoder.copy_buffer_to_buffer(
                 self.buffers.buffer(totals),
                 totals.offset,
-                &self.frames.readback,
-                totals_at,
+                &slot.readback,
+                layout.totals_at,
                 8 * ncounters,
             );
         }
         let pairs = rec.timed.len() as u64;
-        if let (Some((_, resolve)), true) = (&self.frames.queries, pairs > 0) {
+        if let (Some((_, resolve)), true) = (&slot.queries, pairs > 0) {
             rec.encoder
-                .copy_buffer_to_buffer(resolve, 0, &self.frames.readback, ts_at, 16 * pairs);
+                .copy_buffer_to_buffer(resolve, 0, &slot.readback, layout.ts_at, 16 * pairs);
         }
-        self.gpu.queue.submit([rec.encoder.finish()]);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu(format!("running a frame failed: {e}")));
-        }
-        let data = map_buffer(self.gpu, &self.frames.readback, ts_at + 16 * pairs)?;
-        let words: &[u32] = bytemuck::cast_slice(&data[..control_bytes as usize]);
+    }
+
+    /// Waits for the oldest batch in flight and reads its control words, counter totals and
+    /// timestamps back: its statistics, or `None` when no batch is in flight. An overflowed
+    /// queue, a bounded loop that left work or a key out of range in that batch is the error.
+    pub fn collect_frames(&mut self) -> Result<Option<FrameStats>> {
+        let Some(p) = self.frames.in_flight.pop_front() else {
+            return Ok(None);
+        };
+        let layout = Readback::of(&self.program);
+        let pairs = p.timed.len() as u64;
+        let readback = &self.frames.slots[p.slot].readback;
+        let data = map_buffer(self.gpu, readback, layout.bytes(pairs), p.submission.clone())?;
+        let words: &[u32] = bytemuck::cast_slice(&data[..layout.control_bytes as usize]);
         self.check_overflows(words)?;
-        self.check_bounded_loops()?;
+        self.check_bounded_loops(&p)?;
         let mut stats = FrameStats {
-            host_iterations: rec.host_iterations,
+            host_iterations: p.host_iterations,
             loops_capped: words[self.program.resolved.control.loop_capped as usize],
             ..Default::default()
         };
         let g = &self.program.plan.graph;
         for (i, name) in g.counters.iter().enumerate() {
-            let at = (totals_at + 8 * i as u64) as usize;
+            let at = (layout.totals_at + 8 * i as u64) as usize;
             let total = u64::from_le_bytes(data[at..at + 8].try_into().expect("8 bytes"));
             stats.counters.insert(name.clone(), total - self.frames.totals[i]);
             self.frames.totals[i] = total;
         }
         if pairs > 0 {
             let period = self.gpu.queue.get_timestamp_period() as f64 * 1e-9;
-            let ticks: &[u64] = bytemuck::cast_slice(&data[ts_at as usize..(ts_at + 16 * pairs) as usize]);
-            stats.kernel_seconds = kernel_seconds(&self.kernels.timed_names, &rec.timed, ticks, period);
+            let ts = layout.ts_at as usize;
+            let ticks: &[u64] = bytemuck::cast_slice(&data[ts..ts + 16 * pairs as usize]);
+            stats.kernel_seconds = kernel_seconds(&self.kernels.timed_names, &p.timed, ticks, period);
         }
-        Ok(stats)
+        Ok(Some(stats))
     }
 
     /// An overflowed queue or an operator that met a key out of range is an error.
@@ -713,11 +838,12 @@ impl Instance<'_> {
     }
 }
 
-/// Maps the first `size` bytes of `buffer` (rounded up to 8), waits, and copies them out.
-fn map_buffer(gpu: &Gpu, buffer: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
+/// Maps the first `size` bytes of `buffer` (rounded up to 8), waits for `submission` (the
+/// last one writing it; later ones go on running), and copies them out.
+fn map_buffer(gpu: &Gpu, buffer: &wgpu::Buffer, size: u64, submission: wgpu::SubmissionIndex) -> Result<Vec<u8>> {
     let slice = buffer.slice(0..size.next_multiple_of(8));
     slice.map_async(wgpu::MapMode::Read, |_| {});
-    gpu.wait()?;
+    gpu.wait_for(submission)?;
     let data = slice
         .get_mapped_range()
         .map_err(|e| Error::Gpu(format!("mapping a read-back buffer failed: {e}")))?

@@ -39,11 +39,11 @@ impl Recorder {
 
     /// Submits what is recorded so far and goes on in a new encoder: the GPU starts on it
     /// while the rest of the batch is recorded.
-    pub fn submit(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) {
+    pub fn submit(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> wgpu::SubmissionIndex {
         self.end_pass();
         let encoder = std::mem::replace(&mut self.encoder, device.create_command_encoder(&Default::default()));
-        queue.submit([encoder.finish()]);
         self.unsubmitted = 0;
+        queue.submit([encoder.finish()])
     }
 
     /// The open compute pass (opened when none is).
