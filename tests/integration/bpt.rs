@@ -223,40 +223,68 @@ pub fn excess_z(a: &Frames, b: &Frames, block: usize, c: usize) -> f64 {
     (ma - mb) / (sa * sa + sb * sb).sqrt()
 }
 
-/// A structural gap shown on purpose: in cornell-glossy-point the glass sphere focuses the
-/// point light into a caustic on the floor, light - specular - floor - camera paths that path
-/// tracing cannot sample (its BSDF-sampled rays never hit a point light), while light tracing
-/// (the t = 1 connection) and BPT do. So some block of the floor is brighter in BPT than in PT
-/// by many standard errors, and light tracing is brighter than PT there too. Elsewhere the
-/// estimators agree (the tests above).
+/// A structural gap shown on purpose: in cornell-glossy-point the glass sphere refracts and
+/// reflects the point light onto the walls and the floor (light - specular - diffuse - camera
+/// paths), which path tracing cannot sample (its BSDF-sampled rays never hit a point light),
+/// while light tracing (the t = 1 connection) and BPT do. That light is spread thin: about
+/// 2.5% of the image (measured with 8 samples per pixel, rows and tiles, three seeds each:
+/// 2.3-2.9%), no single block of which is reliably many standard errors brighter, so the
+/// test compares regions' per-frame sums (whose spread includes the splats' correlations).
+/// Over the whole image BPT exceeds PT by 8.5-9.3 standard errors; light tracing, which
+/// cannot see the sphere itself (its camera connections do not pass delta surfaces), exceeds
+/// PT by 8.2-10.1 on the blocks where it is not far below BPT (48 of 64) and agrees with BPT
+/// there (|z| <= 1.3). Were the estimators to agree, z > 6 has probability 1e-9.
 #[test]
 fn the_point_light_caustic_is_found_by_lt_and_bpt_but_not_by_pt() {
     let scene = load_scene("cornell-glossy-point").unwrap();
     let (size, n) = (32, 8);
-    let pt = render_frames(&scene, "pt", "NaivePTsk", size, 4, FRAMES, 27, n);
-    let bpt = render_frames(&scene, "bpt-naive", "NaiveBPT", size, 4, FRAMES, 28, n);
+    let pt = render_frames(&scene, "pt", "NaivePTsk", size, 8, FRAMES, 27, n);
+    let bpt = render_frames(&scene, "bpt-naive", "NaiveBPT", size, 8, FRAMES, 28, n);
     // Light tracing spreads its samples over the whole image: 16 per pixel for the power.
     let lt = render_frames(&scene, "lt", "LTsk", size, 16, FRAMES, 29, n);
-    let (block, z) = (0..(n * n) as usize)
-        .map(|b| (b, excess_z(&bpt, &pt, b, 1)))
-        .fold((0, f64::MIN), |best, x| if x.1 > best.1 { x } else { best });
-    let (m_bpt, m_pt) = (bpt.stat(block, 1).0, pt.stat(block, 1).0);
-    eprintln!("caustic block {block}: bpt {m_bpt:.4}, pt {m_pt:.4}, z {z:.1}");
-    // Were the estimators to agree, the largest of 64 blocks' z would exceed 6 with a
-    // probability under 64 x 1e-9; the caustic adds tens of percent to its block (z about 8
-    // at 4 samples per pixel in 48 frames).
-    assert!(z > 6.0, "no block where BPT finds light PT cannot (best z {z:.1})");
+    let all = vec![true; (n * n) as usize];
+    let (z, ratio) = region_excess(&bpt, &pt, &all);
+    eprintln!("whole image: bpt over pt {ratio:.4}, z {z:.1}");
     assert!(
-        m_bpt > 1.1 * m_pt,
-        "block {block}: the caustic adds little ({m_bpt} vs {m_pt})"
+        z > 6.0 && ratio > 1.01,
+        "BPT finds no light PT cannot (z {z:.1}, ratio {ratio:.4})"
     );
-    let z_lt = excess_z(&lt, &pt, block, 1);
-    eprintln!("light tracing in block {block}: z {z_lt:.1}");
-    // One block chosen without light tracing's samples: z > 4 by chance has probability 3e-5.
+    let seen: Vec<bool> = (0..all.len()).map(|b| excess_z(&lt, &bpt, b, 1) > -4.0).collect();
+    let kept = seen.iter().filter(|k| **k).count();
     assert!(
-        z_lt > 4.0,
-        "light tracing does not find the caustic of block {block} (z {z_lt:.1})"
+        kept >= all.len() / 2,
+        "light tracing is far below BPT in {} blocks",
+        all.len() - kept
     );
+    let (z_lt, ratio_lt) = region_excess(&lt, &pt, &seen);
+    let (z_agree, _) = region_excess(&lt, &bpt, &seen);
+    eprintln!("{kept} blocks: lt over pt {ratio_lt:.4}, z {z_lt:.1}; lt against bpt z {z_agree:.1}");
+    assert!(
+        z_lt > 6.0 && ratio_lt > 1.01,
+        "light tracing finds no light PT cannot (z {z_lt:.1})"
+    );
+    assert!(
+        z_agree.abs() < 4.0,
+        "light tracing and BPT disagree there (z {z_agree:.1})"
+    );
+}
+
+/// How much brighter (channel 1) `a` is than `b` over the blocks `keep`: the z-score of the
+/// difference of their per-frame sums, and the ratio of the sums.
+fn region_excess(a: &Frames, b: &Frames, keep: &[bool]) -> (f64, f64) {
+    let region = |f: &Frames| -> (f64, f64) {
+        let sums: Vec<f64> = f
+            .means
+            .iter()
+            .map(|frame| frame.iter().zip(keep).filter(|(_, k)| **k).map(|(m, _)| m[1]).sum())
+            .collect();
+        let k = sums.len() as f64;
+        let mean = sums.iter().sum::<f64>() / k;
+        let var = sums.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (k - 1.0);
+        (mean, (var / k).sqrt())
+    };
+    let ((ma, sa), (mb, sb)) = (region(a), region(b));
+    ((ma - mb) / sa.hypot(sb), ma / mb)
 }
 
 /// A small area light next to a diffuse wall: a 20 cm square 5 cm in front of it, facing it,

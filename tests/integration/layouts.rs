@@ -39,7 +39,8 @@ fn pt_in_tiled_pixel_order_matches_its_layouts_and_the_row_order() {
         assert_same_render(&reference, &other, &format!("{layout} against NaivePTsk in tiles"));
     }
     let image = &reference.image;
-    let rows = render(&scene, "pt", "NaivePTsk", size, 4, 4, 43, &[]).image;
+    let rows = [("TILED_PIXELS", ConstValue::Bool(false))];
+    let rows = render(&scene, "pt", "NaivePTsk", size, 4, 4, 43, &rows).image;
     // The box fills the frame: a pixel whose 16 paths all miss the light is rare (rows with
     // seed 43 have 1 of 400, in the shadow under the box); a tile order that skipped pixels
     // would leave whole runs of them black.

@@ -38,15 +38,17 @@ fn relative_error(pm: &Frames, pt: &Frames) -> (f64, f64) {
 }
 
 /// `graph` in `layout` with the radius `r0` (of the scene's radius), Knaus and Zwicker's
-/// `alpha` (1: a fixed radius) and 8 samples per pixel per frame.
+/// `alpha` (1: a fixed radius) and 16 samples per pixel per frame (with 8, the bias at radius
+/// 0.1 on the diffuse box measured 1.9 noise units with one of PT's random streams: too thin a
+/// margin for the test's 2).
 fn photon_frames(scene: &LoadedScene, graph: &str, layout: &str, r0: f32, alpha: f32, seed: u32) -> Frames {
     let constants = [("PM_RADIUS", ConstValue::F32(r0)), ("PM_ALPHA", ConstValue::F32(alpha))];
-    render_frames_with(scene, graph, layout, (SIZE, 8, FRAMES, seed, BLOCKS), &constants)
+    render_frames_with(scene, graph, layout, (SIZE, 16, FRAMES, seed, BLOCKS), &constants)
 }
 
-/// Path tracing with 16 samples per pixel per frame: the reference.
+/// Path tracing with 32 samples per pixel per frame: the reference.
 fn path_traced(scene: &LoadedScene) -> Frames {
-    render_frames(scene, "pt", "NaivePTsk", SIZE, 16, FRAMES, 17, BLOCKS)
+    render_frames(scene, "pt", "NaivePTsk", SIZE, 32, FRAMES, 17, BLOCKS)
 }
 
 /// Checks (1), (2) and (4) of the module comment for `graph` on `scene`, and (3) when
