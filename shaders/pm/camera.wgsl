@@ -220,8 +220,16 @@ fn merge_begin(p: MergePath) -> Merge {
 // The density estimation of `pending` begun (counted as `pm_queries`), with this frame's
 // radius and nothing found yet.
 fn merge_query(pending: PendingMerge) -> Merge {
+    var m = merge_query_unset(pending);
+    m.bsdf = pending_merge_bsdf(pending);
+    return m;
+}
+
+// `merge_query` with the BSDF not yet set up: a query that finds nothing needs none, so a
+// gather may set it up at its first photon (VCM's, whose queries mostly find none).
+fn merge_query_unset(pending: PendingMerge) -> Merge {
     count(COUNTER_PM_QUERIES, 1u);
-    return Merge(pending.position, pm_radius(), true, pending_merge_bsdf(pending), pending.d_vm, pending.length, vec3<f32>(0.0));
+    return Merge(pending.position, pm_radius(), true, Bsdf(), pending.d_vm, pending.length, vec3<f32>(0.0));
 }
 
 // Adds a photon in range (counted as `pm_found`; the queries as `pm_queries`), standing for

@@ -104,12 +104,14 @@ fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
 
 // Pass `vcm_gather` (Loop): the pending merge, with every cached vertex within the radius
 // (the full hash grid's NaiveQuery over `vcm_grid`, shaders/pm/grid.wgsl), over
-// pi r^2 N_light.
+// pi r^2 N_light. The vertex's BSDF is set up at the first cached vertex found: most queries
+// find none where the radius is small against the scene (Sponza's: 1.6 M queries, 17 k found).
 fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
     if (((*p).flags & VCM_PENDING) == 0u) {
         return true;
     }
-    var m = merge_query((*p).merge);
+    var m = merge_query_unset((*p).merge);
+    var found = false;
     let counts = vcm_counts();
     let box = cell_box(m.position, m.radius);
     var walk = cell_walk(box);
@@ -118,6 +120,10 @@ fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
         for (var i = range.x; i < range.y; i += 1u) {
             let position = vcm_grid[i].position;
             if (pm_in_range(position, m.position, m.radius) && cell_owns(box, walk.cell, position)) {
+                if (!found) {
+                    m.bsdf = pending_merge_bsdf((*p).merge);
+                    found = true;
+                }
                 vcm_merge_vertex(&m, vcm_grid[i], (*p).merge_d_vcm, counts);
             }
         }
@@ -125,7 +131,9 @@ fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
             break;
         }
     }
-    film_add((*p).camera.pixel, (*p).merge.throughput * m.sum * merge_kernel(m.radius));
+    if (found) {
+        film_add((*p).camera.pixel, (*p).merge.throughput * m.sum * merge_kernel(m.radius));
+    }
     return true;
 }
 
