@@ -378,9 +378,10 @@ impl<'g> Session<'g> {
     /// Renders toward a budget, keeping the GPU busy: submits a batch of about
     /// [`BATCH_TIME`] of frames (at most `max`, and no more than fills the `left` time of a
     /// timed run, counting the batch still running), then reads back the batch before it,
-    /// so that the host records and reads back while the GPU runs. Returns the statistics
-    /// read back (none after the first call; [`Session::settle`] reads the rest). Until a
-    /// frame's GPU time is known it renders one frame and waits for it.
+    /// so that the host records and reads back while the GPU runs. Returns the statistics of
+    /// the batches read back (empty when none finished; [`Session::settle`] reads the rest).
+    /// Until a frame's GPU time is known (always, on an adapter without timestamp queries) it
+    /// renders one frame and waits for it.
     pub fn render_for(&mut self, left: Option<Duration>, max: u32) -> Result<FrameStats> {
         let per_frame = self.kernel_seconds.values().sum::<f64>() / self.settled.max(1) as f64;
         if self.settled == 0 || per_frame <= 0.0 {
