@@ -445,12 +445,7 @@ impl<'g> Session<'g> {
             .ok_or_else(|| anyhow!("no batch of frames in flight"))?;
         let count = self.in_flight.pop_front().expect("a batch in flight");
         self.settled += count;
-        for (k, v) in &stats.counters {
-            *self.counters.entry(k.clone()).or_insert(0) += v;
-        }
-        for (k, v) in &stats.kernel_seconds {
-            *self.kernel_seconds.entry(k.clone()).or_insert(0.0) += v;
-        }
+        stats.add_to(&mut self.counters, &mut self.kernel_seconds);
         self.loops_capped += stats.loops_capped as u64;
         Ok(stats)
     }

@@ -44,14 +44,19 @@ impl FrameStats {
         self.kernel_seconds.values().sum()
     }
 
+    /// Adds these counter increments and kernel times to running totals.
+    pub fn add_to(&self, counters: &mut BTreeMap<String, u64>, kernel_seconds: &mut BTreeMap<String, f64>) {
+        for (k, v) in &self.counters {
+            *counters.entry(k.clone()).or_insert(0) += v;
+        }
+        for (k, v) in &self.kernel_seconds {
+            *kernel_seconds.entry(k.clone()).or_insert(0.0) += v;
+        }
+    }
+
     /// Adds the statistics of `other` (frames run besides these) to these.
     pub fn add(&mut self, other: &FrameStats) {
-        for (k, v) in &other.counters {
-            *self.counters.entry(k.clone()).or_insert(0) += v;
-        }
-        for (k, v) in &other.kernel_seconds {
-            *self.kernel_seconds.entry(k.clone()).or_insert(0.0) += v;
-        }
+        other.add_to(&mut self.counters, &mut self.kernel_seconds);
         self.host_iterations += other.host_iterations;
         self.loops_capped += other.loops_capped;
     }

@@ -131,9 +131,7 @@ fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
             break;
         }
     }
-    if (found) {
-        film_add((*p).camera.pixel, (*p).merge.throughput * m.sum * merge_kernel(m.radius));
-    }
+    film_add((*p).camera.pixel, (*p).merge.throughput * m.sum * merge_kernel(m.radius));
     return true;
 }
 

@@ -272,16 +272,20 @@ fn the_point_light_caustic_is_found_by_lt_and_bpt_but_not_by_pt() {
 /// How much brighter (channel 1) `a` is than `b` over the blocks `keep`: the z-score of the
 /// difference of their per-frame sums, and the ratio of the sums.
 fn region_excess(a: &Frames, b: &Frames, keep: &[bool]) -> (f64, f64) {
+    // The region's per-frame sums as the one block of a render: its mean and standard error.
     let region = |f: &Frames| -> (f64, f64) {
-        let sums: Vec<f64> = f
+        let means = f
             .means
             .iter()
-            .map(|frame| frame.iter().zip(keep).filter(|(_, k)| **k).map(|(m, _)| m[1]).sum())
+            .map(|frame| {
+                vec![[
+                    frame.iter().zip(keep).filter(|(_, k)| **k).map(|(m, _)| m[1]).sum(),
+                    0.0,
+                    0.0,
+                ]]
+            })
             .collect();
-        let k = sums.len() as f64;
-        let mean = sums.iter().sum::<f64>() / k;
-        let var = sums.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (k - 1.0);
-        (mean, (var / k).sqrt())
+        Frames { means }.stat(0, 0)
     };
     let ((ma, sa), (mb, sb)) = (region(a), region(b));
     ((ma - mb) / sa.hypot(sb), ma / mb)

@@ -33,6 +33,8 @@ pub struct FrameState {
     records: Vec<Vec<u32>>,
     /// Where host loops read back whether work is left.
     loop_readback: wgpu::Buffer,
+    /// Where a batch's read-back holds what.
+    readback: Readback,
     /// Counter totals since the instance was created, as of the last batch collected.
     pub totals: Vec<u64>,
     /// Host loop iterations the previous frame needed, per loop (the next frame's first batch).
@@ -112,7 +114,7 @@ impl FrameState {
     pub fn new(gpu: &Gpu, program: &Program, layout: &wgpu::BindGroupLayout) -> FrameState {
         let device = &gpu.device;
         let readback = Readback::of(program);
-        let slots = [0, 1].map(|_| BatchSlot::new(gpu, program, layout, &readback));
+        let slots = std::array::from_fn(|_| BatchSlot::new(gpu, program, layout, &readback));
         let loop_readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("loop readback"),
             size: check_bytes(program),
@@ -124,6 +126,7 @@ impl FrameState {
             current: 0,
             records: Vec::new(),
             loop_readback,
+            readback,
             totals: vec![0; program.plan.graph.counters.len()],
             last_iterations: BTreeMap::new(),
             checks: Vec::new(),
@@ -743,7 +746,7 @@ impl Instance<'_> {
     /// Records the copies of the control words, counter totals and timestamps into the
     /// batch's read-back buffer.
     fn copy_read_back(&self, rec: &mut Recorder) {
-        let layout = Readback::of(&self.program);
+        let layout = &self.frames.readback;
         let slot = &self.frames.slots[self.frames.current];
         let control = self.buffers.slot(&BufferRef::Control);
         rec.end_pass();
@@ -779,7 +782,7 @@ impl Instance<'_> {
         let Some(p) = self.frames.in_flight.pop_front() else {
             return Ok(None);
         };
-        let layout = Readback::of(&self.program);
+        let layout = &self.frames.readback;
         let pairs = p.timed.len() as u64;
         let readback = &self.frames.slots[p.slot].readback;
         let data = map_buffer(self.gpu, readback, layout.bytes(pairs), p.submission.clone())?;
