@@ -11,9 +11,12 @@
 //   the density at every non-delta vertex, combined by MIS over the vertices (dVM,
 //   shaders/pm/scatter.wgsl).
 // PPM and PBPM count a light the camera sees directly or through delta vertices only: every
-// other path reaches the camera through a merge. The radius of frame i (from 1) is
+// other path reaches the camera through a merge. The radius of iteration i (from 1) is
 // r_i = PM_RADIUS scene radius i^((PM_ALPHA - 1) / 2) (Knaus and Zwicker 2011), the same for
-// the structure, the query, the kernel 1 / (pi r^2 PM_LIGHT_PATHS) and the MIS.
+// the structure, the query, the kernel 1 / (pi r^2 N) and the MIS, where N is the light
+// sub-paths an iteration merges (`pm_merge_paths`). A frame is one iteration, or
+// PM_ITERATIONS (VCM's): its iterations i = frame PM_ITERATIONS + 1, ... take the radius of
+// the first.
 
 const PM_PPM: u32 = 0u;
 const PM_SPPM: u32 = 1u;
@@ -23,9 +26,15 @@ const MERGE_SPECULAR_PATH: u32 = 1u;   // every vertex so far was left through a
 const MERGE_PENDING: u32 = 2u;         // a density estimation waits at the vertex below
 const MERGE_ALIVE: u32 = 4u;           // the sub-path goes on after this vertex
 
-// The merge radius of this frame.
+// The merge radius of this frame's iterations.
 fn pm_radius() -> f32 {
-    return PM_RADIUS * scene.radius * pow(f32(frame.index) + 1.0, (PM_ALPHA - 1.0) * 0.5);
+    return PM_RADIUS * scene.radius * pow(f32(frame.index * PM_ITERATIONS) + 1.0, (PM_ALPHA - 1.0) * 0.5);
+}
+
+// The light sub-paths whose vertices one iteration merges: the frame's, or their share of
+// one of the frame's PM_ITERATIONS iterations.
+fn pm_merge_paths() -> f32 {
+    return f32(PM_LIGHT_PATHS / PM_ITERATIONS);
 }
 
 // The structures' contract (shaders/pm/photon.wgsl): built for this frame's radius (times
@@ -256,12 +265,13 @@ fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
     (*m).sum += e.f * photon.throughput * w;
 }
 
-// The density estimation's kernel at `radius`: 1 / (pi r^2 PM_LIGHT_PATHS).
+// The density estimation's kernel at `radius`: 1 / (pi r^2 N), N the iteration's light
+// sub-paths.
 fn merge_kernel(radius: f32) -> f32 {
-    return 1.0 / (PI * radius * radius * f32(PM_LIGHT_PATHS));
+    return 1.0 / (PI * radius * radius * pm_merge_paths());
 }
 
-// Adds the finished estimation to the film: the sums over pi r^2 PM_LIGHT_PATHS.
+// Adds the finished estimation to the film: the sums over pi r^2 N.
 fn merge_end(p: ptr<function, MergePath>, m: Merge) {
     if (!m.pending) {
         return;

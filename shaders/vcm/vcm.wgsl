@@ -11,26 +11,35 @@
 // exactly what PBPM's do: the same random numbers, the same vertices (stored off the surface,
 // their direction read with the photons' 24 bits), the same weights. d_vc carries PBPM's dVM
 // then (see `MisCounts`).
+//
+// With PM_ITERATIONS > 1 a frame is that many VCM iterations at once (a small image then
+// fills the GPU): camera sample and light sub-path `index` belong to iteration
+// `vcm_iteration(index)`, a merge finds only the vertices of its own iteration's light
+// sub-paths (each iteration has its own buckets of the grid) and counts N_light as one
+// iteration's. Connections pick from the whole cache, as LVC-BPT's do at several samples per
+// pixel.
 
 const VCM_PENDING: u32 = 1u;    // a merge waits at the vertex below (`merge`)
 const VCM_ALIVE: u32 = 2u;      // the sub-path goes on after this vertex
 
 // A camera sub-path of VCM between passes, with the merge pending at its last vertex (its
-// PendingMerge carries d_vc there, and `merge_d_vcm` d_vcm).
+// PendingMerge carries d_vc there, and `merge_d_vcm` d_vcm), and the frame's iteration it
+// belongs to (`vcm_iteration`).
 struct VcmPath {
     camera: CameraSubpath,
     merge: PendingMerge,
     merge_d_vcm: f32,
     flags: u32,
+    iteration: u32,
 }
 
 // The strategies' counts: connections as LVC-BPT's, a merge pi r^2 N_light times a vertex
-// connection (0 without merging).
+// connection (0 without merging), N_light the light sub-paths of one iteration.
 fn vcm_counts() -> MisCounts {
     var merge = 0.0;
     if (VCM_MERGE) {
         let r = pm_radius();
-        merge = mis_pow(PI * r * r * f32(PM_LIGHT_PATHS));
+        merge = mis_pow(PI * r * r * pm_merge_paths());
     }
     return MisCounts(lvc_eta(), merge, VCM_CONNECT);
 }
@@ -51,9 +60,20 @@ fn vcm_bounce(p: ptr<function, LightPath>) -> bool {
     return lvc_light_visit(p, vcm_counts(), select(2u, 1u, VCM_MERGE));
 }
 
-// Pass `vcm_grid_keys` (Start over the stored vertices): the vertex's hash grid bucket.
+// The frame's iteration (of PM_ITERATIONS) of camera sample or light sub-path `index`: the
+// samples per pixel of a frame, and the light sub-paths with them, cut into equal groups.
+fn vcm_iteration(index: u32) -> u32 {
+    return index / (PATHS / PM_ITERATIONS);
+}
+
+// Pass `vcm_grid_keys` (Start over the stored vertices): the vertex's hash grid bucket, in
+// the grid of its light sub-path's iteration.
 fn vcm_grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
-    grid_key[index] = cell_bucket(cell_of(lvc_staging[index].position));
+    var iteration = 0u;
+    if (PM_ITERATIONS > 1u) {
+        iteration = vcm_iteration(lvc_owner[index]);
+    }
+    grid_key[index] = cell_bucket_in(cell_of(lvc_staging[index].position), iteration);
     return false;
 }
 
@@ -62,6 +82,7 @@ fn vcm_camera(p: ptr<function, VcmPath>, index: u32) -> bool {
     var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
     (*p).camera = camera_subpath_start(camera_tiled_pixel(index % PIXELS), &rng);
     (*p).flags = 0u;
+    (*p).iteration = vcm_iteration(index);
     return true;
 }
 
@@ -116,7 +137,7 @@ fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
     let box = cell_box(m.position, m.radius);
     var walk = cell_walk(box);
     loop {
-        let range = vcm_reached_bucket(walk.cell, m);
+        let range = vcm_reached_bucket(walk.cell, m, (*p).iteration);
         for (var i = range.x; i < range.y; i += 1u) {
             let position = vcm_grid[i].position;
             if (pm_in_range(position, m.position, m.radius) && cell_owns(box, walk.cell, position)) {
@@ -140,13 +161,13 @@ fn vcm_continue(p: ptr<function, VcmPath>) -> bool {
     return ((*p).flags & VCM_ALIVE) != 0u;
 }
 
-// The vertices in `vcm_grid` of the bucket of `cell`, or none when the cell is out of the
-// merge's reach.
-fn vcm_reached_bucket(cell: vec3<i32>, m: Merge) -> vec2<u32> {
+// The vertices in `vcm_grid` of the bucket of `cell` in the grid of `iteration`, or none when
+// the cell is out of the merge's reach.
+fn vcm_reached_bucket(cell: vec3<i32>, m: Merge, iteration: u32) -> vec2<u32> {
     if (!cell_reaches(cell, m.position, m.radius)) {
         return vec2<u32>(0u);
     }
-    let b = cell_bucket(cell);
+    let b = cell_bucket_in(cell, iteration);
     if (b + 1u < PM_CELLS) {
         return vec2<u32>(grid_first[b], grid_first[b + 1u]);
     }
