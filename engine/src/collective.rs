@@ -239,15 +239,18 @@ pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, 
 }
 
 /// The scatter of a counting sort over `buffers` (keys, slots, offsets, input, output) of
-/// elements of `w` words: each element to its bucket's first place plus its slot.
+/// elements of `w` words: each element to its bucket's first place plus its slot. Elements of
+/// a multiple of 4 words move as 16-byte vectors (a 48-byte cache vertex in 3 loads and 3
+/// stores instead of 12 of each).
 fn scatter_kernel(prefix: &str, buffers: [BufferRef; 5], counted: Option<&str>, w: u32, overflow: u32) -> OpKernel {
     let mut m = Module::new(true);
     let [keys, slots, offsets, input, output] = buffers;
+    let (word, w) = if w % 4 == 0 { ("vec4<u32>", w / 4) } else { ("u32", w) };
     m.bind("lg_keys", "array<u32>", keys);
     m.bind("lg_slots", "array<u32>", slots);
     m.bind("lg_offsets", "array<u32>", offsets);
-    m.bind("lg_input", "array<u32>", input);
-    m.bind("lg_output", "array<u32>", output);
+    m.bind("lg_input", &format!("array<{word}>"), input);
+    m.bind("lg_output", &format!("array<{word}>"), output);
     m.element_count(counted);
     let name = format!("{prefix}_scatter");
     let mut copy = String::new();

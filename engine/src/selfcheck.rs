@@ -1,6 +1,8 @@
 //! The engine's collective operators checked against the CPU and timed: an exclusive scan of
 //! `n` words, and a counting sort (clear, count, scan of the bucket counts, scatter) of `n`
-//! 12-byte elements into `buckets` buckets, both from one graph run on any adapter; the
+//! 12-byte elements into `buckets` buckets, whose 48-byte elements (a cache vertex's size,
+//! moved as 16-byte vectors) a second scatter places likewise, all from one graph run on any
+//! adapter; the
 //! radix sort in [`sort`]. The tests run them at the sizes lavapipe allows; `lightgraph
 //! operators` runs them on a GPU.
 
@@ -27,6 +29,7 @@ const GRAPH: &str = r#"// Exclusive scan and counting sort of host-written data 
         Count(name: "count", keys: "keys", counts: "counts", slots: "slots", over: "N"),
         Scan(name: "bucket_starts", input: "counts", output: "starts", over: "BUCKETS"),
         Scatter(name: "scatter", keys: "keys", slots: "slots", offsets: "starts", input: "payload", output: "sorted", over: "N"),
+        Scatter(name: "scatter_wide", keys: "keys", slots: "slots", offsets: "starts", input: "wide", output: "wide_sorted", over: "N"),
     ],
     resources: {
         "values": (ty: "u32", count: "max(N, 1)"),
@@ -37,9 +40,11 @@ const GRAPH: &str = r#"// Exclusive scan and counting sort of host-written data 
         "starts": (ty: "u32", count: "BUCKETS"),
         "payload": (ty: "Payload", count: "max(N, 1)"),
         "sorted": (ty: "Payload", count: "max(N, 1)"),
+        "wide": (ty: "Wide", count: "max(N, 1)"),
+        "wide_sorted": (ty: "Wide", count: "max(N, 1)"),
     },
     constants: { "N": U32(1), "BUCKETS": U32(1) },
-    outputs: ["sums", "slots", "starts", "sorted"],
+    outputs: ["sums", "slots", "starts", "sorted", "wide_sorted"],
     layouts: { "operators": (kernels: []) },
     default_layout: "operators",
 )
@@ -49,7 +54,7 @@ const FILES: &[(&str, &str)] = &[
     ("operators.ron", GRAPH),
     (
         "operators.wgsl",
-        "// A 12-byte element of the counting sort.\nstruct Payload { index: u32, key: u32, check: u32 }\n",
+        "// A 12-byte element of the counting sort, and a 48-byte one.\nstruct Payload { index: u32, key: u32, check: u32 }\nstruct Wide { words: array<vec4<u32>, 3> }\n",
     ),
 ];
 
@@ -162,6 +167,13 @@ fn compare(values: &[u32], keys: &[u32], buckets: u64, out: &Outputs) -> Option<
                 sorted[place]
             ));
         }
+        let want = wide_element(i, k);
+        if out.wide_sorted[place] != want {
+            return Some(format!(
+                "sort of 48-byte elements: place {place} holds {:?}, element {i} is {want:?}",
+                out.wide_sorted[place]
+            ));
+        }
     }
     None
 }
@@ -182,6 +194,8 @@ pub struct Outputs {
     pub starts: Vec<u32>,
     /// The sorted elements.
     pub sorted: Vec<[u32; 3]>,
+    /// The sorted 48-byte elements.
+    pub wide_sorted: Vec<[u32; 12]>,
     /// GPU seconds of the scan (median of the runs; `None` without timestamps).
     pub scan_seconds: Option<f64>,
     /// GPU seconds of the counting sort: clear, count, scan, scatter (median of the runs).
@@ -218,10 +232,12 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         .collect();
     let mut instance = Instance::new(gpu, program, &BTreeMap::new())?;
     let payload: Vec<[u32; 3]> = keys.iter().enumerate().map(|(i, &k)| element(i, k)).collect();
+    let wide: Vec<[u32; 12]> = keys.iter().enumerate().map(|(i, &k)| wide_element(i, k)).collect();
     if n > 0 {
         instance.write("values", bytemuck::cast_slice(values))?;
         instance.write("keys", bytemuck::cast_slice(keys))?;
         instance.write("payload", bytemuck::cast_slice(&payload))?;
+        instance.write("wide", bytemuck::cast_slice(&wide))?;
     }
     let (mut scan, mut sort) = (Vec::new(), Vec::new());
     let mut per_kernel: Vec<Vec<f64>> = vec![Vec::new(); op_kernels.iter().flatten().count()];
@@ -240,14 +256,16 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
             (found.len() == names.len()).then(|| found.iter().sum())
         };
         scan.extend(seconds(&op_kernels[..1]));
-        sort.extend(seconds(&op_kernels[1..]));
+        sort.extend(seconds(&op_kernels[1..5]));
     }
     let read = |name: &str| -> Result<Vec<u32>> { Ok(bytemuck::pod_collect_to_vec(&instance.read(name)?)) };
     let (mut sums, mut slots, starts) = (read("sums")?, read("slots")?, read("starts")?);
     let mut sorted: Vec<[u32; 3]> = bytemuck::pod_collect_to_vec(&instance.read("sorted")?);
+    let mut wide_sorted: Vec<[u32; 12]> = bytemuck::pod_collect_to_vec(&instance.read("wide_sorted")?);
     sums.truncate(n);
     slots.truncate(n);
     sorted.truncate(n);
+    wide_sorted.truncate(n);
     let kernels = op_kernels
         .iter()
         .flatten()
@@ -259,6 +277,7 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         slots,
         starts,
         sorted,
+        wide_sorted,
         scan_seconds: median(scan),
         sort_seconds: median(sort),
         kernels,
@@ -268,6 +287,11 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
 /// The element the sort carries for element `i` with key `k`.
 fn element(i: usize, k: u32) -> [u32; 3] {
     [i as u32, k, (i as u32) ^ k.rotate_left(16)]
+}
+
+/// The 48-byte element the second scatter carries for element `i` with key `k`.
+fn wide_element(i: usize, k: u32) -> [u32; 12] {
+    std::array::from_fn(|w| (i as u32).wrapping_mul(12).wrapping_add(w as u32) ^ k.rotate_left(w as u32))
 }
 
 /// Runs the scan and the counting sort of `n` elements drawn by `pattern` into `buckets`
