@@ -218,10 +218,15 @@ fn gpu_thread(i: usize, selector: &str, run: &Run, claims: &Claims, tx: &mpsc::S
     let mut frame_seconds: Option<f64> = None;
     let (mut rays, mut busy, mut sent_at) = (0u64, 0.0, Instant::now());
     loop {
-        let n = match frame_seconds {
-            None => 1,
-            Some(t) => (BATCH_TIME.as_secs_f64() / t.max(1e-6)).clamp(1.0, MAX_BATCH as f64) as u64,
-        };
+        // Claims come in whole groups of the frames the GPU renders as one.
+        let at_once = session.frames_at_once() as u64;
+        let n = at_once
+            * match frame_seconds {
+                None => 1,
+                Some(t) => {
+                    (BATCH_TIME.as_secs_f64() / (t.max(1e-6) * at_once as f64)).clamp(1.0, MAX_BATCH as f64) as u64
+                }
+            };
         let claimed = claims.claim(n);
         if let Some((offset, count)) = claimed {
             let first = u32::try_from(run.first_frame + offset)

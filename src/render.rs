@@ -353,9 +353,19 @@ impl<'g> Session<'g> {
         self.instance.program()
     }
 
-    /// Renders one more frame.
+    /// Renders one more frame (or [`Session::frames_at_once`] frames where the graph runs
+    /// several as one).
     pub fn render_frame(&mut self) -> Result<FrameStats> {
-        self.render_frames(1)
+        self.render_frames(self.frames_at_once())
+    }
+
+    /// Frames the GPU renders as one (the graph's `FRAMES_AT_ONCE`, passes/film.ron; 1 for a
+    /// graph without it): batches and frame indices then come in multiples of it.
+    pub fn frames_at_once(&self) -> u32 {
+        match self.instance.program().constants().get("FRAMES_AT_ONCE") {
+            Some(ConstValue::U32(n)) => (*n).max(1),
+            _ => 1,
+        }
     }
 
     /// Goes on at frame index `first` instead of the next one: frames claimed out of order
@@ -367,7 +377,8 @@ impl<'g> Session<'g> {
         Ok(())
     }
 
-    /// Renders `count` more frames (at most [`MAX_BATCH`]) recorded together, with one
+    /// Renders `count` more frames (at most [`MAX_BATCH`] times [`Session::frames_at_once`],
+    /// a multiple of it) recorded together, with one
     /// read-back of statistics, and waits for them (and any batch still in flight); returns
     /// the statistics of the frames it waited for.
     pub fn render_frames(&mut self, count: u32) -> Result<FrameStats> {
@@ -381,19 +392,22 @@ impl<'g> Session<'g> {
     /// so that the host records and reads back while the GPU runs. Returns the statistics of
     /// the batches read back (empty when none finished; [`Session::settle`] reads the rest).
     /// Until a frame's GPU time is known (always, on an adapter without timestamp queries) it
-    /// renders one frame and waits for it.
+    /// renders one frame and waits for it. Frames come in multiples of
+    /// [`Session::frames_at_once`].
     pub fn render_for(&mut self, left: Option<Duration>, max: u32) -> Result<FrameStats> {
+        let at_once = self.frames_at_once();
         let per_frame = self.kernel_seconds.values().sum::<f64>() / self.settled.max(1) as f64;
         if self.settled == 0 || per_frame <= 0.0 {
-            return self.render_frames(1);
+            return self.render_frames(max.min(at_once));
         }
         let queued = self.in_flight.iter().sum::<u32>() as f64 * per_frame;
         let room = left.map_or(f64::INFINITY, |t| t.as_secs_f64() - queued);
-        let wanted = (room.min(BATCH_TIME.as_secs_f64()) / per_frame).clamp(0.0, MAX_BATCH as f64) as u32;
-        let count = match wanted.min(max) {
+        let most = (MAX_BATCH * at_once) as f64;
+        let wanted = (room.min(BATCH_TIME.as_secs_f64()) / per_frame).clamp(0.0, most) as u32;
+        let count = match wanted.min(max) / at_once * at_once {
             // A timed run with less than a frame left still renders one, unless the batch in
             // flight ends it.
-            0 if self.in_flight.is_empty() => max.min(1),
+            0 if self.in_flight.is_empty() => max.min(at_once),
             n => n,
         };
         if count > 0 {
@@ -416,17 +430,27 @@ impl<'g> Session<'g> {
         Ok(stats)
     }
 
-    /// Submits `count` frames (at most [`MAX_BATCH`]) as one batch; at most one other batch
-    /// stays in flight (an older one is read back first).
+    /// Submits `count` frames (at most [`MAX_BATCH`] of the GPU's, each
+    /// [`Session::frames_at_once`] frames) as one batch; at most one other batch stays in
+    /// flight (an older one is read back first).
     fn submit(&mut self, count: u32) -> Result<()> {
         if self.first_frame as u64 + self.frames as u64 + count as u64 > u32::MAX as u64 {
             bail!("the frame index would pass 2^32; continue with another seed");
         }
+        let first = self.first_frame + self.frames;
+        let at_once = self.frames_at_once();
+        if !count.is_multiple_of(at_once) || !first.is_multiple_of(at_once) {
+            bail!(
+                "frames {first} to {} do not start and end at multiples of FRAMES_AT_ONCE = {at_once} \
+                 (the frames the GPU renders as one): render and resume a multiple of {at_once} frames",
+                first as u64 + count as u64
+            );
+        }
         while self.in_flight.len() >= IN_FLIGHT {
             self.collect()?;
         }
-        let first = self.first_frame + self.frames;
-        self.instance.submit_frames(first, count, self.options.seed)?;
+        self.instance
+            .submit_frames(first / at_once, count / at_once, self.options.seed)?;
         self.in_flight.push_back(count);
         self.frames += count;
         let range = (first as u64, first as u64 + count as u64);

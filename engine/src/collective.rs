@@ -245,7 +245,11 @@ pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, 
 fn scatter_kernel(prefix: &str, buffers: [BufferRef; 5], counted: Option<&str>, w: u32, overflow: u32) -> OpKernel {
     let mut m = Module::new(true);
     let [keys, slots, offsets, input, output] = buffers;
-    let (word, w) = if w % 4 == 0 { ("vec4<u32>", w / 4) } else { ("u32", w) };
+    let (word, w) = if w.is_multiple_of(4) {
+        ("vec4<u32>", w / 4)
+    } else {
+        ("u32", w)
+    };
     m.bind("lg_keys", "array<u32>", keys);
     m.bind("lg_slots", "array<u32>", slots);
     m.bind("lg_offsets", "array<u32>", offsets);

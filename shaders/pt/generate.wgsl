@@ -1,18 +1,23 @@
-// Pass `generate` (Start over PATHS): path `index` samples pixel index % PIXELS (in 8x8
-// tiles with TILED_PIXELS, camera_tiled_pixel), jittered uniformly inside the pixel.
+// Pass `generate` (Start over PATHS per frame run at once): path `index` of a frame samples
+// pixel index % PIXELS (in 8x8 tiles with TILED_PIXELS, camera_tiled_pixel), jittered
+// uniformly inside the pixel. With FRAMES_AT_ONCE frames run as one, index i is path
+// i % PATHS of frame k = i / PATHS, whose random numbers are those of frame index
+// frame.index FRAMES_AT_ONCE + k and whose light goes to film slot k (passes/film.ron).
 
 fn generate(path: ptr<function, CameraPath>, index: u32) -> bool {
-    var pixel = index % PIXELS;
+    let slot = index / PATHS;
+    let local = index % PATHS;
+    var pixel = local % PIXELS;
     if (TILED_PIXELS) {
         pixel = camera_tiled_pixel(pixel);
     }
-    var rng = rng_seed(frame.seed, frame.index, index);
+    var rng = rng_seed(frame.seed, frame.index * FRAMES_AT_ONCE + slot, local);
     let jitter = rng_vec2(&rng);
     let x = f32(pixel % WIDTH) + jitter.x;
     let y = f32(pixel / WIDTH) + jitter.y;
     (*path).origin = camera.position;
     (*path).direction = camera_direction(x, y);
-    (*path).pixel = pixel;
+    (*path).pixel = slot * PIXELS + pixel;
     (*path).length = 0u;
     (*path).throughput = vec3<f32>(1.0);
     (*path).rng = rng;

@@ -109,7 +109,9 @@ fn scans(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize> {
         }
     }
     if args.kernels {
-        println!("\nkernels (ms): lg_op0 is the scan; lg_op1..4 the clear, count, scan of the counts and scatter; lg_op5 the scatter of 48-byte elements");
+        println!(
+            "\nkernels (ms): lg_op0 is the scan; lg_op1..4 the clear, count, scan of the counts and scatter; lg_op5 the scatter of 48-byte elements"
+        );
         for line in kernel_lines {
             println!("  {line}");
         }

@@ -189,3 +189,68 @@ fn frames_recorded_in_one_batch_match_frames_run_one_by_one() {
         assert!(worst < 1e-5, "{layout}: overlapped batches differ by {worst:.2e}");
     }
 }
+
+/// Frames rendered at once (`FRAMES_AT_ONCE`, each frame's paths in its own film slot, drawing
+/// that frame's random numbers) give every PT layout the image, the per-frame variance and
+/// the counters of the same frames rendered one by one, to float rounding (the variance, a
+/// difference of sums, to 1e-4: seen 1.6e-5); runs that would split a group and graphs that
+/// render one frame at a time are refused.
+#[test]
+fn frames_rendered_at_once_match_frames_rendered_one_by_one() {
+    use lightgraph::render::{Session, SessionOptions};
+    use lightgraph_engine::ConstValue;
+    const FRAMES: u32 = 8;
+    let scene = load_scene("cornell-glossy-point").unwrap();
+    let graph = load_graph("pt").unwrap();
+    let options = SessionOptions {
+        width: 16,
+        height: 16,
+        samples_per_frame: 2,
+        seed: 10,
+        constants: Default::default(),
+        layout: Default::default(),
+    };
+    let at_once = SessionOptions {
+        constants: [("FRAMES_AT_ONCE".to_string(), ConstValue::U32(4))].into(),
+        ..options.clone()
+    };
+    let gpu = crate::common::gpu();
+    let mut single = Session::new(gpu, &graph, "NaivePTsk", &scene, options).unwrap();
+    for _ in 0..FRAMES {
+        single.render_frame().unwrap();
+    }
+    let one = single.image().unwrap();
+    for layout in graph.layouts.keys() {
+        let mut grouped = Session::new(gpu, &graph, layout, &scene, at_once.clone()).unwrap();
+        assert_eq!(grouped.frames_at_once(), 4);
+        while grouped.frames < FRAMES {
+            grouped.render_for(None, FRAMES - grouped.frames).unwrap();
+        }
+        grouped.settle().unwrap();
+        assert_eq!(single.counters, grouped.counters, "{layout}: different rays");
+        let four = grouped.image().unwrap();
+        assert_eq!(four.frames, FRAMES, "{layout}");
+        let worst = largest_relative_difference(&one, &four);
+        let variance = |i: &lightgraph::render::Image| lightgraph::render::Image {
+            mean: i.variance.clone(),
+            ..i.clone()
+        };
+        let worst_variance = largest_relative_difference(&variance(&one), &variance(&four));
+        eprintln!("{layout}: largest relative difference {worst:.2e}, of the variance {worst_variance:.2e}");
+        assert!(worst < 1e-5, "{layout}: frames at once differ by {worst:.2e}");
+        assert!(
+            worst_variance < 1e-4,
+            "{layout}: their variance differs by {worst_variance:.2e}"
+        );
+        let split = grouped.render_frames(3).unwrap_err().to_string();
+        assert!(split.contains("FRAMES_AT_ONCE = 4"), "{layout}: {split}");
+    }
+    let lvc = load_graph("bpt-lvc").unwrap();
+    let refused = Session::new(gpu, &lvc, "LVC-BPTsk", &scene, at_once)
+        .err()
+        .expect("bpt-lvc took frame slots");
+    assert!(
+        format!("{refused:#}").contains("renders one frame at a time"),
+        "{refused:#}"
+    );
+}
