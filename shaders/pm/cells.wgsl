@@ -62,16 +62,15 @@ fn hash_cell(a0: u32, b0: u32, c0: u32) -> u32 {
 
 // The bucket of cell `c` (PM_CELLS buckets, a multiple of 8).
 fn cell_bucket(c: vec3<i32>) -> u32 {
-    return cell_bucket_in(c, 0u);
+    return cell_bucket_among(c, 0u, PM_CELLS / 8u);
 }
 
-// The bucket of cell `c` in the grid of the frame's iteration `iteration` (PM_ITERATIONS
-// grids in one: each iteration has its own PM_CELLS / PM_ITERATIONS buckets, a multiple of 8).
-fn cell_bucket_in(c: vec3<i32>, iteration: u32) -> u32 {
+// The bucket of cell `c` among the `groups` groups of 8 buckets from group `first` on (a grid
+// of its own in part of the buckets, as each of VCM's iterations of a frame has).
+fn cell_bucket_among(c: vec3<i32>, first: u32, groups: u32) -> u32 {
     let pair = vec3<u32>(c >> vec3<u32>(1u));
     let parity = vec3<u32>(c & vec3<i32>(1));
-    let groups = PM_CELLS / (8u * PM_ITERATIONS);
-    let group = iteration * groups + hash_cell(pair.x, pair.y, pair.z) % groups;
+    let group = first + hash_cell(pair.x, pair.y, pair.z) % groups;
     return group * 8u + parity.x + 2u * parity.y + 4u * parity.z;
 }
 

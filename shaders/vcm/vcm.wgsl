@@ -66,6 +66,13 @@ fn vcm_iteration(index: u32) -> u32 {
     return index / (PATHS / PM_ITERATIONS);
 }
 
+// The bucket of `cell` in the grid of the frame's iteration `iteration`: each of the
+// PM_ITERATIONS iterations has its own PM_CELLS / PM_ITERATIONS buckets (a multiple of 8).
+fn vcm_bucket(cell: vec3<i32>, iteration: u32) -> u32 {
+    let groups = PM_CELLS / (8u * PM_ITERATIONS);
+    return cell_bucket_among(cell, iteration * groups, groups);
+}
+
 // Pass `vcm_grid_keys` (Start over the stored vertices): the vertex's hash grid bucket, in
 // the grid of its light sub-path's iteration.
 fn vcm_grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
@@ -73,7 +80,7 @@ fn vcm_grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     if (PM_ITERATIONS > 1u) {
         iteration = vcm_iteration(lvc_owner[index]);
     }
-    grid_key[index] = cell_bucket_in(cell_of(lvc_staging[index].position), iteration);
+    grid_key[index] = vcm_bucket(cell_of(lvc_staging[index].position), iteration);
     return false;
 }
 
@@ -167,7 +174,7 @@ fn vcm_reached_bucket(cell: vec3<i32>, m: Merge, iteration: u32) -> vec2<u32> {
     if (!cell_reaches(cell, m.position, m.radius)) {
         return vec2<u32>(0u);
     }
-    let b = cell_bucket_in(cell, iteration);
+    let b = vcm_bucket(cell, iteration);
     if (b + 1u < PM_CELLS) {
         return vec2<u32>(grid_first[b], grid_first[b + 1u]);
     }
