@@ -1,10 +1,13 @@
-// Pass `bpt_generate` (Start over PATHS): sample `index` traces its whole light sub-path,
-// connecting each non-delta vertex to the camera (t = 1, through the shared `shadow` pass)
-// and storing it in the item, then starts its camera sub-path.
+// Pass `bpt_generate` (Start over PATHS per frame run at once, `frame_slot`): sample `index`
+// traces its whole light sub-path, connecting each non-delta vertex to the camera (t = 1,
+// through the shared `shadow` pass) and storing it in the item, then starts its camera
+// sub-path.
 
 fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
-    var rng = rng_seed(frame.seed, frame.index, index);
-    (*p).camera = camera_subpath_start(index % PIXELS, &rng);
+    let f = frame_slot(index);
+    var rng = rng_seed(frame.seed, f.frame_index, f.path);
+    (*p).camera = camera_subpath_start(f.path % PIXELS, &rng);
+    (*p).camera.pixel += f.film_base;
     (*p).light_count = 0u;
     (*p).pad = 0u;
     var lp: LightPath;
@@ -16,7 +19,7 @@ fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
             if (!a.alive) {
                 break;
             }
-            let visit = bpt_light_visit(&lp, a);
+            let visit = bpt_light_visit(&lp, a, f.film_base);
             if (visit.store) {
                 (*p).light[(*p).light_count] = visit.vertex;
                 (*p).light_count += 1u;

@@ -38,13 +38,15 @@ struct LightVisit {
 }
 
 // Light sub-path `lp` of NaiveBPT or StreamingBPT at the vertex it arrived at: the t = 1
-// splat (through the `shadow` stream), the vertex to store, and the next direction.
-fn bpt_light_visit(lp: ptr<function, LightPath>, a: Arrival) -> LightVisit {
+// splat (through the `shadow` stream, into the film slot from `film_base` on), the vertex to
+// store, and the next direction.
+fn bpt_light_visit(lp: ptr<function, LightPath>, a: Arrival, film_base: u32) -> LightVisit {
     var r: LightVisit;
     r.store = false;
     if (!a.bsdf.is_delta) {
         r.vertex = light_vertex_at(*lp, a.s);
-        let ray = light_vertex_to_camera(r.vertex, a.bsdf, mis_counts(1.0));
+        var ray = light_vertex_to_camera(r.vertex, a.bsdf, mis_counts(1.0));
+        ray.pixel += film_base;
         if (!is_black(ray.contribution)) {
             emit_shadow(ray);
         }

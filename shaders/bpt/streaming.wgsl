@@ -28,11 +28,14 @@ struct VertexPair {
     light: LightVertex,
 }
 
-// Pass `sbpt_generate` (Start over PATHS): sample `index` starts its light sub-path (or its
-// camera sub-path when there is no light to start from), with NaiveBPT's random numbers.
+// Pass `sbpt_generate` (Start over PATHS per frame run at once, `frame_slot`): sample `index`
+// starts its light sub-path (or its camera sub-path when there is no light to start from),
+// with NaiveBPT's random numbers.
 fn sbpt_generate(p: ptr<function, StreamingSample>, index: u32) -> bool {
-    var rng = rng_seed(frame.seed, frame.index, index);
-    (*p).camera = camera_subpath_start(index % PIXELS, &rng);
+    let f = frame_slot(index);
+    var rng = rng_seed(frame.seed, f.frame_index, f.path);
+    (*p).camera = camera_subpath_start(f.path % PIXELS, &rng);
+    (*p).camera.pixel += f.film_base;
     (*p).light_count = 0u;
     (*p).camera_count = 0u;
     (*p).pad = 0u;
@@ -71,7 +74,7 @@ fn sbpt_extend(p: ptr<function, StreamingSample>) -> bool {
         let a = light_path_land(&lp);
         var go_on = false;
         if (a.alive) {
-            let visit = bpt_light_visit(&lp, a);
+            let visit = bpt_light_visit(&lp, a, film_base_of((*p).camera.pixel));
             if (visit.store) {
                 sbpt_light_vertices[sbpt_vertex_at((*p).light_count)] = visit.vertex;
                 (*p).light_count += 1u;

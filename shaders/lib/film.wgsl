@@ -56,6 +56,26 @@ fn film_add(pixel: u32, c: vec3<f32>) {
     }
 }
 
+// Index `index` of a start pass over PATHS * FRAMES_AT_ONCE indices (passes/film.ron): path
+// `path` of frame `slot` of the frames run at once, whose random numbers are those of frame
+// index `frame_index` and whose light goes to the film's pixels from `film_base` on.
+struct FrameSlot {
+    slot: u32,
+    path: u32,
+    frame_index: u32,
+    film_base: u32,
+}
+
+fn frame_slot(index: u32) -> FrameSlot {
+    let slot = index / PATHS;
+    return FrameSlot(slot, index % PATHS, frame.index * FRAMES_AT_ONCE + slot, slot * PIXELS);
+}
+
+// The first film pixel of the frame slot that film pixel `pixel` lies in.
+fn film_base_of(pixel: u32) -> u32 {
+    return pixel / PIXELS * PIXELS;
+}
+
 // Reads a pixel's sum and sets it back to zero.
 fn film_take(pixel: u32) -> vec3<f32> {
     return vec3<f32>(film_take_word(3u * pixel), film_take_word(3u * pixel + 1u), film_take_word(3u * pixel + 2u));

@@ -5,19 +5,18 @@
 // frame.index FRAMES_AT_ONCE + k and whose light goes to film slot k (passes/film.ron).
 
 fn generate(path: ptr<function, CameraPath>, index: u32) -> bool {
-    let slot = index / PATHS;
-    let local = index % PATHS;
-    var pixel = local % PIXELS;
+    let f = frame_slot(index);
+    var pixel = f.path % PIXELS;
     if (TILED_PIXELS) {
         pixel = camera_tiled_pixel(pixel);
     }
-    var rng = rng_seed(frame.seed, frame.index * FRAMES_AT_ONCE + slot, local);
+    var rng = rng_seed(frame.seed, f.frame_index, f.path);
     let jitter = rng_vec2(&rng);
     let x = f32(pixel % WIDTH) + jitter.x;
     let y = f32(pixel / WIDTH) + jitter.y;
     (*path).origin = camera.position;
     (*path).direction = camera_direction(x, y);
-    (*path).pixel = slot * PIXELS + pixel;
+    (*path).pixel = f.film_base + pixel;
     (*path).length = 0u;
     (*path).throughput = vec3<f32>(1.0);
     (*path).rng = rng;

@@ -3,7 +3,8 @@
 //! the film's atomic additions differs. They also trace exactly the same rays.
 
 use crate::common::{assert_same_render, largest_relative_difference, render};
-use lightgraph::render::{load_graph, load_scene};
+use lightgraph::render::{Image, LoadedScene, Session, SessionOptions, load_graph, load_scene};
+use lightgraph_engine::{ConstValue, Graph};
 
 #[test]
 fn every_pt_layout_matches_naive_pt_sk() {
@@ -140,7 +141,6 @@ fn auto_layout_tunes_the_ambient_occlusion_graph() {
 
 #[test]
 fn frames_recorded_in_one_batch_match_frames_run_one_by_one() {
-    use lightgraph::render::{Session, SessionOptions};
     // 40 frames of StreamingPTmk3 record over 2000 dispatches, so the batch is submitted in
     // parts while it is recorded (every 512 dispatches) and its loops run their bound.
     const FRAMES: u32 = 40;
@@ -191,66 +191,72 @@ fn frames_recorded_in_one_batch_match_frames_run_one_by_one() {
 }
 
 /// Frames rendered at once (`FRAMES_AT_ONCE`, each frame's paths in its own film slot, drawing
-/// that frame's random numbers) give every PT layout the image, the per-frame variance and
-/// the counters of the same frames rendered one by one, to float rounding (the variance, a
-/// difference of sums, to 1e-4: seen 1.6e-5); runs that would split a group and graphs that
-/// render one frame at a time are refused.
+/// that frame's random numbers) give every PT layout, NaiveBPT and StreamingBPT the image, the
+/// per-frame variance and the counters of the same frames rendered one by one, to float
+/// rounding (the variance, a difference of sums, to 1e-4: seen 1.6e-5); runs that would split a
+/// group and graphs that render one frame at a time are refused.
 #[test]
 fn frames_rendered_at_once_match_frames_rendered_one_by_one() {
-    use lightgraph::render::{Session, SessionOptions};
-    use lightgraph_engine::ConstValue;
-    const FRAMES: u32 = 8;
     let scene = load_scene("cornell-glossy-point").unwrap();
-    let graph = load_graph("pt").unwrap();
-    let options = SessionOptions {
-        width: 16,
-        height: 16,
-        samples_per_frame: 2,
-        seed: 10,
-        constants: Default::default(),
-        layout: Default::default(),
-    };
-    let at_once = SessionOptions {
-        constants: [("FRAMES_AT_ONCE".to_string(), ConstValue::U32(4))].into(),
-        ..options.clone()
-    };
-    let gpu = crate::common::gpu();
-    let mut single = Session::new(gpu, &graph, "NaivePTsk", &scene, options).unwrap();
-    for _ in 0..FRAMES {
-        single.render_frame().unwrap();
-    }
-    let one = single.image().unwrap();
-    for layout in graph.layouts.keys() {
-        let mut grouped = Session::new(gpu, &graph, layout, &scene, at_once.clone()).unwrap();
-        assert_eq!(grouped.frames_at_once(), 4);
-        while grouped.frames < FRAMES {
-            grouped.render_for(None, FRAMES - grouped.frames).unwrap();
+    for graph in ["pt", "bpt-naive", "bpt-streaming"] {
+        let graph = load_graph(graph).unwrap();
+        let first = graph.layouts.keys().next().unwrap();
+        let single = frames_at_once(&scene, &graph, first, 1);
+        for layout in graph.layouts.keys() {
+            let (mut grouped, four) = frames_at_once(&scene, &graph, layout, 4);
+            let what = format!("{} {layout}", graph.name);
+            assert_eq!(single.0.counters, grouped.counters, "{what}: different rays");
+            assert_eq!(four.frames, AT_ONCE_FRAMES, "{what}");
+            let worst = largest_relative_difference(&single.1, &four);
+            let variance = |i: &Image| Image {
+                mean: i.variance.clone(),
+                ..i.clone()
+            };
+            let worst_variance = largest_relative_difference(&variance(&single.1), &variance(&four));
+            eprintln!("{what}: largest relative difference {worst:.2e}, of the variance {worst_variance:.2e}");
+            assert!(worst < 1e-5, "{what}: frames at once differ by {worst:.2e}");
+            assert!(
+                worst_variance < 1e-4,
+                "{what}: their variance differs by {worst_variance:.2e}"
+            );
+            let split = grouped.render_frames(3).unwrap_err().to_string();
+            assert!(split.contains("FRAMES_AT_ONCE = 4"), "{what}: {split}");
         }
-        grouped.settle().unwrap();
-        assert_eq!(single.counters, grouped.counters, "{layout}: different rays");
-        let four = grouped.image().unwrap();
-        assert_eq!(four.frames, FRAMES, "{layout}");
-        let worst = largest_relative_difference(&one, &four);
-        let variance = |i: &lightgraph::render::Image| lightgraph::render::Image {
-            mean: i.variance.clone(),
-            ..i.clone()
-        };
-        let worst_variance = largest_relative_difference(&variance(&one), &variance(&four));
-        eprintln!("{layout}: largest relative difference {worst:.2e}, of the variance {worst_variance:.2e}");
-        assert!(worst < 1e-5, "{layout}: frames at once differ by {worst:.2e}");
-        assert!(
-            worst_variance < 1e-4,
-            "{layout}: their variance differs by {worst_variance:.2e}"
-        );
-        let split = grouped.render_frames(3).unwrap_err().to_string();
-        assert!(split.contains("FRAMES_AT_ONCE = 4"), "{layout}: {split}");
     }
     let lvc = load_graph("bpt-lvc").unwrap();
-    let refused = Session::new(gpu, &lvc, "LVC-BPTsk", &scene, at_once)
+    let options = at_once_options(2);
+    let refused = Session::new(crate::common::gpu(), &lvc, "LVC-BPTsk", &scene, options)
         .err()
         .expect("bpt-lvc took frame slots");
     assert!(
         format!("{refused:#}").contains("renders one frame at a time"),
         "{refused:#}"
     );
+}
+
+/// Frames of [`frames_rendered_at_once_match_frames_rendered_one_by_one`].
+const AT_ONCE_FRAMES: u32 = 8;
+
+/// 16 x 16 pixels, 2 samples per pixel a frame, `n` frames at once.
+fn at_once_options(n: u32) -> SessionOptions {
+    SessionOptions {
+        width: 16,
+        height: 16,
+        samples_per_frame: 2,
+        seed: 10,
+        constants: [("FRAMES_AT_ONCE".to_string(), ConstValue::U32(n))].into(),
+        layout: Default::default(),
+    }
+}
+
+/// [`AT_ONCE_FRAMES`] frames of `graph` in `layout`, `n` at once: the session and its image.
+fn frames_at_once(scene: &LoadedScene, graph: &Graph, layout: &str, n: u32) -> (Session<'static>, Image) {
+    let mut session = Session::new(crate::common::gpu(), graph, layout, scene, at_once_options(n)).unwrap();
+    assert_eq!(session.frames_at_once(), n);
+    while session.frames < AT_ONCE_FRAMES {
+        session.render_for(None, AT_ONCE_FRAMES - session.frames).unwrap();
+    }
+    session.settle().unwrap();
+    let image = session.image().unwrap();
+    (session, image)
 }
