@@ -55,13 +55,18 @@ pub struct Bvh {
     pub depth: usize,
 }
 
+/// obvhs's build settings for both BVHs: its slowest preset, whose reinsertion passes over
+/// every node (ratio 1) cost Sponza's 262 k triangles 0.25 s more to build than its medium
+/// preset and made PT 1.7-4.7% faster on an H100 (docs/performance.md, "BVH build quality").
+pub const BUILD: BvhBuildParams = BvhBuildParams::very_slow_build();
+
 /// Builds a BVH over `boxes` (min, max per primitive).
 pub fn build(boxes: &[(Vec3A, Vec3A)]) -> Result<Bvh, String> {
     if boxes.is_empty() {
         return Err("cannot build a BVH over no primitives".into());
     }
     let aabbs: Vec<Aabb> = boxes.iter().map(|(lo, hi)| Aabb::new(*lo, *hi)).collect();
-    let mut bvh2 = build_bvh2(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default());
+    let mut bvh2 = build_bvh2(&aabbs, BUILD, &mut Duration::default());
     limit_depth(&mut bvh2, MAX_DEPTH);
     let src = &bvh2.nodes;
     let child = |i: usize| -> (Aabb, u32, u32) {
@@ -305,7 +310,7 @@ pub(crate) mod tests {
 
     fn obvhs_bvh2(boxes: &[(Vec3A, Vec3A)]) -> Bvh2 {
         let aabbs: Vec<Aabb> = boxes.iter().map(|(lo, hi)| Aabb::new(*lo, *hi)).collect();
-        build_bvh2(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default())
+        build_bvh2(&aabbs, BUILD, &mut Duration::default())
     }
 
     #[test]

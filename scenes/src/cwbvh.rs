@@ -41,7 +41,7 @@ pub fn build(boxes: &[(Vec3A, Vec3A)]) -> Result<Cwbvh, String> {
     // of 1e-5 in debug builds (a panic, with coordinates in the millions), so we build as it
     // does, without that check.
     let aabbs: Vec<Aabb> = boxes.iter().map(|(lo, hi)| Aabb::new(*lo, *hi)).collect();
-    let params = BvhBuildParams::medium_build();
+    let params = bvh::BUILD;
     let mut bvh2 = binary_tree(&aabbs, &params);
     // A wide node spans at most seven binary levels of inner nodes and a leaf two: a binary
     // tree deeper than this cannot fit (and could overflow the recursion of obvhs's conversion).
@@ -229,7 +229,7 @@ mod tests {
     fn deep_trees_are_built_within_the_stack() {
         let b = crate::bvh::tests::deep_boxes();
         let aabbs: Vec<Aabb> = b.iter().map(|(lo, hi)| Aabb::new(*lo, *hi)).collect();
-        let unlimited = bvh::depth(&binary_tree(&aabbs, &BvhBuildParams::medium_build()));
+        let unlimited = bvh::depth(&binary_tree(&aabbs, &bvh::BUILD));
         assert!(
             unlimited > 7 * MAX_DEPTH + 2,
             "obvhs's tree is only {unlimited} levels deep"
