@@ -368,6 +368,20 @@ impl<'g> Session<'g> {
         }
     }
 
+    /// Checks that frames `first .. first + count` are whole groups of the frames the GPU
+    /// renders as one ([`Session::frames_at_once`]).
+    pub fn check_frames(&self, first: u32, count: u32) -> Result<()> {
+        let at_once = self.frames_at_once();
+        if !count.is_multiple_of(at_once) || !first.is_multiple_of(at_once) {
+            bail!(
+                "frames {first} to {} do not start and end at multiples of FRAMES_AT_ONCE = {at_once} \
+                 (the frames the GPU renders as one): render and resume a multiple of {at_once} frames",
+                first as u64 + count as u64
+            );
+        }
+        Ok(())
+    }
+
     /// Goes on at frame index `first` instead of the next one: frames claimed out of order
     /// (by several GPUs or ranks sharing a run). The accumulation records which frames it holds.
     pub fn jump_to(&mut self, first: u32) -> Result<()> {
@@ -438,14 +452,8 @@ impl<'g> Session<'g> {
             bail!("the frame index would pass 2^32; continue with another seed");
         }
         let first = self.first_frame + self.frames;
+        self.check_frames(first, count)?;
         let at_once = self.frames_at_once();
-        if !count.is_multiple_of(at_once) || !first.is_multiple_of(at_once) {
-            bail!(
-                "frames {first} to {} do not start and end at multiples of FRAMES_AT_ONCE = {at_once} \
-                 (the frames the GPU renders as one): render and resume a multiple of {at_once} frames",
-                first as u64 + count as u64
-            );
-        }
         while self.in_flight.len() >= IN_FLIGHT {
             self.collect()?;
         }

@@ -297,16 +297,21 @@ fn bounded_instance(g: &Graph, name: &str, decl: LayoutDecl, n: u32, bound: u32)
     Instance::new(gpu(), program, &BTreeMap::new()).unwrap()
 }
 
+/// 300 walks, their steps on the CPU, the loop iterations they need (the loop pass runs once
+/// more than a walk's steps: the last call finds 1) and the graph with a loop bound.
+fn bounded_walks() -> (u32, Vec<u32>, u32, Graph) {
+    let n = 300;
+    let expected = cpu_steps(n);
+    let needed = expected.iter().max().unwrap() + 1;
+    (n, expected, needed, graph_with_loop_bound("Walk", "BOUND").unwrap())
+}
+
 /// With a loop bound, a host loop whose items all start at once runs exactly the bound's
 /// iterations (no read-back between them) and computes the same walks; one iteration too few
 /// is an error naming the bound; a pool smaller than the chunk falls back to read-backs.
 #[test]
 fn bounded_host_loops_run_their_bound_and_catch_a_short_one() {
-    let n = 300;
-    let expected = cpu_steps(n);
-    // The loop pass runs once more than a walk's steps: the last call finds 1.
-    let needed = expected.iter().max().unwrap() + 1;
-    let g = graph_with_loop_bound("Walk", "BOUND").unwrap();
+    let (n, expected, needed, g) = bounded_walks();
     let mut host = 0;
     for (name, decl) in lightgraph_engine::auto::legal_layouts(&g, &Default::default()) {
         if decl.loops != LoopMode::Host {
@@ -350,10 +355,7 @@ fn bounded_host_loops_run_their_bound_and_catch_a_short_one() {
 /// (here a loop bound one short) surfaces when that batch is collected.
 #[test]
 fn batches_in_flight_are_collected_in_order_with_their_own_statistics() {
-    let n = 300;
-    let expected = cpu_steps(n);
-    let needed = expected.iter().max().unwrap() + 1;
-    let g = graph_with_loop_bound("Walk", "BOUND").unwrap();
+    let (n, expected, needed, g) = bounded_walks();
     let split = || g.layouts["split"].clone();
     let mut instance = bounded_instance(&g, "split", split(), n, needed);
     let single = instance.run_frame(0, 0).unwrap();

@@ -57,18 +57,17 @@ fn film_add(pixel: u32, c: vec3<f32>) {
 }
 
 // Index `index` of a start pass over PATHS * FRAMES_AT_ONCE indices (passes/film.ron): path
-// `path` of frame `slot` of the frames run at once, whose random numbers are those of frame
-// index `frame_index` and whose light goes to the film's pixels from `film_base` on.
+// `path` of frame k = index / PATHS of the frames run at once, whose random numbers are those
+// of frame index `frame_index` and whose light goes to the film's pixels from `film_base` on.
 struct FrameSlot {
-    slot: u32,
     path: u32,
     frame_index: u32,
     film_base: u32,
 }
 
 fn frame_slot(index: u32) -> FrameSlot {
-    let slot = index / PATHS;
-    return FrameSlot(slot, index % PATHS, frame.index * FRAMES_AT_ONCE + slot, slot * PIXELS);
+    let k = index / PATHS;
+    return FrameSlot(index % PATHS, frame.index * FRAMES_AT_ONCE + k, k * PIXELS);
 }
 
 // The first film pixel of the frame slot that film pixel `pixel` lies in.

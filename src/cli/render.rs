@@ -117,12 +117,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let mut film = Reference::new((w, h), film_settings(c.scene(), &graph, &opts));
     let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
     session.first_frame = args.first_frame;
-    let at_once = session.frames_at_once();
-    if (args.time.is_none() && !args.frames.is_multiple_of(at_once)) || !args.first_frame.is_multiple_of(at_once) {
-        bail!(
-            "--frames and --first-frame must be multiples of FRAMES_AT_ONCE = {at_once}, the frames the GPU renders as one"
-        );
-    }
+    // A frame count that splits a group of frames rendered at once is refused before rendering.
+    session.check_frames(args.first_frame, if args.time.is_none() { args.frames } else { 0 })?;
     let mut error_text = String::new();
     let mut error_at: Option<Instant> = None;
     let bar = match args.time {

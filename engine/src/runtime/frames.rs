@@ -543,9 +543,9 @@ impl Instance<'_> {
             (Some(&pool), _) => Dispatch::Items(pool),
             (None, Root::Start) => match self.kernels.domains.get(&kp.phase) {
                 Some((_, offset)) => Dispatch::Indirect(*offset),
-                None => Dispatch::Items(self.frames.records[record][3] as u64),
+                None => Dispatch::Items(self.record_items(record)),
             },
-            (None, _) => Dispatch::Items(self.frames.records[record][3] as u64),
+            (None, _) => Dispatch::Items(self.record_items(record)),
         };
         let kernel = &self.kernels.passes[k.0];
         match (kp.input, kp.output) {
@@ -643,7 +643,7 @@ impl Instance<'_> {
     /// holds the whole chunk) and the batch has room for one more check.
     fn bounded_iterations(&self, chain: ChainId, record: usize) -> Option<u32> {
         let bound = *self.program.resolved.loop_bounds.get(&chain)?;
-        let items = self.frames.records[record][3] as u64;
+        let items = self.record_items(record);
         let at_once = self
             .program
             .resolved
@@ -662,7 +662,7 @@ impl Instance<'_> {
         let headers = self.copy_loop_words(rec, chain, buffer, at);
         self.frames.checks.push(LoopCheck {
             chain,
-            items: self.frames.records[record][3] as u64,
+            items: self.record_items(record),
             bound,
             at,
             headers,
@@ -701,7 +701,12 @@ impl Instance<'_> {
             .map_or(self.buffers.slot(&BufferRef::Control).size, |h| h + 8);
         let submission = rec.submit(&self.gpu.device, &self.gpu.queue);
         let bytes = map_buffer(self.gpu, &self.frames.loop_readback, end, submission)?;
-        Ok(self.work_left(&bytes, 0, &headers, chain, self.frames.records[record][3] as u64))
+        Ok(self.work_left(&bytes, 0, &headers, chain, self.record_items(record)))
+    }
+
+    /// Items of the chunk record `record` of the batch being recorded runs over.
+    fn record_items(&self, record: usize) -> u64 {
+        self.frames.records[record][3] as u64
     }
 
     /// Whether a loop over `chain` has work left, from the copy at byte `at` of `bytes`
