@@ -4,15 +4,12 @@
 # (docs/performance.md, "Frames at once"). On the GPU machine from the repo root with carry
 # [".gpu"] after `../shared/tools/gpu-bundle.sh --bin BIN --scene CrytekSponza`:
 #   bash bench/gpu_bpt_at_once.sh
-# Prints scene, graph, FRAMES_AT_ONCE, threads, layout, point, Msamples/s wall-clock, Mrays/s
-# wall-clock and of GPU time.
+# Prints `bench_rows` lines (bench/gpu_common.sh).
 set -uo pipefail
+source "$(dirname "$0")/gpu_common.sh"
 point() { # scene graph layouts points N [threads]
-  bash .gpu/run.sh lightgraph bench --scene "$1" --graph "$2" --layouts "$3" --points "$4" --time 3s \
-    --set FRAMES_AT_ONCE="$5" ${6:+--threads $6} --out /tmp/ba >/dev/null 2>&1 || { echo "$*: failed"; return; }
-  tail -n +2 /tmp/ba/bench.csv | while IFS=, read -r layout w h spp paths frames secs rays rps grps sps rest; do
-    echo "$1,$2,N=$5,threads=${6:-layout},$layout,${w}x${h}x$spp,$(awk "BEGIN { printf \"%.1f Msamples/s,%.0f,%.0f Mrays/s\", $sps / 1e6, $rps / 1e6, $grps / 1e6 }")"
-  done
+  bench_rows lightgraph "$1 N=$5 threads=${6:-layout}" --scene "$1" --graph "$2" --layouts "$3" --points "$4" --time 3s \
+    --set FRAMES_AT_ONCE="$5" ${6:+--threads $6}
 }
 for scene in cornell-glossy-point cornell-diffuse; do
   for n in 1 4 16; do

@@ -1,6 +1,7 @@
-# Shared by the photon-mapping GPU bench scripts (sourced; needs $out, a scratch folder):
-# lightgraph through the GPU bundle, and one 1280x720 render's rates, per-frame counters and
-# GPU time per kernel.
+# Shared by the GPU bench scripts (sourced from the repo root on the GPU machine): lightgraph
+# through the GPU bundle, one 1280x720 render's rates, per-frame counters and GPU time per
+# kernel (`render_summary`, needs $out, a scratch folder), and one `bench` run's rows
+# (`bench_rows`).
 lg() { bash .gpu/run.sh lightgraph "$@"; }
 # render_summary FRAMES ARGS...
 render_summary() {
@@ -8,4 +9,19 @@ render_summary() {
   shift
   echo "== $*"
   lg render --res 1280x720 --frames "$frames" --out "$out/x.exr" "$@" 2>&1 | grep -E "frames,|per frame|GPU time|rror"
+}
+# bench_rows BINARY LABEL BENCH_ARGS...: one `bench` run with the bundle's BINARY, then a line
+# per layout: LABEL, layout, WxHxSPP, frames/s, Msamples/s, Mrays/s wall-clock and of GPU time,
+# and the GPU ms a frame of the kernels whose names match $KERNELS (grep -E; none when unset).
+bench_rows() {
+  local bin=$1 label=$2 dir
+  shift 2
+  dir=$(mktemp -d)
+  bash .gpu/run.sh "$bin" bench --out "$dir" "$@" >/dev/null 2>&1 || { echo "$label: failed"; return; }
+  tail -n +2 "$dir/bench.csv" | while IFS=, read -r layout w h spp paths frames secs rays rps grps sps fps mem kms; do
+    local kernels=""
+    [ -n "${KERNELS:-}" ] && kernels=$(echo "$kms" | tr ';' '\n' | grep -E "$KERNELS" | tr '\n' ' ')
+    echo "$label,$layout,${w}x${h}x$spp,$fps frames/s,$(awk "BEGIN { printf \"%.1f Msamples/s,%.0f Mrays/s,%.0f GPU Mrays/s\", $sps / 1e6, $rps / 1e6, $grps / 1e6 }")${kernels:+,$kernels}"
+  done
+  rm -rf "$dir"
 }

@@ -5,21 +5,19 @@
 # `../shared/tools/gpu-bundle.sh --bin BIN --scene CrytekSponza` and the binary before the
 # BVH change copied to .gpu/bin/lightgraph-old:
 #   bash bench/gpu_cornell_sweep.sh
-# 2 s a point; prints binary, scene, layout, BVH, workgroup, Gsamples/s and Mrays/s wall-clock.
+# 2 s a point; prints `bench_rows` lines (bench/gpu_common.sh).
 set -uo pipefail
-point() { # binary scene layouts bvh workgroup
-  bash .gpu/run.sh "$1" bench --scene "$2" --graph pt --layouts "$3" --points 1280x720x16 --time 2s \
-    --bvh "$4" ${5:+--workgroup $5} --out /tmp/cs >/dev/null 2>&1 || { echo "$*: failed"; return; }
-  tail -n +2 /tmp/cs/bench.csv | while IFS=, read -r layout w h spp paths frames secs rays rps grps sps rest; do
-    echo "$1,$2,$layout,$4,workgroup=${5:-default},$(awk "BEGIN { printf \"%.3f Gsamples/s,%.0f Mrays/s\", $sps / 1e9, $rps / 1e6 }")"
-  done
-}
+source "$(dirname "$0")/gpu_common.sh"
 for r in 1 2; do
   for bin in lightgraph-old lightgraph; do
-    point $bin cornell-mitsuba NaivePTsk,RegenerationPTsk auto
-    point $bin sponza NaivePTsk,StreamingPTmk1,StreamingPTmk2,RegenerationPTsk auto
+    bench_rows $bin "r$r $bin" --scene cornell-mitsuba --graph pt --layouts NaivePTsk,RegenerationPTsk --points 1280x720x16 --time 2s
+    bench_rows $bin "r$r $bin" --scene sponza --graph pt --layouts NaivePTsk,StreamingPTmk1,StreamingPTmk2,RegenerationPTsk \
+      --points 1280x720x16 --time 2s
   done
 done
 for bvh in bvh2 cwbvh; do
-  for wg in 32 64 128 256; do point lightgraph cornell-mitsuba NaivePTsk,RegenerationPTsk $bvh $wg; done
+  for wg in 32 64 128 256; do
+    bench_rows lightgraph "$bvh workgroup=$wg" --scene cornell-mitsuba --graph pt --layouts NaivePTsk,RegenerationPTsk \
+      --points 1280x720x16 --time 2s --bvh $bvh --workgroup $wg
+  done
 done

@@ -5,22 +5,15 @@
 # connection and merging"). On the GPU machine from the repo root with carry [".gpu"] after
 # `../shared/tools/gpu-bundle.sh --bin BIN --scene CrytekSponza`:
 #   bash bench/gpu_vcm_iterations.sh
-# 3 s a point after the bench's warm-up; prints graph, layout, K, frames/s, iterations/s and
-# the GPU milliseconds per frame of each kernel (the bench's CSV columns 6, 7, 12 and 14).
+# 3 s a point after the bench's warm-up; prints `bench_rows` lines (bench/gpu_common.sh) with
+# every kernel's GPU ms a frame; iterations/s are frames/s times K.
 set -uo pipefail
-run() { # graph layouts K
-  bash .gpu/run.sh lightgraph bench --scene cornell-diffuse --graph "$1" --layouts "$2" \
-    --points 256x256x"$3" --time 3s ${4:+--set PM_ITERATIONS=$3} --out /tmp/vi >/dev/null 2>&1 \
-    || { echo "$1 $2 K=$3: failed"; return; }
-  tail -n +2 /tmp/vi/bench.csv | while IFS=, read -r layout w h spp paths frames secs rays rps grps sps fps mem kms; do
-    echo "$1,$layout,K=$3,$fps frames/s,$(awk "BEGIN { printf \"%.0f\", $fps * $3 }") iterations/s,kernels: $kms"
-  done
-}
+source "$(dirname "$0")/gpu_common.sh"
 for k in 1 2 4 8 16 32 64; do
-  run vcm VCMsk,VCMmk "$k" merge
-  run bpt-lvc LVC-BPTsk "$k"
+  KERNELS=. bench_rows lightgraph "vcm K=$k" --scene cornell-diffuse --graph vcm --layouts VCMsk,VCMmk \
+    --points 256x256x$k --time 3s --set PM_ITERATIONS=$k
+  KERNELS=. bench_rows lightgraph "bpt-lvc K=$k" --scene cornell-diffuse --graph bpt-lvc --layouts LVC-BPTsk \
+    --points 256x256x$k --time 3s
 done
 # The rate of large frames (one iteration of 1280x720).
-bash .gpu/run.sh lightgraph bench --scene cornell-diffuse --graph vcm --layouts VCMsk,VCMmk \
-  --points 1280x720x1 --time 3s --out /tmp/vl >/dev/null 2>&1
-cut -d, -f1,6,7,11,12 /tmp/vl/bench.csv
+bench_rows lightgraph "vcm 1280x720" --scene cornell-diffuse --graph vcm --layouts VCMsk,VCMmk --points 1280x720x1 --time 3s
