@@ -6,12 +6,6 @@
 // bucket is read twice. Coordinates are relative to the origin (no bounds: the hash takes
 // any cell), and the query's box of cells is widened by a margin above the rounding error
 // of the cell computations, so a photon within r is never in a cell the query skips.
-//
-// Beside the records in bucket order, the full hash grid keeps each photon's 4-byte tag in
-// the same order (`grid_tags`): 8 bits that tell its cell from most others of its bucket and
-// its position in the cell to 1/256 of a side along each axis. A gather reads a record only
-// when its tag may be in range (`tag_may_reach`): the photons of other cells that share the
-// bucket and the photons of the cell out of range then cost 4 bytes each, not a record.
 
 // A query's box of cells, and whether its cells' buckets are distinct (at most 2 cells along
 // each axis). Otherwise a bucket may hold several of the box's cells, and a gather keeps a
@@ -121,51 +115,4 @@ fn cell_reaches(cell: vec3<i32>, center: vec3<f32>, radius: f32) -> bool {
 // Whether a photon at `position`, found in the bucket of `cell`, counts in this visit.
 fn cell_owns(box: CellBox, cell: vec3<i32>, position: vec3<f32>) -> bool {
     return box.distinct || all(cell_of(position) == cell);
-}
-
-// The tag of a photon at `position` in `cell` (its `cell_of`): bits 0-7 the cell's
-// `cell_mark`, then a byte per axis, the position within the cell in 256ths of the side
-// (rounded down).
-fn photon_tag(position: vec3<f32>, cell: vec3<i32>) -> u32 {
-    let x = (position - pm_origin()) / cell_size() - vec3<f32>(cell);
-    let q = min(vec3<u32>(clamp(x, vec3<f32>(0.0), vec3<f32>(1.0)) * 256.0), vec3<u32>(255u));
-    return cell_mark(cell) | (q.x << 8u) | (q.y << 16u) | (q.z << 24u);
-}
-
-// 8 bits of cell `c` that the other cells of its bucket mostly lack: the low bits of its pair
-// coordinates (those of a bucket's cells share their parities), 3 + 3 + 2.
-fn cell_mark(c: vec3<i32>) -> u32 {
-    let pair = vec3<u32>(c >> vec3<u32>(1u));
-    return (pair.x & 7u) | ((pair.y & 7u) << 3u) | ((pair.z & 3u) << 6u);
-}
-
-// What a gather's visit of one cell needs to screen the tags of its bucket: the cell's mark,
-// the cell's corner relative to the query's centre, the side of a tag's box, and the query's
-// reach (radius and margin) squared.
-struct TagScreen {
-    mark: u32,
-    corner: vec3<f32>,
-    step: f32,
-    reach2: f32,
-}
-
-// The screen of the visit of `cell` by a query of `radius` around `center`.
-fn tag_screen(cell: vec3<i32>, center: vec3<f32>, radius: f32) -> TagScreen {
-    let size = cell_size();
-    let reach = radius + cell_margin(radius);
-    return TagScreen(cell_mark(cell), pm_origin() + vec3<f32>(cell) * size - center, size / 256.0, reach * reach);
-}
-
-// Whether a photon with tag `tag`, found in the visited cell's bucket, may be in that cell
-// within reach: its mark is the cell's and the box of its position (the cell's 256ths) comes
-// within reach of the centre. False only for photons of other cells (which count in other
-// visits or nowhere) and photons of the cell out of range: the exact test follows for the rest.
-fn tag_may_reach(s: TagScreen, tag: u32) -> bool {
-    if ((tag & 0xffu) != s.mark) {
-        return false;
-    }
-    let q = vec3<f32>(vec3<u32>(tag >> 8u, tag >> 16u, tag >> 24u) & vec3<u32>(0xffu));
-    let lo = s.corner + q * s.step;
-    let d = max(max(lo, -(lo + s.step)), vec3<f32>(0.0));
-    return dot(d, d) <= s.reach2;
 }

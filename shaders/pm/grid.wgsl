@@ -1,24 +1,19 @@
 // The full hash grid (Davidovic et al. 2014, Algorithm 1), built with the engine's operators:
-// `grid_keys` writes each photon's bucket and tag (shaders/pm/cells.wgsl), a Count gives each
-// photon its slot in its bucket, a Scan of the counts each bucket's first place, and two
-// Scatters put the photon records themselves in bucket order in `grid_photons` (no index
-// array) and their tags in the same order in `grid_tags`, so a
+// `grid_keys` writes each photon's bucket (shaders/pm/cells.wgsl), a Count gives each photon
+// its slot in its bucket, a Scan of the counts each bucket's first place, and a Scatter puts
+// the photon records themselves in bucket order in `grid_photons` (no index array), so a
 // bucket's photons are contiguous: grid_first[b] .. grid_first[b + 1] (the photon total for the
 // last). The gather visits the query's cells with NaiveQuery (cell by cell) or, with
 // PM_WHILE_QUERY, WhileQuery (Algorithm 2: one loop that first finds the next photon in range,
 // over all cells, then processes it); both find the same photons in the same order. NaiveQuery
-// is the default: faster on an H100 (docs/performance.md). Both read a photon's tag first, its
-// position only when the tag may be in range, and the rest of its record only when it is in
-// range (most are not: a query's 8 cells cover about 5 times its disc, and other cells'
-// photons share their buckets).
+// is the default: faster on an H100 (docs/performance.md). Both read a photon's position
+// first and the rest of its record only when it is in range (most are not: a query's 8
+// cells cover about 5 times its disc).
 
-// Pass `grid_keys` (Start over the stored photons): the photon's bucket and tag.
+// Pass `grid_keys` (Start over the stored photons): the photon's bucket.
 fn grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     (*p).index = index;
-    let position = pm_staging[index].position;
-    let cell = cell_of(position);
-    grid_key[index] = cell_bucket(cell);
-    grid_tag_staging[index] = photon_tag(position, cell);
+    grid_key[index] = cell_bucket(cell_of(pm_staging[index].position));
     return false;
 }
 
@@ -58,11 +53,7 @@ fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
     var walk = cell_walk(box);
     loop {
         let range = grid_reached_bucket(walk.cell, *m);
-        let screen = tag_screen(walk.cell, (*m).position, (*m).radius);
         for (var i = range.x; i < range.y; i += 1u) {
-            if (!tag_may_reach(screen, grid_tags[i])) {
-                continue;
-            }
             let position = grid_photons[i].position;
             if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, position)) {
                 merge_photon(m, grid_photons[i], 1.0);
@@ -79,17 +70,13 @@ fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
 fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
     var walk = cell_walk(box);
     var range = grid_reached_bucket(walk.cell, *m);
-    var screen = tag_screen(walk.cell, (*m).position, (*m).radius);
     var i = range.x;
     loop {
         var found = false;
         loop {
             if (i < range.y) {
+                let position = grid_photons[i].position;
                 i += 1u;
-                if (!tag_may_reach(screen, grid_tags[i - 1u])) {
-                    continue;
-                }
-                let position = grid_photons[i - 1u].position;
                 if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, position)) {
                     found = true;
                     break;
@@ -100,7 +87,6 @@ fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
                 break;
             }
             range = grid_reached_bucket(walk.cell, *m);
-            screen = tag_screen(walk.cell, (*m).position, (*m).radius);
             i = range.x;
         }
         if (!found) {

@@ -74,16 +74,13 @@ fn vcm_bucket(cell: vec3<i32>, iteration: u32) -> u32 {
 }
 
 // Pass `vcm_grid_keys` (Start over the stored vertices): the vertex's hash grid bucket, in
-// the grid of its light sub-path's iteration, and its tag (shaders/pm/cells.wgsl).
+// the grid of its light sub-path's iteration.
 fn vcm_grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     var iteration = 0u;
     if (PM_ITERATIONS > 1u) {
         iteration = vcm_iteration(lvc_owner[index]);
     }
-    let position = lvc_staging[index].position;
-    let cell = cell_of(position);
-    grid_key[index] = vcm_bucket(cell, iteration);
-    grid_tag_staging[index] = photon_tag(position, cell);
+    grid_key[index] = vcm_bucket(cell_of(lvc_staging[index].position), iteration);
     return false;
 }
 
@@ -134,7 +131,7 @@ fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
 }
 
 // Pass `vcm_gather` (Loop): the pending merge, with every cached vertex within the radius
-// (the full hash grid's NaiveQuery over `vcm_grid` and its tags, shaders/pm/grid.wgsl), over
+// (the full hash grid's NaiveQuery over `vcm_grid`, shaders/pm/grid.wgsl), over
 // pi r^2 N_light. The vertex's BSDF is set up at the first cached vertex found: most queries
 // find none where the radius is small against the scene (Sponza's: 1.6 M queries, 17 k found).
 fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
@@ -148,11 +145,7 @@ fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
     var walk = cell_walk(box);
     loop {
         let range = vcm_reached_bucket(walk.cell, m, (*p).iteration);
-        let screen = tag_screen(walk.cell, m.position, m.radius);
         for (var i = range.x; i < range.y; i += 1u) {
-            if (!tag_may_reach(screen, grid_tags[i])) {
-                continue;
-            }
             let position = vcm_grid[i].position;
             if (pm_in_range(position, m.position, m.radius) && cell_owns(box, walk.cell, position)) {
                 if (!found) {
