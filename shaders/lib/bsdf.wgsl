@@ -264,6 +264,27 @@ fn bsdf_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     return e;
 }
 
+// When the BSDF's non-delta part is a Lambertian alone (not glTF's model, no Phong lobe): the
+// value of `bsdf_eval(b, w).f` for every direction w with dot(w, b.frame.n) >= EPS_COSINE
+// (it is 0 for the others). Otherwise -1. A sum of such values over many directions (a
+// density estimation's) can then take the value out.
+fn bsdf_lambertian_f(b: Bsdf) -> vec3<f32> {
+#if BSDF_PBR
+    if (b.pbr) {
+        return vec3<f32>(-1.0);
+    }
+#endif
+#if BSDF_PHONG
+    if (b.phong_prob > 0.0) {
+        return vec3<f32>(-1.0);
+    }
+#endif
+    if (b.diffuse_prob > 0.0 && b.fix.z >= EPS_COSINE) {
+        return b.m.diffuse * INV_PI;
+    }
+    return vec3<f32>(0.0);
+}
+
 // Evaluates for a world direction.
 fn bsdf_eval(b: Bsdf, world_gen: vec3<f32>) -> BsdfEval {
     return bsdf_eval_local(b, to_local(b.frame, world_gen));

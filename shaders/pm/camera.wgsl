@@ -97,7 +97,9 @@ struct MergePath {
     merge: PendingMerge,
 }
 
-// A density estimation under way: the query and the sums of the photons it found.
+// A density estimation under way: the query and the sums of the photons it found. Where the
+// BSDF is a Lambertian (PPM and SPPM), its value `lambertian_f` comes out of the sum: `flux`
+// sums the throughputs of the photons arriving from above the surface (`merge_sum`).
 struct Merge {
     position: vec3<f32>,
     radius: f32,
@@ -106,6 +108,8 @@ struct Merge {
     d_vm: f32,
     length: u32,
     sum: vec3<f32>,
+    lambertian_f: vec3<f32>,
+    flux: vec3<f32>,
 }
 
 // Pass `pm_camera` (Start over PATHS): the camera ray of sample `index` (pixel index % PIXELS
@@ -223,6 +227,9 @@ fn merge_begin(p: MergePath) -> Merge {
     if (PM_MODE == PM_SPPM) {
         m.bsdf = bsdf_diffuse_part(m.bsdf);
     }
+    if (PM_MODE != PM_PBPM) {
+        m.lambertian_f = bsdf_lambertian_f(m.bsdf);
+    }
     return m;
 }
 
@@ -238,20 +245,27 @@ fn merge_query(pending: PendingMerge) -> Merge {
 // gather may set it up at its first photon (VCM's, whose queries mostly find none).
 fn merge_query_unset(pending: PendingMerge) -> Merge {
     count(COUNTER_PM_QUERIES, 1u);
-    return Merge(pending.position, pm_radius(), true, Bsdf(), pending.d_vm, pending.length, vec3<f32>(0.0));
+    return Merge(pending.position, pm_radius(), true, Bsdf(), pending.d_vm, pending.length, vec3<f32>(0.0),
+                 vec3<f32>(-1.0), vec3<f32>(0.0));
 }
 
 // Adds a photon in range (counted as `pm_found`; the queries as `pm_queries`), standing for
-// `weight` photons, to the estimation: the BSDF for the
-// direction it arrived from times its throughput (the photon arrives at the query point),
-// with PBPM's MIS weight. Photons that would make the path longer than MAX_PATH_LENGTH are
-// left out.
+// `weight` photons, to the estimation: the BSDF for the direction it arrived from (a
+// Lambertian's value taken out of the sum, see `Merge`) times its throughput (the photon
+// arrives at the query point), with PBPM's MIS weight. Photons that would make the path
+// longer than MAX_PATH_LENGTH are left out.
 fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
     count(COUNTER_PM_FOUND, 1u);
     if (photon_length(photon) + (*m).length > MAX_PATH_LENGTH) {
         return;
     }
     let towards = photon_direction(photon);
+    if ((*m).lambertian_f.x >= 0.0) {
+        if (dot(towards, (*m).bsdf.frame.n) >= EPS_COSINE) {
+            (*m).flux += photon.throughput * weight;
+        }
+        return;
+    }
     let e = bsdf_eval((*m).bsdf, towards);
     if (is_black(e.f)) {
         return;
@@ -277,5 +291,10 @@ fn merge_end(p: ptr<function, MergePath>, m: Merge) {
         return;
     }
     (*p).flags &= ~MERGE_PENDING;
-    film_add((*p).pixel, (*p).merge.throughput * m.sum * merge_kernel(m.radius));
+    film_add((*p).pixel, (*p).merge.throughput * merge_sum(m) * merge_kernel(m.radius));
+}
+
+// The estimation's sum of BSDF values times photon throughputs.
+fn merge_sum(m: Merge) -> vec3<f32> {
+    return m.sum + max(m.lambertian_f, vec3<f32>(0.0)) * m.flux;
 }
