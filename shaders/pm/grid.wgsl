@@ -48,15 +48,24 @@ fn grid_gather(p: ptr<function, MergePath>) -> bool {
     return true;
 }
 
-// NaiveQuery: every cell's photons in turn.
+// NaiveQuery: every cell's photons in turn, four at a time: their positions are read together
+// (four loads in flight at once, not one round trip after another), then the photons in range
+// are merged in order.
 fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
     var walk = cell_walk(box);
     loop {
         let range = grid_reached_bucket(walk.cell, *m);
-        for (var i = range.x; i < range.y; i += 1u) {
-            let position = grid_photons[i].position;
-            if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, position)) {
-                merge_photon(m, grid_photons[i], 1.0);
+        for (var i = range.x; i < range.y; i += 4u) {
+            let at = cell_four(i, range.y);
+            var found = cell_four_kept(
+                array(grid_photons[at.x].position, grid_photons[at.y].position,
+                      grid_photons[at.z].position, grid_photons[at.w].position),
+                i, range.y, (*m).position, (*m).radius, box, walk.cell,
+            );
+            while (found != 0u) {
+                let k = firstTrailingBit(found);
+                found &= found - 1u;
+                merge_photon(m, grid_photons[i + k], 1.0);
             }
         }
         if (!cell_walk_next(&walk)) {

@@ -272,8 +272,9 @@ fn brute_force(cloud: &Cloud) -> Vec<(Vec<u32>, Vec<u32>)> {
         .collect()
 }
 
-/// An instance of the test graph for the structure `PM_STRUCTURE = structure`.
-fn instance(structure: u32) -> Instance<'static> {
+/// An instance of the test graph for the structure `PM_STRUCTURE = structure`, the hash grid
+/// queried with WhileQuery or NaiveQuery (`PM_WHILE_QUERY = while_query`).
+fn instance(structure: u32, while_query: bool) -> Instance<'static> {
     let vfs = lightgraph::assets::builtin().with_front(Layer::Dir(data("graphs")));
     let graph = Graph::load(&vfs, "pm_query.ron").unwrap();
     let plan = Plan::new(&graph, "query").unwrap();
@@ -287,6 +288,7 @@ fn instance(structure: u32) -> Instance<'static> {
         constants: constants
             .iter()
             .map(|(k, v)| (k.to_string(), ConstValue::U32(*v)))
+            .chain([("PM_WHILE_QUERY".to_string(), ConstValue::Bool(while_query))])
             .collect(),
         ..Default::default()
     };
@@ -374,8 +376,8 @@ fn exact_mismatch(cloud: &Cloud, found: &[Found], skipped: &mut usize) -> Option
 }
 
 /// Runs every cloud through an exact structure.
-fn exact_structure(structure: u32, name: &str) {
-    let mut instance = instance(structure);
+fn exact_structure(structure: u32, while_query: bool, name: &str) {
+    let mut instance = instance(structure, while_query);
     let (mut skipped, mut photons_found) = (0, 0u64);
     for cloud in clouds() {
         let found = run(&mut instance, cloud);
@@ -395,12 +397,14 @@ fn exact_structure(structure: u32, name: &str) {
 
 #[test]
 fn kd_tree_queries_find_exactly_the_photons_in_range() {
-    exact_structure(3, "kD-tree");
+    exact_structure(3, false, "kD-tree");
 }
 
 #[test]
 fn full_hash_grid_queries_find_exactly_the_photons_in_range() {
-    exact_structure(0, "full hash grid");
+    // NaiveQuery reads a bucket's photons four at a time: buckets of every size mod 4.
+    exact_structure(0, false, "full hash grid, NaiveQuery");
+    exact_structure(0, true, "full hash grid, WhileQuery");
 }
 
 /// The cell of a photon (cell_of in shaders/pm/cells.wgsl), or `None` within 1e-4 of a cell
@@ -456,7 +460,7 @@ fn stochastic_mismatch(cloud: &Cloud, found: &[Found]) -> Option<String> {
 #[test]
 fn stochastic_hash_grids_report_photons_in_range_with_consistent_weights() {
     for (structure, name) in [(1, "rectified"), (2, "original")] {
-        let mut instance = instance(structure);
+        let mut instance = instance(structure, false);
         let mut reported = 0;
         for cloud in clouds() {
             let found = run(&mut instance, cloud);
