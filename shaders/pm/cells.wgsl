@@ -116,24 +116,3 @@ fn cell_reaches(cell: vec3<i32>, center: vec3<f32>, radius: f32) -> bool {
 fn cell_owns(box: CellBox, cell: vec3<i32>, position: vec3<f32>) -> bool {
     return box.distinct || all(cell_of(position) == cell);
 }
-
-// The entries a gather reads at once from a bucket ending at `end`, from entry i < end on:
-// i .. i + 3, those past the end replaced by the last (the loads need no branch; see
-// `cell_four_kept`).
-fn cell_four(i: u32, end: u32) -> vec4<u32> {
-    return min(vec4<u32>(i) + vec4<u32>(0u, 1u, 2u, 3u), vec4<u32>(end - 1u));
-}
-
-// Of the positions of entries i .. i + 3 (`cell_four`) of the bucket of `cell`, ending at
-// `end`: bit k set where entry i + k exists, is within `radius` of `center` and counts in this
-// visit of `cell` (`cell_owns`).
-fn cell_four_kept(p: array<vec3<f32>, 4>, i: u32, end: u32, center: vec3<f32>, radius: f32, box: CellBox, cell: vec3<i32>) -> u32 {
-    let exists = vec4<u32>(i) + vec4<u32>(0u, 1u, 2u, 3u) < vec4<u32>(end);
-    let kept = exists & vec4<bool>(
-        pm_in_range(p[0], center, radius) && cell_owns(box, cell, p[0]),
-        pm_in_range(p[1], center, radius) && cell_owns(box, cell, p[1]),
-        pm_in_range(p[2], center, radius) && cell_owns(box, cell, p[2]),
-        pm_in_range(p[3], center, radius) && cell_owns(box, cell, p[3]),
-    );
-    return dot(select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), kept), vec4<u32>(1u));
-}

@@ -6,9 +6,9 @@
 // last). The gather visits the query's cells with NaiveQuery (cell by cell) or, with
 // PM_WHILE_QUERY, WhileQuery (Algorithm 2: one loop that first finds the next photon in range,
 // over all cells, then processes it); both find the same photons in the same order. NaiveQuery
-// is the default: faster on an H100 (docs/performance.md). Both read a photon's position
-// first and the rest of its record only when it is in range (most are not: a query's 8
-// cells cover about 5 times its disc).
+// is the default: faster on an H100 (docs/performance.md), most since it reads four positions
+// of a bucket at once. Both read a photon's position first and the rest of its record only
+// when it is in range (most are not: a query's 8 cells cover about 5 times its disc).
 
 // Pass `grid_keys` (Start over the stored photons): the photon's bucket.
 fn grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
@@ -56,10 +56,9 @@ fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
     loop {
         let range = grid_reached_bucket(walk.cell, *m);
         for (var i = range.x; i < range.y; i += 4u) {
-            let at = cell_four(i, range.y);
-            var found = cell_four_kept(
-                array(grid_photons[at.x].position, grid_photons[at.y].position,
-                      grid_photons[at.z].position, grid_photons[at.w].position),
+            let at = grid_four(i, range.y);
+            var found = grid_four_kept(
+                grid_photons[at.x].position, grid_photons[at.y].position, grid_photons[at.z].position, grid_photons[at.w].position,
                 i, range.y, (*m).position, (*m).radius, box, walk.cell,
             );
             while (found != 0u) {
@@ -74,6 +73,31 @@ fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
     }
 }
 
+// The entries a gather reads at once from a bucket ending at `end`, from entry i < end on:
+// i .. i + 3, those past the end replaced by the last (the loads need no branch; see
+// `grid_four_kept`).
+fn grid_four(i: u32, end: u32) -> vec4<u32> {
+    return min(vec4<u32>(i) + vec4<u32>(0u, 1u, 2u, 3u), vec4<u32>(end - 1u));
+}
+
+// Of the positions p0 .. p3 of entries i .. i + 3 (`grid_four`) of the bucket of `cell`, ending
+// at `end`: bit k set where entry i + k exists, is within `radius` of `center` and counts in
+// this visit of `cell` (`cell_owns`).
+fn grid_four_kept(p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, p3: vec3<f32>, i: u32, end: u32, center: vec3<f32>, radius: f32, box: CellBox, cell: vec3<i32>) -> u32 {
+    let exists = vec4<u32>(i) + vec4<u32>(0u, 1u, 2u, 3u) < vec4<u32>(end);
+    let kept = exists & vec4<bool>(
+        grid_keeps(p0, center, radius, box, cell), grid_keeps(p1, center, radius, box, cell),
+        grid_keeps(p2, center, radius, box, cell), grid_keeps(p3, center, radius, box, cell),
+    );
+    return dot(select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), kept), vec4<u32>(1u));
+}
+
+// Whether an entry at `position` in the bucket of `cell` is within `radius` of `center` and
+// counts in this visit of `cell`.
+fn grid_keeps(position: vec3<f32>, center: vec3<f32>, radius: f32, box: CellBox, cell: vec3<i32>) -> bool {
+    return pm_in_range(position, center, radius) && cell_owns(box, cell, position);
+}
+
 // WhileQuery: finds the next photon in range over all cells, then processes it, so threads
 // of a warp process photons together whatever the cells' sizes.
 fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
@@ -86,7 +110,7 @@ fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
             if (i < range.y) {
                 let position = grid_photons[i].position;
                 i += 1u;
-                if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, walk.cell, position)) {
+                if (grid_keeps(position, (*m).position, (*m).radius, box, walk.cell)) {
                     found = true;
                     break;
                 }

@@ -131,8 +131,7 @@ fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
 }
 
 // Pass `vcm_gather` (Loop): the pending merge, with every cached vertex within the radius
-// (the full hash grid's NaiveQuery over `vcm_grid`, four entries read at once,
-// shaders/pm/grid.wgsl), over
+// (the full hash grid's NaiveQuery over `vcm_grid`, shaders/pm/grid.wgsl), over
 // pi r^2 N_light. The vertex's BSDF is set up at the first cached vertex found: most queries
 // find none where the radius is small against the scene (Sponza's: 1.6 M queries, 17 k found).
 fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
@@ -146,20 +145,14 @@ fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
     var walk = cell_walk(box);
     loop {
         let range = vcm_reached_bucket(walk.cell, m, (*p).iteration);
-        for (var i = range.x; i < range.y; i += 4u) {
-            let at = cell_four(i, range.y);
-            var kept = cell_four_kept(
-                array(vcm_grid[at.x].position, vcm_grid[at.y].position, vcm_grid[at.z].position, vcm_grid[at.w].position),
-                i, range.y, m.position, m.radius, box, walk.cell,
-            );
-            if (kept != 0u && !found) {
-                m.bsdf = pending_merge_bsdf((*p).merge);
-                found = true;
-            }
-            while (kept != 0u) {
-                let k = firstTrailingBit(kept);
-                kept &= kept - 1u;
-                vcm_merge_vertex(&m, vcm_grid[i + k], (*p).merge_d_vcm, counts);
+        for (var i = range.x; i < range.y; i += 1u) {
+            let position = vcm_grid[i].position;
+            if (pm_in_range(position, m.position, m.radius) && cell_owns(box, walk.cell, position)) {
+                if (!found) {
+                    m.bsdf = pending_merge_bsdf((*p).merge);
+                    found = true;
+                }
+                vcm_merge_vertex(&m, vcm_grid[i], (*p).merge_d_vcm, counts);
             }
         }
         if (!cell_walk_next(&walk)) {

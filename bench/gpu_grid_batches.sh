@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Hash grid gathers that read a bucket's entries four at a time, the binary before against the
+# one after (docs/performance.md, "Photon mapping" and "Vertex connection and merging"):
+# PPMsk's camera kernel on ModernHall at 1280x720 with r_0 0.0038 and 0.0041 (about 17 and 20
+# photons a query) and with no photon stored (PM_MEASURING: the queries' other costs), SPPMsk
+# and WhileQuery; then VCMsk and VCMmk on Sponza against LVC-BPTsk, and VCMsk on the diffuse
+# box at 256x256 with 64 iterations a frame. On the GPU machine from the repo root with carry
+# [".gpu"] after `../shared/tools/gpu-bundle.sh --bin NEW --scene CrytekSponza --scene ModernHall`
+# and the binary before copied to .gpu/bin/lightgraph-old:
+#   bash bench/gpu_grid_batches.sh
+# Two interleaved rounds (60 frames a render, 2 s a bench point).
+set -uo pipefail
+source "$(dirname "$0")/gpu_common.sh"
+hall=.gpu/scenes/ModernHall/staircase2.gltf
+# camera BINARY GRAPH LAYOUT ARGS...: the camera kernel's GPU ms a frame and the photons found.
+camera() {
+  bash .gpu/run.sh "$1" render --scene $hall --graph "$2" --layout "$3" --res 1280x720 --frames 60 "${@:4}" \
+    --out /tmp/x.exr 2>&1 | grep -oE "pm_found [0-9.]* [kM]?|pm_queries [0-9.]* [kM]?|k2_[a-z_]* [0-9.]* ms" | tr '\n' ' '
+}
+camera lightgraph ppm PPMsk >/dev/null
+export KERNELS=camera
+for r in 1 2; do
+  for bin in lightgraph-old lightgraph; do
+    for radius in 0.0038 0.0041; do
+      echo "r$r $bin PPMsk r_0 $radius: $(camera $bin ppm PPMsk --set PM_RADIUS=$radius)"
+      echo "r$r $bin PPMsk r_0 $radius no photon: $(camera $bin ppm PPMsk --set PM_RADIUS=$radius --set PM_MEASURING=true)"
+    done
+    echo "r$r $bin SPPMsk r_0 0.0038: $(camera $bin sppm SPPMsk --set PM_RADIUS=0.0038)"
+    echo "r$r $bin PPMsk WhileQuery r_0 0.0038: $(camera $bin ppm PPMsk --set PM_RADIUS=0.0038 --set PM_WHILE_QUERY=true)"
+    bench_rows $bin "r$r $bin sponza" --time 2s --scene sponza --graph bpt-lvc --layouts LVC-BPTsk --points 1280x720x1
+    bench_rows $bin "r$r $bin sponza" --time 2s --scene sponza --graph vcm --layouts VCMsk,VCMmk --points 1280x720x1
+    bench_rows $bin "r$r $bin box" --time 2s --scene cornell-diffuse --graph vcm --layouts VCMsk \
+      --points 256x256x64 --set PM_ITERATIONS=64
+  done
+done
