@@ -8,7 +8,9 @@
 # [".gpu"] after `../shared/tools/gpu-bundle.sh --bin NEW --scene CrytekSponza --scene ModernHall`
 # and the binary before copied to .gpu/bin/lightgraph-old:
 #   bash bench/gpu_grid_batches.sh
-# Two interleaved rounds (60 frames a render, 2 s a bench point).
+# Two interleaved rounds (60 frames a render, 2 s a bench point). The VCM lines were measured
+# with the batched read in VCM's gather too (commit 1c9aa02); VCM reads one entry at a time
+# again since, so with later binaries they compare like with like.
 set -uo pipefail
 source "$(dirname "$0")/gpu_common.sh"
 hall=.gpu/scenes/ModernHall/staircase2.gltf
