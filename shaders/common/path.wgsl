@@ -26,6 +26,20 @@ struct ShadowRay {
     contribution: vec3<f32>,
 }
 
+// The surface and BSDF at a camera path's last hit as `logic` set them up, for `material` when
+// it runs next in the same thread (the two passes fused in one kernel): the same values, not
+// computed twice. `material` in a kernel of its own finds `valid` false (private memory starts
+// zeroed) and sets them up itself; it clears `valid` when it takes them. Only in scenes with
+// textures, whose set-up fetches texels: there holding the vertex made PT 3.5-10% faster on
+// Sponza on an H100, while without textures the registers it holds cost the one-kernel layouts
+// 9-14% on the Cornell box (docs/performance.md, "A bounce's vertex set up once").
+struct PathVertex {
+    s: Surface,
+    bsdf: Bsdf,
+    valid: bool,
+}
+var<private> path_vertex: PathVertex;
+
 // The surface the path's last ray hit.
 fn path_surface(path: CameraPath) -> Surface {
     return surface_at(Hit(path.hit_t, path.hit_primitive, path.hit_uv, true), path.origin, path.direction);

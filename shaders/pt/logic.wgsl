@@ -24,6 +24,9 @@ fn logic(path: ptr<function, CameraPath>) -> bool {
     if (!bsdf.valid) {
         return false;
     }
+#if TEXTURES
+    path_vertex = PathVertex(s, bsdf, true);
+#endif
     if (s.light >= 0) {
         let le = area_light_radiance(u32(s.light), (*path).direction);
         if (le.w > 0.0) {

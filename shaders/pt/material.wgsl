@@ -4,8 +4,9 @@
 // probability, as in SmallVCM; with the throughput rule (Mitsuba's) they do not.
 
 fn material(path: ptr<function, CameraPath>) -> bool {
-    let s = path_surface(*path);
-    let bsdf = bsdf_setup(material_at(s.material, s.tex), s.normal, -(*path).direction);
+    let v = path_vertex_taken(*path);
+    let s = v.s;
+    let bsdf = v.bsdf;
     var rng = (*path).rng;
     let q_mis = select(1.0, bsdf.continuation, RR_ALBEDO);
     let light_u = rng_f32(&rng);
@@ -54,4 +55,17 @@ fn material(path: ptr<function, CameraPath>) -> bool {
     (*path).origin = offset_ray_origin(s.position, side, s.extent);
     (*path).direction = smp.direction;
     return true;
+}
+
+// The surface and BSDF at the path's last hit: `logic`'s, when it ran just before in this
+// thread (with textures; see `PathVertex`), else set up here.
+fn path_vertex_taken(path: CameraPath) -> PathVertex {
+#if TEXTURES
+    if (path_vertex.valid) {
+        path_vertex.valid = false;
+        return path_vertex;
+    }
+#endif
+    let s = path_surface(path);
+    return PathVertex(s, bsdf_setup(material_at(s.material, s.tex), s.normal, -path.direction), false);
 }

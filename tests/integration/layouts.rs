@@ -2,8 +2,8 @@
 //! the layouts run the same pass functions on the same random streams, and only the order of
 //! the film's atomic additions differs. They also trace exactly the same rays.
 
-use crate::common::{assert_same_render, borrowed, largest_relative_difference, measured, render};
-use lightgraph::render::{Image, LoadedScene, Session, SessionOptions, load_graph, load_scene};
+use crate::common::{assert_same_render, borrowed, largest_relative_difference, measured, render, render_with_layout};
+use lightgraph::render::{Image, LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
 use lightgraph_engine::{ConstValue, Graph};
 
 #[test]
@@ -21,6 +21,24 @@ fn every_pt_layout_matches_naive_pt_sk() {
             let other = render(&scene, "pt", layout, (24, 24), 2, 2, 42, &[]);
             assert_same_render(&reference, &other, &format!("{name}, {layout} against NaivePTsk"));
         }
+    }
+    // With every feature compiled in (textures among them), `material` takes the vertex that
+    // `logic` set up where the two are fused (`PathVertex`) and sets it up itself elsewhere.
+    let scene = load_scene("cornell-glossy-point").unwrap();
+    let all = || LayoutOverrides {
+        all_features: true,
+        ..Default::default()
+    };
+    let reference = render_with_layout(&scene, "pt", "NaivePTsk", (24, 24), 2, 2, 42, &[], all());
+    let plain = render(&scene, "pt", "NaivePTsk", (24, 24), 2, 2, 42, &[]);
+    assert_same_render(&plain, &reference, "NaivePTsk with every feature against the scene's");
+    for layout in &layouts {
+        let other = render_with_layout(&scene, "pt", layout, (24, 24), 2, 2, 42, &[], all());
+        assert_same_render(
+            &reference,
+            &other,
+            &format!("every feature, {layout} against NaivePTsk"),
+        );
     }
 }
 
