@@ -74,18 +74,6 @@ fn cell_bucket_among(c: vec3<i32>, first: u32, groups: u32) -> u32 {
     return group * 8u + parity.x + 2u * parity.y + 4u * parity.z;
 }
 
-// Cell k (0 to 7) of a box of at most 2 cells along each axis (`distinct`): the low corner
-// plus the bits of k along x, y and z. Past the box's high corner where it is one cell thick
-// along an axis (`box_holds`).
-fn box_cell(box: CellBox, k: u32) -> vec3<i32> {
-    return box.lo + vec3<i32>(vec3<u32>(k, k >> 1u, k >> 2u) & vec3<u32>(1u));
-}
-
-// Whether `cell` lies in the box (`box_cell`'s cells lie at or above its low corner).
-fn box_holds(box: CellBox, cell: vec3<i32>) -> bool {
-    return all(cell <= box.hi);
-}
-
 // Walks a box of cells in x, then y, then z order.
 struct CellWalk {
     box: CellBox,

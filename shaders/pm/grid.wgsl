@@ -17,15 +17,6 @@ fn grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     return false;
 }
 
-// Pass `grid_copy_positions` (Start over the stored photons, after the scatter): the photon's
-// position in `grid_positions`, beside its record in bucket order, so that a gather's reads of
-// positions (most of them out of range) take 16 bytes each, not the record's 32.
-fn grid_copy_positions(p: ptr<function, PhotonSlot>, index: u32) -> bool {
-    (*p).index = index;
-    grid_positions[index] = vec4<f32>(grid_photons[index].position, 0.0);
-    return false;
-}
-
 // The photons of bucket `b` in `grid_photons`: first and end.
 fn grid_bucket(b: u32) -> vec2<u32> {
     if (b + 1u < PM_CELLS) {
@@ -57,65 +48,27 @@ fn grid_gather(p: ptr<function, MergePath>) -> bool {
     return true;
 }
 
-// NaiveQuery: every cell's photons in turn. In a box of at most 2 cells along each axis (the
-// usual one) the 8 cells' bucket ranges are read first, all at once (eight loads in flight,
-// not one round trip per cell); a wider box is walked cell by cell.
+// NaiveQuery: every cell's photons in turn, four at a time: their positions are read together
+// (four loads in flight at once, not one round trip after another), then the photons in range
+// are merged in order.
 fn grid_naive_query(m: ptr<function, Merge>, box: CellBox) {
-    if (box.distinct) {
-        var ranges: array<vec2<u32>, 8>;
-        grid_box_ranges(&ranges, *m, box);
-        for (var k = 0u; k < 8u; k += 1u) {
-            grid_cell_gather(m, ranges[k], box, box_cell(box, k));
-        }
-        return;
-    }
     var walk = cell_walk(box);
     loop {
-        grid_cell_gather(m, grid_reached_bucket(walk.cell, *m), box, walk.cell);
+        let range = grid_reached_bucket(walk.cell, *m);
+        for (var i = range.x; i < range.y; i += 4u) {
+            let at = grid_four(i, range.y);
+            var found = grid_four_kept(
+                grid_photons[at.x].position, grid_photons[at.y].position, grid_photons[at.z].position, grid_photons[at.w].position,
+                i, range.y, (*m).position, (*m).radius, box, walk.cell,
+            );
+            while (found != 0u) {
+                let k = firstTrailingBit(found);
+                found &= found - 1u;
+                merge_photon(m, grid_photons[i + k], 1.0);
+            }
+        }
         if (!cell_walk_next(&walk)) {
             break;
-        }
-    }
-}
-
-// The bucket ranges of the 8 cells of a box of at most 2 cells along each axis (`box_cell`),
-// each read without a branch so that the loads are in flight together; empty for a cell out of
-// the box or of the query's reach.
-fn grid_box_ranges(ranges: ptr<function, array<vec2<u32>, 8>>, m: Merge, box: CellBox) {
-    let total = photon_total();
-    (*ranges)[0] = grid_box_range(box, 0u, m, total);
-    (*ranges)[1] = grid_box_range(box, 1u, m, total);
-    (*ranges)[2] = grid_box_range(box, 2u, m, total);
-    (*ranges)[3] = grid_box_range(box, 3u, m, total);
-    (*ranges)[4] = grid_box_range(box, 4u, m, total);
-    (*ranges)[5] = grid_box_range(box, 5u, m, total);
-    (*ranges)[6] = grid_box_range(box, 6u, m, total);
-    (*ranges)[7] = grid_box_range(box, 7u, m, total);
-}
-
-// The photons of the bucket of cell k of the box (`box_cell`), `total` photons in all, or none
-// where the cell is out of the box or of the query's reach. The loads are made either way.
-fn grid_box_range(box: CellBox, k: u32, m: Merge, total: u32) -> vec2<u32> {
-    let cell = box_cell(box, k);
-    let b = cell_bucket(cell);
-    let range = vec2<u32>(grid_first[b], select(total, grid_first[min(b + 1u, PM_CELLS - 1u)], b + 1u < PM_CELLS));
-    return select(vec2<u32>(0u), range, box_holds(box, cell) && cell_reaches(cell, m.position, m.radius));
-}
-
-// The photons of `range`, the bucket of `cell`, four at a time: their positions are read
-// together (four loads in flight at once, not one round trip after another), then those in
-// range are merged in order.
-fn grid_cell_gather(m: ptr<function, Merge>, range: vec2<u32>, box: CellBox, cell: vec3<i32>) {
-    for (var i = range.x; i < range.y; i += 4u) {
-        let at = grid_four(i, range.y);
-        var found = grid_four_kept(
-            grid_positions[at.x].xyz, grid_positions[at.y].xyz, grid_positions[at.z].xyz, grid_positions[at.w].xyz,
-            i, range.y, (*m).position, (*m).radius, box, cell,
-        );
-        while (found != 0u) {
-            let k = firstTrailingBit(found);
-            found &= found - 1u;
-            merge_photon(m, grid_photons[i + k], 1.0);
         }
     }
 }
@@ -155,7 +108,7 @@ fn grid_while_query(m: ptr<function, Merge>, box: CellBox) {
         var found = false;
         loop {
             if (i < range.y) {
-                let position = grid_positions[i].xyz;
+                let position = grid_photons[i].position;
                 i += 1u;
                 if (grid_keeps(position, (*m).position, (*m).radius, box, walk.cell)) {
                     found = true;

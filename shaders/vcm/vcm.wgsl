@@ -140,67 +140,27 @@ fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
     }
     var m = merge_query_unset((*p).merge);
     var found = false;
+    let counts = vcm_counts();
     let box = cell_box(m.position, m.radius);
-    if (box.distinct) {
-        var ranges: array<vec2<u32>, 8>;
-        vcm_box_ranges(&ranges, m, box, (*p).iteration);
-        for (var k = 0u; k < 8u; k += 1u) {
-            vcm_cell_gather(&m, &found, p, ranges[k], box, box_cell(box, k));
-        }
-    } else {
-        var walk = cell_walk(box);
-        loop {
-            vcm_cell_gather(&m, &found, p, vcm_reached_bucket(walk.cell, m, (*p).iteration), box, walk.cell);
-            if (!cell_walk_next(&walk)) {
-                break;
+    var walk = cell_walk(box);
+    loop {
+        let range = vcm_reached_bucket(walk.cell, m, (*p).iteration);
+        for (var i = range.x; i < range.y; i += 1u) {
+            let position = vcm_grid[i].position;
+            if (pm_in_range(position, m.position, m.radius) && cell_owns(box, walk.cell, position)) {
+                if (!found) {
+                    m.bsdf = pending_merge_bsdf((*p).merge);
+                    found = true;
+                }
+                vcm_merge_vertex(&m, vcm_grid[i], (*p).merge_d_vcm, counts);
             }
+        }
+        if (!cell_walk_next(&walk)) {
+            break;
         }
     }
     film_add((*p).camera.pixel, (*p).merge.throughput * m.sum * merge_kernel(m.radius));
     return true;
-}
-
-// The cached vertices of `range`, the bucket of `cell`, merged where in range; the merge's BSDF
-// is set up at the first (`found`).
-fn vcm_cell_gather(m: ptr<function, Merge>, found: ptr<function, bool>, p: ptr<function, VcmPath>, range: vec2<u32>, box: CellBox, cell: vec3<i32>) {
-    for (var i = range.x; i < range.y; i += 1u) {
-        let position = vcm_grid[i].position;
-        if (pm_in_range(position, (*m).position, (*m).radius) && cell_owns(box, cell, position)) {
-            if (!*found) {
-                (*m).bsdf = pending_merge_bsdf((*p).merge);
-                *found = true;
-            }
-            vcm_merge_vertex(m, vcm_grid[i], (*p).merge_d_vcm, vcm_counts());
-        }
-    }
-}
-
-// The bucket ranges of the 8 cells of a box of at most 2 cells along each axis (`box_cell`) in
-// the grid of `iteration`, read at once as `grid_box_ranges` does (shaders/pm/grid.wgsl).
-fn vcm_box_ranges(ranges: ptr<function, array<vec2<u32>, 8>>, m: Merge, box: CellBox, iteration: u32) {
-    let total = vcm_grid_total();
-    (*ranges)[0] = vcm_box_range(box, 0u, m, iteration, total);
-    (*ranges)[1] = vcm_box_range(box, 1u, m, iteration, total);
-    (*ranges)[2] = vcm_box_range(box, 2u, m, iteration, total);
-    (*ranges)[3] = vcm_box_range(box, 3u, m, iteration, total);
-    (*ranges)[4] = vcm_box_range(box, 4u, m, iteration, total);
-    (*ranges)[5] = vcm_box_range(box, 5u, m, iteration, total);
-    (*ranges)[6] = vcm_box_range(box, 6u, m, iteration, total);
-    (*ranges)[7] = vcm_box_range(box, 7u, m, iteration, total);
-}
-
-// The vertices of the bucket of cell k of the box in the grid of `iteration`, or none where the
-// cell is out of the box or of the merge's reach; the loads are made either way.
-fn vcm_box_range(box: CellBox, k: u32, m: Merge, iteration: u32, total: u32) -> vec2<u32> {
-    let cell = box_cell(box, k);
-    let b = vcm_bucket(cell, iteration);
-    let range = vec2<u32>(grid_first[b], select(total, grid_first[min(b + 1u, PM_CELLS - 1u)], b + 1u < PM_CELLS));
-    return select(vec2<u32>(0u), range, box_holds(box, cell) && cell_reaches(cell, m.position, m.radius));
-}
-
-// The vertices in `vcm_grid`.
-fn vcm_grid_total() -> u32 {
-    return min(atomicLoad(&lvc_count), arrayLength(&vcm_grid));
 }
 
 // Pass `vcm_continue` (Loop, last): ends the sub-path when `vcm_vertex` said so.
@@ -218,7 +178,7 @@ fn vcm_reached_bucket(cell: vec3<i32>, m: Merge, iteration: u32) -> vec2<u32> {
     if (b + 1u < PM_CELLS) {
         return vec2<u32>(grid_first[b], grid_first[b + 1u]);
     }
-    return vec2<u32>(grid_first[b], vcm_grid_total());
+    return vec2<u32>(grid_first[b], min(atomicLoad(&lvc_count), arrayLength(&vcm_grid)));
 }
 
 // Adds cached vertex `v`, in range of merge `m` (counted as `pm_found`), to it: the BSDF for
