@@ -30,9 +30,10 @@ struct ShadowRay {
 // it runs next in the same thread (the two passes fused in one kernel): the same values, not
 // computed twice. `material` in a kernel of its own finds `valid` false (private memory starts
 // zeroed) and sets them up itself; it clears `valid` when it takes them. Only in scenes with
-// textures, whose set-up fetches texels: there holding the vertex made PT 3.5-10% faster on
-// Sponza on an H100, while without textures the registers it holds cost the one-kernel layouts
-// 9-14% on the Cornell box (docs/performance.md, "A bounce's vertex set up once").
+// textures, whose set-up fetches texels: there holding the vertex made NaivePTsk and the
+// streaming layouts 4.5-10.5% faster on Sponza on an H100 (RegenerationPTsk 4.8% slower), while
+// without textures the registers it holds cost the one-kernel layouts 9-14% on the Cornell box
+// (docs/performance.md, "A bounce's vertex set up once").
 struct PathVertex {
     s: Surface,
     bsdf: Bsdf,
