@@ -1,7 +1,7 @@
 # Shared by the GPU bench scripts (sourced from the repo root on the GPU machine): lightgraph
 # through the GPU bundle, one 1280x720 render's rates, per-frame counters and GPU time per
-# kernel (`render_summary`, needs $out, a scratch folder), and one `bench` run's rows
-# (`bench_rows`).
+# kernel (`render_summary`, needs $out, a scratch folder), one `bench` run's rows
+# (`bench_rows`), and issue 13's VCM rows (`vcm_rows`).
 lg() { bash .gpu/run.sh lightgraph "$@"; }
 # render_summary FRAMES ARGS...
 render_summary() {
@@ -24,4 +24,12 @@ bench_rows() {
     echo "$label,$layout,${w}x${h}x$spp,$fps frames/s,$(awk "BEGIN { printf \"%.1f Msamples/s,%.0f Mrays/s,%.0f GPU Mrays/s\", $sps / 1e6, $rps / 1e6, $grps / 1e6 }")${kernels:+,$kernels}"
   done
   rm -rf "$dir"
+}
+# vcm_rows BINARY LABEL: `bench_rows` of LVC-BPTsk, VCMsk and VCMmk on Sponza at 1280x720x1 and of
+# VCMsk on the diffuse box at 256x256 with 64 iterations a frame (issue 13's two rates), 2 s a point.
+vcm_rows() {
+  bench_rows "$1" "$2 sponza" --time 2s --scene sponza --graph bpt-lvc --layouts LVC-BPTsk --points 1280x720x1
+  bench_rows "$1" "$2 sponza" --time 2s --scene sponza --graph vcm --layouts VCMsk,VCMmk --points 1280x720x1
+  bench_rows "$1" "$2 box" --time 2s --scene cornell-diffuse --graph vcm --layouts VCMsk \
+    --points 256x256x64 --set PM_ITERATIONS=64
 }

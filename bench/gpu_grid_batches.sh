@@ -36,9 +36,6 @@ for r in 1 2; do
     done
     echo "r$r $bin SPPMsk r_0 0.0038: $(camera $bin sppm SPPMsk --set PM_RADIUS=0.0038)"
     echo "r$r $bin PPMsk WhileQuery r_0 0.0038: $(camera $bin ppm PPMsk --set PM_RADIUS=0.0038 --set PM_WHILE_QUERY=true)"
-    bench_rows $bin "r$r $bin sponza" --time 2s --scene sponza --graph bpt-lvc --layouts LVC-BPTsk --points 1280x720x1
-    bench_rows $bin "r$r $bin sponza" --time 2s --scene sponza --graph vcm --layouts VCMsk,VCMmk --points 1280x720x1
-    bench_rows $bin "r$r $bin box" --time 2s --scene cornell-diffuse --graph vcm --layouts VCMsk \
-      --points 256x256x64 --set PM_ITERATIONS=64
+    vcm_rows $bin "r$r $bin"
   done
 done

@@ -82,8 +82,19 @@ fn side_normal(n: vec3<f32>, towards: vec3<f32>) -> vec3<f32> {
 
 // Starts a light sub-path with the path's random numbers; false when the emission is void.
 fn light_path_start(p: ptr<function, LightPath>, rng: ptr<function, u32>) -> bool {
+    return light_path_start_stratified(p, rng, 0u, 0u);
+}
+
+// `light_path_start` for sub-path `index` of `count` (no strata when `count` is 0 or
+// LIGHT_STRATA false): the point on the light (the disc of a distant light) is stratified along a Z curve over the unit square,
+// rotated by one random shift a frame, so that neighbouring sub-paths start close together
+// and each sub-path's point is still uniform (`light_stratified_point`).
+fn light_path_start_stratified(p: ptr<function, LightPath>, rng: ptr<function, u32>, index: u32, count: u32) -> bool {
     let pick = pick_light(rng_f32(rng));
-    let u_point = rng_vec2(rng);
+    var u_point = rng_vec2(rng);
+    if (LIGHT_STRATA && count > 0u) {
+        u_point = light_stratified_point(index, count, u_point, rng_vec2(rng));
+    }
     let u_direction = rng_vec2(rng);
     let e = emit_light(pick.index, u_point, u_direction);
     if (is_black(e.radiance)) {
@@ -102,6 +113,27 @@ fn light_path_start(p: ptr<function, LightPath>, rng: ptr<function, u32>) -> boo
     }
     (*p).is_finite = select(0u, 1u, e.is_finite);
     return true;
+}
+
+// A point of the unit square for sub-path `index` of `count`: the stratum index / count of a
+// Z curve over the square (32-bit fixed point, jittered by u.x), plus one random shift of the
+// frame (a rotation, so the point is uniform whatever the stratum), cut into 16 bits along
+// each axis, jittered in the last cell by `cell`.
+fn light_stratified_point(index: u32, count: u32, u: vec2<f32>, cell: vec2<f32>) -> vec2<f32> {
+    let step = 0xffffffffu / count;
+    let shift = rng_hash(frame.index ^ rng_hash(frame.seed ^ 0x5bd1e995u));
+    let x = index * step + u32(u.x * f32(step)) + shift;
+    let at = vec2<f32>(vec2<u32>(z_curve_compact(x), z_curve_compact(x >> 1u)));
+    return (at + cell) * (1.0 / 65536.0);
+}
+
+// The even bits of x, packed into the low 16.
+fn z_curve_compact(x: u32) -> u32 {
+    var v = x & 0x55555555u;
+    v = (v | (v >> 1u)) & 0x33333333u;
+    v = (v | (v >> 2u)) & 0x0f0f0f0fu;
+    v = (v | (v >> 4u)) & 0x00ff00ffu;
+    return (v | (v >> 8u)) & 0x0000ffffu;
 }
 
 // Traces the sub-path's next ray.

@@ -133,8 +133,10 @@ fn lvc_bpt_mk_shares_memory_and_renders_what_it_renders_without_sharing() {
 /// same command, `lightgraph render --graph bpt-lvc --layout LVC-BPTsk --scene
 /// cornell-glossy-background --res 32x32 --spp 2 --frames 3 --seed 11 --set
 /// LVC_AVERAGE_LENGTH=0.8007`) when camera samples started taking their pixels in tile order
-/// (VCM's halves equal LVC-BPT and PBPM, whose order it is). Both layouts must render it, up
-/// to the float rounding of the film's atomic sums.
+/// (VCM's halves equal LVC-BPT and PBPM, whose order it is), and again when light sub-paths
+/// started at stratified points of the light (`light_stratified_point`: other random numbers,
+/// the same estimator). Both layouts must render it, up to the float rounding of the film's
+/// atomic sums.
 /// The average light sub-path length it was rendered with, 0.8007 (8007 vertices stored by the
 /// 10^4 sub-paths of the measuring frame), is given rather than measured again: on lavapipe the
 /// measuring frame's count can differ between sessions (README, Testing).
