@@ -86,14 +86,15 @@ fn light_path_start(p: ptr<function, LightPath>, rng: ptr<function, u32>) -> boo
 }
 
 // `light_path_start` for sub-path `index` of `count` (no strata when `count` is 0 or
-// LIGHT_STRATA false): the point on the light (the disc of a distant light) is stratified along a Z curve over the unit square,
-// rotated by one random shift a frame, so that neighbouring sub-paths start close together
-// and each sub-path's point is still uniform (`light_stratified_point`).
+// LIGHT_STRATA false): the point on the light (the disc of a distant light) is stratified
+// along a Z curve over the unit square, rotated by one random shift a frame, so that
+// neighbouring sub-paths start close together and each sub-path's point is still uniform
+// (`light_stratified_point`).
 fn light_path_start_stratified(p: ptr<function, LightPath>, rng: ptr<function, u32>, index: u32, count: u32) -> bool {
     let pick = pick_light(rng_f32(rng));
     var u_point = rng_vec2(rng);
     if (LIGHT_STRATA && count > 0u) {
-        u_point = light_stratified_point(index, count, u_point, rng_vec2(rng));
+        u_point = light_stratified_point(index, count, u_point.x, rng_vec2(rng));
     }
     let u_direction = rng_vec2(rng);
     let e = emit_light(pick.index, u_point, u_direction);
@@ -115,14 +116,14 @@ fn light_path_start_stratified(p: ptr<function, LightPath>, rng: ptr<function, u
     return true;
 }
 
-// A point of the unit square for sub-path `index` of `count`: the stratum index / count of a
-// Z curve over the square (32-bit fixed point, jittered by u.x), plus one random shift of the
-// frame (a rotation, so the point is uniform whatever the stratum), cut into 16 bits along
-// each axis, jittered in the last cell by `cell`.
-fn light_stratified_point(index: u32, count: u32, u: vec2<f32>, cell: vec2<f32>) -> vec2<f32> {
+// A point of the unit square for sub-path `index` of `count`: stratum index / count of a Z
+// curve over the square (its position in 32-bit fixed point, `jitter` inside the stratum),
+// plus one random shift of the frame (a rotation, so the point is uniform whatever the
+// stratum), cut into 16 bits along each axis and jittered in that last cell by `cell`.
+fn light_stratified_point(index: u32, count: u32, jitter: f32, cell: vec2<f32>) -> vec2<f32> {
     let step = 0xffffffffu / count;
     let shift = rng_hash(frame.index ^ rng_hash(frame.seed ^ 0x5bd1e995u));
-    let x = index * step + u32(u.x * f32(step)) + shift;
+    let x = index * step + u32(jitter * f32(step)) + shift;
     let at = vec2<f32>(vec2<u32>(z_curve_compact(x), z_curve_compact(x >> 1u)));
     return (at + cell) * (1.0 / 65536.0);
 }
