@@ -23,7 +23,7 @@ fn lvc_eta() -> f32 {
 // measured average, then starts it as light tracing does.
 fn lvc_light_generate(p: ptr<function, LightPath>, index: u32) -> bool {
     count(COUNTER_LVC_PATHS, 1u);
-    return light_generate_stratified(p, index, select(PATHS, LVC_MEASURE_PATHS, LVC_MEASURING));
+    return light_generate_stratified(p, index, LVC_LIGHT_STARTS);
 }
 
 // Pass `lvc_bounce` (Loop): at the light sub-path's new vertex, the t = 1 splat, the vertex

@@ -23,7 +23,7 @@ fn pm_light_generate(p: ptr<function, PhotonPath>, index: u32) -> bool {
     (*p).stored = PM_NONE;
     (*p).alive = 1u;
     var light: LightPath;
-    let started = light_generate_stratified(&light, index, select(PM_LIGHT_PATHS, PM_MEASURE_PATHS, PM_MEASURING));
+    let started = light_generate_stratified(&light, index, PM_LIGHT_STARTS);
     (*p).light = light;
     return started;
 }
