@@ -1,6 +1,7 @@
 // Pass `bpt_generate` (Start over PATHS per frame run at once, `frame_slot`): sample `index`
-// traces its whole light sub-path, connecting each non-delta vertex to the camera (t = 1,
-// through the shared `shadow` pass) and storing it in the item, then starts its camera
+// traces its whole light sub-path (its point on the light stratified among the frame's PATHS
+// samples, `light_path_start_stratified`), connecting each non-delta vertex to the camera
+// (t = 1, through the shared `shadow` pass) and storing it in the item, then starts its camera
 // sub-path.
 
 fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
@@ -11,7 +12,7 @@ fn bpt_generate(p: ptr<function, BptPath>, index: u32) -> bool {
     (*p).light_count = 0u;
     (*p).pad = 0u;
     var lp: LightPath;
-    if (scene.num_lights > 0u && light_path_start(&lp, &rng)) {
+    if (scene.num_lights > 0u && light_path_start_stratified(&lp, &rng, LightStratum(f.path, PATHS, f.frame_index))) {
         lp.rng = rng;
         loop {
             light_path_trace(&lp);

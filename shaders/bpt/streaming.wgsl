@@ -30,7 +30,7 @@ struct VertexPair {
 
 // Pass `sbpt_generate` (Start over PATHS per frame run at once, `frame_slot`): sample `index`
 // starts its light sub-path (or its camera sub-path when there is no light to start from),
-// with NaiveBPT's random numbers.
+// with NaiveBPT's random numbers and strata.
 fn sbpt_generate(p: ptr<function, StreamingSample>, index: u32) -> bool {
     let f = frame_slot(index);
     var rng = rng_seed(frame.seed, f.frame_index, f.path);
@@ -41,7 +41,7 @@ fn sbpt_generate(p: ptr<function, StreamingSample>, index: u32) -> bool {
     (*p).pad = 0u;
     (*p).on_light = 0u;
     var lp: LightPath;
-    if (scene.num_lights > 0u && light_path_start(&lp, &rng)) {
+    if (scene.num_lights > 0u && light_path_start_stratified(&lp, &rng, LightStratum(f.path, PATHS, f.frame_index))) {
         lp.rng = rng;
         (*p).on_light = 1u;
     }

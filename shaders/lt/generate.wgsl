@@ -14,7 +14,7 @@ fn light_generate_stratified(p: ptr<function, LightPath>, index: u32, count: u32
         return false;
     }
     var rng = rng_seed(frame.seed, frame.index, index);
-    let started = light_path_start_stratified(p, &rng, index, count);
+    let started = light_path_start_stratified(p, &rng, LightStratum(index, count, frame.index));
     (*p).rng = rng;
     (*p).index = index;
     return started;

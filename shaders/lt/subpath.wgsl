@@ -80,21 +80,24 @@ fn side_normal(n: vec3<f32>, towards: vec3<f32>) -> vec3<f32> {
     return select(-n, n, dot(n, towards) > 0.0);
 }
 
-// Starts a light sub-path with the path's random numbers; false when the emission is void.
-fn light_path_start(p: ptr<function, LightPath>, rng: ptr<function, u32>) -> bool {
-    return light_path_start_stratified(p, rng, 0u, 0u);
+// Which stratum of the light a sub-path starts in: sub-path `index` of the `count` of frame
+// `frame_index` (that frame's random numbers: with FRAMES_AT_ONCE, its frame slot's).
+struct LightStratum {
+    index: u32,
+    count: u32,
+    frame_index: u32,
 }
 
-// `light_path_start` for sub-path `index` of `count` (no strata when `count` is 0 or
-// LIGHT_STRATA false): the point on the light (the disc of a distant light) is stratified
-// along a Z curve over the unit square, rotated by one random shift a frame, so that
-// neighbouring sub-paths start close together and each sub-path's point is still uniform
-// (`light_stratified_point`).
-fn light_path_start_stratified(p: ptr<function, LightPath>, rng: ptr<function, u32>, index: u32, count: u32) -> bool {
+// Starts a light sub-path with the path's random numbers in stratum `stratum`; false when the
+// emission is void. The point on the light (the disc of a distant light) is stratified along
+// a Z curve over the unit square, rotated by one random shift a frame, so that neighbouring
+// sub-paths start close together and each sub-path's point is still uniform
+// (`light_stratified_point`); with LIGHT_STRATA false, each draws its own point.
+fn light_path_start_stratified(p: ptr<function, LightPath>, rng: ptr<function, u32>, stratum: LightStratum) -> bool {
     let pick = pick_light(rng_f32(rng));
     var u_point = rng_vec2(rng);
-    if (LIGHT_STRATA && count > 0u) {
-        u_point = light_stratified_point(index, count, u_point.x, rng_vec2(rng));
+    if (LIGHT_STRATA) {
+        u_point = light_stratified_point(stratum, u_point.x, rng_vec2(rng));
     }
     let u_direction = rng_vec2(rng);
     let e = emit_light(pick.index, u_point, u_direction);
@@ -116,14 +119,15 @@ fn light_path_start_stratified(p: ptr<function, LightPath>, rng: ptr<function, u
     return true;
 }
 
-// A point of the unit square for sub-path `index` of `count`: stratum index / count of a Z
-// curve over the square (its position in 32-bit fixed point, `jitter` inside the stratum),
-// plus one random shift of the frame (a rotation, so the point is uniform whatever the
-// stratum), cut into 16 bits along each axis and jittered in that last cell by `cell`.
-fn light_stratified_point(index: u32, count: u32, jitter: f32, cell: vec2<f32>) -> vec2<f32> {
-    let step = 0xffffffffu / count;
-    let shift = rng_hash(frame.index ^ rng_hash(frame.seed ^ 0x5bd1e995u));
-    let x = index * step + u32(jitter * f32(step)) + shift;
+// A point of the unit square for sub-path `index` of `count` (`stratum`): stratum
+// index / count of a Z curve over the square (its position in 32-bit fixed point, `jitter`
+// inside the stratum), plus one random shift of its frame (a rotation, so the point is uniform
+// whatever the stratum), cut into 16 bits along each axis and jittered in that last cell by
+// `cell`.
+fn light_stratified_point(stratum: LightStratum, jitter: f32, cell: vec2<f32>) -> vec2<f32> {
+    let step = 0xffffffffu / stratum.count;
+    let shift = rng_hash(stratum.frame_index ^ rng_hash(frame.seed ^ 0x5bd1e995u));
+    let x = stratum.index * step + u32(jitter * f32(step)) + shift;
     let at = vec2<f32>(vec2<u32>(z_curve_compact(x), z_curve_compact(x >> 1u)));
     return (at + cell) * (1.0 / 65536.0);
 }

@@ -61,6 +61,23 @@ fn light_tracing_agrees_with_path_tracing_on_the_diffuse_box() {
 /// under 5% of its mean (4 left some at 6%).
 #[test]
 fn stratified_light_sub_paths_agree_with_independent_ones_in_sunlight() {
+    strata_agree_in_sunlight("lt", "LTsk", 16);
+}
+
+/// NaiveBPT's light sub-paths, stratified among the frame's samples (light sub-path i is the
+/// one sample i pairs with its camera sub-path), against independent ones, as
+/// [`stratified_light_sub_paths_agree_with_independent_ones_in_sunlight`]: a pairing that made
+/// a sample's light start depend on its pixel would show here. 4 samples a pixel a frame keep
+/// every block's standard error under 5% of its mean.
+#[test]
+fn stratified_naive_bpt_agrees_with_independent_light_sub_paths_in_sunlight() {
+    strata_agree_in_sunlight("bpt-naive", "NaiveBPT", 4);
+}
+
+/// The sunlit box of the strata tests, its balls diffuse and blue in its sun, rendered by
+/// `graph` in `layout` at `spp` samples a pixel a frame with strata and without: they must agree
+/// within 4 standard errors in every block.
+fn strata_agree_in_sunlight(graph: &str, layout: &str, spp: u32) {
     let text = std::fs::read_to_string("scenes/cornell/cornell-glossy-sun.ron").unwrap();
     let diffuse = text
         .replace(
@@ -81,20 +98,14 @@ fn stratified_light_sub_paths_agree_with_independent_ones_in_sunlight() {
     let scene = LoadedScene::parse("cornell-glossy-sun.ron", &diffuse, BvhKind::Bvh2, None).unwrap();
     let (size, n) = (32, 4);
     let independent = [("LIGHT_STRATA", ConstValue::Bool(false))];
-    let plain = render_frames_with(&scene, "lt", "LTsk", (size, 16, FRAMES, 27, n), &independent);
-    let strata = render_frames(&scene, "lt", "LTsk", size, 16, FRAMES, 28, n);
+    let plain = render_frames_with(&scene, graph, layout, (size, spp, FRAMES, 27, n), &independent);
+    let strata = render_frames(&scene, graph, layout, size, spp, FRAMES, 28, n);
     let keep = vec![true; (n * n) as usize];
-    let z = worst_z(
-        &strata,
-        &plain,
-        &keep,
-        &vec![false; keep.len()],
-        0.05,
-        "sunlit box: lt strata vs none",
-    );
+    let what = format!("sunlit box: {graph} strata vs none");
+    let z = worst_z(&strata, &plain, &keep, &vec![false; keep.len()], 0.05, &what);
     assert!(
         z < 4.0,
-        "light sub-paths with strata differ from independent ones by {z:.2} standard errors"
+        "{layout}: light sub-paths with strata differ from independent ones by {z:.2} standard errors"
     );
 }
 

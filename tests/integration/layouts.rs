@@ -212,10 +212,11 @@ fn frames_recorded_in_one_batch_match_frames_run_one_by_one() {
 /// that frame's random numbers) give every PT layout, NaiveBPT and StreamingBPT the image, the
 /// per-frame variance and the counters of the same frames rendered one by one, to float
 /// rounding (the variance, a difference of sums, to 1e-4: seen 1.6e-5); runs that would split a
-/// group and graphs that render one frame at a time are refused.
+/// group and graphs that render one frame at a time are refused. In sunlight: BPT's light
+/// sub-paths start at points of the sun's disc stratified per frame (a point light has none).
 #[test]
 fn frames_rendered_at_once_match_frames_rendered_one_by_one() {
-    let scene = load_scene("cornell-glossy-point").unwrap();
+    let scene = load_scene("cornell-glossy-sun").unwrap();
     for graph in ["pt", "bpt-naive", "bpt-streaming"] {
         let graph = load_graph(graph).unwrap();
         let first = graph.layouts.keys().next().unwrap();
