@@ -3,7 +3,7 @@
 # (shaders/common/path.wgsl, `PathVertex`): the binary before against the one after, PT
 # layouts (LAYOUTS, default five) on the Cornell box and on Sponza at 1280x720x16 (14.7 M
 # paths a frame), and NaivePTsk with a workgroup of 128 at 1280x720x64 (docs/performance.md,
-# "A bounce's vertex set up once").
+# "A bounce's vertex set up once"; also for "The shadow ray emitted last").
 # On the GPU machine from the repo root with carry [".gpu"] after
 # `../shared/tools/gpu-bundle.sh --bin NEW --scene CrytekSponza` and the binary before copied to
 # .gpu/bin/lightgraph-old:

@@ -20,7 +20,7 @@ struct Bsdf {
     reflect_prob: f32,
     refract_prob: f32,
     continuation: f32,          // Russian roulette continuation probability (albedo bound)
-    fresnel: f32,
+    fresnel: f32,               // the Fresnel reflectance at `fix` (evaluations take it from here)
     cos_t: f32,                 // cosine of the refracted direction (0: none)
     is_delta: bool,
     valid: bool,
@@ -570,7 +570,8 @@ fn pbr_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     // the diffuse one; a part's renormalised).
     let lobes_o = vec2<f32>(b.spec_prob, b.diffuse_prob);
     let lobes_i = pbr_lobe_probs(b, gen.z);
-    let f_o = pbr_fresnel(m, o.z).x;
+    // The set-up's `pbr_fresnel(m, o.z).x`: evaluated once a vertex, not once an evaluation.
+    let f_o = b.fresnel;
     let f_i = pbr_fresnel(m, gen.z).x;
     if (outside_o && outside_i && (m.flags & BSDF_NO_DIFFUSE) == 0u) {
         let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * (1.0 - f_o) * (1.0 - f_i) * INV_PI;

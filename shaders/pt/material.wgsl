@@ -2,39 +2,71 @@
 // light picked in proportion to its power) and the next direction from the BSDF, with Russian roulette. With
 // the albedo roulette rule the BSDF densities used for MIS include the continuation
 // probability, as in SmallVCM; with the throughput rule (Mitsuba's) they do not.
+//
+// The shadow ray is emitted last, once the path has moved on: where `shadow` runs in the same
+// kernel it is traced at once, and the vertex's surface and BSDF are no longer held in
+// registers during that traversal.
 
 fn material(path: ptr<function, CameraPath>) -> bool {
     let v = path_vertex_taken(*path);
-    let s = v.s;
-    let bsdf = v.bsdf;
     var rng = (*path).rng;
-    let q_mis = select(1.0, bsdf.continuation, RR_ALBEDO);
     let light_u = rng_f32(&rng);
     let light_uv = rng_vec2(&rng);
-    if (!bsdf.is_delta && scene.num_lights > 0u) {
-        let picked = pick_light(light_u);
-        let index = picked.index;
-        let pick = picked.probability;
-        let ill = illuminate(index, s.position, light_uv);
-        if (!is_black(ill.radiance)) {
-            let e = bsdf_eval(bsdf, ill.direction);
-            if (!is_black(e.f)) {
-                var w = 1.0;
-                if (!ill.is_delta) {
-                    w = mis_weight(ill.pdf * pick, e.pdf_forward * q_mis);
-                }
-                let contribution = (*path).throughput * ill.radiance * e.f * (w * e.cos_gen / (pick * ill.pdf));
-                let side = select(-s.normal, s.normal, dot(s.normal, ill.direction) > 0.0);
-                let origin = offset_ray_origin(s.position, side, s.extent);
-                let distance = light_shadow_distance(s.position, origin, ill);
-                emit_shadow(ShadowRay(origin, (*path).pixel, ill.direction, distance, contribution));
-            }
-        }
-    }
     let u = vec3<f32>(rng_vec2(&rng), rng_f32(&rng));
-    let smp = bsdf_sample(bsdf, u);
     let roulette_u = rng_f32(&rng);
     (*path).rng = rng;
+    let shadow = material_next_event(*path, v, light_u, light_uv);
+    let goes_on = material_scatter(path, v, u, roulette_u);
+    if (shadow.emit) {
+        emit_shadow(shadow.ray);
+    }
+    return goes_on;
+}
+
+// A shadow ray of next-event estimation, if there is one to trace.
+struct NextEvent {
+    ray: ShadowRay,
+    emit: bool,
+}
+
+// Next-event estimation at the path's vertex `v`: a light picked with `light_u`, a point on
+// it with `light_uv`, and the shadow ray carrying the MIS-weighted contribution.
+fn material_next_event(path: CameraPath, v: PathVertex, light_u: f32, light_uv: vec2<f32>) -> NextEvent {
+    var next = NextEvent(ShadowRay(), false);
+    let s = v.s;
+    let bsdf = v.bsdf;
+    if (bsdf.is_delta || scene.num_lights == 0u) {
+        return next;
+    }
+    let picked = pick_light(light_u);
+    let pick = picked.probability;
+    let ill = illuminate(picked.index, s.position, light_uv);
+    if (is_black(ill.radiance)) {
+        return next;
+    }
+    let e = bsdf_eval(bsdf, ill.direction);
+    if (is_black(e.f)) {
+        return next;
+    }
+    var w = 1.0;
+    if (!ill.is_delta) {
+        w = mis_weight(ill.pdf * pick, e.pdf_forward * select(1.0, bsdf.continuation, RR_ALBEDO));
+    }
+    let contribution = path.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick * ill.pdf));
+    let side = select(-s.normal, s.normal, dot(s.normal, ill.direction) > 0.0);
+    let origin = offset_ray_origin(s.position, side, s.extent);
+    let distance = light_shadow_distance(s.position, origin, ill);
+    next.ray = ShadowRay(origin, path.pixel, ill.direction, distance, contribution);
+    next.emit = true;
+    return next;
+}
+
+// The path's next direction from the BSDF at `v` (sampled with `u`), then Russian roulette
+// with `roulette_u`; false when the path ends.
+fn material_scatter(path: ptr<function, CameraPath>, v: PathVertex, u: vec3<f32>, roulette_u: f32) -> bool {
+    let s = v.s;
+    let bsdf = v.bsdf;
+    let smp = bsdf_sample(bsdf, u);
     if (is_black(smp.f)) {
         return false;
     }
@@ -49,7 +81,7 @@ fn material(path: ptr<function, CameraPath>) -> bool {
         return false;
     }
     (*path).throughput = throughput / q;
-    (*path).last_pdf = smp.pdf * q_mis;
+    (*path).last_pdf = smp.pdf * select(1.0, bsdf.continuation, RR_ALBEDO);
     (*path).last_specular = select(0u, 1u, smp.specular);
     let side = select(-s.normal, s.normal, dot(s.normal, smp.direction) > 0.0);
     (*path).origin = offset_ray_origin(s.position, side, s.extent);

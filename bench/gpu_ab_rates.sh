@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Two binaries of the bundle against each other on the rates a BSDF change moves: PT on Sponza
+# (NaivePTsk, StreamingPTmk2, 1280x720x16), LVC-BPTsk, VCMsk and VCMmk on Sponza and VCMsk on
+# the 256x256 box (`vcm_rows`), and PPMsk's camera kernel at about 20 photons a query on five
+# scenes (bench/gpu_pm_variants.sh, its higher radius of each), ROUNDS interleaved rounds
+# (default 2). On the GPU machine from the repo root with carry [".gpu"] after
+# `../shared/tools/gpu-bundle.sh --bin NEW --scene CrytekSponza --scene ModernHall --scene
+# VeachBidir` and the binary before copied to .gpu/bin/lightgraph-old:
+#   bash bench/gpu_ab_rates.sh [OLD NEW]
+set -uo pipefail
+source "$(dirname "$0")/gpu_common.sh"
+old=${1:-lightgraph-old} new=${2:-lightgraph}
+camera() {
+  bash .gpu/run.sh "$1" render --graph ppm --layout PPMsk --res 1280x720 --frames 60 "${@:2}" --out /tmp/x.exr 2>&1 |
+    grep -oE "pm_found [0-9.]* [kM]?|k[0-9]+_pm_camera[a-z_]* [0-9.]* ms" | tr '\n' ' '
+}
+scenes=(
+  "cornell-diffuse 0.0068"
+  "cornell-glossy-point 0.0075"
+  ".gpu/scenes/ModernHall/staircase2.gltf 0.0041"
+  "sponza 0.052"
+  ".gpu/scenes/VeachBidir/veach-bidir.gltf 0.008"
+)
+camera "$new" --scene cornell-glossy-point >/dev/null
+for r in $(seq "${ROUNDS:-2}"); do
+  for bin in "$old" "$new"; do
+    bench_rows "$bin" "r$r $bin sponza" --time 2s --scene sponza --graph pt --layouts NaivePTsk,StreamingPTmk2 \
+      --points 1280x720x16
+    vcm_rows "$bin" "r$r $bin"
+    for run in "${scenes[@]}"; do
+      read -r scene radius <<<"$run"
+      echo "r$r $bin PPMsk $(basename "$scene") r_0 $radius: $(camera "$bin" --scene "$scene" --set PM_RADIUS="$radius")"
+    done
+  done
+done
