@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# Two binaries of the bundle against each other on the rates a BSDF change moves: PT on Sponza
+# Two binaries of the bundle against each other on the rates a shader change moves: PT on Sponza
 # (NaivePTsk, StreamingPTmk2, 1280x720x16), LVC-BPTsk, VCMsk and VCMmk on Sponza and VCMsk on
-# the 256x256 box (`vcm_rows`), and PPMsk's camera kernel at about 20 photons a query on five
+# the 256x256 box (`vcm_rows`), NaiveBPT, NaiveBPTmk, StreamingBPT and LVC-BPTmk on Sponza
+# (1280x720x1) and the diffuse box (512x512x4), and PPMsk's camera kernel at about 20 photons a query on five
 # scenes (bench/gpu_pm_variants.sh, its higher radius of each), ROUNDS interleaved rounds
 # (default 2). On the GPU machine from the repo root with carry [".gpu"] after
 # `../shared/tools/gpu-bundle.sh --bin NEW --scene CrytekSponza --scene ModernHall --scene
 # VeachBidir` and the binary before copied to .gpu/bin/lightgraph-old:
 #   bash bench/gpu_ab_rates.sh [OLD NEW]
+# NO_BPT=1 leaves the BPT rows out (as in the Fresnel-term measurement, which had none).
 set -uo pipefail
 source "$(dirname "$0")/gpu_common.sh"
 old=${1:-lightgraph-old} new=${2:-lightgraph}
@@ -27,6 +29,14 @@ for r in $(seq "${ROUNDS:-2}"); do
     bench_rows "$bin" "r$r $bin sponza" --time 2s --scene sponza --graph pt --layouts NaivePTsk,StreamingPTmk2 \
       --points 1280x720x16
     vcm_rows "$bin" "r$r $bin"
+    [ -n "${NO_BPT:-}" ] || for point in sponza:1280x720x1 cornell-diffuse:512x512x4; do
+      bench_rows "$bin" "r$r $bin ${point%%:*}" --time 2s --scene "${point%%:*}" --graph bpt-naive \
+        --layouts NaiveBPT,NaiveBPTmk --points "${point#*:}"
+      bench_rows "$bin" "r$r $bin ${point%%:*}" --time 2s --scene "${point%%:*}" --graph bpt-streaming \
+        --layouts StreamingBPT --points "${point#*:}"
+      bench_rows "$bin" "r$r $bin ${point%%:*}" --time 2s --scene "${point%%:*}" --graph bpt-lvc \
+        --layouts LVC-BPTmk --points "${point#*:}"
+    done
     for run in "${scenes[@]}"; do
       read -r scene radius <<<"$run"
       echo "r$r $bin PPMsk $(basename "$scene") r_0 $radius: $(camera "$bin" --scene "$scene" --set PM_RADIUS="$radius")"

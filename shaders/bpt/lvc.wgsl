@@ -111,6 +111,7 @@ fn lvc_vertex(p: ptr<function, CameraSubpath>) -> bool {
     }
     let alive = camera_scatter(p, visit.a, counts, &rng);
     (*p).rng = rng;
+    camera_emit_direct(visit);
     return alive;
 }
 

@@ -119,10 +119,15 @@ struct CameraVisit {
     a: Arrival,
     alive: bool,                // false: the sub-path ends here
     rng: u32,                   // random numbers for the connections and the scatter
+    direct: ShadowRay,          // the s = 1 shadow ray; a black contribution: none
 }
 
 // Camera sub-path `c` arrives at its next vertex (`camera_arrive`, strategies counted as
-// `counts`) and, at a non-delta vertex, samples a light (s = 1) through the `shadow` stream.
+// `counts`) and, at a non-delta vertex, samples a light (s = 1): the shadow ray, which the
+// caller emits (`camera_emit_direct`). LVC-BPT and VCM emit it last, once the sub-path has
+// moved on, so that a fused `shadow` does not trace it with the vertex's BSDF held in
+// registers (as PT's `material`); NaiveBPT and StreamingBPT at once, which measured faster
+// there (docs/performance.md, "The shadow ray emitted last").
 // The light's random numbers are drawn even where unused, so every estimator built on this
 // consumes the same numbers per vertex; none without light sampling (`counts.vc` false:
 // photon mapping's numbers).
@@ -145,13 +150,17 @@ fn camera_visit(c: ptr<function, CameraSubpath>, counts: MisCounts) -> CameraVis
         return v;
     }
     if (counts.vc && !v.a.bsdf.is_delta && scene.num_lights > 0u) {
-        let ray = bpt_direct(*c, v.a.s, v.a.bsdf, light_u, light_uv, counts);
-        if (!is_black(ray.contribution)) {
-            emit_shadow(ray);
-        }
+        v.direct = bpt_direct(*c, v.a.s, v.a.bsdf, light_u, light_uv, counts);
     }
     v.alive = true;
     return v;
+}
+
+// Emits the visit's s = 1 shadow ray through the `shadow` stream, if it has one.
+fn camera_emit_direct(v: CameraVisit) {
+    if (!is_black(v.direct.contribution)) {
+        emit_shadow(v.direct);
+    }
 }
 
 // Continues camera sub-path `c` from where it arrived (strategies counted as `counts`, see

@@ -104,6 +104,7 @@ fn sbpt_camera_vertex(p: ptr<function, StreamingSample>, c: ptr<function, Camera
     if (!v.alive) {
         return false;
     }
+    camera_emit_direct(v);
     let s = v.a.s;
     if (!v.a.bsdf.is_delta && (*c).length + 2u <= MAX_PATH_LENGTH && (*p).light_count > 0u) {
         sbpt_camera_vertices[sbpt_vertex_at((*p).camera_count)] = CameraVertex(

@@ -9,6 +9,7 @@ fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
     if (!v.alive) {
         return false;
     }
+    camera_emit_direct(v);
     if (!v.a.bsdf.is_delta) {
         for (var i = 0u; i < (*p).light_count; i += 1u) {
             let lv = (*p).light[i];

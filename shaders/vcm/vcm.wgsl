@@ -127,6 +127,7 @@ fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
         c.rng = rng;
     }
     (*p).camera = c;
+    camera_emit_direct(visit);
     return true;
 }
 
