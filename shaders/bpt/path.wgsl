@@ -199,15 +199,15 @@ fn bpt_hit_weight(p: CameraSubpath, direct_pdf: f32, emission_pdf: f32, counts: 
 // The s = 1 strategy: a shadow ray towards a light sampled from the camera vertex, weighed
 // against the strategies counted as `counts`; a zero contribution when there is none.
 fn bpt_direct(p: CameraSubpath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>, counts: MisCounts) -> ShadowRay {
-    var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
+    let none = ShadowRay();
     let pick = pick_light(u);
     let ill = illuminate(pick.index, s.position, uv);
     if (is_black(ill.radiance)) {
-        return ray;
+        return none;
     }
     let e = bsdf_eval(bsdf, ill.direction);
     if (is_black(e.f)) {
-        return ray;
+        return none;
     }
     let emission = emission_pdf_of(pick.index, ill);
     let q = bsdf.continuation;
@@ -215,11 +215,7 @@ fn bpt_direct(p: CameraSubpath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>, c
     let w_light = mis_pow(forward / (pick.probability * ill.pdf));
     let w_camera = mis_pow(emission.x * e.cos_gen / (ill.pdf * emission.y)) * (counts.merge + p.d_vcm + p.d_vc * mis_pow(e.pdf_reverse * q));
     let w = 1.0 / (w_light + 1.0 + w_camera);
-    ray.contribution = p.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick.probability * ill.pdf));
-    ray.origin = offset_ray_origin(s.position, side_normal(s.normal, ill.direction), s.extent);
-    ray.direction = ill.direction;
-    ray.distance = light_shadow_distance(s.position, ray.origin, ill);
-    return ray;
+    return light_sample_ray(s, ill, p.pixel, p.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick.probability * ill.pdf)));
 }
 
 // The s >= 2 strategies: connects the camera vertex to a stored light vertex; the strategy

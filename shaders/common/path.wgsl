@@ -26,6 +26,18 @@ struct ShadowRay {
     contribution: vec3<f32>,
 }
 
+// The side of a surface that `towards` points to.
+fn side_normal(n: vec3<f32>, towards: vec3<f32>) -> vec3<f32> {
+    return select(-n, n, dot(n, towards) > 0.0);
+}
+
+// The shadow ray from surface `s` to the light point `ill` that light sampling picked (it
+// starts off the side the light is on), carrying `contribution` to `pixel`.
+fn light_sample_ray(s: Surface, ill: Illumination, pixel: u32, contribution: vec3<f32>) -> ShadowRay {
+    let origin = offset_ray_origin(s.position, side_normal(s.normal, ill.direction), s.extent);
+    return ShadowRay(origin, pixel, ill.direction, light_shadow_distance(s.position, origin, ill), contribution);
+}
+
 // The surface and BSDF at a camera path's last hit as `logic` set them up, for `material` when
 // it runs next in the same thread (the two passes fused in one kernel): the same values, not
 // computed twice. `material` in a kernel of its own finds `valid` false (private memory starts

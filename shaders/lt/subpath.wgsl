@@ -75,11 +75,6 @@ struct LightVertex {
     tex: u32,
 }
 
-// The side of a surface that `towards` points to.
-fn side_normal(n: vec3<f32>, towards: vec3<f32>) -> vec3<f32> {
-    return select(-n, n, dot(n, towards) > 0.0);
-}
-
 // Which stratum of the light a sub-path starts in: sub-path `index` of the `count` of frame
 // `frame_index` (that frame's random numbers: with FRAMES_AT_ONCE, its frame slot's).
 struct LightStratum {

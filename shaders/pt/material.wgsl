@@ -17,48 +17,42 @@ fn material(path: ptr<function, CameraPath>) -> bool {
     (*path).rng = rng;
     let shadow = material_next_event(*path, v, light_u, light_uv);
     let goes_on = material_scatter(path, v, u, roulette_u);
-    if (shadow.emit) {
-        emit_shadow(shadow.ray);
+    if (!is_black(shadow.contribution)) {
+        emit_shadow(shadow);
     }
     return goes_on;
 }
 
-// A shadow ray of next-event estimation, if there is one to trace.
-struct NextEvent {
-    ray: ShadowRay,
-    emit: bool,
+// The factor of the continuation probability in the BSDF densities used for MIS (see above).
+fn material_mis_continuation(bsdf: Bsdf) -> f32 {
+    return select(1.0, bsdf.continuation, RR_ALBEDO);
 }
 
 // Next-event estimation at the path's vertex `v`: a light picked with `light_u`, a point on
-// it with `light_uv`, and the shadow ray carrying the MIS-weighted contribution.
-fn material_next_event(path: CameraPath, v: PathVertex, light_u: f32, light_uv: vec2<f32>) -> NextEvent {
-    var next = NextEvent(ShadowRay(), false);
+// it with `light_uv`, and the shadow ray carrying the MIS-weighted contribution (black: no
+// ray to trace).
+fn material_next_event(path: CameraPath, v: PathVertex, light_u: f32, light_uv: vec2<f32>) -> ShadowRay {
     let s = v.s;
     let bsdf = v.bsdf;
+    let none = ShadowRay();
     if (bsdf.is_delta || scene.num_lights == 0u) {
-        return next;
+        return none;
     }
     let picked = pick_light(light_u);
     let pick = picked.probability;
     let ill = illuminate(picked.index, s.position, light_uv);
     if (is_black(ill.radiance)) {
-        return next;
+        return none;
     }
     let e = bsdf_eval(bsdf, ill.direction);
     if (is_black(e.f)) {
-        return next;
+        return none;
     }
     var w = 1.0;
     if (!ill.is_delta) {
-        w = mis_weight(ill.pdf * pick, e.pdf_forward * select(1.0, bsdf.continuation, RR_ALBEDO));
+        w = mis_weight(ill.pdf * pick, e.pdf_forward * material_mis_continuation(bsdf));
     }
-    let contribution = path.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick * ill.pdf));
-    let side = select(-s.normal, s.normal, dot(s.normal, ill.direction) > 0.0);
-    let origin = offset_ray_origin(s.position, side, s.extent);
-    let distance = light_shadow_distance(s.position, origin, ill);
-    next.ray = ShadowRay(origin, path.pixel, ill.direction, distance, contribution);
-    next.emit = true;
-    return next;
+    return light_sample_ray(s, ill, path.pixel, path.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick * ill.pdf)));
 }
 
 // The path's next direction from the BSDF at `v` (sampled with `u`), then Russian roulette
@@ -81,10 +75,9 @@ fn material_scatter(path: ptr<function, CameraPath>, v: PathVertex, u: vec3<f32>
         return false;
     }
     (*path).throughput = throughput / q;
-    (*path).last_pdf = smp.pdf * select(1.0, bsdf.continuation, RR_ALBEDO);
+    (*path).last_pdf = smp.pdf * material_mis_continuation(bsdf);
     (*path).last_specular = select(0u, 1u, smp.specular);
-    let side = select(-s.normal, s.normal, dot(s.normal, smp.direction) > 0.0);
-    (*path).origin = offset_ray_origin(s.position, side, s.extent);
+    (*path).origin = offset_ray_origin(s.position, side_normal(s.normal, smp.direction), s.extent);
     (*path).direction = smp.direction;
     return true;
 }
