@@ -12,10 +12,6 @@
 set -uo pipefail
 source "$(dirname "$0")/gpu_common.sh"
 old=${1:-lightgraph-old} new=${2:-lightgraph}
-camera() {
-  bash .gpu/run.sh "$1" render --graph ppm --layout PPMsk --res 1280x720 --frames 60 "${@:2}" --out /tmp/x.exr 2>&1 |
-    grep -oE "pm_found [0-9.]* [kM]?|k[0-9]+_pm_camera[a-z_]* [0-9.]* ms" | tr '\n' ' '
-}
 scenes=(
   "cornell-diffuse 0.0068"
   "cornell-glossy-point 0.0075"
@@ -23,7 +19,7 @@ scenes=(
   "sponza 0.052"
   ".gpu/scenes/VeachBidir/veach-bidir.gltf 0.008"
 )
-camera "$new" --scene cornell-glossy-point >/dev/null
+ppm_camera "$new" --scene cornell-glossy-point >/dev/null
 for r in $(seq "${ROUNDS:-2}"); do
   for bin in "$old" "$new"; do
     bench_rows "$bin" "r$r $bin sponza" --time 2s --scene sponza --graph pt --layouts NaivePTsk,StreamingPTmk2 \
@@ -39,7 +35,7 @@ for r in $(seq "${ROUNDS:-2}"); do
     done
     for run in "${scenes[@]}"; do
       read -r scene radius <<<"$run"
-      echo "r$r $bin PPMsk $(basename "$scene") r_0 $radius: $(camera "$bin" --scene "$scene" --set PM_RADIUS="$radius")"
+      echo "r$r $bin PPMsk $(basename "$scene") r_0 $radius: $(ppm_camera "$bin" --scene "$scene" --set PM_RADIUS="$radius")"
     done
   done
 done

@@ -1,7 +1,7 @@
 # Shared by the GPU bench scripts (sourced from the repo root on the GPU machine): lightgraph
 # through the GPU bundle, one 1280x720 render's rates, per-frame counters and GPU time per
 # kernel (`render_summary`, needs $out, a scratch folder), one `bench` run's rows
-# (`bench_rows`), and issue 13's VCM rows (`vcm_rows`).
+# (`bench_rows`), issue 13's VCM rows (`vcm_rows`), and PPMsk's camera kernel (`ppm_camera`).
 lg() { bash .gpu/run.sh lightgraph "$@"; }
 # render_summary FRAMES ARGS...
 render_summary() {
@@ -32,4 +32,11 @@ vcm_rows() {
   bench_rows "$1" "$2 sponza" --time 2s --scene sponza --graph vcm --layouts VCMsk,VCMmk --points 1280x720x1
   bench_rows "$1" "$2 box" --time 2s --scene cornell-diffuse --graph vcm --layouts VCMsk \
     --points 256x256x64 --set PM_ITERATIONS=64
+}
+# ppm_camera BINARY ARGS...: a 60-frame PPMsk render at 1280x720 with the bundle's BINARY (scene
+# and constants in ARGS), on one line: photons found and queries a frame, and the GPU ms a frame
+# of the camera kernel.
+ppm_camera() {
+  bash .gpu/run.sh "$1" render --graph ppm --layout PPMsk --res 1280x720 --frames 60 "${@:2}" --out /tmp/x.exr 2>&1 |
+    grep -oE "pm_found [0-9.]* [kM]?|pm_queries [0-9.]* [kM]?|k[0-9]+_pm_camera[a-z_]* [0-9.]* ms" | tr '\n' ' '
 }

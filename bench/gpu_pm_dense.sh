@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Where PPMsk's camera kernel goes on VeachBidir (its lamp's shade gathers photons densely):
+# Where PPMsk's camera kernel goes on VeachBidir (a lamp under a shade; its photons are dense in places):
 # r_0 = 0.008 (about 17 photons a query) with the defaults, more buckets, smaller cells, both,
 # WhileQuery, the kD-tree and the rectified stochastic grid, and with no photon stored. On the
 # GPU machine from the repo root with carry [".gpu"] after `../shared/tools/gpu-bundle.sh
@@ -7,12 +7,9 @@
 #   bash bench/gpu_pm_dense.sh [BINARY]
 # 60 frames a render, two interleaved rounds.
 set -uo pipefail
+source "$(dirname "$0")/gpu_common.sh"
 bin=${1:-lightgraph}
-camera() {
-  bash .gpu/run.sh "$bin" render --scene .gpu/scenes/VeachBidir/veach-bidir.gltf --graph ppm --layout PPMsk \
-    --res 1280x720 --frames 60 --set PM_RADIUS=0.008 "$@" --out /tmp/x.exr 2>&1 |
-    grep -oE "pm_found [0-9.]* [kM]?|pm_queries [0-9.]* [kM]?|k[0-9]+_pm_camera[a-z_]* [0-9.]* ms" | tr '\n' ' '
-}
+camera() { ppm_camera "$bin" --scene .gpu/scenes/VeachBidir/veach-bidir.gltf --set PM_RADIUS=0.008 "$@"; }
 camera >/dev/null
 for r in 1 2; do
   for sets in "" "PM_BUCKETS_PER_PATH=4" "PM_CELL_SCALE=0.5" "PM_CELL_SCALE=0.5 PM_BUCKETS_PER_PATH=4" \

@@ -9,10 +9,8 @@
 #   bash bench/gpu_pm_variants.sh - PM_MEASURING=true
 # 60 frames a render, ROUNDS interleaved rounds (default 2); BIN names the bundle's binary.
 set -uo pipefail
-camera() {
-  bash .gpu/run.sh "${BIN:-lightgraph}" render --graph ppm --layout PPMsk --res 1280x720 --frames 60 "$@" \
-    --out /tmp/x.exr 2>&1 | grep -oE "pm_found [0-9.]* [kM]?|pm_queries [0-9.]* [kM]?|k[0-9]+_pm_camera[a-z_]* [0-9.]* ms" | tr '\n' ' '
-}
+source "$(dirname "$0")/gpu_common.sh"
+camera() { ppm_camera "${BIN:-lightgraph}" "$@"; }
 runs=(
   "cornell-diffuse 0.0058 0.0068"
   "cornell-glossy-point 0.0065 0.0075"
