@@ -216,14 +216,25 @@ fn pm_continue(p: ptr<function, MergePath>) -> bool {
     return ((*p).flags & MERGE_ALIVE) != 0u;
 }
 
-// The density estimation pending at the sub-path's vertex, if any (the structures' contract).
+// The density estimation pending at the sub-path's vertex, if any (the structures' contract),
+// counted as `pm_queries`.
 fn merge_begin(p: MergePath) -> Merge {
-    var m: Merge;
-    m.pending = (p.flags & MERGE_PENDING) != 0u;
-    if (!m.pending) {
-        return m;
+    if ((p.flags & MERGE_PENDING) == 0u) {
+        var none: Merge;
+        none.pending = false;
+        return none;
     }
-    m = merge_query(p.merge);
+    count(COUNTER_PM_QUERIES, 1u);
+    return merge_resume(p);
+}
+
+// A part of the density estimation pending at the sub-path's vertex (the structures'
+// contract: a gather that splits a query over threads begins each part so; not counted
+// again): this frame's radius, the BSDF there (SPPM's diffuse part; a Lambertian's value apart)
+// and nothing found yet.
+fn merge_resume(p: MergePath) -> Merge {
+    var m = merge_unset(p.merge);
+    m.bsdf = pending_merge_bsdf(p.merge);
     if (PM_MODE == PM_SPPM) {
         m.bsdf = bsdf_diffuse_part(m.bsdf);
     }
@@ -233,18 +244,16 @@ fn merge_begin(p: MergePath) -> Merge {
     return m;
 }
 
-// The density estimation of `pending` begun (counted as `pm_queries`), with this frame's
-// radius and nothing found yet.
-fn merge_query(pending: PendingMerge) -> Merge {
-    var m = merge_query_unset(pending);
-    m.bsdf = pending_merge_bsdf(pending);
-    return m;
-}
-
-// `merge_query` with the BSDF not yet set up: a query that finds nothing needs none, so a
-// gather may set it up at its first photon (VCM's, whose queries mostly find none).
+// The density estimation of `pending` begun (counted as `pm_queries`) with its BSDF not yet
+// set up: a query that finds nothing needs none, so a gather may set it up at its first photon
+// (VCM's, whose queries mostly find none).
 fn merge_query_unset(pending: PendingMerge) -> Merge {
     count(COUNTER_PM_QUERIES, 1u);
+    return merge_unset(pending);
+}
+
+// An estimation at `pending` with this frame's radius, nothing found yet and no BSDF.
+fn merge_unset(pending: PendingMerge) -> Merge {
     return Merge(pending.position, pm_radius(), true, Bsdf(), pending.d_vm, pending.length, vec3<f32>(0.0),
                  vec3<f32>(-1.0), vec3<f32>(0.0));
 }
@@ -285,7 +294,7 @@ fn merge_kernel(radius: f32) -> f32 {
     return 1.0 / (PI * radius * radius * pm_merge_paths());
 }
 
-// Adds the finished estimation to the film: the sums over pi r^2 N.
+// Adds the finished estimation, or a part of a split one, to the film: the sums over pi r^2 N.
 fn merge_end(p: ptr<function, MergePath>, m: Merge) {
     if (!m.pending) {
         return;

@@ -15,7 +15,9 @@
 //   a structure's gather pass (Loop over MergePath) calls `merge_photon(&m, photon, weight)`
 //   once for every stored photon with `pm_in_range(photon.position, m.position, m.radius)`
 //   (weight 1; a stochastic grid's kept photon stands for `weight` photons), then
-//   `merge_end(&path, m)`, and returns true.
+//   `merge_end(&path, m)`, and returns true. A gather may split a query over threads: each
+//   part begins with `merge_resume(path)` (not counted again as a query) and ends with
+//   `merge_end`, which adds the part's sum (shaders/pm/grid.wgsl).
 
 // Needs shaders/lib/scene.wgsl (the octahedral code of directions).
 

@@ -272,9 +272,27 @@ fn brute_force(cloud: &Cloud) -> Vec<(Vec<u32>, Vec<u32>)> {
         .collect()
 }
 
+/// How NaiveQuery splits the hash grid's queries over threads: above `entries` entries (0:
+/// never) in parts of `chunk`, with room for `queries` queries and `parts` parts a run.
+#[derive(Clone, Copy)]
+struct Split {
+    entries: u32,
+    chunk: u32,
+    queries: u32,
+    parts: u32,
+}
+
+/// Queries are never split.
+const UNSPLIT: Split = Split {
+    entries: 0,
+    chunk: 1,
+    queries: 1,
+    parts: 1,
+};
+
 /// An instance of the test graph for the structure `PM_STRUCTURE = structure`, the hash grid
-/// queried with WhileQuery or NaiveQuery (`PM_WHILE_QUERY = while_query`).
-fn instance(structure: u32, while_query: bool) -> Instance<'static> {
+/// queried with WhileQuery or NaiveQuery (`PM_WHILE_QUERY = while_query`), split as `split`.
+fn instance(structure: u32, while_query: bool, split: Split) -> Instance<'static> {
     let vfs = lightgraph::assets::builtin().with_front(Layer::Dir(data("graphs")));
     let graph = Graph::load(&vfs, "pm_query.ron").unwrap();
     let plan = Plan::new(&graph, "query").unwrap();
@@ -283,6 +301,10 @@ fn instance(structure: u32, while_query: bool) -> Instance<'static> {
         ("QUERIES", QUERIES as u32),
         ("PM_CELLS", CELLS),
         ("PM_STRUCTURE", structure),
+        ("PM_SPLIT_ENTRIES", split.entries),
+        ("PM_SPLIT_CHUNK", split.chunk),
+        ("PM_SPLIT_QUERIES", split.queries),
+        ("PM_SPLIT_PARTS", split.parts),
     ];
     let spec = Specialization {
         constants: constants
@@ -375,9 +397,9 @@ fn exact_mismatch(cloud: &Cloud, found: &[Found], skipped: &mut usize) -> Option
     None
 }
 
-/// Runs every cloud through an exact structure.
-fn exact_structure(structure: u32, while_query: bool, name: &str) {
-    let mut instance = instance(structure, while_query);
+/// Runs every cloud through an exact structure; the queries it split over threads.
+fn exact_structure(structure: u32, while_query: bool, split: Split, name: &str) -> u64 {
+    let mut instance = instance(structure, while_query, split);
     let (mut skipped, mut photons_found) = (0, 0u64);
     for cloud in clouds() {
         let found = run(&mut instance, cloud);
@@ -393,18 +415,41 @@ fn exact_structure(structure: u32, while_query: bool, name: &str) {
         skipped < 10,
         "{name}: {skipped} queries with too many ambiguous photons"
     );
+    instance.counter_totals().get("pm_split").copied().unwrap_or(0)
 }
 
 #[test]
 fn kd_tree_queries_find_exactly_the_photons_in_range() {
-    exact_structure(3, false, "kD-tree");
+    exact_structure(3, false, UNSPLIT, "kD-tree");
 }
 
 #[test]
 fn full_hash_grid_queries_find_exactly_the_photons_in_range() {
     // NaiveQuery reads a bucket's photons four at a time: buckets of every size mod 4.
-    exact_structure(0, false, "full hash grid, NaiveQuery");
-    exact_structure(0, true, "full hash grid, WhileQuery");
+    exact_structure(0, false, UNSPLIT, "full hash grid, NaiveQuery");
+    exact_structure(0, true, UNSPLIT, "full hash grid, WhileQuery");
+}
+
+#[test]
+fn queries_split_over_threads_find_exactly_the_photons_in_range() {
+    // Parts of sizes that are not multiples of four, starting anywhere in a bucket; then so
+    // little room that most split queries walk their cells themselves after all.
+    let roomy = Split {
+        entries: 64,
+        chunk: 13,
+        queries: QUERIES as u32,
+        parts: 1 << 20,
+    };
+    let split = exact_structure(0, false, roomy, "full hash grid, split above 64 entries");
+    assert!(split > 200, "only {split} queries split");
+    let cramped = Split {
+        entries: 8,
+        chunk: 5,
+        queries: 40,
+        parts: 300,
+    };
+    let split = exact_structure(0, false, cramped, "full hash grid, split with little room");
+    assert!(split > 0, "no query split");
 }
 
 /// The cell of a photon (cell_of in shaders/pm/cells.wgsl), or `None` within 1e-4 of a cell
@@ -460,7 +505,7 @@ fn stochastic_mismatch(cloud: &Cloud, found: &[Found]) -> Option<String> {
 #[test]
 fn stochastic_hash_grids_report_photons_in_range_with_consistent_weights() {
     for (structure, name) in [(1, "rectified"), (2, "original")] {
-        let mut instance = instance(structure, false);
+        let mut instance = instance(structure, false, UNSPLIT);
         let mut reported = 0;
         for cloud in clouds() {
             let found = run(&mut instance, cloud);

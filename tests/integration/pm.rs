@@ -153,10 +153,14 @@ fn every_photon_mapping_layout_and_query_finds_the_same_photons() {
         ("sppm", "SPPMsk", "SPPMmk", "SPPMmkScreen"),
         ("pbpm", "PBPMsk", "PBPMmk", "PBPMmkScreen"),
     ] {
+        // NaiveQuery splits queries whose cells hold more than 16 entries (most do here);
+        // WhileQuery splits none.
         let run = |layout: &str, while_query: bool| {
             let constants = [
                 ("PM_RADIUS", ConstValue::F32(0.05)),
                 ("PM_WHILE_QUERY", ConstValue::Bool(while_query)),
+                ("PM_SPLIT_ENTRIES", ConstValue::U32(16)),
+                ("PM_SPLIT_CHUNK", ConstValue::U32(7)),
             ];
             render(&scene, graph, layout, (SIZE, SIZE), 2, 2, 3, &constants)
         };
@@ -196,13 +200,61 @@ fn smaller_cells_and_more_buckets_find_the_same_photons() {
     }
 }
 
+#[test]
+fn queries_split_over_threads_find_the_same_photons() {
+    // The hash grid's NaiveQuery splits a query whose cells hold more than PM_SPLIT_ENTRIES
+    // entries into parts of PM_SPLIT_CHUNK entries, each summed by a thread of its own: with
+    // budgets from none to all, parts of sizes that are and are not multiples of the four
+    // entries read at once, in every estimator and in the layouts with and without compaction,
+    // the photons found and the image must be those of the unsplit queries. With parts of one
+    // entry the frame's room for parts (PATHS + 256) runs out, so most queries then walk
+    // their cells themselves: the fallback must find the same photons too.
+    let scene = load_scene("cornell-glossy-mirrorball").unwrap();
+    for (graph, sk, mk) in [
+        ("ppm", "PPMsk", "PPMmk"),
+        ("sppm", "SPPMsk", "SPPMmkScreen"),
+        ("pbpm", "PBPMsk", "PBPMmk"),
+    ] {
+        let run = |layout: &str, entries: u32, chunk: u32| {
+            let constants = [
+                ("PM_RADIUS", ConstValue::F32(0.05)),
+                ("PM_SPLIT_ENTRIES", ConstValue::U32(entries)),
+                ("PM_SPLIT_CHUNK", ConstValue::U32(chunk)),
+            ];
+            render(&scene, graph, layout, (SIZE, SIZE), 2, 2, 3, &constants)
+        };
+        let reference = run(sk, 0, 1);
+        assert_eq!(
+            reference.counters["pm_split"], 0,
+            "{graph}: split with PM_SPLIT_ENTRIES 0"
+        );
+        for (layout, entries, chunk) in [(sk, 1, 1), (sk, 16, 7), (mk, 16, 8), (sk, 4, 64), (mk, 1, 1000)] {
+            let other = run(layout, entries, chunk);
+            let what = format!("{graph} {layout}, split above {entries} entries, parts of {chunk}");
+            let (split, queries) = (other.counters["pm_split"], reference.counters["pm_queries"]);
+            eprintln!("{what}: {split} of {queries} queries split");
+            // Parts of one entry leave room for a few queries' parts only.
+            let most = if chunk == 1 { queries / 2 } else { queries };
+            assert!(split > 0 && split <= most, "{what}: {split} of {queries} queries split");
+            assert_same_photons(&reference, &other, &what);
+        }
+    }
+}
+
 /// `other` found the photons `reference` found and rendered its image: the same counters
-/// (rays, queries, photons found), and pixels equal to float rounding (the photons of a
-/// bucket are summed in the order their atomics gave them slots).
+/// (rays, queries, photons found; the queries split over threads aside), and pixels equal to
+/// float rounding (the photons of a bucket are summed in the order their atomics gave them
+/// slots, the parts of a split query in any order).
 fn assert_same_photons(reference: &Rendered, other: &Rendered, what: &str) {
     let worst = largest_relative_difference(&reference.image, &other.image);
     assert!(worst < 1e-5, "{what}: differs by {worst:.2e}");
-    assert_eq!(reference.counters, other.counters, "{what}: different rays or photons");
+    let unsplit = |r: &Rendered| {
+        let mut c = r.counters.clone();
+        c.remove("pm_split");
+        c.remove("pm_split_parts");
+        c
+    };
+    assert_eq!(unsplit(reference), unsplit(other), "{what}: different rays or photons");
 }
 
 /// The diffuse Cornell box with walls of albedo 0.99 (the paper's Figure 8): each wall's

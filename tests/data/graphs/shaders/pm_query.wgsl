@@ -13,10 +13,10 @@ struct QueryScene {
 const QUERY_LISTED: u32 = 32u;
 
 struct QueryResult {
-    found: u32,
-    sum: u32,
-    xor: u32,
-    weight: f32,
+    found: atomic<u32>,
+    sum: atomic<u32>,
+    xor: atomic<u32>,
+    weight: atomic<u32>,    // the bits of an f32
     // Id and weight (its bits) of the first photons found.
     listed: array<vec2<u32>, QUERY_LISTED>,
 }
@@ -40,7 +40,6 @@ struct Merge {
     radius: f32,
     pending: bool,
     query: u32,
-    found: u32,
     sum: u32,
     xor: u32,
     weight: f32,
@@ -58,8 +57,12 @@ fn pm_extent() -> f32 {
     return scene.extent;
 }
 
-// Pass `query_load` (Start over QUERIES): query `index`.
+// Pass `query_load` (Start over QUERIES): query `index`, its result cleared.
 fn query_load(p: ptr<function, MergePath>, index: u32) -> bool {
+    atomicStore(&film[index].found, 0u);
+    atomicStore(&film[index].sum, 0u);
+    atomicStore(&film[index].xor, 0u);
+    atomicStore(&film[index].weight, 0u);
     let q = queries[index];
     *p = MergePath(q.xyz, q.w, index);
     return true;
@@ -82,7 +85,11 @@ fn query_end(p: ptr<function, MergePath>) -> bool {
 }
 
 fn merge_begin(p: MergePath) -> Merge {
-    return Merge(p.position, p.radius, true, p.query, 0u, 0u, 0u, 0.0);
+    return merge_resume(p);
+}
+
+fn merge_resume(p: MergePath) -> Merge {
+    return Merge(p.position, p.radius, true, p.query, 0u, 0u, 0.0);
 }
 
 // A well-mixed hash of a photon's id (the test computes the same).
@@ -98,19 +105,26 @@ fn query_hash(id: u32) -> u32 {
 
 fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
     let id = u32(photon.throughput.x);
-    if ((*m).found < QUERY_LISTED) {
-        film[(*m).query].listed[(*m).found] = vec2<u32>(id, bitcast<u32>(weight));
+    let slot = atomicAdd(&film[(*m).query].found, 1u);
+    if (slot < QUERY_LISTED) {
+        film[(*m).query].listed[slot] = vec2<u32>(id, bitcast<u32>(weight));
     }
     let h = query_hash(id);
-    (*m).found += 1u;
     (*m).sum += h;
     (*m).xor ^= h;
     (*m).weight += weight;
 }
 
 fn merge_end(p: ptr<function, MergePath>, m: Merge) {
-    film[m.query].found = m.found;
-    film[m.query].sum = m.sum;
-    film[m.query].xor = m.xor;
-    film[m.query].weight = m.weight;
+    let q = m.query;
+    atomicAdd(&film[q].sum, m.sum);
+    atomicXor(&film[q].xor, m.xor);
+    var old = atomicLoad(&film[q].weight);
+    loop {
+        let r = atomicCompareExchangeWeak(&film[q].weight, old, bitcast<u32>(bitcast<f32>(old) + m.weight));
+        if (r.exchanged) {
+            break;
+        }
+        old = r.old_value;
+    }
 }
