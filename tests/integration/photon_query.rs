@@ -10,7 +10,8 @@
 //! loops after 65535 iterations in all (of its 8 lanes together), so a hash-grid bucket of
 //! 20 000 photons already truncates WhileQuery there; a GPU has no such limit.
 //!
-//! The kD-tree and the full hash grid must find exactly the brute-force set. A photon whose
+//! The kD-tree and the full hash grid (its queries whole, and split over threads with room
+//! to spare and with too little) must find exactly the brute-force set. A photon whose
 //! f64 distance is within a relative 1e-5 of the radius is ambiguous for f32 and excluded
 //! from both sides: the GPU's set must be the CPU's plus some of the ambiguous photons (the
 //! subset whose count, sum and xor match). A stochastic hash grid (rectified, and the

@@ -153,7 +153,7 @@ fn every_photon_mapping_layout_and_query_finds_the_same_photons() {
         ("sppm", "SPPMsk", "SPPMmk", "SPPMmkScreen"),
         ("pbpm", "PBPMsk", "PBPMmk", "PBPMmkScreen"),
     ] {
-        // NaiveQuery splits queries whose cells hold more than 16 entries (most do here);
+        // NaiveQuery splits a query at a cell holding more than 16 entries (many do here);
         // WhileQuery splits none.
         let run = |layout: &str, while_query: bool| {
             let constants = [
@@ -202,13 +202,14 @@ fn smaller_cells_and_more_buckets_find_the_same_photons() {
 
 #[test]
 fn queries_split_over_threads_find_the_same_photons() {
-    // The hash grid's NaiveQuery splits a query whose cells hold more than PM_SPLIT_ENTRIES
-    // entries into parts of PM_SPLIT_CHUNK entries, each summed by a thread of its own: with
-    // budgets from none to all, parts of sizes that are and are not multiples of the four
-    // entries read at once, in every estimator and in the layouts with and without compaction,
-    // the photons found and the image must be those of the unsplit queries. With parts of one
-    // entry the frame's room for parts (PATHS + 256) runs out, so most queries then walk
-    // their cells themselves: the fallback must find the same photons too.
+    // The hash grid's NaiveQuery splits a query at its first cell holding more than
+    // PM_SPLIT_ENTRIES entries into parts of PM_SPLIT_CHUNK entries, each summed by a thread of
+    // its own: with thresholds from none to every cell, parts of sizes that are and are not
+    // multiples of the four entries read at once, in every estimator and in the layouts with
+    // and without compaction, the photons found and the image must be those of the unsplit
+    // queries. With parts of one entry the frame's room for parts (16 PATHS + 256) runs out,
+    // and with the low thresholds its room for queries (PATHS / 8 + 256), so many queries
+    // then walk their cells themselves: the fallback must find the same photons too.
     let scene = load_scene("cornell-glossy-mirrorball").unwrap();
     for (graph, sk, mk) in [
         ("ppm", "PPMsk", "PPMmk"),
