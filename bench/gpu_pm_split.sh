@@ -7,7 +7,7 @@
 # defaults), with the first argument's binary. On the GPU machine from the repo root with carry [".gpu"] after
 # `../shared/tools/gpu-bundle.sh --scene CrytekSponza --scene ModernHall --scene VeachBidir`:
 #   bash bench/gpu_pm_split.sh lightgraph-old lightgraph:PM_SPLIT_ENTRIES=0 lightgraph
-# 60 frames a render, two interleaved rounds.
+# 60 frames a render, ROUNDS interleaved rounds (default 2).
 set -uo pipefail
 source "$(dirname "$0")/gpu_common.sh"
 runs=(
@@ -19,7 +19,7 @@ runs=(
 )
 first=${1%%:*}
 ppm_camera "$first" --scene cornell-glossy-point >/dev/null
-for r in 1 2; do
+for r in $(seq "${ROUNDS:-2}"); do
   for run in "${runs[@]}"; do
     read -r scene radius <<<"$run"
     for variant in "$@"; do
