@@ -35,9 +35,9 @@ vcm_rows() {
 }
 # ppm_camera BINARY ARGS...: a 60-frame PPMsk render (or $PM_GRAPH in $PM_LAYOUT) at 1280x720
 # with the bundle's BINARY (scene and constants in ARGS), on one line: photons found, queries and queries split a
-# frame, and the GPU ms a frame of the camera kernel, of the split queries' parts and of the
-# engine's operators (the grid's build, the split queries' scan).
+# frame, and the GPU ms a frame of the light and camera kernels, of the split queries' parts and
+# of the engine's operators (the grid's build, the split queries' scan).
 ppm_camera() {
   bash .gpu/run.sh "$1" render --graph "${PM_GRAPH:-ppm}" --layout "${PM_LAYOUT:-PPMsk}" --res 1280x720 --frames 60 "${@:2}" --out /tmp/x.exr 2>&1 |
-    grep -oE "pm_(found|queries|split|split_parts) [0-9.]* [kM]?|k[0-9]+_([a-z]+_camera[a-z_]*|grid_split_gather) [0-9.]* ms|lg_op[0-9]+_[a-z0-9]+ [0-9.]* ms" | tr '\n' ' '
+    grep -oE "pm_(found|queries|split|split_parts) [0-9.]* [kM]?|k[0-9]+_(pm_light[a-z_]*|[a-z]+_camera[a-z_]*|grid_split_gather) [0-9.]* ms|lg_op[0-9]+_[a-z0-9]+ [0-9.]* ms" | tr '\n' ' '
 }
