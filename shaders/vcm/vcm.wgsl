@@ -73,14 +73,24 @@ fn vcm_bucket(cell: vec3<i32>, iteration: u32) -> u32 {
     return cell_bucket_among(cell, iteration * groups, groups);
 }
 
+// A cached vertex as the grid holds it: its position and its place in `lvc_staging` (16 bytes
+// in bucket order, where the whole 48-byte vertex would take three times the scatter's traffic
+// and the walk's reads; a merge loads the vertex only once found).
+struct GridPoint {
+    position: vec3<f32>,
+    vertex: u32,
+}
+
 // Pass `vcm_grid_keys` (Start over the stored vertices): the vertex's hash grid bucket, in
-// the grid of its light sub-path's iteration.
+// the grid of its light sub-path's iteration, and its point for the grid.
 fn vcm_grid_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     var iteration = 0u;
     if (PM_ITERATIONS > 1u) {
         iteration = vcm_iteration(lvc_owner[index]);
     }
-    grid_key[index] = vcm_bucket(cell_of(lvc_staging[index].position), iteration);
+    let position = lvc_staging[index].position;
+    grid_key[index] = vcm_bucket(cell_of(position), iteration);
+    vcm_points[index] = GridPoint(position, index);
     return false;
 }
 
@@ -133,30 +143,30 @@ fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
 
 // Pass `vcm_gather` (Loop): the pending merge, with every cached vertex within the radius
 // (the full hash grid's NaiveQuery over `vcm_grid`, shaders/pm/grid.wgsl), over
-// pi r^2 N_light. The vertex's BSDF is set up at the first cached vertex found: most queries
-// find none where the radius is small against the scene (Sponza's: 1.6 M queries, 17 k found).
+// pi r^2 N_light. The walk over the grid only finds vertices, up to VCM_FOUND_BATCH at a time
+// (`vcm_find`); they are weighed after it, the vertex's BSDF set up once the first is found:
+// most queries find none where the radius is small against the scene (Sponza's: 1.6 M queries,
+// 27 k found), and the walk does not hold the BSDF and its evaluation. The sum is the same
+// (the same vertices in the same order).
 fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
     if (((*p).flags & VCM_PENDING) == 0u) {
         return true;
     }
     var m = merge_query_unset((*p).merge);
-    var found = false;
     let counts = vcm_counts();
-    let box = cell_box(m.position, m.radius);
-    var walk = cell_walk(box);
+    var cursor = VcmCursor(cell_box(m.position, m.radius).lo, 0u, false);
+    var set_up = false;
     loop {
-        let range = vcm_reached_bucket(walk.cell, m, (*p).iteration);
-        for (var i = range.x; i < range.y; i += 1u) {
-            let position = vcm_grid[i].position;
-            if (pm_in_range(position, m.position, m.radius) && cell_owns(box, walk.cell, position)) {
-                if (!found) {
-                    m.bsdf = pending_merge_bsdf((*p).merge);
-                    found = true;
-                }
-                vcm_merge_vertex(&m, vcm_grid[i], (*p).merge_d_vcm, counts);
-            }
+        var found: array<u32, VCM_FOUND_BATCH>;
+        let n = vcm_find(m.position, m.radius, (*p).iteration, &cursor, &found);
+        if (n > 0u && !set_up) {
+            m.bsdf = pending_merge_bsdf((*p).merge);
+            set_up = true;
         }
-        if (!cell_walk_next(&walk)) {
+        for (var j = 0u; j < n; j += 1u) {
+            vcm_merge_vertex(&m, lvc_staging[found[j]], (*p).merge_d_vcm, counts);
+        }
+        if (cursor.done) {
             break;
         }
     }
@@ -164,15 +174,59 @@ fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
     return true;
 }
 
+// Cached vertices a walk finds before their weighing (4: 2-4% faster on the 256x256 diffuse
+// box than 1 or 8 on an H100; docs/performance.md).
+const VCM_FOUND_BATCH: u32 = 4u;
+
+// Where a merge's walk over the grid goes on: the cell and the entry of its bucket, or done.
+struct VcmCursor {
+    cell: vec3<i32>,
+    entry: u32,
+    done: bool,
+}
+
+// The next cached vertices within `radius` of `position` in the grid of `iteration`, from the
+// cursor on: up to VCM_FOUND_BATCH of their places in `lvc_staging` into `found`, in the
+// walk's order. Returns how many, and leaves the cursor at the next one (done after the last
+// cell).
+fn vcm_find(position: vec3<f32>, radius: f32, iteration: u32, cursor: ptr<function, VcmCursor>,
+            found: ptr<function, array<u32, VCM_FOUND_BATCH>>) -> u32 {
+    let box = cell_box(position, radius);
+    var walk = CellWalk(box, (*cursor).cell);
+    var first = (*cursor).entry;
+    var n = 0u;
+    loop {
+        let range = vcm_reached_bucket(walk.cell, position, radius, iteration);
+        for (var i = max(first, range.x); i < range.y; i += 1u) {
+            let point = vcm_grid[i];
+            if (pm_in_range(point.position, position, radius) && cell_owns(box, walk.cell, point.position)) {
+                if (n == VCM_FOUND_BATCH) {
+                    (*cursor).cell = walk.cell;
+                    (*cursor).entry = i;
+                    return n;
+                }
+                (*found)[n] = point.vertex;
+                n += 1u;
+            }
+        }
+        first = 0u;
+        if (!cell_walk_next(&walk)) {
+            break;
+        }
+    }
+    (*cursor).done = true;
+    return n;
+}
+
 // Pass `vcm_continue` (Loop, last): ends the sub-path when `vcm_vertex` said so.
 fn vcm_continue(p: ptr<function, VcmPath>) -> bool {
     return ((*p).flags & VCM_ALIVE) != 0u;
 }
 
-// The vertices in `vcm_grid` of the bucket of `cell` in the grid of `iteration`, or none when
-// the cell is out of the merge's reach.
-fn vcm_reached_bucket(cell: vec3<i32>, m: Merge, iteration: u32) -> vec2<u32> {
-    if (!cell_reaches(cell, m.position, m.radius)) {
+// The points in `vcm_grid` of the bucket of `cell` in the grid of `iteration`, or none when
+// the cell is out of the reach of a merge of `radius` at `position`.
+fn vcm_reached_bucket(cell: vec3<i32>, position: vec3<f32>, radius: f32, iteration: u32) -> vec2<u32> {
+    if (!cell_reaches(cell, position, radius)) {
         return vec2<u32>(0u);
     }
     let b = vcm_bucket(cell, iteration);
