@@ -524,6 +524,11 @@ pub struct LayoutDecl {
     /// them unread.
     #[serde(default)]
     pub hints: BTreeMap<String, String>,
+    /// Constants this layout compiles with unless the program is given them (a variant of the
+    /// estimator's code that suits the layout's kernels, the same image to float rounding):
+    /// they cull passes and enter the code as the graph's own constants do.
+    #[serde(default)]
+    pub constants: BTreeMap<String, ConstValue>,
 }
 
 /// How a chain with a loop keeps its threads busy (the paper's regeneration policies).
@@ -568,6 +573,7 @@ impl Default for LayoutDecl {
             threads: None,
             regenerate_at: None,
             hints: BTreeMap::new(),
+            constants: BTreeMap::new(),
         }
     }
 }

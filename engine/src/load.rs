@@ -360,6 +360,7 @@ impl Declared {
         self.check_loop_bounds(file)?;
         self.check_measured(file)?;
         self.check_parameters(file)?;
+        self.check_layout_constants(file)?;
         let g = &self.file;
         if !g.layouts.contains_key(&g.default_layout) {
             return Err(self.sources.at_name(
@@ -661,6 +662,36 @@ impl Declared {
                         return Err(err(format!(
                             "measured constant '{name}': sets '{c}', which is no constant of that type"
                         )));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A layout's constants are constants of the graph, of their declared type.
+    fn check_layout_constants(&self, file: &str) -> Result<()> {
+        for (layout, decl) in &self.file.layouts {
+            for (c, v) in &decl.constants {
+                match self.constants.get(c) {
+                    Some(d) if d.wgsl_type() == v.wgsl_type() => {}
+                    Some(d) => {
+                        return Err(self.sources.at_key(
+                            file,
+                            c,
+                            format!(
+                                "layout '{layout}': constant '{c}' is {} in the graph but set as {}",
+                                d.wgsl_type(),
+                                v.wgsl_type()
+                            ),
+                        ));
+                    }
+                    None => {
+                        return Err(self.sources.at_key(
+                            file,
+                            c,
+                            format!("layout '{layout}': sets '{c}', which is no constant of the graph"),
+                        ));
                     }
                 }
             }

@@ -138,8 +138,11 @@ pub struct Program {
 impl Program {
     /// Compiles `plan` for `target` with `spec`.
     pub fn compile(plan: &Plan, spec: &Specialization, target: &Target) -> Result<Program> {
-        // Specialise, then plan the layout on what the constants leave.
-        let graph = plan.graph.specialize(&spec.constants)?;
+        // Specialise (the layout's constants where the program is not given them), then plan
+        // the layout on what the constants leave.
+        let mut constants = plan.layout.constants.clone();
+        constants.extend(spec.constants.iter().map(|(k, v)| (k.clone(), *v)));
+        let graph = plan.graph.specialize(&constants)?;
         let plan = Plan::with_decl(&graph, &plan.layout_name, plan.layout.clone())?;
         let shared = shared_sources(&plan, &spec.flags)?;
         // Reflect: every source compiled together, with emits that do nothing.

@@ -425,3 +425,48 @@ fn a_state_kernel_stores_only_the_words_its_passes_write() {
         "the whole-item store is left out"
     );
 }
+
+/// A layout's constants compile into its program unless the program is given them (VCMsk's
+/// culling by one is tested with VCM); a layout naming no constant of the graph, or one of
+/// another type, is refused at load with the layout and the constant named.
+#[test]
+fn a_layout_compiles_with_its_constants_unless_given_them() {
+    let g = graph();
+    let mut decl = g.layouts["fused"].clone();
+    decl.constants.insert("BINS".to_string(), ConstValue::U32(32));
+    let plan = Plan::with_decl(&g, "fused", decl).unwrap();
+    let compiled = |given: &[(&str, ConstValue)]| {
+        let spec = Specialization {
+            constants: given.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+            ..Default::default()
+        };
+        Program::compile(&plan, &spec, &gpu().target())
+            .unwrap()
+            .plan
+            .graph
+            .constants["BINS"]
+    };
+    assert_eq!(compiled(&[]), ConstValue::U32(32));
+    assert_eq!(compiled(&[("BINS", ConstValue::U32(16))]), ConstValue::U32(16));
+    let text =
+        std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/collatz.ron")).unwrap();
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let vfs = Vfs::new(vec![Layer::Dir(dir)]);
+    for (set, message) in [
+        (
+            r#""BINZ": U32(8)"#,
+            "layout 'fused': sets 'BINZ', which is no constant of the graph",
+        ),
+        (
+            r#""BINS": F32(8.0)"#,
+            "layout 'fused': constant 'BINS' is u32 in the graph but set as f32",
+        ),
+    ] {
+        let bad = text.replace(
+            r#""fused": (kernels: [["seed", "step", "record"], ["summarize"]]),"#,
+            &format!(r#""fused": (kernels: [["seed", "step", "record"], ["summarize"]], constants: {{ {set} }}),"#),
+        );
+        let e = Graph::from_text(&vfs, "bad.ron", &bad).unwrap_err().to_string();
+        assert!(e.starts_with("bad.ron:") && e.contains(message), "{e}");
+    }
+}
