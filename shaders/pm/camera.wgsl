@@ -53,32 +53,29 @@ fn pm_extent() -> f32 {
 }
 
 // A density estimation left pending at a camera vertex for a gather pass (photon mapping's
-// and VCM's): the vertex, what its BSDF needs (material, texture coordinates, geometric
-// normal and the direction towards the previous vertex, octahedral), the camera sub-path's
-// throughput and dVM there, and its length (segments).
+// and VCM's): the vertex, what its BSDF is set up from (material, texture coordinates, shading
+// normal and the direction towards the previous vertex), unrounded, so that the gather's BSDF
+// is the one the vertex had (VCM merging at the vertex renders what PBPM and VCM's gather
+// render); the camera sub-path's throughput and dVM there, and its length (segments).
 struct PendingMerge {
     position: vec3<f32>,
     material: u32,
     throughput: vec3<f32>,
     d_vm: f32,
-    normal: u32,
-    fix: u32,
-    tex: u32,
+    normal: vec3<f32>,
     length: u32,
+    fix: vec3<f32>,
+    tex: vec2<f32>,
 }
 
 // The estimation to leave pending at surface `s`, reached from `towards`.
 fn pending_merge_at(s: Surface, towards: vec3<f32>, throughput: vec3<f32>, d_vm: f32, length: u32) -> PendingMerge {
-    return PendingMerge(
-        s.position, s.material, throughput, d_vm, encode_octahedral(s.normal), encode_octahedral(towards),
-        pack2x16unorm(fract(s.tex)), length,
-    );
+    return PendingMerge(s.position, s.material, throughput, d_vm, s.normal, length, towards, s.tex);
 }
 
-// The BSDF at a pending estimation's vertex.
+// The BSDF at a pending estimation's vertex, as the camera sub-path set it up there.
 fn pending_merge_bsdf(m: PendingMerge) -> Bsdf {
-    let material = material_at(m.material, unpack2x16unorm(m.tex));
-    return bsdf_setup(material, decode_octahedral(m.normal), decode_octahedral(m.fix));
+    return bsdf_setup(material_at(m.material, m.tex), m.normal, m.fix);
 }
 
 // A camera sub-path between passes, with the density estimation pending at its last vertex.
@@ -244,18 +241,22 @@ fn merge_resume(p: MergePath) -> Merge {
     return m;
 }
 
-// The density estimation of `pending` begun (counted as `pm_queries`) with its BSDF not yet
-// set up: a query that finds nothing needs none, so a gather may set it up at its first photon
-// (VCM's, whose queries mostly find none).
-fn merge_query_unset(pending: PendingMerge) -> Merge {
+// A density estimation at `position` begun (counted as `pm_queries`) with its BSDF not yet set
+// up: a query that finds nothing needs none (VCM's, whose queries mostly find none, set it up
+// at their first vertex found, or take the one of the vertex they are made at).
+fn merge_query_at(position: vec3<f32>, d_vm: f32, length: u32) -> Merge {
     count(COUNTER_PM_QUERIES, 1u);
-    return merge_unset(pending);
+    return merge_unset_at(position, d_vm, length);
 }
 
 // An estimation at `pending` with this frame's radius, nothing found yet and no BSDF.
 fn merge_unset(pending: PendingMerge) -> Merge {
-    return Merge(pending.position, pm_radius(), true, Bsdf(), pending.d_vm, pending.length, vec3<f32>(0.0),
-                 vec3<f32>(-1.0), vec3<f32>(0.0));
+    return merge_unset_at(pending.position, pending.d_vm, pending.length);
+}
+
+// An estimation at `position` with this frame's radius, nothing found yet and no BSDF.
+fn merge_unset_at(position: vec3<f32>, d_vm: f32, length: u32) -> Merge {
+    return Merge(position, pm_radius(), true, Bsdf(), d_vm, length, vec3<f32>(0.0), vec3<f32>(-1.0), vec3<f32>(0.0));
 }
 
 // Adds a photon in range (counted as `pm_found`; the queries as `pm_queries`), standing for

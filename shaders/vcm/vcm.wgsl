@@ -126,9 +126,14 @@ fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
                 lvc_connect(c, visit.a, counts, &rng);
             }
             if (VCM_MERGE) {
-                (*p).merge = pending_merge_at(visit.a.s, -c.direction, c.throughput, c.d_vc, c.length);
-                (*p).merge_d_vcm = c.d_vcm;
-                (*p).flags = VCM_PENDING;
+                let pending = pending_merge_at(visit.a.s, -c.direction, c.throughput, c.d_vc, c.length);
+                if (VCM_MERGE_AT_VERTEX) {
+                    vcm_merge(pending, c.d_vcm, visit.a.bsdf, (*p).iteration, c.pixel, counts);
+                } else {
+                    (*p).merge = pending;
+                    (*p).merge_d_vcm = c.d_vcm;
+                    (*p).flags = VCM_PENDING;
+                }
             }
         }
         if (camera_scatter(&c, visit.a, counts, &rng)) {
@@ -141,37 +146,43 @@ fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
     return true;
 }
 
-// Pass `vcm_gather` (Loop): the pending merge, with every cached vertex within the radius
-// (the full hash grid's NaiveQuery over `vcm_grid`, shaders/pm/grid.wgsl), over
-// pi r^2 N_light. The walk over the grid only finds vertices, up to VCM_FOUND_BATCH at a time
-// (`vcm_find`); they are weighed after it, the vertex's BSDF set up once the first is found:
-// most queries find none where the radius is small against the scene (Sponza's: 1.6 M queries,
-// 27 k found), and the walk does not hold the BSDF and its evaluation. The sum is the same
-// (the same vertices in the same order).
+// Pass `vcm_gather` (Loop; culled where VCM_MERGE_AT_VERTEX): the pending merge.
 fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
-    if (((*p).flags & VCM_PENDING) == 0u) {
-        return true;
+    if (((*p).flags & VCM_PENDING) != 0u) {
+        vcm_merge((*p).merge, (*p).merge_d_vcm, Bsdf(), (*p).iteration, (*p).camera.pixel, vcm_counts());
     }
-    var m = merge_query_unset((*p).merge);
-    let counts = vcm_counts();
+    return true;
+}
+
+// The merge at camera vertex `v` (dVCM `d_vcm`) of `iteration`: every cached vertex within the
+// radius (the full hash grid's NaiveQuery over `vcm_grid`, shaders/pm/grid.wgsl) over
+// pi r^2 N_light, into `pixel`. With VCM_MERGE_AT_VERTEX `bsdf` is the vertex's; otherwise it
+// is set up from `v` at the first vertex found (most queries find none where the radius is
+// small against the scene: Sponza's 1.6 M queries a frame find 27 k). The walk only finds
+// vertices, up to VCM_FOUND_BATCH at a time (`vcm_find`), and they are weighed after it, so
+// the walk's loop holds no BSDF code; it resumes where it stopped.
+fn vcm_merge(v: PendingMerge, d_vcm: f32, bsdf: Bsdf, iteration: u32, pixel: u32, counts: MisCounts) {
+    var m = merge_query_at(v.position, v.d_vm, v.length);
+    m.bsdf = bsdf;
     var cursor = VcmCursor(cell_box(m.position, m.radius).lo, 0u, false);
-    var set_up = false;
+    var set_up = VCM_MERGE_AT_VERTEX;
     loop {
         var found: array<u32, VCM_FOUND_BATCH>;
-        let n = vcm_find(m.position, m.radius, (*p).iteration, &cursor, &found);
+        let n = vcm_find(m.position, m.radius, iteration, &cursor, &found);
         if (n > 0u && !set_up) {
-            m.bsdf = pending_merge_bsdf((*p).merge);
+            m.bsdf = pending_merge_bsdf(v);
             set_up = true;
         }
         for (var j = 0u; j < n; j += 1u) {
-            vcm_merge_vertex(&m, lvc_staging[found[j]], (*p).merge_d_vcm, counts);
+            vcm_merge_vertex(&m, lvc_staging[found[j]], d_vcm, counts);
         }
         if (cursor.done) {
             break;
         }
     }
-    film_add((*p).camera.pixel, (*p).merge.throughput * m.sum * merge_kernel(m.radius));
-    return true;
+    if (any(m.sum != vec3<f32>(0.0))) {
+        film_add(pixel, v.throughput * m.sum * merge_kernel(m.radius));
+    }
 }
 
 // Cached vertices a walk finds before their weighing (4: 2-4% faster on the 256x256 diffuse

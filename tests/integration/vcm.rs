@@ -70,7 +70,9 @@ fn vcm_without_connections_renders_pbpm() {
 
 /// VCMmk stores its sub-paths between kernels, compacts them and queues the connections, yet
 /// takes the same random numbers, cache vertices and merges as VCMsk, also with two
-/// iterations a frame.
+/// iterations a frame; VCMsk merges at the vertex (its layout sets VCM_MERGE_AT_VERTEX), VCMmk
+/// in `vcm_gather` with the BSDF set up again from the pending merge, and VCMsk with the
+/// constant given false (its gather fused) renders the same too.
 #[test]
 fn every_vcm_layout_matches_vcm_sk() {
     let radius = ("PM_RADIUS", ConstValue::F32(0.05));
@@ -88,7 +90,15 @@ fn every_vcm_layout_matches_vcm_sk() {
         let sk = render(&scene, "vcm", "VCMsk", (16, 16), 2, 2, 44, &constants);
         let mk = render(&scene, "vcm", "VCMmk", (16, 16), 2, 2, 44, &constants);
         assert_eq!(sk.counters, mk.counters, "{name}: VCMmk traced or merged differently");
+        assert!(sk.counters["pm_found"] > 1000, "{name}: too few merges to compare");
         assert_same_render(&sk, &mk, &format!("{name}: VCMmk vs VCMsk"));
+        constants.push(("VCM_MERGE_AT_VERTEX", ConstValue::Bool(false)));
+        let gathered = render(&scene, "vcm", "VCMsk", (16, 16), 2, 2, 44, &constants);
+        assert_eq!(
+            sk.counters, gathered.counters,
+            "{name}: VCMsk with its gather traced or merged differently"
+        );
+        assert_same_render(&sk, &gathered, &format!("{name}: VCMsk with its gather vs VCMsk"));
     }
 }
 
