@@ -318,8 +318,10 @@ impl Resolved {
                     per_item_bytes = per_item_bytes.max(4 * self.words[&g.streams[q].item].len() as u64 * f);
                 }
             }
+            // A boundary or queue buffer holds its header before the items.
             let fit = target
                 .max_binding_bytes
+                .saturating_sub(BOUNDARY_HEADER)
                 .checked_div(per_item_bytes)
                 .map_or(u64::MAX, |f| f.max(1));
             let chunk = if plan.kernels.iter().any(|k| k.chain == root && k.regenerates) {

@@ -470,3 +470,28 @@ fn a_layout_compiles_with_its_constants_unless_given_them() {
         assert!(e.starts_with("bad.ron:") && e.contains(message), "{e}");
     }
 }
+
+/// A pool whose items would fill a binding exactly is cut to what fits beside the buffer's
+/// header, not refused (the boundary holds a header before its items).
+#[test]
+fn a_pool_is_cut_to_what_fits_one_binding_with_its_header() {
+    let g = graph();
+    let mut decl = g.layouts["split"].clone();
+    decl.policy = Policy::Compaction;
+    decl.threads = Some(256);
+    let plan = Plan::with_decl(&g, "pool", decl.clone()).unwrap();
+    let spec = Specialization {
+        constants: [("N".to_string(), ConstValue::U32(700))].into_iter().collect(),
+        ..Default::default()
+    };
+    let item_bytes = 4 * Program::compile(&plan, &spec, &gpu().target()).unwrap().resolved.words["Walk"].len() as u64;
+    let target = lightgraph_engine::program::Target {
+        max_binding_bytes: 256 * item_bytes,
+        ..gpu().target()
+    };
+    let program = Program::compile(&plan, &spec, &target).unwrap();
+    let fits = (256 * item_bytes - lightgraph_engine::resolve::BOUNDARY_HEADER) / item_bytes;
+    assert_eq!(program.resolved.pools.values().copied().max(), Some(fits));
+    let (steps, _, _) = run_decl(&g, "pool", decl, 700);
+    assert_eq!(steps, cpu_steps(700));
+}
