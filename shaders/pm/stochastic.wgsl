@@ -9,7 +9,8 @@
 // - Rectified (PM_STRUCTURE 1, Davidovic et al. 2014, section 6.2): reservoir sampling
 //   without races: every photon draws a random 32-bit key, `sg_keys` keeps each bucket's
 //   largest with an atomic max, and `sg_pick` lets the photon holding it write its index.
-//   Every photon of a bucket is kept with the same probability, whatever the order.
+//   Every photon of a bucket is kept with the same probability, whatever the order. The key
+//   hashes the photon, not its slot, so the photons kept do not depend on the threads' order.
 
 // Pass `sg_insert_last` (Loop over PhotonPath, after `pm_bounce`): the photon just stored
 // replaces the bucket's.
@@ -23,27 +24,35 @@ fn sg_insert_last(p: ptr<function, PhotonPath>) -> bool {
     return true;
 }
 
-// The random key of stored photon `index` this frame.
-fn sg_key_of(index: u32) -> u32 {
-    return rng_seed(frame.seed ^ 0x85ebca6bu, frame.index, index);
+// The random key of a stored photon this frame: a hash of the frame and the photon's position
+// and direction (not its slot: the light pass's atomics hand slots out in the threads' order).
+fn sg_key_of(photon: Photon) -> u32 {
+    let bits = bitcast<vec3<u32>>(photon.position);
+    var key = rng_seed(frame.seed ^ 0x85ebca6bu, frame.index, bits.x);
+    key = rng_hash(key ^ bits.y);
+    key = rng_hash(key ^ bits.z);
+    return rng_hash(key ^ photon.direction_length);
 }
 
 // Pass `sg_keys` (Start over the stored photons): counts the photon in its bucket and offers
 // its key.
 fn sg_keys(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     (*p).index = index;
-    let b = cell_bucket(cell_of(pm_staging[index].position));
+    let photon = pm_staging[index];
+    let b = cell_bucket(cell_of(photon.position));
     atomicAdd(&sg_count[b], 1u);
-    atomicMax(&sg_key[b], sg_key_of(index));
+    atomicMax(&sg_key[b], sg_key_of(photon));
     return false;
 }
 
 // Pass `sg_pick` (Start over the stored photons): the photon with its bucket's largest key
-// writes its index (equal keys, 2^-32 apart, write one of them).
+// writes its index (equal keys, 2^-32 apart or of photons at one point from one direction,
+// write one of them).
 fn sg_pick_winner(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     (*p).index = index;
-    let b = cell_bucket(cell_of(pm_staging[index].position));
-    if (atomicLoad(&sg_key[b]) == sg_key_of(index)) {
+    let photon = pm_staging[index];
+    let b = cell_bucket(cell_of(photon.position));
+    if (atomicLoad(&sg_key[b]) == sg_key_of(photon)) {
         atomicStore(&sg_pick[b], index);
     }
     return false;

@@ -313,8 +313,13 @@ fn structure_frames(scene: &LoadedScene, structure: u32, seed: u32) -> Frames {
 #[test]
 fn the_original_stochastic_grid_is_biased_and_the_rectified_one_is_not() {
     // On the box of albedo-0.99 walls (the paper's Figure 8) and the ordinary diffuse box,
-    // the rectified grid (reservoir sampling) agrees with the full grid within 4 standard
-    // errors (for 16 blocks x 3 channels a |z| above 4 happens about 0.3% of the time).
+    // the rectified grid (reservoir sampling) agrees with the full grid within 5 standard
+    // errors. The errors come from 48 frames, so z follows Student's t (some 56 degrees of
+    // freedom, Welch's), not the normal law: over 2 scenes x 16 blocks x 3 channels a |z|
+    // above 4 comes in about 2% of runs (measured: 2 of 102 seeds), above 5 in under 0.1%
+    // (96 P(|t_47| > 5) = 8e-4). 5 standard errors are some 13% of a block's mean (the
+    // rectified grid's photons weighted 1.1 measured 6.9). Its keys hash the photons, so
+    // these seeds give the same z every run.
     // The original grid keeps the last photon written, so the deepest: on the albedo-0.99
     // box its colours shift towards the walls' (measured: 120 standard errors), on the
     // diffuse box (albedo 0.8, photons dimmer with depth) it is darker (87). Both are
@@ -330,7 +335,7 @@ fn the_original_stochastic_grid_is_biased_and_the_rectified_one_is_not() {
             "{name}: against the full grid: rectified {z_rectified:.2}, original {z_original:.2} standard errors"
         );
         assert!(
-            z_rectified < 4.0,
+            z_rectified < 5.0,
             "{name}: the rectified grid differs from the full grid by {z_rectified:.2} standard errors"
         );
         assert!(
