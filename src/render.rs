@@ -135,7 +135,8 @@ pub struct SessionOptions {
     pub layout: LayoutOverrides,
 }
 
-/// Options that override a layout's own (`--threads`, `--workgroup`, `--state`).
+/// Options that override a layout's own (`--threads`, `--workgroup`, `--state`,
+/// `--loop-guards`).
 #[derive(Debug, Clone, Default)]
 pub struct LayoutOverrides {
     /// Thread pool size of regeneration and compaction layouts.
@@ -153,6 +154,8 @@ pub struct LayoutOverrides {
     /// Compile without subgroup operations even where the adapter has them (per-item
     /// appends, workgroup-memory scans).
     pub no_subgroups: bool,
+    /// Whether the pass kernels keep wgpu's loop guards (the layout's `loop_guards`).
+    pub loop_guards: Option<bool>,
 }
 
 impl LayoutOverrides {
@@ -180,6 +183,9 @@ impl LayoutOverrides {
         }
         if let Some(s) = self.state {
             decl.state = s;
+        }
+        if let Some(b) = self.loop_guards {
+            decl.loop_guards = b;
         }
         decl
     }

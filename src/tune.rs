@@ -1,6 +1,7 @@
 //! `--layout auto`: measure every legal layout of a graph on this scene and GPU (the paper's
 //! advice, "measure every configuration", done by the tool), then refine the fastest few over
-//! option values (workgroup size, pool size, state storage).
+//! option values (workgroup size, pool size, state storage), and the fastest of all with wgpu's
+//! loop guards the other way.
 
 use crate::bench::{Measurement, measure};
 use crate::render::{LoadedScene, SessionOptions};
@@ -39,10 +40,14 @@ fn options_of(decl: &LayoutDecl) -> String {
     if decl.kernels.len() > decl.kernels.iter().filter(|k| k.len() == 1).count().min(1) {
         let _ = write!(s, ", {:?}", decl.state);
     }
+    if !decl.loop_guards {
+        let _ = write!(s, ", loop guards off");
+    }
     s
 }
 
-/// Measures every legal layout for `budget` each, then the three fastest over option values;
+/// Measures every legal layout for `budget` each, then the three fastest over option values
+/// and the fastest of all with the loop guards flipped;
 /// returns all trials, fastest first. `report` sees each trial as it finishes.
 pub fn autotune(
     gpu: &Gpu,
@@ -114,6 +119,15 @@ pub fn autotune(
             }
         }
     }
+    trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
+    // The fastest once more with wgpu's loop guards the other way (LayoutDecl::loop_guards).
+    let (name, decl) = (trials[0].name.clone(), trials[0].decl.clone());
+    let flipped = LayoutDecl {
+        loop_guards: !decl.loop_guards,
+        ..decl
+    };
+    let base_name = name.rsplit_once(" (").map_or(name.as_str(), |(n, _)| n).to_string();
+    run(format!("{base_name} ({})", options_of(&flipped)), flipped, &mut trials);
     trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
     Ok(trials)
 }

@@ -75,11 +75,12 @@ fn header(program: &Program, out: &mut String) {
     let _ = writeln!(out, "layout '{}': {}", plan.layout_name, l.description);
     let _ = writeln!(
         out,
-        "  state {:?}, workgroup {}, loops {:?}, max items in flight {}",
+        "  state {:?}, workgroup {}, loops {:?}, max items in flight {}, loop guards {}",
         l.state,
         l.workgroup_size,
         l.loops,
-        l.max_items_in_flight.map_or("auto".to_string(), |v| v.to_string())
+        l.max_items_in_flight.map_or("auto".to_string(), |v| v.to_string()),
+        if l.loop_guards { "on" } else { "off" }
     );
     if !g.culled.is_empty() {
         let _ = writeln!(out, "culled:");

@@ -529,6 +529,18 @@ pub struct LayoutDecl {
     /// they cull passes and enter the code as the graph's own constants do.
     #[serde(default)]
     pub constants: BTreeMap<String, ConstValue>,
+    /// Whether the pass kernels keep the loop guards wgpu adds to a shader (a counter in every
+    /// loop that ends it after 2^64 iterations, so that a loop that never ends cannot hang the
+    /// GPU or be miscompiled). `false` for a layout whose loops all end: its kernels run
+    /// without the counters, which also frees the driver to unroll and schedule the loops
+    /// (faster where a kernel traverses the BVH at one place, slower where it fuses several
+    /// traversals; measured per layout, docs/performance.md).
+    #[serde(default = "default_loop_guards")]
+    pub loop_guards: bool,
+}
+
+fn default_loop_guards() -> bool {
+    true
 }
 
 /// How a chain with a loop keeps its threads busy (the paper's regeneration policies).
@@ -574,6 +586,7 @@ impl Default for LayoutDecl {
             regenerate_at: None,
             hints: BTreeMap::new(),
             constants: BTreeMap::new(),
+            loop_guards: default_loop_guards(),
         }
     }
 }

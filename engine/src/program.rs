@@ -87,6 +87,8 @@ pub struct KernelModule {
     /// Whether the engine wrote it and guards every index itself, so it runs without the
     /// bounds checks and loop bounds wgpu adds to a shader.
     pub trusted: bool,
+    /// Whether an untrusted kernel keeps wgpu's loop guards (the layout's `loop_guards`).
+    pub loop_guards: bool,
 }
 
 /// A buffer an entry point uses, as its WGSL declares it.
@@ -249,6 +251,7 @@ fn pass_kernels(
             module,
             uses,
             trusted: false,
+            loop_guards: plan.layout.loop_guards,
         });
     }
     Ok(kernels)
@@ -278,6 +281,7 @@ impl Internal<'_> {
             module,
             uses,
             trusted: true,
+            loop_guards: false,
         })
     }
 
@@ -411,6 +415,7 @@ impl Internal<'_> {
                     module,
                     uses,
                     trusted: true,
+                    loop_guards: false,
                 };
                 kernels.push((module, k.groups));
             }

@@ -471,6 +471,22 @@ fn a_layout_compiles_with_its_constants_unless_given_them() {
     }
 }
 
+/// A layout with `loop_guards: false` compiles its pass kernels without wgpu's loop guards (the
+/// engine's own kernels never have them) and computes the walks the guarded layout computes.
+#[test]
+fn a_layout_may_leave_the_loop_guards_out() {
+    let g = graph();
+    for layout in ["fused", "split"] {
+        let mut decl = g.layouts[layout].clone();
+        assert!(decl.loop_guards, "the guards are on by default");
+        decl.loop_guards = false;
+        let plan = Plan::with_decl(&g, layout, decl.clone()).unwrap();
+        let program = Program::compile(&plan, &Specialization::default(), &gpu().target()).unwrap();
+        assert!(program.kernels.iter().all(|k| !k.loop_guards), "{layout}");
+        assert_eq!(run_decl(&g, layout, decl, 1000), run(layout, 1000), "{layout}");
+    }
+}
+
 /// A pool whose items would fill a binding exactly is cut to what fits beside the buffer's
 /// header, not refused (the boundary holds a header before its items).
 #[test]

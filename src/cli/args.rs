@@ -106,12 +106,25 @@ pub struct Common {
     /// their workgroup-memory scans (to measure what subgroups buy).
     #[arg(long)]
     pub no_subgroups: bool,
+    /// Keep wgpu's loop guards in the pass kernels (on) or leave them out (off): overrides
+    /// the layout's `loop_guards`, which is off in the layouts measured faster without them.
+    #[arg(long, value_parser = parse_on_off)]
+    pub loop_guards: Option<bool>,
 }
 
 impl Common {
     /// The scene named, or the default.
     pub fn scene(&self) -> &str {
         self.scene.as_deref().unwrap_or(DEFAULT_SCENE)
+    }
+}
+
+/// Parses an `on` or `off` switch.
+pub fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s.to_lowercase().as_str() {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("'{s}' is not on or off")),
     }
 }
 
@@ -261,6 +274,7 @@ pub fn options(
         all_features: common.all_features,
         separate_memory: common.separate_memory,
         no_subgroups: common.no_subgroups,
+        loop_guards: common.loop_guards,
     };
     Ok(SessionOptions {
         width,

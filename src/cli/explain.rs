@@ -74,7 +74,8 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
         let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
         let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
         let externals = scene.compiled.resources(&camera);
-        let plan = Plan::new(&graph, &layout)?;
+        let decl = opts.layout.apply(named_layout(&graph, Some(&layout))?.1);
+        let plan = Plan::with_decl(&graph, &layout, decl)?;
         // A graph with measured constants (LVC-BPT's average light sub-path length) is
         // measured by a session first, so that the sizes shown are those a render allocates.
         let session = match &gpu {

@@ -42,6 +42,40 @@ fn every_pt_layout_matches_naive_pt_sk() {
     }
 }
 
+/// Layouts that leave wgpu's loop guards out (`loop_guards: false`) render the image they
+/// render with the guards, to float rounding: the guards only end loops after 2^64 iterations.
+#[test]
+fn layouts_without_loop_guards_render_what_they_render_with_them() {
+    let scene = load_scene("cornell-glossy-sun").unwrap();
+    for (graph, layout) in [
+        ("pt", "StreamingPTmk2"),
+        ("lt", "LTsk"),
+        ("ppm", "PPMsk"),
+        ("vcm", "VCMmk"),
+    ] {
+        let decl = &load_graph(graph).unwrap().layouts[layout];
+        assert!(
+            !decl.loop_guards,
+            "{layout} leaves the loop guards out (graphs/{graph}.ron)"
+        );
+        let guarded = LayoutOverrides {
+            loop_guards: Some(true),
+            ..Default::default()
+        };
+        assert!(
+            guarded.apply(decl.clone()).loop_guards,
+            "--loop-guards on overrides the layout"
+        );
+        let with = render_with_layout(&scene, graph, layout, (24, 24), 2, 2, 42, &[], guarded);
+        let without = render(&scene, graph, layout, (24, 24), 2, 2, 42, &[]);
+        assert_same_render(
+            &with,
+            &without,
+            &format!("{graph} {layout} with and without loop guards"),
+        );
+    }
+}
+
 /// PT's pixels in 8x8 tiles (`TILED_PIXELS`), at a size whose last tiles are partial: every
 /// layout still renders NaivePTsk's image for one seed, every pixel gets its paths, and the
 /// image's mean agrees with the rows' within 4 standard errors

@@ -108,6 +108,14 @@ impl Builder<'_> {
                 self.device
                     .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
             }
+        } else if !module.loop_guards {
+            let checks = wgpu::ShaderRuntimeChecks {
+                force_loop_bounding: false,
+                ..wgpu::ShaderRuntimeChecks::checked()
+            };
+            // SAFETY: bounds checks stay; the layout declares that its kernels' loops all end
+            // (LayoutDecl::loop_guards).
+            unsafe { self.device.create_shader_module_trusted(desc, checks) }
         } else {
             self.device.create_shader_module(desc)
         };
