@@ -46,6 +46,11 @@ fn options_of(decl: &LayoutDecl) -> String {
     s
 }
 
+/// A trial's name without its options.
+fn base_name(name: &str) -> String {
+    name.rsplit_once(" (").map_or(name, |(n, _)| n).to_string()
+}
+
 /// Measures every legal layout for `budget` each, then the three fastest over option values
 /// and the fastest of all with the loop guards flipped;
 /// returns all trials, fastest first. `report` sees each trial as it finishes.
@@ -87,7 +92,7 @@ pub fn autotune(
         .map(|t| (t.name.clone(), t.decl.clone()))
         .collect();
     for (name, decl) in best {
-        let base_name = name.rsplit_once(" (").map_or(name.as_str(), |(n, _)| n).to_string();
+        let base = base_name(&name);
         let plan = Plan::with_decl(graph, &name, decl.clone())?;
         let pooled = plan.kernels.iter().any(|k| k.regenerates);
         let stores = !plan.stored_chains.is_empty() || !plan.boundaries.is_empty() || !plan.queued_streams.is_empty();
@@ -110,7 +115,7 @@ pub fn autotune(
                         state,
                         ..decl.clone()
                     };
-                    let label = format!("{base_name} ({})", options_of(&variant));
+                    let label = format!("{base} ({})", options_of(&variant));
                     if trials.iter().any(|tr| tr.name == label) {
                         continue;
                     }
@@ -126,8 +131,11 @@ pub fn autotune(
         loop_guards: !decl.loop_guards,
         ..decl
     };
-    let base_name = name.rsplit_once(" (").map_or(name.as_str(), |(n, _)| n).to_string();
-    run(format!("{base_name} ({})", options_of(&flipped)), flipped, &mut trials);
+    run(
+        format!("{} ({})", base_name(&name), options_of(&flipped)),
+        flipped,
+        &mut trials,
+    );
     trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
     Ok(trials)
 }

@@ -189,6 +189,9 @@ fn auto_layout_tunes_the_ambient_occlusion_graph() {
         table.contains("ao_primary+ao_occlusion") && table.contains("[ao_primary] [ao_occlusion]"),
         "{table}"
     );
+    // The AO layouts keep the loop guards; the fastest is tried once more without them.
+    assert_eq!(trials.iter().filter(|t| !t.decl.loop_guards).count(), 1, "{table}");
+    assert!(table.contains("loop guards off"), "{table}");
 }
 
 #[test]
