@@ -152,6 +152,32 @@ fn explain_prints_kernels_and_resources_of_each_layout() {
 }
 
 #[test]
+fn explain_shows_the_layout_with_its_overrides() {
+    let text = |extra: &[&str]| {
+        let mut args = vec![
+            "explain",
+            "--graph",
+            "pt",
+            "--layout",
+            "StreamingPTmk2",
+            "--res",
+            "32x32",
+        ];
+        args.extend_from_slice(extra);
+        let out = lightgraph(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    let own = text(&[]);
+    assert!(own.contains("workgroup 64") && own.contains("loop guards off"), "{own}");
+    let overridden = text(&["--workgroup", "128", "--loop-guards", "on"]);
+    assert!(
+        overridden.contains("workgroup 128") && overridden.contains("loop guards on"),
+        "{overridden}"
+    );
+}
+
+#[test]
 fn malformed_ron_graph() {
     let path = temp_dir("malformed").join("malformed.ron");
     std::fs::write(&path, "(\n    name: \"broken\",\n    passes: [Use(\"generate\"\n)").unwrap();
