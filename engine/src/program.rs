@@ -84,11 +84,19 @@ pub struct KernelModule {
     pub module: naga::Module,
     /// Buffers the entry point uses.
     pub uses: Vec<BindingUse>,
-    /// Whether the engine wrote it and guards every index itself, so it runs without the
-    /// bounds checks and loop bounds wgpu adds to a shader.
-    pub trusted: bool,
-    /// Whether an untrusted kernel keeps wgpu's loop guards (the layout's `loop_guards`).
-    pub loop_guards: bool,
+    /// The runtime checks wgpu compiles into it.
+    pub checks: RuntimeChecks,
+}
+
+/// The runtime checks wgpu compiles into a kernel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RuntimeChecks {
+    /// Bounds checks and a loop guard in every loop: a graph's pass kernels.
+    All,
+    /// Bounds checks only: pass kernels of a layout whose loops all end (`loop_guards: false`).
+    NoLoopGuards,
+    /// None: the engine wrote the kernel and guards every index and loop itself.
+    None,
 }
 
 /// A buffer an entry point uses, as its WGSL declares it.
@@ -250,8 +258,11 @@ fn pass_kernels(
             source: src,
             module,
             uses,
-            trusted: false,
-            loop_guards: plan.layout.loop_guards,
+            checks: if plan.layout.loop_guards {
+                RuntimeChecks::All
+            } else {
+                RuntimeChecks::NoLoopGuards
+            },
         });
     }
     Ok(kernels)
@@ -280,8 +291,7 @@ impl Internal<'_> {
             source,
             module,
             uses,
-            trusted: true,
-            loop_guards: false,
+            checks: RuntimeChecks::None,
         })
     }
 
@@ -414,8 +424,7 @@ impl Internal<'_> {
                     source,
                     module,
                     uses,
-                    trusted: true,
-                    loop_guards: false,
+                    checks: RuntimeChecks::None,
                 };
                 kernels.push((module, k.groups));
             }

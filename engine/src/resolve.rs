@@ -318,7 +318,7 @@ impl Resolved {
                     per_item_bytes = per_item_bytes.max(4 * self.words[&g.streams[q].item].len() as u64 * f);
                 }
             }
-            // A boundary or queue buffer holds its header before the items.
+            // A boundary buffer holds BOUNDARY_HEADER bytes before its items.
             let fit = target
                 .max_binding_bytes
                 .saturating_sub(BOUNDARY_HEADER)

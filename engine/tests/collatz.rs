@@ -3,6 +3,7 @@
 //! with messages that name the passes and resources involved.
 
 use lightgraph_engine::ir::{LayoutDecl, LoopMode, Policy};
+use lightgraph_engine::program::RuntimeChecks;
 use lightgraph_engine::{ConstValue, Gpu, Graph, Instance, Layer, Plan, Program, Specialization, Vfs};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -482,7 +483,10 @@ fn a_layout_may_leave_the_loop_guards_out() {
         decl.loop_guards = false;
         let plan = Plan::with_decl(&g, layout, decl.clone()).unwrap();
         let program = Program::compile(&plan, &Specialization::default(), &gpu().target()).unwrap();
-        assert!(program.kernels.iter().all(|k| !k.loop_guards), "{layout}");
+        assert!(
+            program.kernels.iter().all(|k| k.checks == RuntimeChecks::NoLoopGuards),
+            "{layout}"
+        );
         assert_eq!(run_decl(&g, layout, decl, 1000), run(layout, 1000), "{layout}");
     }
 }

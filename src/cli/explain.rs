@@ -67,15 +67,14 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
         graph.name,
         graph.layouts.keys().cloned().collect::<Vec<_>>().join(", ")
     )?;
-    for ((layout, _), kind) in layouts.into_iter().zip(kinds) {
+    for ((layout, decl), kind) in layouts.into_iter().zip(kinds) {
         let scene = scenes.get(kind);
         writeln!(out, "layout {layout}: BVH {}", kind.name())?;
         let flags = lightgraph::render::kernel_flags(device.clone(), scene, c.all_features);
         let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
         let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
         let externals = scene.compiled.resources(&camera);
-        let decl = opts.layout.apply(named_layout(&graph, Some(&layout))?.1);
-        let plan = Plan::with_decl(&graph, &layout, decl)?;
+        let plan = Plan::with_decl(&graph, &layout, opts.layout.apply(decl))?;
         // A graph with measured constants (LVC-BPT's average light sub-path length) is
         // measured by a session first, so that the sizes shown are those a render allocates.
         let session = match &gpu {

@@ -6,7 +6,7 @@ use super::buffers::Buffers;
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::plan::{Port, Side};
-use crate::program::{BindingUse, KernelModule, Program};
+use crate::program::{BindingUse, KernelModule, Program, RuntimeChecks};
 use crate::resolve::BufferRef;
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -100,24 +100,24 @@ impl Builder<'_> {
             label: Some(name),
             source: wgpu::ShaderSource::Naga(Cow::Owned(module.module.clone())),
         };
-        let shader = if module.trusted {
+        let shader = match module.checks {
+            RuntimeChecks::All => self.device.create_shader_module(desc),
+            // SAFETY: bounds checks stay; the layout declares that its kernels' loops all end
+            // (LayoutDecl::loop_guards).
+            RuntimeChecks::NoLoopGuards => unsafe {
+                let checks = wgpu::ShaderRuntimeChecks {
+                    force_loop_bounding: false,
+                    ..wgpu::ShaderRuntimeChecks::checked()
+                };
+                self.device.create_shader_module_trusted(desc, checks)
+            },
             // SAFETY: the engine's own kernels index only below lengths they check (their
             // element counts are validated against the buffers when the program is resolved)
             // and loop a bounded number of times.
-            unsafe {
+            RuntimeChecks::None => unsafe {
                 self.device
                     .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
-            }
-        } else if !module.loop_guards {
-            let checks = wgpu::ShaderRuntimeChecks {
-                force_loop_bounding: false,
-                ..wgpu::ShaderRuntimeChecks::checked()
-            };
-            // SAFETY: bounds checks stay; the layout declares that its kernels' loops all end
-            // (LayoutDecl::loop_guards).
-            unsafe { self.device.create_shader_module_trusted(desc, checks) }
-        } else {
-            self.device.create_shader_module(desc)
+            },
         };
         let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(name),
