@@ -106,34 +106,36 @@ fn lvc_vertex(p: ptr<function, CameraSubpath>) -> bool {
         return false;
     }
     var rng = visit.rng;
-    if (!visit.a.bsdf.is_delta) {
-        lvc_connect(*p, visit.a, counts, &rng);
-    }
+    lvc_shadow_rays(*p, visit, counts, true, &rng);
     let alive = camera_scatter(p, visit.a, counts, &rng);
     (*p).rng = rng;
-    camera_emit_direct(visit);
     return alive;
 }
 
-// Connects camera vertex `a` of sub-path `p` to `lvc_connections()` cache vertices picked
-// uniformly (one random number each, drawn even when the cache is empty), through the
-// `shadow` stream: a cache of M vertices from PATHS light sub-paths, sampled n times,
-// estimates one light sub-path's connections with weight M / (n PATHS).
-fn lvc_connect(p: CameraSubpath, a: Arrival, counts: MisCounts, rng: ptr<function, u32>) {
+// The shadow rays of camera vertex `visit` of sub-path `p`, emitted through the `shadow`
+// stream at one place (a fused `shadow` then inlines one traversal): with `connect`, at a
+// non-delta vertex, connections to `lvc_connections()` cache vertices picked uniformly (one
+// random number each, drawn even when the cache is empty), then the s = 1 ray, if any. A
+// cache of M vertices from PATHS light sub-paths, sampled n times, estimates one light
+// sub-path's connections with weight M / (n PATHS).
+fn lvc_shadow_rays(p: CameraSubpath, visit: CameraVisit, counts: MisCounts, connect: bool, rng: ptr<function, u32>) {
     let m = min(atomicLoad(&lvc_count), arrayLength(&lvc_cache));
-    let n = lvc_connections();
-    let scale = f32(m) / (f32(n) * f32(PATHS));
-    for (var k = 0u; k < n; k += 1u) {
-        let u = rng_f32(rng);
-        if (m == 0u) {
-            continue;
+    let n = select(0u, lvc_connections(), connect && !visit.a.bsdf.is_delta);
+    let scale = f32(m) / (f32(lvc_connections()) * f32(PATHS));
+    for (var k = 0u; k <= n; k += 1u) {
+        var ray = visit.direct;
+        if (k < n) {
+            let u = rng_f32(rng);
+            if (m == 0u) {
+                continue;
+            }
+            let v = lvc_cache[min(u32(u * f32(m)), m - 1u)];
+            if (light_vertex_length(v) + 1u + p.length > MAX_PATH_LENGTH) {
+                continue;
+            }
+            ray = bpt_connect(p, visit.a.s, visit.a.bsdf, v, counts);
+            ray.contribution *= scale;
         }
-        let v = lvc_cache[min(u32(u * f32(m)), m - 1u)];
-        if (light_vertex_length(v) + 1u + p.length > MAX_PATH_LENGTH) {
-            continue;
-        }
-        var ray = bpt_connect(p, a.s, a.bsdf, v, counts);
-        ray.contribution *= scale;
         if (!is_black(ray.contribution)) {
             emit_shadow(ray);
         }

@@ -124,10 +124,10 @@ struct CameraVisit {
 
 // Camera sub-path `c` arrives at its next vertex (`camera_arrive`, strategies counted as
 // `counts`) and, at a non-delta vertex, samples a light (s = 1): the shadow ray, which the
-// caller emits (`camera_emit_direct`). LVC-BPT and VCM emit it last, once the sub-path has
-// moved on, so that a fused `shadow` does not trace it with the vertex's BSDF held in
-// registers (as PT's `material`); NaiveBPT and StreamingBPT at once, which measured faster
-// there (docs/performance.md, "The shadow ray emitted last").
+// caller emits. LVC-BPT, VCM and NaiveBPT emit it with their connections, at one place
+// (`lvc_shadow_rays`, `bpt_vertex`), so that a fused `shadow` inlines one any-hit traversal
+// (docs/performance.md, "The CWBVH's child loop"); StreamingBPT at once
+// (`camera_emit_direct`).
 // The light's random numbers are drawn even where unused, so every estimator built on this
 // consumes the same numbers per vertex; none without light sampling (`counts.vc` false:
 // photon mapping's numbers).

@@ -9,17 +9,20 @@ fn bpt_vertex(p: ptr<function, BptPath>) -> bool {
     if (!v.alive) {
         return false;
     }
-    camera_emit_direct(v);
-    if (!v.a.bsdf.is_delta) {
-        for (var i = 0u; i < (*p).light_count; i += 1u) {
-            let lv = (*p).light[i];
+    // The s = 1 ray, then the connections, emitted at one place (a fused `shadow` then
+    // inlines one any-hit traversal).
+    let connections = select((*p).light_count, 0u, v.a.bsdf.is_delta);
+    for (var i = 0u; i <= connections; i += 1u) {
+        var ray = v.direct;
+        if (i > 0u) {
+            let lv = (*p).light[i - 1u];
             if (light_vertex_length(lv) + 1u + (*c).length > MAX_PATH_LENGTH) {
                 break;
             }
-            let ray = bpt_connect(*c, v.a.s, v.a.bsdf, lv, mis_counts(1.0));
-            if (!is_black(ray.contribution)) {
-                emit_shadow(ray);
-            }
+            ray = bpt_connect(*c, v.a.s, v.a.bsdf, lv, mis_counts(1.0));
+        }
+        if (!is_black(ray.contribution)) {
+            emit_shadow(ray);
         }
     }
     var rng = v.rng;

@@ -147,13 +147,29 @@ fn cwbvh_byte(w: vec2<u32>, i: u32) -> u32 {
     return (w[i >> 2u] >> ((i & 3u) * 8u)) & 0xffu;
 }
 
-// Intersects the children of `n` with o + t d, t in [0, t_max]: returns the hit bits of a node
-// group (bits 24..32) and of a primitive group (each hit leaf's unary primitive count shifted
-// to its primitive offset, bits 0..24). `oct_inv` has bit 2, 1, 0 set for a non-negative x, y,
-// z direction.
-fn cwbvh_intersect_children(n: BvhNode, o: vec3<f32>, inv_d: vec3<f32>, oct_inv: u32, t_max: f32) -> u32 {
-    // The ray in the node's grid: the plane at quantized q lies at t = q s + b, with s exact
-    // (e is a power of two).
+// Slots of a node's occupied children (meta byte not 0), slot k at bit 8 (k % 4) + 4 (k / 4):
+// a byte is not 0 when its low 7 bits plus 0x7f carry into bit 7 or bit 7 is set.
+fn cwbvh_occupied(child_meta: vec2<u32>) -> u32 {
+    let nonzero = (((child_meta & vec2<u32>(0x7f7f7f7fu)) + vec2<u32>(0x7f7f7f7fu)) | child_meta) & vec2<u32>(0x80808080u);
+    return (nonzero.x >> 7u) | (nonzero.y >> 3u);
+}
+
+// The planes of a node's children a ray meets first and last per axis, with the node's grid:
+// the plane at quantized q lies at t = q s + b (b_near, b_far padded apart).
+struct CwbvhRayGrid {
+    near_x: vec2<u32>,
+    near_y: vec2<u32>,
+    near_z: vec2<u32>,
+    far_x: vec2<u32>,
+    far_y: vec2<u32>,
+    far_z: vec2<u32>,
+    s: vec3<f32>,
+    b_near: vec3<f32>,
+    b_far: vec3<f32>,
+}
+
+fn cwbvh_ray_grid(n: BvhNode, o: vec3<f32>, inv_d: vec3<f32>) -> CwbvhRayGrid {
+    // s is exact (e is a power of two).
     let e = bitcast<vec3<f32>>(((vec3<u32>(n.e_imask) >> vec3<u32>(0u, 8u, 16u)) & vec3<u32>(0xffu)) << vec3<u32>(23u));
     let s = e * inv_d;
     let rel = n.p - o;
@@ -163,34 +179,62 @@ fn cwbvh_intersect_children(n: BvhNode, o: vec3<f32>, inv_d: vec3<f32>, oct_inv:
     // (6 u |p - o| + 3 u 255 e) |inv_d|, and the builder's boxes may fall short of their
     // contents by u 255 e (it rounds child - p before flooring or ceiling it to the grid).
     let pad = (4.0 * 1.1920929e-7) * (abs(rel) + 255.0 * e) * abs(inv_d);
-    let b_near = b - pad;
-    let b_far = b + pad;
     // Per axis, the planes the ray enters through: the minima for a non-negative direction.
     let neg = inv_d < vec3<f32>(0.0);
-    let near_x = select(n.child_min_x, n.child_max_x, neg.x);
-    let far_x = select(n.child_max_x, n.child_min_x, neg.x);
-    let near_y = select(n.child_min_y, n.child_max_y, neg.y);
-    let far_y = select(n.child_max_y, n.child_min_y, neg.y);
-    let near_z = select(n.child_min_z, n.child_max_z, neg.z);
-    let far_z = select(n.child_max_z, n.child_min_z, neg.z);
+    return CwbvhRayGrid(
+        select(n.child_min_x, n.child_max_x, neg.x),
+        select(n.child_min_y, n.child_max_y, neg.y),
+        select(n.child_min_z, n.child_max_z, neg.z),
+        select(n.child_max_x, n.child_min_x, neg.x),
+        select(n.child_max_y, n.child_min_y, neg.y),
+        select(n.child_max_z, n.child_min_z, neg.z),
+        s,
+        b - pad,
+        b + pad,
+    );
+}
+
+// The hit bits child `i` (meta byte `child_meta`, not 0) of a node adds (see below): its node
+// bit, or its leaf's unary primitive count at its primitive offset; 0 if the ray misses it.
+fn cwbvh_child_hit(g: CwbvhRayGrid, i: u32, child_meta: u32, imask: u32, oct_inv: u32, t_max: f32) -> u32 {
+    let q_near = vec3<f32>(vec3<u32>(cwbvh_byte(g.near_x, i), cwbvh_byte(g.near_y, i), cwbvh_byte(g.near_z, i)));
+    let q_far = vec3<f32>(vec3<u32>(cwbvh_byte(g.far_x, i), cwbvh_byte(g.far_y, i), cwbvh_byte(g.far_z, i)));
+    let t_near = q_near * g.s + g.b_near;
+    let t_far = q_far * g.s + g.b_far;
+    let t_enter = max(max(t_near.x, t_near.y), max(t_near.z, 0.0));
+    let t_exit = min(min(t_far.x, t_far.y), min(t_far.z, t_max));
+    if (!(t_enter <= t_exit)) {
+        return 0u;
+    }
+    if (((imask >> i) & 1u) != 0u) {
+        return 1u << (24u + (i ^ oct_inv));
+    }
+    return (child_meta >> 5u) << (child_meta & 31u);
+}
+
+// Intersects the children of `n` with o + t d, t in [0, t_max]: returns the hit bits of a node
+// group (bits 24..32) and of a primitive group (each hit leaf's unary primitive count shifted
+// to its primitive offset, bits 0..24). `oct_inv` has bit 2, 1, 0 set for a non-negative x, y,
+// z direction. With CWBVH_CHILD_SCAN it visits the occupied slots found by bit scan, a loop
+// the compiler keeps small; else all eight slots, a loop it unrolls (faster where a kernel
+// traverses at one place, slower where it inlines several traversals: docs/performance.md).
+fn cwbvh_intersect_children(n: BvhNode, o: vec3<f32>, inv_d: vec3<f32>, oct_inv: u32, t_max: f32) -> u32 {
+    let g = cwbvh_ray_grid(n, o, inv_d);
     let imask = n.e_imask >> 24u;
     var hits = 0u;
-    for (var i = 0u; i < 8u; i += 1u) {
-        let child_meta = cwbvh_byte(n.child_meta, i);
-        if (child_meta == 0u) {
-            continue;
+    if (CWBVH_CHILD_SCAN) {
+        var occupied = cwbvh_occupied(n.child_meta);
+        while (occupied != 0u) {
+            let bit = firstTrailingBit(occupied);
+            occupied &= occupied - 1u;
+            let i = (bit >> 3u) | (bit & 4u);
+            hits |= cwbvh_child_hit(g, i, cwbvh_byte(n.child_meta, i), imask, oct_inv, t_max);
         }
-        let q_near = vec3<f32>(vec3<u32>(cwbvh_byte(near_x, i), cwbvh_byte(near_y, i), cwbvh_byte(near_z, i)));
-        let q_far = vec3<f32>(vec3<u32>(cwbvh_byte(far_x, i), cwbvh_byte(far_y, i), cwbvh_byte(far_z, i)));
-        let t_near = q_near * s + b_near;
-        let t_far = q_far * s + b_far;
-        let t_enter = max(max(t_near.x, t_near.y), max(t_near.z, 0.0));
-        let t_exit = min(min(t_far.x, t_far.y), min(t_far.z, t_max));
-        if (t_enter <= t_exit) {
-            if (((imask >> i) & 1u) != 0u) {
-                hits |= 1u << (24u + (i ^ oct_inv));
-            } else {
-                hits |= (child_meta >> 5u) << (child_meta & 31u);
+    } else {
+        for (var i = 0u; i < 8u; i += 1u) {
+            let child_meta = cwbvh_byte(n.child_meta, i);
+            if (child_meta != 0u) {
+                hits |= cwbvh_child_hit(g, i, child_meta, imask, oct_inv, t_max);
             }
         }
     }

@@ -121,10 +121,8 @@ fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
     let visit = camera_visit(&c, counts);
     if (visit.alive) {
         var rng = visit.rng;
+        lvc_shadow_rays(c, visit, counts, VCM_CONNECT, &rng);
         if (!visit.a.bsdf.is_delta) {
-            if (VCM_CONNECT) {
-                lvc_connect(c, visit.a, counts, &rng);
-            }
             if (VCM_MERGE) {
                 let pending = pending_merge_at(visit.a.s, -c.direction, c.throughput, c.d_vc, c.length);
                 if (VCM_MERGE_AT_VERTEX) {
@@ -142,7 +140,6 @@ fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
         c.rng = rng;
     }
     (*p).camera = c;
-    camera_emit_direct(visit);
     return true;
 }
 

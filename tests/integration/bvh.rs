@@ -270,20 +270,25 @@ enum Shapes {
 #[test]
 fn gpu_bvh2_traversal_matches_brute_force() {
     for shapes in [Shapes::Random, Shapes::AxisAligned, Shapes::Deep] {
-        traversal_matches_brute_force(BvhKind::Bvh2, shapes);
+        traversal_matches_brute_force(BvhKind::Bvh2, shapes, false);
     }
 }
 
+/// Both of the CWBVH's child loops: the loop of eight slots and the bit scan over the occupied
+/// ones (`CWBVH_CHILD_SCAN`).
 #[test]
 fn gpu_cwbvh_traversal_matches_brute_force() {
     for shapes in [Shapes::Random, Shapes::AxisAligned, Shapes::Deep] {
-        traversal_matches_brute_force(BvhKind::Cwbvh, shapes);
+        for child_scan in [false, true] {
+            traversal_matches_brute_force(BvhKind::Cwbvh, shapes, child_scan);
+        }
     }
 }
 
-/// Traces 4096 rays through a BVH of `kind` over `shapes` on the GPU and compares with brute
-/// force; the BVH must be within the traversal's stack.
-fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes) {
+/// Traces 4096 rays through a BVH of `kind` over `shapes` on the GPU (the CWBVH's children
+/// visited by bit scan if `child_scan`) and compares with brute force; the BVH must be within
+/// the traversal's stack.
+fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes, child_scan: bool) {
     let mut rng = Rng(0x9E3779B97F4A7C15);
     let n = 4096usize;
     let (scene, queries) = if shapes == Shapes::Deep {
@@ -316,9 +321,12 @@ fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes) {
     let graph = Graph::load(&vfs, "graphs/bvh_query.ron").unwrap();
     let plan = Plan::new(&graph, "fused").unwrap();
     let spec = Specialization {
-        constants: [("QUERIES".to_string(), ConstValue::U32(n as u32))]
-            .into_iter()
-            .collect(),
+        constants: [
+            ("QUERIES".to_string(), ConstValue::U32(n as u32)),
+            ("CWBVH_CHILD_SCAN".to_string(), ConstValue::Bool(child_scan)),
+        ]
+        .into_iter()
+        .collect(),
         flags: kind
             .flag()
             .map(String::from)
@@ -387,7 +395,7 @@ fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes) {
         assert_eq!(r[2] == 1.0, cpu_any, "ray {i}: any-hit below {t_any}");
     }
     eprintln!(
-        "{kind:?} (depth {}), {shapes:?} shapes, {n} rays: {hits} closest hits, {any_hits} any-hits, {ambiguous} skipped as ambiguous (ties {}, edges {}, f32-ill-conditioned {}, at the any-hit limit {})",
+        "{kind:?} (depth {}, child scan {child_scan}), {shapes:?} shapes, {n} rays: {hits} closest hits, {any_hits} any-hits, {ambiguous} skipped as ambiguous (ties {}, edges {}, f32-ill-conditioned {}, at the any-hit limit {})",
         compiled.bvh_depth, reasons[0], reasons[1], reasons[2], reasons[3]
     );
     // About 2.5% of random rays meet a surface at so grazing an angle that f32 cannot give

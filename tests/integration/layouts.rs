@@ -76,6 +76,33 @@ fn layouts_without_loop_guards_render_what_they_render_with_them() {
     }
 }
 
+/// Layouts that visit the CWBVH's children by bit scan (`CWBVH_CHILD_SCAN`, set in their
+/// `constants`) render the image they render with the loop of eight slots: both test the
+/// same children against the same ray, so the images agree to float rounding.
+#[test]
+fn layouts_with_the_child_scan_render_what_the_loop_of_eight_renders() {
+    use lightgraph_engine::ConstValue;
+    use lightgraph_scenes::bvh::BvhKind;
+    let scene = lightgraph::render::load_scene_with("cornell-glossy-sun", BvhKind::Cwbvh).unwrap();
+    let eight = [("CWBVH_CHILD_SCAN", ConstValue::Bool(false))];
+    for (graph, layout) in [
+        ("pt", "NaivePTsk"),
+        ("bpt-naive", "NaiveBPT"),
+        ("bpt-lvc", "LVC-BPTsk"),
+        ("vcm", "VCMsk"),
+    ] {
+        let decl = &load_graph(graph).unwrap().layouts[layout];
+        assert_eq!(
+            decl.constants.get("CWBVH_CHILD_SCAN"),
+            Some(&ConstValue::Bool(true)),
+            "{layout} visits the children by bit scan (graphs/{graph}.ron)"
+        );
+        let scan = render(&scene, graph, layout, (24, 24), 2, 2, 42, &[]);
+        let unrolled = render(&scene, graph, layout, (24, 24), 2, 2, 42, &eight);
+        assert_same_render(&scan, &unrolled, &format!("{graph} {layout} with either child loop"));
+    }
+}
+
 /// PT's pixels in 8x8 tiles (`TILED_PIXELS`), at a size whose last tiles are partial: every
 /// layout still renders NaivePTsk's image for one seed, every pixel gets its paths, and the
 /// image's mean agrees with the rows' within 4 standard errors
