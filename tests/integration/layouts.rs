@@ -81,7 +81,6 @@ fn layouts_without_loop_guards_render_what_they_render_with_them() {
 /// same children against the same ray, so the images agree to float rounding.
 #[test]
 fn layouts_with_the_child_scan_render_what_the_loop_of_eight_renders() {
-    use lightgraph_engine::ConstValue;
     use lightgraph_scenes::bvh::BvhKind;
     let scene = lightgraph::render::load_scene_with("cornell-glossy-sun", BvhKind::Cwbvh).unwrap();
     let eight = [("CWBVH_CHILD_SCAN", ConstValue::Bool(false))];
