@@ -18,7 +18,8 @@
 # to Mitsuba XML on this machine from the bundled glTF), LG (the command that runs lightgraph,
 # default "bash .gpu/run.sh lightgraph"; e.g. target/release/lightgraph to test the script here),
 # PYTHON (default python3), LG_SET (one NAME=VALUE lightgraph constant for its runs, e.g.
-# FRAMES_AT_ONCE=4; default none).
+# FRAMES_AT_ONCE=4; default none), LG_ARGS (more lightgraph render arguments for its runs, split
+# at spaces, e.g. "--threads 8388608"; default none).
 #
 # The output folder gets at most 8 files (what the device tool brings back): summary.md,
 # results.json, run.log, reference.png, and with KEEP_EXR=1 reference.exr, lightgraph.exr,
@@ -43,6 +44,7 @@ SCENE=${SCENE:-cornell}
 LG=${LG:-bash .gpu/run.sh lightgraph}
 PYTHON=${PYTHON:-python3}
 read -r -a lg <<< "$LG"
+read -r -a lg_args <<< "${LG_ARGS:-}"
 case $SCENE in
   # lightgraph's scene, Mitsuba's scene arguments, light-pixel threshold, max depth, rr depth
   cornell) lg_scene=cornell-mitsuba; mi_scene=(); threshold=1.0; max_depth=8; rr_depth=5 ;;
@@ -73,7 +75,7 @@ if [ -f .peers.tar.xz ]; then
 fi
 [ "$LG" != "bash .gpu/run.sh lightgraph" ] || [ -f .gpu/run.sh ] || { echo "run_gpu.sh: .gpu/run.sh missing: bundle with ../shared/tools/gpu-bundle.sh and carry .gpu" >&2; return 1; }
 device=$(nvidia-smi --query-gpu=name,driver_version,clocks.max.sm --format=csv,noheader 2>/dev/null | head -1)
-echo "device: ${device:-unknown}; scene $SCENE ($lg_scene); layout $LAYOUT ${LG_SET:+($LG_SET)}; $RES; equal time ${secs} s; reference ${REF_SECONDS} s (seed $REF_SEED)"
+echo "device: ${device:-unknown}; scene $SCENE ($lg_scene); layout $LAYOUT ${LG_SET:+($LG_SET)} ${LG_ARGS:+($LG_ARGS)}; $RES; equal time ${secs} s; reference ${REF_SECONDS} s (seed $REF_SEED)"
 
 mitsuba_ok=1
 if "$PYTHON" -c 'import mitsuba, drjit' 2>/dev/null; then
@@ -114,7 +116,7 @@ fi
 
 run_lightgraph() { # $1 = name, $2 = seconds, $3 = seed
   "${lg[@]}" render --scene "$lg_scene" --res "$RES" --layout "$LAYOUT" \
-    --spp "$LG_SPP" --time "${2}s" --seed "$3" ${LG_SET:+--set "$LG_SET"} --out "$work/$1.exr" 2>"$work/$1.log"
+    --spp "$LG_SPP" --time "${2}s" --seed "$3" ${LG_SET:+--set "$LG_SET"} "${lg_args[@]}" --out "$work/$1.exr" 2>"$work/$1.log"
   local rc=$?
   cat "$work/$1.log"
   grep -q 'samples/s' "$work/$1.log" && [ $rc = 0 ] && [ -f "$work/$1.exr" ] || { failed+=("lightgraph $1 (rc $rc)"); return 1; }
@@ -150,7 +152,7 @@ else
 fi
 
 step "(e) summary"
-"$PYTHON" "$script" summary --res "$RES" --seconds "$secs" --layout "$LAYOUT" \
+"$PYTHON" "$script" summary --res "$RES" --seconds "$secs" --layout "$LAYOUT${LG_SET:+, $LG_SET}${LG_ARGS:+, $LG_ARGS}" \
   --title "lightgraph vs Mitsuba 3 on $lg_scene" --max-depth "$max_depth" --rr-depth "$rr_depth" \
   --lightgraph-log "$work/lightgraph.log" --reference-log "$work/reference.log" \
   --mitsuba-json "$work/mitsuba-megakernel.json" --mitsuba-json "$work/mitsuba-wavefront.json" \

@@ -12,7 +12,7 @@ struct Hit {
 }
 
 // Returns (t, u, v); t < 0 when there is no hit in (0, t_max).
-fn intersect_triangle(o: vec3<f32>, d: vec3<f32>, p: Primitive, t_max: f32) -> vec3<f32> {
+fn intersect_triangle(o: vec3<f32>, d: vec3<f32>, p: PrimitiveFields, t_max: f32) -> vec3<f32> {
     let pv = cross(d, p.c);
     let det = dot(p.b, pv);
     if (det == 0.0) {
@@ -31,7 +31,7 @@ fn intersect_triangle(o: vec3<f32>, d: vec3<f32>, p: Primitive, t_max: f32) -> v
 }
 
 // Distance along a unit direction to the nearest sphere hit in (0, t_max), or -1.
-fn intersect_sphere(o: vec3<f32>, d: vec3<f32>, p: Primitive, t_max: f32) -> f32 {
+fn intersect_sphere(o: vec3<f32>, d: vec3<f32>, p: PrimitiveFields, t_max: f32) -> f32 {
     let r = p.b.x;
     let f = o - p.a;
     let b = -dot(f, d);
@@ -109,8 +109,16 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     return select(1.0 / d, big, abs(d) < tiny);
 }
 
+// Primitive `i`, loaded as three 16-byte words and unpacked into its fields.
+fn primitive_at(i: u32) -> PrimitiveFields {
+    let w0 = primitives[i].w0;
+    let w1 = primitives[i].w1;
+    let w2 = primitives[i].w2;
+    return PrimitiveFields(bitcast<vec3<f32>>(w0.xyz), w0.w, bitcast<vec3<f32>>(w1.xyz), bitcast<i32>(w1.w), bitcast<vec3<f32>>(w2.xyz), w2.w);
+}
+
 fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: ptr<function, Hit>) {
-    let p = primitives[index];
+    let p = primitive_at(index);
 #if SPHERES
     if (p.kind == PRIMITIVE_SPHERE) {
         let t = intersect_sphere(o, d, p, t_max);
@@ -142,6 +150,16 @@ fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: 
 // builds no deeper trees than this, scenes/src/cwbvh.rs MAX_DEPTH).
 const BVH_STACK_SIZE: u32 = 32u;
 
+// Node `i`, loaded as five 16-byte words and unpacked into its fields.
+fn cwbvh_node(i: u32) -> CwbvhNode {
+    let w0 = bvh[i].w0;
+    let w1 = bvh[i].w1;
+    let w2 = bvh[i].w2;
+    let w3 = bvh[i].w3;
+    let w4 = bvh[i].w4;
+    return CwbvhNode(bitcast<vec3<f32>>(w0.xyz), w0.w, w1.x, w1.y, w1.zw, w2.xy, w2.zw, w3.xy, w3.zw, w4.xy, w4.zw);
+}
+
 // The byte of child `i` in a packed pair of words.
 fn cwbvh_byte(w: vec2<u32>, i: u32) -> u32 {
     return (w[i >> 2u] >> ((i & 3u) * 8u)) & 0xffu;
@@ -168,7 +186,7 @@ struct CwbvhRayGrid {
     b_far: vec3<f32>,
 }
 
-fn cwbvh_ray_grid(n: BvhNode, o: vec3<f32>, inv_d: vec3<f32>) -> CwbvhRayGrid {
+fn cwbvh_ray_grid(n: CwbvhNode, o: vec3<f32>, inv_d: vec3<f32>) -> CwbvhRayGrid {
     // s is exact (e is a power of two).
     let e = bitcast<vec3<f32>>(((vec3<u32>(n.e_imask) >> vec3<u32>(0u, 8u, 16u)) & vec3<u32>(0xffu)) << vec3<u32>(23u));
     let s = e * inv_d;
@@ -218,7 +236,7 @@ fn cwbvh_child_hit(g: CwbvhRayGrid, i: u32, child_meta: u32, imask: u32, oct_inv
 // z direction. With CWBVH_CHILD_SCAN it visits the occupied slots found by bit scan, a loop
 // the compiler keeps small; else all eight slots, a loop it unrolls (faster where a kernel
 // traverses at one place, slower where it inlines several traversals: docs/performance.md).
-fn cwbvh_intersect_children(n: BvhNode, o: vec3<f32>, inv_d: vec3<f32>, oct_inv: u32, t_max: f32) -> u32 {
+fn cwbvh_intersect_children(n: CwbvhNode, o: vec3<f32>, inv_d: vec3<f32>, oct_inv: u32, t_max: f32) -> u32 {
     let g = cwbvh_ray_grid(n, o, inv_d);
     let imask = n.e_imask >> 24u;
     var hits = 0u;
@@ -278,7 +296,7 @@ fn cwbvh_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
             stack[sp] = nodes;
             sp += 1u;
         }
-        let n = bvh[index];
+        let n = cwbvh_node(index);
         let hits = cwbvh_intersect_children(n, o, inv_d, oct_inv, hit.t);
         nodes = vec2<u32>(n.child_base, (hits & 0xff000000u) | (n.e_imask >> 24u));
         prims = vec2<u32>(n.primitive_base, hits & 0x00ffffffu);
@@ -424,7 +442,7 @@ struct Surface {
 }
 
 fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
-    let p = primitives[hit.primitive];
+    let p = primitive_at(hit.primitive);
 #if SPHERES
     if (p.kind == PRIMITIVE_SPHERE) {
         let n = normalize(o + hit.t * d - p.a);

@@ -24,7 +24,10 @@ struct Camera {
 const PRIMITIVE_TRIANGLE: u32 = 0u;
 const PRIMITIVE_SPHERE: u32 = 1u;
 
-struct Primitive {
+// A primitive's fields. `Primitive` is how the buffer holds them: the same 48 bytes as three
+// 16-byte words, which `primitive_at` (intersect.wgsl) loads as three vector loads and unpacks
+// (docs/performance.md, "Nodes and primitives loaded as 16-byte words").
+struct PrimitiveFields {
     a: vec3<f32>,           // triangle v0, or sphere centre
     material: u32,
     b: vec3<f32>,           // triangle v1 - v0, or (radius, 0, 0)
@@ -33,14 +36,23 @@ struct Primitive {
     kind: u32,
 }
 
+struct Primitive {
+    w0: vec4<u32>,
+    w1: vec4<u32>,
+    w2: vec4<u32>,
+}
+
 #if CWBVH
 // A compressed wide BVH node (Ylitie et al. 2017, as obvhs lays it out): up to eight children
 // with boxes quantized to bytes on a grid of origin `p` and spacing 2^(e - 127) per axis. One
 // byte per child, child i in byte i % 4 (bits 8 (i % 4) ..) of word i / 4 of a vec2 field.
 // Meta byte: 0 for an empty slot; inner node: 0b00111iii, the node child_base + (the number of
 // inner children in slots below i); leaf: the primitive count in unary in bits 5..8 and the
-// offset of its first primitive from primitive_base in bits 0..5.
-struct BvhNode {
+// offset of its first primitive from primitive_base in bits 0..5. `BvhNode` is how the buffer
+// holds it: the same 80 bytes as five 16-byte words, which the traversal loads as five vector
+// loads and unpacks (`cwbvh_node` in intersect.wgsl; docs/performance.md, "Nodes and
+// primitives loaded as 16-byte words").
+struct CwbvhNode {
     p: vec3<f32>,
     e_imask: u32,           // bytes 0..3: exponents e of x, y, z; byte 3: bit i set if child i is inner
     child_base: u32,
@@ -52,6 +64,14 @@ struct BvhNode {
     child_max_y: vec2<u32>,
     child_min_z: vec2<u32>,
     child_max_z: vec2<u32>,
+}
+
+struct BvhNode {
+    w0: vec4<u32>,
+    w1: vec4<u32>,
+    w2: vec4<u32>,
+    w3: vec4<u32>,
+    w4: vec4<u32>,
 }
 #else
 // A BVH2 node with both children's boxes; a child with count 0 is the inner node `first`,

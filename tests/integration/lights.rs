@@ -57,8 +57,8 @@ const AREA_PDF: &str = "fn probe(item: ptr<function, ProbeItem>, index: u32) -> 
     let d = probe_in[index + 1u].xyz;
     let hit = trace_closest(p, d, INFINITE_DISTANCE);
     var pdf = 0.0;
-    if (hit.found && primitives[hit.primitive].light >= 0) {
-        let light = u32(primitives[hit.primitive].light);
+    if (hit.found && primitive_at(hit.primitive).light >= 0) {
+        let light = u32(primitive_at(hit.primitive).light);
         let le = area_light_radiance(light, d);
         pdf = le.w * hit.t * hit.t / abs(dot(lights[light].normal, d));
     }

@@ -56,8 +56,9 @@ fn every_builtin_scene_renders_without_invalid_samples() {
     }
 }
 
-/// Checks both variants of scene.wgsl: the BVH2 one, and the CWBVH one (`BvhNode` is then the
-/// compressed wide node).
+/// Checks both variants of scene.wgsl: the BVH2 one, and the CWBVH one (`CwbvhNode` is then the
+/// compressed wide node's fields, `BvhNode` the same bytes as the buffer holds them). Primitives
+/// likewise: `PrimitiveFields` against the Rust struct, `Primitive` (the buffer's words) its size.
 #[test]
 fn rust_scene_structs_match_the_wgsl_layout() {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/lib/scene.wgsl")).unwrap();
@@ -88,7 +89,9 @@ fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
         GpuCamera,
         [position, width, forward, height, right, pad0, up, pad1]
     );
-    check!("Primitive", GpuPrimitive, [a, material, b, light, c, kind]);
+    check!("PrimitiveFields", GpuPrimitive, [a, material, b, light, c, kind]);
+    let (size, _) = struct_layout(module, "Primitive").expect("Primitive");
+    assert_eq!(size as usize, size_of::<GpuPrimitive>(), "size of Primitive");
     match kind {
         BvhKind::Bvh2 => check!(
             "BvhNode",
@@ -104,23 +107,27 @@ fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
                 right_count
             ]
         ),
-        BvhKind::Cwbvh => check!(
-            "BvhNode",
-            GpuCwbvhNode,
-            [
-                p,
-                e_imask,
-                child_base,
-                primitive_base,
-                child_meta,
-                child_min_x,
-                child_max_x,
-                child_min_y,
-                child_max_y,
-                child_min_z,
-                child_max_z
-            ]
-        ),
+        BvhKind::Cwbvh => {
+            let (size, _) = struct_layout(module, "BvhNode").expect("BvhNode");
+            assert_eq!(size as usize, size_of::<GpuCwbvhNode>(), "size of the CWBVH's BvhNode");
+            check!(
+                "CwbvhNode",
+                GpuCwbvhNode,
+                [
+                    p,
+                    e_imask,
+                    child_base,
+                    primitive_base,
+                    child_meta,
+                    child_min_x,
+                    child_max_x,
+                    child_min_y,
+                    child_max_y,
+                    child_min_z,
+                    child_max_z
+                ]
+            )
+        }
     }
     check!(
         "Material",
