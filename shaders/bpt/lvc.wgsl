@@ -120,8 +120,9 @@ fn lvc_vertex(p: ptr<function, CameraSubpath>) -> bool {
 // sub-path's connections with weight M / (n PATHS).
 fn lvc_shadow_rays(p: CameraSubpath, visit: CameraVisit, counts: MisCounts, connect: bool, rng: ptr<function, u32>) {
     let m = min(atomicLoad(&lvc_count), arrayLength(&lvc_cache));
-    let n = select(0u, lvc_connections(), connect && !visit.a.bsdf.is_delta);
-    let scale = f32(m) / (f32(lvc_connections()) * f32(PATHS));
+    let picks = lvc_connections();
+    let n = select(0u, picks, connect && !visit.a.bsdf.is_delta);
+    let scale = f32(m) / (f32(picks) * f32(PATHS));
     for (var k = 0u; k <= n; k += 1u) {
         var ray = visit.direct;
         if (k < n) {
