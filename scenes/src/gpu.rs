@@ -39,6 +39,8 @@ pub mod primitive_kind {
     pub const TRIANGLE: u32 = 0;
     /// A sphere: `a` = centre, `b.x` = radius.
     pub const SPHERE: u32 = 1;
+    /// Bit set on a triangle whose material is alpha-masked (`TRIANGLE | ALPHA_MASKED`).
+    pub const ALPHA_MASKED: u32 = 2;
 }
 
 /// Scene-wide values (`SceneInfo` in WGSL).

@@ -17,7 +17,7 @@ use bytemuck::Zeroable;
 use glam::{Vec3, Vec3A};
 use gpu::{
     GpuAliasEntry, GpuCamera, GpuEnvironment, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, GpuTextureInfo,
-    GpuTriangleAttributes, light_kind, primitive_kind,
+    GpuTriangleAttributes, light_kind, material_flags, primitive_kind,
 };
 use model::{Camera, FovAxis, Light, Look, Scene, Shape};
 use std::collections::BTreeMap;
@@ -605,7 +605,10 @@ impl CompiledScene {
             }
         };
         let bvh_time = start.elapsed();
-        let primitives: Vec<GpuPrimitive> = order.iter().map(|&i| prims[i as usize]).collect();
+        let primitives: Vec<GpuPrimitive> = order
+            .iter()
+            .map(|&i| mark_alpha_masked(prims[i as usize], &materials))
+            .collect();
         let attributes = if with_attributes {
             order.iter().map(|&i| attrs[i as usize]).collect()
         } else {
@@ -914,6 +917,15 @@ fn check_shape(index: usize, shape: &Shape) -> Result<(), String> {
     Ok(())
 }
 
+/// `p` with `primitive_kind::ALPHA_MASKED` set when it is a triangle of an alpha-masked
+/// material, so that traversal tests its alpha without loading the material.
+fn mark_alpha_masked(mut p: GpuPrimitive, materials: &[GpuMaterial]) -> GpuPrimitive {
+    if p.kind == primitive_kind::TRIANGLE && materials[p.material as usize].flags & material_flags::ALPHA_MASK != 0 {
+        p.kind |= primitive_kind::ALPHA_MASKED;
+    }
+    p
+}
+
 /// The axis-aligned bounds of a primitive.
 pub fn primitive_bounds(p: &GpuPrimitive) -> (Vec3A, Vec3A) {
     let a = Vec3A::from_array(p.a);
@@ -977,6 +989,32 @@ mod tests {
                 assert_eq!(p.kind, kind_of_shape, "{kind:?}: primitives follow order");
             }
             assert_eq!(c.resources(&CompiledScene::camera(&scene, 1, 1))["bvh"], c.bvh);
+        }
+    }
+
+    #[test]
+    fn triangles_of_alpha_masked_materials_are_marked() {
+        let text = BASE
+            .replace(
+                "materials: {",
+                "materials: { \"cut\": (pbr: Some((alpha_cutoff: Some(0.5)))), ",
+            )
+            .replace(
+                "shapes: [",
+                "shapes: [Triangle(vertices: ((0.0, 0.0, 2.0), (1.0, 0.0, 2.0), (0.0, 1.0, 2.0)), material: \"cut\"), \
+                 Triangle(vertices: ((0.0, 0.0, 3.0), (1.0, 0.0, 3.0), (0.0, 1.0, 3.0)), material: \"m\"), ",
+            );
+        let scene = parse_scene("s.ron", &text).unwrap();
+        for kind in [BvhKind::Bvh2, BvhKind::Cwbvh] {
+            let c = CompiledScene::with_bvh(&scene, kind).unwrap();
+            for (p, &i) in c.primitives.iter().zip(&c.order) {
+                let expected = [
+                    primitive_kind::TRIANGLE | primitive_kind::ALPHA_MASKED,
+                    primitive_kind::TRIANGLE,
+                    primitive_kind::SPHERE,
+                ][i as usize];
+                assert_eq!(p.kind, expected, "{kind:?}: shape {i}");
+            }
         }
     }
 

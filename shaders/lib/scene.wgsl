@@ -23,6 +23,7 @@ struct Camera {
 
 const PRIMITIVE_TRIANGLE: u32 = 0u;
 const PRIMITIVE_SPHERE: u32 = 1u;
+const PRIMITIVE_ALPHA_MASKED: u32 = 2u;  // bit of a triangle whose material is alpha-masked
 
 // A primitive's fields. `Primitive` is how the buffer holds them: the same 48 bytes as three
 // 16-byte words, which `primitive_at` (intersect.wgsl) loads as three vector loads and unpacks

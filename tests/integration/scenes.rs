@@ -8,7 +8,7 @@ use lightgraph_engine::reflect::struct_layout;
 use lightgraph_engine::wgsl::preprocess;
 use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::gpu::{
-    GpuAliasEntry, GpuBvhNode, GpuCamera, GpuCwbvhNode, GpuEnvironment, GpuLight, GpuMaterial, GpuPrimitive,
+    self, GpuAliasEntry, GpuBvhNode, GpuCamera, GpuCwbvhNode, GpuEnvironment, GpuLight, GpuMaterial, GpuPrimitive,
     GpuSceneInfo, GpuTextureInfo, GpuTriangleAttributes,
 };
 use std::collections::BTreeSet;
@@ -66,6 +66,42 @@ fn rust_scene_structs_match_the_wgsl_layout() {
         let flags: BTreeSet<String> = kind.flag().into_iter().map(String::from).collect();
         let source = preprocess("shaders/lib/scene.wgsl", &text, &flags).unwrap();
         check_scene_structs(&naga::front::wgsl::parse_str(&source).unwrap(), kind);
+    }
+}
+
+/// The flags and kinds the host writes into scene buffers have the values scene.wgsl tests for.
+#[test]
+fn rust_scene_constants_match_the_wgsl_constants() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/lib/scene.wgsl")).unwrap();
+    let source = preprocess("shaders/lib/scene.wgsl", &text, &BTreeSet::new()).unwrap();
+    let module = naga::front::wgsl::parse_str(&source).unwrap();
+    let wgsl = |name: &str| -> u32 {
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("scene.wgsl has no constant {name}"));
+        match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => v,
+            ref e => panic!("{name} is not a u32 literal: {e:?}"),
+        }
+    };
+    for (name, rust) in [
+        ("PRIMITIVE_TRIANGLE", gpu::primitive_kind::TRIANGLE),
+        ("PRIMITIVE_SPHERE", gpu::primitive_kind::SPHERE),
+        ("PRIMITIVE_ALPHA_MASKED", gpu::primitive_kind::ALPHA_MASKED),
+        ("MATERIAL_TWO_SIDED", gpu::material_flags::TWO_SIDED),
+        ("MATERIAL_PBR", gpu::material_flags::PBR),
+        ("MATERIAL_ALPHA_MASK", gpu::material_flags::ALPHA_MASK),
+        ("MATERIAL_THIN_WALLED", gpu::material_flags::THIN_WALLED),
+        ("LIGHT_AREA", gpu::light_kind::AREA),
+        ("LIGHT_POINT", gpu::light_kind::POINT),
+        ("LIGHT_DIRECTIONAL", gpu::light_kind::DIRECTIONAL),
+        ("LIGHT_BACKGROUND", gpu::light_kind::BACKGROUND),
+        ("LIGHT_SPOT", gpu::light_kind::SPOT),
+        ("LIGHT_ENVIRONMENT", gpu::light_kind::ENVIRONMENT),
+    ] {
+        assert_eq!(wgsl(name), rust, "{name}");
     }
 }
 
