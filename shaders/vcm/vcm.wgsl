@@ -182,9 +182,9 @@ fn vcm_merge(v: PendingMerge, d_vcm: f32, bsdf: Bsdf, iteration: u32, pixel: u32
     }
 }
 
-// Cached vertices a walk finds before their weighing (4: 2-4% faster on the 256x256 diffuse
-// box than 1 or 8 on an H100; docs/performance.md).
-const VCM_FOUND_BATCH: u32 = 4u;
+// Cached vertices a walk finds before their weighing (2: on an H100 1.6% faster on the 256x256
+// diffuse box than 4, and 1% on Sponza; 1 and 8 slower; docs/performance.md).
+const VCM_FOUND_BATCH: u32 = 2u;
 
 // Where a merge's walk over the grid goes on: the cell and the entry of its bucket, or done.
 struct VcmCursor {
