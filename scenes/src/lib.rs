@@ -6,6 +6,7 @@ pub mod bvh;
 pub mod cwbvh;
 pub mod environment;
 pub mod features;
+mod flatten;
 pub mod gltf;
 pub mod gpu;
 pub mod mitsuba;
@@ -13,7 +14,6 @@ pub mod model;
 pub mod texture;
 
 use bvh::BvhKind;
-use bytemuck::Zeroable;
 use glam::{Vec3, Vec3A};
 use gpu::{
     GpuAliasEntry, GpuCamera, GpuEnvironment, GpuLight, GpuMaterial, GpuPrimitive, GpuSceneInfo, GpuTextureInfo,
@@ -403,226 +403,35 @@ impl CompiledScene {
                 gpu_material(m, &mut packed, &scene.textures).map_err(|e| format!("material '{name}': {e}"))
             })
             .collect::<Result<Vec<_>, String>>()?;
-        let with_attributes = scene
-            .shapes
+        let flatten::Geometry {
+            primitives: prims,
+            mut lights,
+            attributes: attrs,
+        } = flatten::flatten_shapes(scene, &material_index)?;
+        let sky = flatten::push_scene_lights(&scene.lights, &mut lights)?;
+        let (boxes, clipped_primitives) = traced_boxes(&prims);
+        let (lo, hi) = boxes
             .iter()
-            .any(|s| matches!(s, Shape::Mesh { uvs, normals, .. } if uvs.is_some() || normals.is_some()));
-        let mut attrs: Vec<GpuTriangleAttributes> = Vec::new();
-        let mut prims: Vec<GpuPrimitive> = Vec::new();
-        let mut lights: Vec<GpuLight> = Vec::new();
-        let push_triangle = |v: [Vec3; 3],
-                             material: u32,
-                             emission: Option<[f32; 3]>,
-                             prims: &mut Vec<GpuPrimitive>,
-                             lights: &mut Vec<GpuLight>| {
-            let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
-            let light = match emission {
-                Some(radiance) if radiance.iter().any(|&c| c > 0.0) => {
-                    let cross = e1.cross(e2);
-                    let area = 0.5 * cross.length();
-                    lights.push(GpuLight {
-                        position: v[0].into(),
-                        kind: light_kind::AREA,
-                        e1: e1.into(),
-                        inv_area: if area > 0.0 { 1.0 / area } else { 0.0 },
-                        e2: e2.into(),
-                        cos_inner: 0.0,
-                        normal: cross.normalize_or_zero().into(),
-                        cos_outer: 0.0,
-                        radiance,
-                        pad2: 0.0,
-                    });
-                    lights.len() as i32 - 1
-                }
-                _ => -1,
-            };
-            prims.push(GpuPrimitive {
-                a: v[0].into(),
-                material,
-                b: e1.into(),
-                light,
-                c: e2.into(),
-                kind: primitive_kind::TRIANGLE,
+            .fold((Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN)), |(lo, hi), (a, b)| {
+                (lo.min(*a), hi.max(*b))
             });
-        };
-        for (s, shape) in scene.shapes.iter().enumerate() {
-            check_shape(s, shape)?;
-            match shape {
-                Shape::Triangle {
-                    vertices,
-                    material,
-                    emission,
-                } => {
-                    push_triangle(
-                        vertices.map(v3),
-                        material_index[material.as_str()],
-                        *emission,
-                        &mut prims,
-                        &mut lights,
-                    );
-                }
-                Shape::Quad {
-                    corners,
-                    material,
-                    emission,
-                } => {
-                    let c = corners.map(v3);
-                    let m = material_index[material.as_str()];
-                    push_triangle([c[0], c[1], c[2]], m, *emission, &mut prims, &mut lights);
-                    push_triangle([c[0], c[2], c[3]], m, *emission, &mut prims, &mut lights);
-                }
-                Shape::Mesh {
-                    positions,
-                    indices,
-                    material,
-                    emission,
-                    uvs,
-                    normals,
-                } => {
-                    let m = material_index[material.as_str()];
-                    let emissive_texture = scene.materials[material.as_str()]
-                        .pbr
-                        .as_ref()
-                        .and_then(|p| p.textures.emissive);
-                    for t in indices {
-                        let v = t.map(|i| v3(positions[i as usize]));
-                        // An emissive texture scales the light by its mean over the triangle.
-                        let emission = match (emission, emissive_texture, uvs) {
-                            (Some(e), Some(r), Some(uv)) => {
-                                let mean = r.mean_over_triangle(&scene.textures, t.map(|i| uv[i as usize]), true);
-                                Some(std::array::from_fn(|c| e[c] * mean[c]))
-                            }
-                            _ => *emission,
-                        };
-                        push_triangle(v, m, emission, &mut prims, &mut lights);
-                        if with_attributes {
-                            attrs.push(triangle_attributes(*t, uvs.as_deref(), normals.as_deref()));
-                        }
-                    }
-                }
-                Shape::Sphere {
-                    center,
-                    radius,
-                    material,
-                } => prims.push(GpuPrimitive {
-                    a: *center,
-                    material: material_index[material.as_str()],
-                    b: [*radius, 0.0, 0.0],
-                    light: -1,
-                    c: [0.0; 3],
-                    kind: primitive_kind::SPHERE,
-                }),
-            }
-            if with_attributes {
-                attrs.resize(prims.len(), GpuTriangleAttributes::default());
-            }
-        }
-        let mut background = -1;
-        let mut environment = GpuEnvironment::zeroed();
-        let mut env_distribution = None;
-        for light in &scene.lights {
-            let mut l = GpuLight::zeroed();
-            match light {
-                Light::Point { position, intensity } => {
-                    l.kind = light_kind::POINT;
-                    l.position = *position;
-                    l.radiance = *intensity;
-                }
-                Light::Spot {
-                    position,
-                    direction,
-                    intensity,
-                    inner_cone_degrees,
-                    outer_cone_degrees,
-                } => {
-                    l.kind = light_kind::SPOT;
-                    l.position = *position;
-                    l.e1 = v3(*direction).normalize_or_zero().into();
-                    l.radiance = *intensity;
-                    l.cos_inner = inner_cone_degrees.to_radians().cos();
-                    l.cos_outer = outer_cone_degrees.to_radians().cos();
-                }
-                Light::Directional { direction, irradiance } => {
-                    l.kind = light_kind::DIRECTIONAL;
-                    l.position = v3(*direction).normalize_or_zero().into();
-                    l.radiance = *irradiance;
-                }
-                Light::Background { radiance, scale } => {
-                    l.kind = light_kind::BACKGROUND;
-                    l.radiance = radiance.map(|c| c * scale);
-                    background = lights.len() as i32;
-                }
-                Light::Environment {
-                    file,
-                    scale,
-                    rotation_degrees,
-                    map,
-                } => {
-                    let map = map.as_ref().ok_or_else(|| {
-                        format!("environment map '{file}' was not loaded (resolve the scene's assets first)")
-                    })?;
-                    l.kind = light_kind::ENVIRONMENT;
-                    l.radiance = [*scale; 3];
-                    background = lights.len() as i32;
-                    let (sin, cos) = rotation_degrees.to_radians().sin_cos();
-                    environment = GpuEnvironment {
-                        width: map.width,
-                        height: map.height,
-                        cos_rotation: cos,
-                        sin_rotation: sin,
-                    };
-                    env_distribution = Some(map.distribution());
-                }
-            }
-            lights.push(l);
-        }
-        let limit = Vec3A::splat(TRACED_EXTENT);
-        let mut clipped_primitives = 0;
-        let boxes: Vec<(Vec3A, Vec3A)> = prims
-            .iter()
-            .map(|p| {
-                let (a, b) = primitive_bounds(p);
-                if a.min_element() < -TRACED_EXTENT || b.max_element() > TRACED_EXTENT {
-                    clipped_primitives += 1;
-                }
-                (a.clamp(-limit, limit), b.clamp(-limit, limit))
-            })
-            .collect();
-        let (mut lo, mut hi) = (Vec3A::splat(f32::MAX), Vec3A::splat(f32::MIN));
-        for (a, b) in &boxes {
-            lo = lo.min(*a);
-            hi = hi.max(*b);
-        }
         let start = Instant::now();
-        let (bvh, order, bvh_depth) = match kind {
-            BvhKind::Bvh2 => {
-                let b = bvh::build(&boxes)?;
-                (bytemuck::cast_slice(&b.nodes).to_vec(), b.order, b.depth)
-            }
-            BvhKind::Cwbvh => {
-                let b = cwbvh::build(&boxes)?;
-                (bytemuck::cast_slice(&b.nodes).to_vec(), b.order, b.depth)
-            }
-        };
+        let (bvh, order, bvh_depth) = build_bvh(kind, &boxes)?;
         let bvh_time = start.elapsed();
         let primitives: Vec<GpuPrimitive> = order
             .iter()
             .map(|&i| mark_alpha_masked(prims[i as usize], &materials))
             .collect();
-        let attributes = if with_attributes {
-            order.iter().map(|&i| attrs[i as usize]).collect()
-        } else {
-            Vec::new()
-        };
+        let attributes = attrs.map_or_else(Vec::new, |a| order.iter().map(|&i| a[i as usize]).collect());
         let center = (lo + hi) * 0.5;
         let radius = ((hi - lo) * 0.5).length();
-        let mean_env_luminance = env_distribution.as_ref().map_or(0.0, |d| d.mean_luminance);
+        let mean_env_luminance = sky.distribution.as_ref().map_or(0.0, |d| d.mean_luminance);
         let light_power: Vec<f64> = lights
             .iter()
             .map(|l| light_power(l, radius as f64, mean_env_luminance))
             .collect();
         let light_alias = alias::build(&light_power);
-        let (env_texels, env_cdf) = match env_distribution {
+        let (env_texels, env_cdf) = match sky.distribution {
             Some(d) => (d.texels, d.cdf),
             None => (vec![[0.0; 4]], vec![0.0, 1.0]),
         };
@@ -630,7 +439,7 @@ impl CompiledScene {
             center: center.into(),
             radius,
             num_lights: lights.len() as u32,
-            background,
+            background: sky.background,
             num_primitives: primitives.len() as u32,
             num_materials: scene.materials.len() as u32,
         };
@@ -644,7 +453,7 @@ impl CompiledScene {
             lights,
             light_power,
             light_alias,
-            environment,
+            environment: sky.environment,
             env_texels,
             env_cdf,
             attributes,
@@ -830,31 +639,6 @@ fn gpu_material(
     })
 }
 
-/// The attributes of mesh triangle `t`: its vertices' texture coordinates ((0, 0) without),
-/// and their normals when all three are finite and non-zero (else the geometric normal
-/// shades it).
-fn triangle_attributes(
-    t: [u32; 3],
-    uvs: Option<&[[f32; 2]]>,
-    normals: Option<&[model::Vec3]>,
-) -> GpuTriangleAttributes {
-    let uv = |i: u32| uvs.map_or([0.0; 2], |u| u[i as usize]);
-    let mut a = GpuTriangleAttributes {
-        uv0: uv(t[0]),
-        uv1: uv(t[1]),
-        uv2: uv(t[2]),
-        ..Default::default()
-    };
-    if let Some(n) = normals {
-        let n = t.map(|i| v3(n[i as usize]));
-        if n.iter().all(|n| n.is_finite() && n.length_squared() > 0.0) {
-            [a.n0, a.n1, a.n2] = n.map(|n| gpu::encode_octahedral(n.normalize().to_array()));
-            a.flags = gpu::attribute_flags::NORMALS;
-        }
-    }
-    a
-}
-
 /// The largest coordinate (or sphere radius) a shape may have: as far as a ray travels
 /// (`INFINITE_DISTANCE` in the WGSL).
 pub const MAX_COORDINATE: f32 = 1e30;
@@ -864,57 +648,36 @@ pub const MAX_COORDINATE: f32 = 1e30;
 /// finite in f32, and f32 positions that far apart are coarser than 1e8 units anyway.
 pub const TRACED_EXTENT: f32 = 1e15;
 
-/// Checks what [`CompiledScene::with_bvh`] needs of shape `index`: mesh indices within its
-/// vertices, finite coordinates within [`MAX_COORDINATE`].
-fn check_shape(index: usize, shape: &Shape) -> Result<(), String> {
-    let (points, radius): (&[model::Vec3], Option<&f32>) = match shape {
-        Shape::Triangle { vertices, .. } => (vertices, None),
-        Shape::Quad { corners, .. } => (corners, None),
-        Shape::Mesh { positions, .. } => (positions, None),
-        Shape::Sphere { center, radius, .. } => (std::slice::from_ref(center), Some(radius)),
-    };
-    if let Some(v) = points
+/// The primitives' boxes as the BVH bounds them (clipped to ±[`TRACED_EXTENT`]), and how many
+/// were clipped.
+fn traced_boxes(prims: &[GpuPrimitive]) -> (Vec<(Vec3A, Vec3A)>, usize) {
+    let limit = Vec3A::splat(TRACED_EXTENT);
+    let mut clipped = 0;
+    let boxes = prims
         .iter()
-        .flatten()
-        .chain(radius)
-        .find(|v| !v.is_finite() || v.abs() > MAX_COORDINATE)
-    {
-        return Err(format!(
-            "shape {index}: coordinate {v} is not a finite number within ±{MAX_COORDINATE:e}"
-        ));
-    }
-    if let Shape::Mesh {
-        positions,
-        indices,
-        uvs,
-        normals,
-        ..
-    } = shape
-    {
-        if let Some(&i) = indices.iter().flatten().find(|&&i| i as usize >= positions.len()) {
-            return Err(format!(
-                "shape {index}: a mesh triangle uses vertex {i}, but the mesh has {} vertices",
-                positions.len()
-            ));
+        .map(|p| {
+            let (a, b) = primitive_bounds(p);
+            if a.min_element() < -TRACED_EXTENT || b.max_element() > TRACED_EXTENT {
+                clipped += 1;
+            }
+            (a.clamp(-limit, limit), b.clamp(-limit, limit))
+        })
+        .collect();
+    (boxes, clipped)
+}
+
+/// A BVH of `kind` over `boxes`: its nodes' bytes, the leaf order of the boxes and its depth.
+fn build_bvh(kind: BvhKind, boxes: &[(Vec3A, Vec3A)]) -> Result<(Vec<u8>, Vec<u32>, usize), String> {
+    Ok(match kind {
+        BvhKind::Bvh2 => {
+            let b = bvh::build(boxes)?;
+            (bytemuck::cast_slice(&b.nodes).to_vec(), b.order, b.depth)
         }
-        let counts = [
-            ("uvs", uvs.as_ref().map(Vec::len)),
-            ("normals", normals.as_ref().map(Vec::len)),
-        ];
-        if let Some((what, n)) = counts
-            .iter()
-            .find_map(|(w, n)| n.filter(|&n| n != positions.len()).map(|n| (w, n)))
-        {
-            return Err(format!(
-                "shape {index}: the mesh has {n} {what} for {} vertices",
-                positions.len()
-            ));
+        BvhKind::Cwbvh => {
+            let b = cwbvh::build(boxes)?;
+            (bytemuck::cast_slice(&b.nodes).to_vec(), b.order, b.depth)
         }
-        if let Some(v) = uvs.iter().flatten().flatten().find(|v| !v.is_finite()) {
-            return Err(format!("shape {index}: texture coordinate {v} is not a finite number"));
-        }
-    }
-    Ok(())
+    })
 }
 
 /// `p` with `primitive_kind::ALPHA_MASKED` set when it is a triangle of an alpha-masked
