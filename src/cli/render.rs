@@ -9,6 +9,7 @@ use lightgraph::metrics::image_error;
 use lightgraph::output;
 use lightgraph::reference::{Reference, film_settings};
 use lightgraph::render::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
+use lightgraph::tev::LiveView;
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{Gpu, Graph};
 use std::path::PathBuf;
@@ -70,6 +71,8 @@ pub struct RenderArgs {
     pub mpi: bool,
 }
 
+/// `lightgraph render`: sets the session up, renders progressively, writes the film and the
+/// PNG, and reports the rates.
 pub fn render(args: RenderArgs) -> Result<()> {
     if args.aov.is_some() && (args.gpus.is_some() || mpi_asked(&args)) {
         bail!("--aov renders its buffers on one GPU: leave out --gpus and --mpi");
@@ -119,6 +122,52 @@ pub fn render(args: RenderArgs) -> Result<()> {
     session.first_frame = args.first_frame;
     // A frame count that splits a group of frames rendered at once is refused before rendering.
     session.check_frames(args.first_frame, if args.time.is_none() { args.frames } else { 0 })?;
+    let mut view = args.tev.view(&args.out.display().to_string(), (w, h));
+    let seconds = render_progressively(&mut session, &args, reference.as_deref(), &mut view)?;
+    let image = session.image()?;
+    if let Some(v) = &mut view {
+        v.show(&image.mean);
+    }
+    if let Some(r) = &reference {
+        let e = image_error(&image.mean, r);
+        eprintln!(
+            "error against {}: RMSE {:.4e}, relMSE {:.4e}",
+            args.reference.as_ref().expect("a reference path").display(),
+            e.rmse,
+            e.rel_mse
+        );
+    }
+    let rejected = session.counters.get("samples_rejected").copied().unwrap_or(0);
+    for (k, v) in [
+        ("layout", layout.clone()),
+        ("adapter", gpu.info.name.clone()),
+        ("rays", session.rays().to_string()),
+        ("rejected_samples", rejected.to_string()),
+    ] {
+        film.info.insert(k.to_string(), v);
+    }
+    film.absorb(&session.accumulation()?)?;
+    film.seconds = seconds;
+    if let Some(list) = &args.aov {
+        film.layers = feature_buffers(&gpu, &scene, &session, list, args.first_frame)?;
+    }
+    film.write(&args.out, "render")?;
+    let png = args.out.with_extension("png");
+    output::write_png(&png, &image, args.exposure)?;
+    report_rates(&session, seconds, rejected);
+    println!("wrote {} and {}", args.out.display(), png.display());
+    Ok(())
+}
+
+/// Renders `session` for `--time` or `--frames`, with a progress bar of samples/s, rays/s and,
+/// against `reference`, the RMSE (once a second), and the live view; returns the seconds taken.
+fn render_progressively(
+    session: &mut Session,
+    args: &RenderArgs,
+    reference: Option<&[[f32; 3]]>,
+    view: &mut Option<LiveView>,
+) -> Result<f64> {
+    let (w, h) = (session.options.width as f64, session.options.height as f64);
     let mut error_text = String::new();
     let mut error_at: Option<Instant> = None;
     let bar = match args.time {
@@ -126,7 +175,6 @@ pub fn render(args: RenderArgs) -> Result<()> {
         None => ProgressBar::new(args.frames as u64),
     };
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
-    let mut view = args.tev.view(&args.out.display().to_string(), (w, h));
     let start = Instant::now();
     loop {
         let elapsed = start.elapsed();
@@ -143,8 +191,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
         };
         // Rates of the frames read back (one batch may still be running).
         let secs = start.elapsed().as_secs_f64();
-        let samples = session.settled as f64 * session.options.samples_per_frame as f64 * (w as f64 * h as f64);
-        if let Some(r) = &reference
+        let samples = session.settled as f64 * session.options.samples_per_frame as f64 * w * h;
+        if let Some(r) = reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
             error_text = format!(" | RMSE {:.4e}", image_error(&session.image()?.mean, r).rmse);
@@ -166,40 +214,16 @@ pub fn render(args: RenderArgs) -> Result<()> {
     }
     session.settle()?;
     bar.finish();
-    let seconds = start.elapsed().as_secs_f64();
-    let rejected = session.counters.get("samples_rejected").copied().unwrap_or(0);
-    let image = session.image()?;
-    if let Some(v) = &mut view {
-        v.show(&image.mean);
-    }
-    if let Some(r) = &reference {
-        let e = image_error(&image.mean, r);
-        eprintln!(
-            "error against {}: RMSE {:.4e}, relMSE {:.4e}",
-            args.reference.as_ref().expect("a reference path").display(),
-            e.rmse,
-            e.rel_mse
-        );
-    }
-    for (k, v) in [
-        ("layout", layout.clone()),
-        ("adapter", gpu.info.name.clone()),
-        ("rays", session.rays().to_string()),
-        ("rejected_samples", rejected.to_string()),
-    ] {
-        film.info.insert(k.to_string(), v);
-    }
-    film.absorb(&session.accumulation()?)?;
-    film.seconds = seconds;
-    if let Some(list) = &args.aov {
-        film.layers = feature_buffers(&gpu, &scene, &session, list, args.first_frame)?;
-    }
-    film.write(&args.out, "render")?;
-    let png = args.out.with_extension("png");
-    output::write_png(&png, &image, args.exposure)?;
+    Ok(start.elapsed().as_secs_f64())
+}
+
+/// The render's rates on stderr: samples/s and rays/s wall-clock and of GPU time, the counters
+/// and each kernel's GPU time per frame, and loops that hit their iteration cap.
+fn report_rates(session: &Session, seconds: f64, rejected: u64) {
     let gpu_time: f64 = session.kernel_seconds.values().sum();
     let frames = session.frames.max(1) as f64;
-    let samples = session.samples_per_pixel() as f64 * (w * h) as f64;
+    let pixels = (session.options.width * session.options.height) as f64;
+    let samples = session.samples_per_pixel() as f64 * pixels;
     eprintln!(
         "{} frames, {} spp in {seconds:.2} s: {}samples/s, {}rays/s wall-clock; GPU kernel time {gpu_time:.3} s ({}rays/s); {rejected} rejected samples",
         session.frames,
@@ -228,8 +252,6 @@ pub fn render(args: RenderArgs) -> Result<()> {
             session.loops_capped
         );
     }
-    println!("wrote {} and {}", args.out.display(), png.display());
-    Ok(())
 }
 
 /// `--layout auto`: measures every legal layout of `graph`, writes the table beside the
