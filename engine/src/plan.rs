@@ -365,6 +365,8 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
     Ok(groups)
 }
 
+/// The plan of kernel `k` of layout `layout_name`, the passes `group`, after checking that they
+/// may share a kernel.
 fn plan_kernel(
     graph: &Graph,
     layout_name: &str,
@@ -373,158 +375,24 @@ fn plan_kernel(
     group: &[PassId],
 ) -> Result<KernelPlan> {
     let names: Vec<&str> = group.iter().map(|&p| graph.passes[p].decl.name.as_str()).collect();
-    let describe = format!("layout '{layout_name}': kernel [{}]", names.join(", "));
-    // One phase per kernel.
-    let phase_of = |p: PassId| graph.phase_of_chain(graph.chain_of(p).0);
-    let first_phase = phase_of(group[0]);
-    if let Some(&other) = group.iter().find(|&&p| phase_of(p) != first_phase) {
-        let (a, b) = (&graph.passes[group[0]].decl.name, &graph.passes[other].decl.name);
-        let (pa, pb) = (first_phase, phase_of(other));
-        let reason = graph.barrier_reason(pa, pb);
-        return Err(graph.error_in_layout(
-            layout_name,
-            b,
-            format!("{describe} fuses '{a}' (phase {pa}) with '{b}' (phase {pb}) across a phase boundary: {reason}"),
-        ));
-    }
-    // Segments per chain.
-    let mut segments: Vec<(ChainId, Range<usize>)> = Vec::new();
-    let mut chains_in: Vec<ChainId> = group.iter().map(|&p| graph.chain_of(p).0).collect();
-    chains_in.sort();
-    chains_in.dedup();
-    for &c in &chains_in {
-        let mut pos: Vec<usize> = group
-            .iter()
-            .map(|&p| graph.chain_of(p))
-            .filter(|(cc, _)| *cc == c)
-            .map(|(_, i)| i)
-            .collect();
-        pos.sort();
-        let range = pos[0]..pos[pos.len() - 1] + 1;
-        if range.len() != pos.len() {
-            let chain = &graph.chains[c];
-            let gap = range.clone().find(|i| !pos.contains(i)).expect("a gap exists");
-            let gap_name = &graph.passes[chain.passes[gap]].decl.name;
-            return Err(graph.error_in_layout(
-                layout_name,
-                gap_name,
-                format!(
-                    "{describe} takes passes of the chain of '{}' around '{gap_name}' but not '{gap_name}' itself",
-                    chain.item
-                ),
-            ));
-        }
-        segments.push((c, range));
-    }
-    // Stream-fed chains whose producer is in the kernel are fused (called directly).
-    let in_group = |p: PassId| group.contains(&p);
-    let mut fused = Vec::new();
-    let mut roots = Vec::new();
-    for (c, range) in &segments {
-        let chain = &graph.chains[*c];
-        let fused_here = match &chain.entry {
-            ChainEntry::Stream(s) => {
-                let producers: Vec<PassId> = (0..graph.passes.len())
-                    .map(PassId)
-                    .filter(|&p| graph.passes[p].decl.emits.contains(s))
-                    .collect();
-                let inside = producers.iter().filter(|&&p| in_group(p)).count();
-                if inside > 0 && inside < producers.len() {
-                    return Err(graph.error_in_layout(layout_name, s, format!("{describe}: stream '{s}' has producers inside and outside this kernel; its consumer must run in a kernel of its own")));
-                }
-                if inside > 0 && range.len() != chain.passes.len() {
-                    return Err(graph.error_in_layout(layout_name, s, format!("{describe}: the chain of '{}' fed by '{s}' is fused with its producer, so it must be fused whole", chain.item)));
-                }
-                inside > 0
-            }
-            ChainEntry::Start(_) => false,
-        };
-        if fused_here {
-            fused.push(*c);
-        } else {
-            roots.push((*c, range.clone()));
-        }
-    }
-    if roots.len() != 1 {
-        let firsts: Vec<String> = roots
-            .iter()
-            .map(|(c, r)| format!("'{}'", graph.passes[graph.chains[*c].passes[r.start]].decl.name))
-            .collect();
-        return Err(graph.error_in_layout(
-            layout_name,
-            &graph.passes[group[0]].decl.name,
-            format!(
-                "{describe} has {} entry points ({}); a kernel runs one chain segment plus the consumers it feeds",
-                roots.len(),
-                firsts.join(", ")
-            ),
-        ));
-    }
-    let (chain_index, segment) = roots.remove(0);
+    let check = KernelCheck {
+        graph,
+        layout_name,
+        describe: format!("layout '{layout_name}': kernel [{}]", names.join(", ")),
+    };
+    let phase = check.one_phase(group)?;
+    let segments = check.chain_segments(group)?;
+    let (fused, (chain_index, segment)) = check.fused_and_root(group, &segments)?;
     let chain = &graph.chains[chain_index];
-    let root = if segment.start > 0 {
-        Root::State
-    } else {
-        match &chain.entry {
-            ChainEntry::Start(_) => Root::Start,
-            ChainEntry::Stream(s) => Root::Queue(s.clone()),
-        }
-    };
-    if let Root::Queue(s) = &root
-        && segment.len() != chain.passes.len()
-    {
-        return Err(graph.error_in_layout(
-            layout_name,
-            s,
-            format!("{describe}: the chain fed by queue '{s}' must run whole in one kernel"),
-        ));
-    }
+    let root = check.root(chain_index, &segment)?;
     let has_loop = chain.loop_start.is_some_and(|ls| segment.end > ls);
-    let whole_loop = chain
-        .loop_start
-        .is_some_and(|ls| segment.start <= ls && segment.end == chain.passes.len());
-    let loop_in_kernel = match (&root, layout.loops) {
-        (Root::Queue(_), _) => true,
-        (_, LoopMode::InKernel) if has_loop && layout.policy == Policy::Compaction => {
-            return Err(graph.error_in_layout(
-                layout_name,
-                layout_name,
-                format!("{describe}: policy Compaction moves items between kernels, so it needs loops: Host"),
-            ));
-        }
-        (Root::State, LoopMode::InKernel) if has_loop && layout.policy == Policy::Regeneration => {
-            return Err(graph.error_in_layout(layout_name, layout_name, format!("{describe}: with in-kernel loops, policy Regeneration means persistent threads, so the start pass and the loop must share a kernel")));
-        }
-        (_, LoopMode::InKernel) => {
-            if has_loop && !whole_loop {
-                let ls = chain.loop_start.unwrap_or(0);
-                let first = &graph.passes[chain.passes[ls]].decl.name;
-                return Err(graph.error_in_layout(layout_name, first, format!("{describe} splits the loop group of the chain of '{}' (from '{first}'); with loops: InKernel the loop group must be in one kernel", chain.item)));
-            }
-            has_loop
-        }
-        (Root::Start, LoopMode::Host) => {
-            if has_loop && layout.policy == Policy::Naive {
-                let first = &graph.passes[chain.passes[segment.start]].decl.name;
-                return Err(graph.error_in_layout(layout_name, first, format!("{describe} puts the start pass '{first}' and a host-driven loop in one kernel; split the start pass into its own kernel, or regenerate (policy Regeneration or Compaction)")));
-            }
-            false
-        }
-        (Root::Boundary, _) => unreachable!("boundaries are assigned after planning"),
-        (Root::State, LoopMode::Host) => {
-            if has_loop && chain.loop_start.is_some_and(|ls| segment.start < ls) {
-                let first = &graph.passes[chain.passes[segment.start]].decl.name;
-                return Err(graph.error_in_layout(layout_name, first, format!("{describe} mixes the step '{first}' with loop passes; with loops: Host a kernel holds steps or loop passes, not both")));
-            }
-            false
-        }
-    };
+    let loop_in_kernel = check.loop_in_kernel(layout, chain_index, &segment, &root)?;
     let ends_iteration = !loop_in_kernel && has_loop && segment.end == chain.passes.len();
     let short: Vec<&str> = names.iter().take(3).copied().collect();
     let is_start = root == Root::Start;
     Ok(KernelPlan {
         name: format!("k{k}_{}", short.join("_")),
-        phase: first_phase,
+        phase,
         chain: chain_index,
         segment,
         root,
@@ -535,6 +403,200 @@ fn plan_kernel(
         input: None,
         output: None,
     })
+}
+
+/// The passes of a chain (by position) that a kernel holds.
+type Segment = (ChainId, Range<usize>);
+
+/// The checks of one kernel of a layout: what its errors name (`describe`: the layout and the
+/// kernel's passes).
+struct KernelCheck<'a> {
+    graph: &'a Graph,
+    layout_name: &'a str,
+    describe: String,
+}
+
+impl KernelCheck<'_> {
+    /// The one phase of the kernel's passes; an error when they span a phase boundary.
+    fn one_phase(&self, group: &[PassId]) -> Result<PhaseId> {
+        let graph = self.graph;
+        let phase_of = |p: PassId| graph.phase_of_chain(graph.chain_of(p).0);
+        let first_phase = phase_of(group[0]);
+        if let Some(&other) = group.iter().find(|&&p| phase_of(p) != first_phase) {
+            let (a, b) = (&graph.passes[group[0]].decl.name, &graph.passes[other].decl.name);
+            let (pa, pb) = (first_phase, phase_of(other));
+            let reason = graph.barrier_reason(pa, pb);
+            return Err(graph.error_in_layout(
+                self.layout_name,
+                b,
+                format!(
+                    "{} fuses '{a}' (phase {pa}) with '{b}' (phase {pb}) across a phase boundary: {reason}",
+                    self.describe
+                ),
+            ));
+        }
+        Ok(first_phase)
+    }
+
+    /// The kernel's passes as one contiguous segment per chain; an error at a gap.
+    fn chain_segments(&self, group: &[PassId]) -> Result<Vec<Segment>> {
+        let graph = self.graph;
+        let mut segments = Vec::new();
+        let mut chains_in: Vec<ChainId> = group.iter().map(|&p| graph.chain_of(p).0).collect();
+        chains_in.sort();
+        chains_in.dedup();
+        for &c in &chains_in {
+            let mut pos: Vec<usize> = group
+                .iter()
+                .map(|&p| graph.chain_of(p))
+                .filter(|(cc, _)| *cc == c)
+                .map(|(_, i)| i)
+                .collect();
+            pos.sort();
+            let range = pos[0]..pos[pos.len() - 1] + 1;
+            if range.len() != pos.len() {
+                let chain = &graph.chains[c];
+                let gap = range.clone().find(|i| !pos.contains(i)).expect("a gap exists");
+                let gap_name = &graph.passes[chain.passes[gap]].decl.name;
+                return Err(graph.error_in_layout(
+                    self.layout_name,
+                    gap_name,
+                    format!(
+                        "{} takes passes of the chain of '{}' around '{gap_name}' but not '{gap_name}' itself",
+                        self.describe, chain.item
+                    ),
+                ));
+            }
+            segments.push((c, range));
+        }
+        Ok(segments)
+    }
+
+    /// The stream-fed chains whose producer is in the kernel (fused: called directly), and the
+    /// one segment the kernel runs as its entry point; errors for a stream produced both inside
+    /// and outside, a fused chain not whole, and other than one entry point.
+    fn fused_and_root(&self, group: &[PassId], segments: &[Segment]) -> Result<(Vec<ChainId>, Segment)> {
+        let graph = self.graph;
+        let describe = &self.describe;
+        let in_group = |p: PassId| group.contains(&p);
+        let mut fused = Vec::new();
+        let mut roots = Vec::new();
+        for (c, range) in segments {
+            let chain = &graph.chains[*c];
+            let fused_here = match &chain.entry {
+                ChainEntry::Stream(s) => {
+                    let producers: Vec<PassId> = (0..graph.passes.len())
+                        .map(PassId)
+                        .filter(|&p| graph.passes[p].decl.emits.contains(s))
+                        .collect();
+                    let inside = producers.iter().filter(|&&p| in_group(p)).count();
+                    if inside > 0 && inside < producers.len() {
+                        return Err(graph.error_in_layout(self.layout_name, s, format!("{describe}: stream '{s}' has producers inside and outside this kernel; its consumer must run in a kernel of its own")));
+                    }
+                    if inside > 0 && range.len() != chain.passes.len() {
+                        return Err(graph.error_in_layout(self.layout_name, s, format!("{describe}: the chain of '{}' fed by '{s}' is fused with its producer, so it must be fused whole", chain.item)));
+                    }
+                    inside > 0
+                }
+                ChainEntry::Start(_) => false,
+            };
+            if fused_here {
+                fused.push(*c);
+            } else {
+                roots.push((*c, range.clone()));
+            }
+        }
+        if roots.len() != 1 {
+            let firsts: Vec<String> = roots
+                .iter()
+                .map(|(c, r)| format!("'{}'", graph.passes[graph.chains[*c].passes[r.start]].decl.name))
+                .collect();
+            return Err(graph.error_in_layout(
+                self.layout_name,
+                &graph.passes[group[0]].decl.name,
+                format!(
+                    "{describe} has {} entry points ({}); a kernel runs one chain segment plus the consumers it feeds",
+                    roots.len(),
+                    firsts.join(", ")
+                ),
+            ));
+        }
+        Ok((fused, roots.remove(0)))
+    }
+
+    /// Where the entry segment `segment` of chain `c` gets its items: a Start pass, the state of
+    /// an earlier kernel, or the queue of its stream (then the chain must run whole).
+    fn root(&self, c: ChainId, segment: &Range<usize>) -> Result<Root> {
+        let chain = &self.graph.chains[c];
+        let root = if segment.start > 0 {
+            Root::State
+        } else {
+            match &chain.entry {
+                ChainEntry::Start(_) => Root::Start,
+                ChainEntry::Stream(s) => Root::Queue(s.clone()),
+            }
+        };
+        if let Root::Queue(s) = &root
+            && segment.len() != chain.passes.len()
+        {
+            return Err(self.graph.error_in_layout(
+                self.layout_name,
+                s,
+                format!(
+                    "{}: the chain fed by queue '{s}' must run whole in one kernel",
+                    self.describe
+                ),
+            ));
+        }
+        Ok(root)
+    }
+
+    /// Whether the kernel runs its chain's loop itself, by the layout's loop mode and policy;
+    /// errors for the combinations that cannot run.
+    fn loop_in_kernel(&self, layout: &LayoutDecl, c: ChainId, segment: &Range<usize>, root: &Root) -> Result<bool> {
+        let (graph, layout_name, describe) = (self.graph, self.layout_name, &self.describe);
+        let chain = &graph.chains[c];
+        let has_loop = chain.loop_start.is_some_and(|ls| segment.end > ls);
+        let whole_loop = chain
+            .loop_start
+            .is_some_and(|ls| segment.start <= ls && segment.end == chain.passes.len());
+        Ok(match (root, layout.loops) {
+            (Root::Queue(_), _) => true,
+            (_, LoopMode::InKernel) if has_loop && layout.policy == Policy::Compaction => {
+                return Err(graph.error_in_layout(
+                    layout_name,
+                    layout_name,
+                    format!("{describe}: policy Compaction moves items between kernels, so it needs loops: Host"),
+                ));
+            }
+            (Root::State, LoopMode::InKernel) if has_loop && layout.policy == Policy::Regeneration => {
+                return Err(graph.error_in_layout(layout_name, layout_name, format!("{describe}: with in-kernel loops, policy Regeneration means persistent threads, so the start pass and the loop must share a kernel")));
+            }
+            (_, LoopMode::InKernel) => {
+                if has_loop && !whole_loop {
+                    let ls = chain.loop_start.unwrap_or(0);
+                    let first = &graph.passes[chain.passes[ls]].decl.name;
+                    return Err(graph.error_in_layout(layout_name, first, format!("{describe} splits the loop group of the chain of '{}' (from '{first}'); with loops: InKernel the loop group must be in one kernel", chain.item)));
+                }
+                has_loop
+            }
+            (Root::Start, LoopMode::Host) => {
+                if has_loop && layout.policy == Policy::Naive {
+                    let first = &graph.passes[chain.passes[segment.start]].decl.name;
+                    return Err(graph.error_in_layout(layout_name, first, format!("{describe} puts the start pass '{first}' and a host-driven loop in one kernel; split the start pass into its own kernel, or regenerate (policy Regeneration or Compaction)")));
+                }
+                false
+            }
+            (Root::Boundary, _) => unreachable!("boundaries are assigned after planning"),
+            (Root::State, LoopMode::Host) => {
+                if has_loop && chain.loop_start.is_some_and(|ls| segment.start < ls) {
+                    let first = &graph.passes[chain.passes[segment.start]].decl.name;
+                    return Err(graph.error_in_layout(layout_name, first, format!("{describe} mixes the step '{first}' with loop passes; with loops: Host a kernel holds steps or loop passes, not both")));
+                }
+                false
+            }
+        })
+    }
 }
 
 /// Applies the layout's policy to the chains with host-driven loops: their start kernel
