@@ -184,29 +184,84 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
     let g: GraphFile = parse_ron(file, text)?;
     let mut sources = Sources::default();
     sources.add(file, text);
-    let read = |sources: &mut Sources, path: &str| -> Result<CatalogFile> {
+    let catalogs = read_catalogs(vfs, file, &g.catalogs, &mut sources)?;
+    let includes = read_catalogs(vfs, file, &g.include, &mut sources)?;
+    let (passes, ops, entries) = graph_entries(&g, file, &includes, &catalogs, &sources)?;
+    // What each part brings: library, counters, constants, resources.
+    let mut parts = Parts::of_graph(&g, file, &sources)?;
+    for (path, inc) in &includes {
+        parts.add_include(path, inc, &sources)?;
+    }
+    for p in &passes {
+        let cat = catalogs.iter().chain(&includes).find(|(path, _)| *path == p.origin);
+        parts.add_pass(p, cat.map(|(_, c)| c), &sources)?;
+    }
+    // A catalog's resources that operators name join as well (the first catalog declaring one).
+    for op in &ops {
+        for name in op.reads().into_iter().chain(op.writes()) {
+            if let Some((path, r)) = catalogs
+                .iter()
+                .chain(&includes)
+                .find_map(|(path, cat)| cat.resources.get(name).map(|r| (path, r)))
+            {
+                parts
+                    .resources
+                    .add(&sources, "resource", name, r, Rank::Catalog, path)?;
+            }
+        }
+    }
+    let mut origins = BTreeMap::new();
+    for c in &parts.counters {
+        origins.insert(c.clone(), file.to_string());
+    }
+    let declared = Declared {
+        library: parts.library,
+        passes,
+        ops,
+        entries,
+        constants: parts.constants.into_parts(&mut origins),
+        derived: parts.derived.into_parts(&mut origins),
+        resources: parts.resources.into_parts(&mut origins),
+        counters: parts.counters,
+        checks: parts.checks,
+        origins,
+        sources,
+        file: g,
+    };
+    declared.check(file)?;
+    Ok(declared)
+}
+
+/// The catalog (or include) files `paths` that graph `file` names, read and parsed, their texts
+/// added to `sources`.
+fn read_catalogs(vfs: &Vfs, file: &str, paths: &[String], sources: &mut Sources) -> Result<Vec<(String, CatalogFile)>> {
+    let mut out = Vec::new();
+    for path in paths {
         let t = vfs
             .read(path)
             .map_err(|e| sources.at_name(file, path, format!("cannot read pass catalog: {e}")))?;
         sources.add(path, &t);
-        parse_ron(path, &t)
-    };
-    let mut catalogs: Vec<(String, CatalogFile)> = Vec::new();
-    for path in &g.catalogs {
-        catalogs.push((path.clone(), read(&mut sources, path)?));
+        out.push((path.clone(), parse_ron(path, &t)?));
     }
-    let mut includes: Vec<(String, CatalogFile)> = Vec::new();
-    for path in &g.include {
-        includes.push((path.clone(), read(&mut sources, path)?));
-    }
-    // Passes `Use` can name: the later file wins.
+    Ok(out)
+}
+
+/// The graph's `passes` entries: its passes (its own, and those it `Use`s from its includes
+/// and catalogs, where the later file wins) and operators, in order; an error for an unknown
+/// pass or a name used twice.
+fn graph_entries(
+    g: &GraphFile,
+    file: &str,
+    includes: &[(String, CatalogFile)],
+    catalogs: &[(String, CatalogFile)],
+    sources: &Sources,
+) -> Result<(Vec<Pass>, Vec<Operator>, Vec<Entry>)> {
     let mut offered: BTreeMap<String, (PassDecl, String)> = BTreeMap::new();
-    for (path, cat) in includes.iter().chain(&catalogs) {
+    for (path, cat) in includes.iter().chain(catalogs) {
         for d in &cat.passes {
             offered.insert(d.name.clone(), (d.clone(), path.clone()));
         }
     }
-
     let mut passes: Vec<Pass> = Vec::new();
     let mut ops: Vec<Operator> = Vec::new();
     let mut entries = Vec::new();
@@ -249,97 +304,95 @@ pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
             return Err(sources.at_name(file, n, format!("pass '{n}' appears twice")));
         }
     }
+    Ok((passes, ops, entries))
+}
 
-    // What each part brings: library, counters, constants, resources.
-    let mut library = g.library.clone();
-    let mut counters = g.counters.clone();
-    let mut constants = Merged::new();
-    let mut derived = Merged::new();
-    let mut resources = Merged::new();
-    for (name, v) in &g.constants {
-        constants.add(&sources, "constant", name, v, Rank::Graph, file)?;
+/// What the files of a graph bring, merged: WGSL library files and counters in order without
+/// repeats, constants, derived constants and resources by rank ([`Merged`]), and checks.
+struct Parts {
+    library: Vec<String>,
+    counters: Vec<String>,
+    constants: Merged<ConstValue>,
+    derived: Merged<String>,
+    resources: Merged<ResourceDecl>,
+    checks: Vec<ConstCheck>,
+}
+
+impl Parts {
+    /// What graph `g` (file `file`) declares itself.
+    fn of_graph(g: &GraphFile, file: &str, sources: &Sources) -> Result<Parts> {
+        let mut parts = Parts {
+            library: g.library.clone(),
+            counters: g.counters.clone(),
+            constants: Merged::new(),
+            derived: Merged::new(),
+            resources: Merged::new(),
+            checks: Vec::new(),
+        };
+        for (name, v) in &g.constants {
+            parts.constants.add(sources, "constant", name, v, Rank::Graph, file)?;
+        }
+        for (name, e) in &g.derived {
+            parts
+                .derived
+                .add(sources, "derived constant", name, e, Rank::Graph, file)?;
+        }
+        for (name, r) in &g.resources {
+            parts.resources.add(sources, "resource", name, r, Rank::Graph, file)?;
+        }
+        add_checks(&mut parts.checks, &g.checks, file);
+        Ok(parts)
     }
-    for (name, e) in &g.derived {
-        derived.add(&sources, "derived constant", name, e, Rank::Graph, file)?;
-    }
-    for (name, r) in &g.resources {
-        resources.add(&sources, "resource", name, r, Rank::Graph, file)?;
-    }
-    let mut checks = Vec::new();
-    add_checks(&mut checks, &g.checks, file);
-    for (path, inc) in &includes {
-        add_checks(&mut checks, &inc.checks, path);
-        push_unique(&mut library, &inc.library);
-        push_unique(&mut counters, &inc.counters);
+
+    /// What the included file `path` declares, all of it.
+    fn add_include(&mut self, path: &str, inc: &CatalogFile, sources: &Sources) -> Result<()> {
+        add_checks(&mut self.checks, &inc.checks, path);
+        push_unique(&mut self.library, &inc.library);
+        push_unique(&mut self.counters, &inc.counters);
         for (name, v) in &inc.constants {
-            constants.add(&sources, "constant", name, v, Rank::Include, path)?;
+            self.constants.add(sources, "constant", name, v, Rank::Include, path)?;
         }
         for (name, e) in &inc.derived {
-            derived.add(&sources, "derived constant", name, e, Rank::Include, path)?;
+            self.derived
+                .add(sources, "derived constant", name, e, Rank::Include, path)?;
         }
         for (name, r) in &inc.resources {
-            resources.add(&sources, "resource", name, r, Rank::Include, path)?;
+            self.resources.add(sources, "resource", name, r, Rank::Include, path)?;
         }
+        Ok(())
     }
-    for p in &passes {
+
+    /// What pass `p` brings: its catalog's (or include's) library, counters, constants and
+    /// checks, the resources of it that the pass reads or writes, and the pass's own.
+    fn add_pass(&mut self, p: &Pass, catalog: Option<&CatalogFile>, sources: &Sources) -> Result<()> {
         let d = &p.decl;
-        if let Some((_, cat)) = catalogs.iter().chain(&includes).find(|(path, _)| *path == p.origin) {
-            push_unique(&mut library, &cat.library);
-            push_unique(&mut counters, &cat.counters);
+        if let Some(cat) = catalog {
+            push_unique(&mut self.library, &cat.library);
+            push_unique(&mut self.counters, &cat.counters);
             for (name, v) in &cat.constants {
-                constants.add(&sources, "constant", name, v, Rank::Catalog, &p.origin)?;
+                self.constants
+                    .add(sources, "constant", name, v, Rank::Catalog, &p.origin)?;
             }
             for (name, e) in &cat.derived {
-                derived.add(&sources, "derived constant", name, e, Rank::Catalog, &p.origin)?;
+                self.derived
+                    .add(sources, "derived constant", name, e, Rank::Catalog, &p.origin)?;
             }
-            add_checks(&mut checks, &cat.checks, &p.origin);
+            add_checks(&mut self.checks, &cat.checks, &p.origin);
             for (name, r) in &cat.resources {
                 if d.reads.contains(name) || d.writes.contains(name) {
-                    resources.add(&sources, "resource", name, r, Rank::Catalog, &p.origin)?;
+                    self.resources
+                        .add(sources, "resource", name, r, Rank::Catalog, &p.origin)?;
                 }
             }
         }
-        push_unique(&mut library, &d.library);
-        push_unique(&mut counters, &d.counters);
+        push_unique(&mut self.library, &d.library);
+        push_unique(&mut self.counters, &d.counters);
         for (name, v) in &d.constants {
-            constants.add(&sources, "constant", name, v, Rank::Pass, &p.origin)?;
+            self.constants
+                .add(sources, "constant", name, v, Rank::Pass, &p.origin)?;
         }
+        Ok(())
     }
-    // A catalog's resources that operators name join as well (the first catalog declaring one).
-    for op in &ops {
-        for name in op.reads().into_iter().chain(op.writes()) {
-            if let Some((path, r)) = catalogs
-                .iter()
-                .chain(&includes)
-                .find_map(|(path, cat)| cat.resources.get(name).map(|r| (path, r)))
-            {
-                resources.add(&sources, "resource", name, r, Rank::Catalog, path)?;
-            }
-        }
-    }
-    let mut origins = BTreeMap::new();
-    for c in &counters {
-        origins.insert(c.clone(), file.to_string());
-    }
-    let constants = constants.into_parts(&mut origins);
-    let derived = derived.into_parts(&mut origins);
-    let resources = resources.into_parts(&mut origins);
-    let declared = Declared {
-        library,
-        passes,
-        ops,
-        entries,
-        resources,
-        counters,
-        constants,
-        derived,
-        checks,
-        origins,
-        sources,
-        file: g,
-    };
-    declared.check(file)?;
-    Ok(declared)
 }
 
 impl Declared {
