@@ -132,6 +132,32 @@ fn count(v: u64) -> String {
 /// form, plus a detail table) and `rays_per_second.png` into `dir`; returns the Markdown.
 pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result<String> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    std::fs::write(dir.join("bench.csv"), bench_csv(results))?;
+    let md = bench_markdown(title, results);
+    std::fs::write(dir.join("bench.md"), &md)?;
+    plot_rates(&dir.join("rays_per_second.png"), title, results)?;
+    Ok(md)
+}
+
+/// The layouts and the paths per frame measured, each once: layouts in the order measured,
+/// sizes ascending.
+fn layouts_and_sizes(results: &[Measurement]) -> (Vec<&str>, Vec<u64>) {
+    let mut layouts: Vec<&str> = Vec::new();
+    let mut sizes: Vec<u64> = Vec::new();
+    for m in results {
+        if !layouts.contains(&m.layout.as_str()) {
+            layouts.push(&m.layout);
+        }
+        if !sizes.contains(&m.paths_per_frame()) {
+            sizes.push(m.paths_per_frame());
+        }
+    }
+    sizes.sort();
+    (layouts, sizes)
+}
+
+/// One CSV row per measurement.
+fn bench_csv(results: &[Measurement]) -> String {
     let mut csv = String::from(
         "layout,width,height,spp,paths_per_frame,frames,seconds,rays,rays_per_s,gpu_rays_per_s,samples_per_s,frames_per_s,memory_mib,kernel_ms\n",
     );
@@ -156,18 +182,13 @@ pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result
             kernels.join(";")
         );
     }
-    std::fs::write(dir.join("bench.csv"), &csv)?;
-    let mut layouts: Vec<&str> = Vec::new();
-    let mut sizes: Vec<u64> = Vec::new();
-    for m in results {
-        if !layouts.contains(&m.layout.as_str()) {
-            layouts.push(&m.layout);
-        }
-        if !sizes.contains(&m.paths_per_frame()) {
-            sizes.push(m.paths_per_frame());
-        }
-    }
-    sizes.sort();
+    csv
+}
+
+/// The Markdown report: Mrays/s by layout and paths per frame, then a row of detail per
+/// measurement.
+fn bench_markdown(title: &str, results: &[Measurement]) -> String {
+    let (layouts, sizes) = layouts_and_sizes(results);
     let mut md = format!(
         "## {title}\n\nMillions of rays per second (wall-clock; GPU-time rate in parentheses), by paths per frame.\n\n| layout |"
     );
@@ -208,7 +229,12 @@ pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result
             kernels.join(", ")
         );
     }
-    std::fs::write(dir.join("bench.md"), &md)?;
+    md
+}
+
+/// The plot of rays/s against paths per frame, a line per layout, into `path`.
+fn plot_rates(path: &Path, title: &str, results: &[Measurement]) -> Result<()> {
+    let (layouts, _) = layouts_and_sizes(results);
     let series: Vec<Series> = layouts
         .iter()
         .map(|l| Series {
@@ -221,7 +247,7 @@ pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result
         })
         .collect();
     line_plot(
-        &dir.join("rays_per_second.png"),
+        path,
         &Axes {
             title,
             x_label: "paths per frame",
@@ -232,5 +258,5 @@ pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result
         },
         &series,
     )?;
-    Ok(md)
+    Ok(())
 }
