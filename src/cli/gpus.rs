@@ -6,7 +6,7 @@ use super::render::RenderArgs;
 use anyhow::{Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::metrics::image_error;
-use lightgraph::multi::{Budget, Run, Share, render_on_gpus};
+use lightgraph::multi::{Budget, Merging, Run, Share, render_on_gpus};
 use lightgraph::reference::{Reference, film_settings};
 use lightgraph::render::{LoadedScene, SessionOptions, load_graph, load_scene_with};
 use lightgraph_engine::Graph;
@@ -113,6 +113,13 @@ impl Setup {
     }
 }
 
+/// The progress bar of a render of `args`: over its time in milliseconds, else its frames.
+pub fn progress_bar(args: &RenderArgs) -> ProgressBar {
+    let bar = ProgressBar::new(args.time.map_or(args.frames as u64, |t| t.as_millis() as u64));
+    bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
+    bar
+}
+
 /// The budget of `args`: its time, else its frames.
 pub fn budget(args: &RenderArgs) -> Budget {
     match args.time {
@@ -121,6 +128,8 @@ pub fn budget(args: &RenderArgs) -> Budget {
     }
 }
 
+/// `lightgraph render --gpus`: the frames of one render shared by several GPUs, each claiming
+/// batches sized to its speed, added into one film.
 pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
     let c = &args.common;
     let selectors = gpu_selectors(spec)?;
@@ -145,11 +154,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
         graph.name
     );
     let mut film = setup.film(args);
-    let bar = match args.time {
-        Some(t) => ProgressBar::new(t.as_millis() as u64),
-        None => ProgressBar::new(args.frames as u64),
-    };
-    bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
+    let bar = progress_bar(args);
     let run = setup.run(args);
     let start = Instant::now();
     let pixels = (w as f64) * (h as f64);
@@ -196,6 +201,15 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
             e.rmse, e.rel_mse
         );
     }
+    report_shares(&film, &shares, &merging, pixels);
+    println!("wrote {} and {}", args.out.display(), png.display());
+    Ok(())
+}
+
+/// The rates of a render on several GPUs on stderr: samples/s wall-clock over `film`, each
+/// GPU's share, and the host's merging.
+fn report_shares(film: &Reference, shares: &[Share], merging: &Merging, pixels: f64) {
+    let seconds = merging.run_seconds;
     let spf = film.samples_per_pixel() as f64 / film.frames.max(1) as f64;
     eprintln!(
         "{} frames, {} spp in {seconds:.2} s on {} GPUs: {}samples/s wall-clock",
@@ -218,6 +232,4 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
         merging.batches,
         1e3 * merging.seconds / merging.batches.max(1) as f64
     );
-    println!("wrote {} and {}", args.out.display(), png.display());
-    Ok(())
 }

@@ -3,10 +3,10 @@
 
 use super::args::measure_into;
 use super::args::si;
-use super::gpus::{Setup, budget};
+use super::gpus::{Setup, budget, progress_bar};
 use super::render::RenderArgs;
 use anyhow::{Result, anyhow};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use lightgraph::cluster::{place, rank_adapter, render_across};
 use lightgraph_engine::ConstValue;
 use mpi::topology::SimpleCommunicator;
@@ -23,11 +23,10 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     let mut film = setup.film(args);
     let run = setup.run(args);
     let bar = if root {
-        ProgressBar::new(args.time.map_or(args.frames as u64, |t| t.as_millis() as u64))
+        progress_bar(args)
     } else {
         ProgressBar::hidden()
     };
-    bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
     let pixels = w as f64 * h as f64;
     let mut view = root
         .then(|| args.tev.view(&args.out.display().to_string(), (w, h)))

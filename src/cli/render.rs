@@ -3,7 +3,6 @@
 use super::args::*;
 use anyhow::{Result, bail};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::aov::{Aov, AovRender};
 use lightgraph::metrics::image_error;
 use lightgraph::output;
@@ -170,11 +169,7 @@ fn render_progressively(
     let (w, h) = (session.options.width as f64, session.options.height as f64);
     let mut error_text = String::new();
     let mut error_at: Option<Instant> = None;
-    let bar = match args.time {
-        Some(t) => ProgressBar::new(t.as_millis() as u64),
-        None => ProgressBar::new(args.frames as u64),
-    };
-    bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
+    let bar = super::gpus::progress_bar(args);
     let start = Instant::now();
     loop {
         let elapsed = start.elapsed();
