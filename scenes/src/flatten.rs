@@ -89,8 +89,9 @@ impl Geometry {
         });
     }
 
-    /// The triangles of mesh `mesh` (of material `material`), with their attributes. An
-    /// emissive texture scales each triangle's light by the texture's mean over it.
+    /// The triangles of mesh `mesh` (of material `material`), with their attributes; other
+    /// shapes add nothing. An emissive texture scales each triangle's light by the texture's
+    /// mean over it.
     fn push_mesh(&mut self, scene: &Scene, mesh: &Shape, material: u32) {
         let Shape::Mesh {
             positions,
