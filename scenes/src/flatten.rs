@@ -47,7 +47,34 @@ pub(crate) fn flatten_shapes(scene: &Scene, material_index: &BTreeMap<&str, u32>
                 g.push_triangle([c[0], c[1], c[2]], m, *emission);
                 g.push_triangle([c[0], c[2], c[3]], m, *emission);
             }
-            Shape::Mesh { material, .. } => g.push_mesh(scene, shape, material_index[material.as_str()]),
+            Shape::Mesh {
+                positions,
+                indices,
+                material,
+                emission,
+                uvs,
+                normals,
+            } => {
+                let m = material_index[material.as_str()];
+                let emissive_texture = scene.materials[material.as_str()]
+                    .pbr
+                    .as_ref()
+                    .and_then(|p| p.textures.emissive);
+                for t in indices {
+                    // An emissive texture scales the light by its mean over the triangle.
+                    let emission = match (emission, emissive_texture, uvs) {
+                        (Some(e), Some(r), Some(uv)) => {
+                            let mean = r.mean_over_triangle(&scene.textures, t.map(|i| uv[i as usize]), true);
+                            Some(std::array::from_fn(|c| e[c] * mean[c]))
+                        }
+                        _ => *emission,
+                    };
+                    g.push_triangle(t.map(|i| v3(positions[i as usize])), m, emission);
+                    if let Some(a) = &mut g.attributes {
+                        a.push(triangle_attributes(*t, uvs.as_deref(), normals.as_deref()));
+                    }
+                }
+            }
             Shape::Sphere {
                 center,
                 radius,
@@ -87,41 +114,6 @@ impl Geometry {
             c: e2.into(),
             kind: primitive_kind::TRIANGLE,
         });
-    }
-
-    /// The triangles of mesh `mesh` (of material `material`), with their attributes; other
-    /// shapes add nothing. An emissive texture scales each triangle's light by the texture's
-    /// mean over it.
-    fn push_mesh(&mut self, scene: &Scene, mesh: &Shape, material: u32) {
-        let Shape::Mesh {
-            positions,
-            indices,
-            material: name,
-            emission,
-            uvs,
-            normals,
-        } = mesh
-        else {
-            return;
-        };
-        let emissive_texture = scene.materials[name.as_str()]
-            .pbr
-            .as_ref()
-            .and_then(|p| p.textures.emissive);
-        for t in indices {
-            let v = t.map(|i| v3(positions[i as usize]));
-            let emission = match (emission, emissive_texture, uvs) {
-                (Some(e), Some(r), Some(uv)) => {
-                    let mean = r.mean_over_triangle(&scene.textures, t.map(|i| uv[i as usize]), true);
-                    Some(std::array::from_fn(|c| e[c] * mean[c]))
-                }
-                _ => *emission,
-            };
-            self.push_triangle(v, material, emission);
-            if let Some(a) = &mut self.attributes {
-                a.push(triangle_attributes(*t, uvs.as_deref(), normals.as_deref()));
-            }
-        }
     }
 }
 

@@ -62,14 +62,14 @@ fn intersect_sphere(o: vec3<f32>, d: vec3<f32>, p: PrimitiveFields, t_max: f32) 
 // host sets for scenes with an alpha-masked material) ----
 #if ALPHA_MASK
 
-// Whether primitive `index` (kind `kind`) of material `material` is solid at barycentrics
-// `uv`: always, unless the host marked it PRIMITIVE_ALPHA_MASKED (its material is
-// alpha-masked; the rest need no material load) and its alpha there is below the cutoff.
-fn alpha_solid(kind: u32, material: u32, index: u32, uv: vec2<f32>) -> bool {
-    if ((kind & PRIMITIVE_ALPHA_MASKED) == 0u) {
+// Whether primitive `p` (at `index`) is solid at barycentrics `uv`: always, unless the host
+// marked it PRIMITIVE_ALPHA_MASKED (its material is alpha-masked; the rest need no material
+// load) and its alpha there is below the cutoff.
+fn alpha_solid(p: PrimitiveFields, index: u32, uv: vec2<f32>) -> bool {
+    if ((p.kind & PRIMITIVE_ALPHA_MASKED) == 0u) {
         return true;
     }
-    let m = materials[material];
+    let m = materials[p.material];
     return material_alpha(m, surface_tex(index, uv)) >= m.alpha_cutoff;
 }
 
@@ -131,7 +131,7 @@ fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: 
 #endif
         let r = intersect_triangle(o, d, p, t_max);
 #if ALPHA_MASK
-        if (r.x > 0.0 && alpha_solid(p.kind, p.material, index, r.yz)) {
+        if (r.x > 0.0 && alpha_solid(p, index, r.yz)) {
 #else
         if (r.x > 0.0) {
 #endif

@@ -136,7 +136,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
             e.rel_mse
         );
     }
-    let rejected = session.counters.get("samples_rejected").copied().unwrap_or(0);
+    let rejected = rejected_samples(&session);
     for (k, v) in [
         ("layout", layout.clone()),
         ("adapter", gpu.info.name.clone()),
@@ -153,7 +153,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
     film.write(&args.out, "render")?;
     let png = args.out.with_extension("png");
     output::write_png(&png, &image, args.exposure)?;
-    report_rates(&session, seconds, rejected);
+    report_rates(&session, seconds);
     println!("wrote {} and {}", args.out.display(), png.display());
     Ok(())
 }
@@ -212,9 +212,15 @@ fn render_progressively(
     Ok(start.elapsed().as_secs_f64())
 }
 
+/// The samples the session's kernels rejected (non-finite or negative).
+fn rejected_samples(session: &Session) -> u64 {
+    session.counters.get("samples_rejected").copied().unwrap_or(0)
+}
+
 /// The render's rates on stderr: samples/s and rays/s wall-clock and of GPU time, the counters
 /// and each kernel's GPU time per frame, and loops that hit their iteration cap.
-fn report_rates(session: &Session, seconds: f64, rejected: u64) {
+fn report_rates(session: &Session, seconds: f64) {
+    let rejected = rejected_samples(session);
     let gpu_time: f64 = session.kernel_seconds.values().sum();
     let frames = session.frames.max(1) as f64;
     let pixels = (session.options.width * session.options.height) as f64;
