@@ -647,20 +647,22 @@ fn measure_prepared(
             continue;
         }
         let mut measuring = spec.clone();
+        measuring.constants.extend(measured.clone());
         measuring.constants.extend(m.set.clone());
         let program = Program::compile(plan, &measuring, &options.layout.target(gpu))?;
         let mut instance = Instance::new(gpu, program, externals)
             .with_context(|| format!("measuring '{name}' of graph '{}' in layout '{layout}'", graph.name))?;
         let stats = instance.run_frames(0, 1, options.seed)?;
         let (a, b) = (stats.counters[&m.ratio.0], stats.counters[&m.ratio.1]);
-        if b == 0 {
-            bail!(
-                "measuring '{name}' of graph '{}': counter '{}' stayed 0 (no light in the scene?)",
-                graph.name,
-                m.ratio.1
-            );
-        }
-        measured.insert(name.clone(), ConstValue::F32((a as f64 / b as f64) as f32));
+        let value = m.value_from(a, b, &measuring.constants).map_err(|why| {
+            let hint = if m.value.is_none() {
+                " (no light in the scene?)"
+            } else {
+                ""
+            };
+            anyhow!("measuring '{name}' of graph '{}': {why}{hint}", graph.name)
+        })?;
+        measured.insert(name.clone(), ConstValue::F32(value as f32));
     }
     Ok(measured)
 }

@@ -204,9 +204,23 @@ pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, 
             input,
             output,
         } => {
-            let buffers = [keys, slots, offsets, input, output].map(|b| BufferRef::Resource(b.clone()));
+            let buffer = |b: &String| BufferRef::Resource(b.clone());
+            let sorted = [keys, slots, offsets].map(buffer);
+            let moved = input.as_ref().map(|i| (buffer(i), words(i)));
             let overflow = resolved.control.op_overflow[&o];
-            vec![scatter_kernel(&prefix, buffers, counted, words(input), overflow)]
+            vec![scatter_kernel(
+                &prefix,
+                sorted,
+                moved,
+                buffer(output),
+                counted,
+                overflow,
+            )]
+        }
+        OpKind::Gather { indices, input, output } => {
+            let buffers = [indices, input, output].map(|b| BufferRef::Resource(b.clone()));
+            let overflow = resolved.control.op_overflow[&o];
+            vec![gather_kernel(&prefix, buffers, counted, words(input), overflow)]
         }
         OpKind::Scan { input, output } => {
             let scan = Scan {
@@ -238,32 +252,75 @@ pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, 
     }
 }
 
-/// The scatter of a counting sort over `buffers` (keys, slots, offsets, input, output) of
-/// elements of `w` words: each element to its bucket's first place plus its slot. Elements of
-/// a multiple of 4 words move as 16-byte vectors (a 48-byte cache vertex in 3 loads and 3
-/// stores instead of 12 of each).
-fn scatter_kernel(prefix: &str, buffers: [BufferRef; 5], counted: Option<&str>, w: u32, overflow: u32) -> OpKernel {
+/// The scatter of a counting sort over `sorted` (keys, slots, offsets) into `output`: each
+/// element to its bucket's first place plus its slot. `moved` is the input and its elements'
+/// words, or none to move each element's index. Elements of a multiple of 4 words move as
+/// 16-byte vectors (a 48-byte cache vertex in 3 loads and 3 stores instead of 12 of each).
+fn scatter_kernel(
+    prefix: &str,
+    sorted: [BufferRef; 3],
+    moved: Option<(BufferRef, u32)>,
+    output: BufferRef,
+    counted: Option<&str>,
+    overflow: u32,
+) -> OpKernel {
     let mut m = Module::new(true);
-    let [keys, slots, offsets, input, output] = buffers;
-    let (word, w) = if w.is_multiple_of(4) {
-        ("vec4<u32>", w / 4)
-    } else {
-        ("u32", w)
-    };
+    let [keys, slots, offsets] = sorted;
+    let w = moved.as_ref().map_or(1, |(_, w)| *w);
+    let (word, w) = moved_words(w);
     m.bind("lg_keys", "array<u32>", keys);
     m.bind("lg_slots", "array<u32>", slots);
     m.bind("lg_offsets", "array<u32>", offsets);
-    m.bind("lg_input", &format!("array<{word}>"), input);
+    let mut copy = String::new();
+    match moved {
+        Some((input, _)) => {
+            m.bind("lg_input", &format!("array<{word}>"), input);
+            for k in 0..w {
+                let _ = writeln!(copy, "    lg_output[d * {w}u + {k}u] = lg_input[i * {w}u + {k}u];");
+            }
+        }
+        None => copy.push_str("    lg_output[d] = i;\n"),
+    }
     m.bind("lg_output", &format!("array<{word}>"), output);
     m.element_count(counted);
     let name = format!("{prefix}_scatter");
-    let mut copy = String::new();
-    for k in 0..w {
-        let _ = writeln!(copy, "    lg_output[d * {w}u + {k}u] = lg_input[i * {w}u + {k}u];");
-    }
     let _ = write!(
         m.text,
         "{}    if (i >= lg_n()) {{ return; }}\n    let k = lg_keys[i];\n    var d = 0xffffffffu;\n    if (k < arrayLength(&lg_offsets)) {{ d = lg_offsets[k] + lg_slots[i]; }}\n    if (d >= arrayLength(&lg_output) / {w}u) {{\n        atomicAdd(&lg_control[{overflow}], 1u);\n        return;\n    }}\n{copy}}}\n",
+        element_entry(&name)
+    );
+    m.finish(name, Groups::elements(WORKGROUP as u64))
+}
+
+/// The WGSL type an element of `w` words moves in, and how many of them: 16-byte vectors where
+/// `w` is a multiple of 4, words otherwise.
+fn moved_words(w: u32) -> (&'static str, u32) {
+    if w.is_multiple_of(4) {
+        ("vec4<u32>", w / 4)
+    } else {
+        ("u32", w)
+    }
+}
+
+/// The gather over `buffers` (indices, input, output) of elements of `w` words: each element
+/// from the place its index names, written in order (16-byte vectors as the scatter's). An
+/// index past the input is counted as skipped.
+fn gather_kernel(prefix: &str, buffers: [BufferRef; 3], counted: Option<&str>, w: u32, overflow: u32) -> OpKernel {
+    let mut m = Module::new(true);
+    let [indices, input, output] = buffers;
+    let (word, w) = moved_words(w);
+    m.bind("lg_indices", "array<u32>", indices);
+    m.bind("lg_input", &format!("array<{word}>"), input);
+    m.bind("lg_output", &format!("array<{word}>"), output);
+    m.element_count(counted);
+    let name = format!("{prefix}_gather");
+    let mut copy = String::new();
+    for k in 0..w {
+        let _ = writeln!(copy, "    lg_output[i * {w}u + {k}u] = lg_input[s * {w}u + {k}u];");
+    }
+    let _ = write!(
+        m.text,
+        "{}    if (i >= lg_n()) {{ return; }}\n    let s = lg_indices[i];\n    if (s >= arrayLength(&lg_input) / {w}u || i >= arrayLength(&lg_output) / {w}u) {{\n        atomicAdd(&lg_control[{overflow}], 1u);\n        return;\n    }}\n{copy}}}\n",
         element_entry(&name)
     );
     m.finish(name, Groups::elements(WORKGROUP as u64))

@@ -75,7 +75,8 @@ pub struct GraphFile {
 
 /// How the host measures a constant: it runs one frame of the graph (same layout and
 /// scene) with the constants `set`, and the constant becomes the ratio of two counters'
-/// totals, `ratio.0 / ratio.1`.
+/// totals, `ratio.0 / ratio.1`, or `value` evaluated with that ratio. Constants are measured
+/// in name order, each measuring frame with the values measured before it.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeasuredDecl {
@@ -84,6 +85,31 @@ pub struct MeasuredDecl {
     pub set: BTreeMap<String, ConstValue>,
     /// Numerator and denominator counters.
     pub ratio: (String, String),
+    /// The constant's value: an expression of `RATIO` (the counters' ratio; 0 where the
+    /// denominator stayed 0) and the graph's constants, e.g. a setting chosen by what the
+    /// frame found. Without it, the ratio itself (and a denominator of 0 is an error).
+    #[serde(default)]
+    pub value: Option<String>,
+}
+
+/// The name a measured constant's `value` expression reads the measured ratio by.
+pub const MEASURED_RATIO: &str = "RATIO";
+
+impl MeasuredDecl {
+    /// The constant's value from the measuring frame's counter totals `a` (`ratio.0`) and `b`
+    /// (`ratio.1`), its `value` read with the frame's `constants`; the error says why none.
+    pub fn value_from(&self, a: u64, b: u64, constants: &BTreeMap<String, ConstValue>) -> Result<f64, String> {
+        let Some(value) = &self.value else {
+            if b == 0 {
+                return Err(format!("counter '{}' stayed 0", self.ratio.1));
+            }
+            return Ok(a as f64 / b as f64);
+        };
+        let ratio = if b == 0 { 0.0 } else { a as f64 / b as f64 };
+        let mut vars: BTreeMap<String, f64> = constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
+        vars.insert(MEASURED_RATIO.to_string(), ratio);
+        crate::expr::Expr::parse(value)?.eval(&vars)
+    }
 }
 
 /// An entry of a graph's `passes`: a catalog pass, a pass declared inline, or one of the
@@ -103,6 +129,8 @@ pub enum PassEntry {
     Count(CountDecl),
     /// The scatter step of a counting sort: each element to `offsets[key] + slot`.
     Scatter(ScatterDecl),
+    /// Each element from the place its index names: `output[i] = input[indices[i]]`.
+    Gather(GatherDecl),
     /// Stable radix sort of `u32` keys, with `u32` values permuted alongside.
     Sort(SortDecl),
 }
@@ -211,7 +239,8 @@ pub struct CountDecl {
 }
 
 /// `Scatter(name, keys, slots, offsets, input, output, over, counted)`: for each element `i`,
-/// `output[offsets[keys[i]] + slots[i]] = input[i]`.
+/// `output[offsets[keys[i]] + slots[i]] = input[i]`, or `= i` without `input` (the permutation
+/// that sorts, for elements too large to move: readers then load `input[output[k]]`).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScatterDecl {
@@ -223,9 +252,34 @@ pub struct ScatterDecl {
     pub slots: String,
     /// Each bucket's first place (`u32`, e.g. the exclusive scan of the counts).
     pub offsets: String,
-    /// The elements (any type).
+    /// The elements (any type); omitted, each element's index `i` (`u32`) moves instead.
+    #[serde(default)]
+    pub input: Option<String>,
+    /// Where they go (the input's element type, or `u32` without an input).
+    pub output: String,
+    /// Elements.
+    pub over: String,
+    /// A GPU counter of the elements (at most `over`).
+    #[serde(default)]
+    pub counted: Option<String>,
+    /// Constant expression; the operator is culled when it is 0.
+    #[serde(default)]
+    pub enabled: Option<String>,
+}
+
+/// `Gather(name, indices, input, output, over, counted)`: for each element `i`,
+/// `output[i] = input[indices[i]]` (after a `Scatter` of indices, the sorted elements written
+/// in order, where a scatter of large elements would write each one to a random place).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GatherDecl {
+    /// Operator name.
+    pub name: String,
+    /// Each element's place in `input` (`u32`).
+    pub indices: String,
+    /// The elements read (any type).
     pub input: String,
-    /// Where they go (the same element type).
+    /// Where they go, in the order of `indices` (the same element type).
     pub output: String,
     /// Elements.
     pub over: String,

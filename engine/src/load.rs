@@ -584,13 +584,22 @@ impl Declared {
                     ),
                 ));
             }
-            if let crate::operator::OpKind::Scatter { input, output, .. } = &op.kind {
+            let moved = match &op.kind {
+                crate::operator::OpKind::Scatter {
+                    input: Some(input),
+                    output,
+                    ..
+                }
+                | crate::operator::OpKind::Gather { input, output, .. } => Some((input, output)),
+                _ => None,
+            };
+            if let Some((input, output)) = moved {
                 let (a, b) = (&self.resources[input].ty, &self.resources[output].ty);
                 if a != b {
                     return Err(here(
                         output,
                         format!(
-                            "operator '{}' scatters '{input}' ({a}) into '{output}' ({b}); both must hold the same type",
+                            "operator '{}' moves '{input}' ({a}) into '{output}' ({b}); both must hold the same type",
                             op.name
                         ),
                     ));
@@ -706,6 +715,16 @@ impl Declared {
             for c in [&m.ratio.0, &m.ratio.1] {
                 if !self.counters.contains(c) {
                     return Err(err(format!("measured constant '{name}': no counter '{c}'")));
+                }
+            }
+            if let Some(value) = &m.value {
+                let e = Expr::parse(value).map_err(|why| err(format!("measured constant '{name}': value: {why}")))?;
+                let known = |n: &String| n == crate::ir::MEASURED_RATIO || self.constants.contains_key(n);
+                if let Some(n) = e.names().into_iter().find(|n| !known(n)) {
+                    return Err(err(format!(
+                        "measured constant '{name}': value uses '{n}', which is neither {} nor a constant",
+                        crate::ir::MEASURED_RATIO
+                    )));
                 }
             }
             for (c, v) in &m.set {

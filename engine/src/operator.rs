@@ -45,7 +45,7 @@ pub enum OpKind {
         /// Slots in the buckets.
         slots: String,
     },
-    /// `output[offsets[keys[i]] + slots[i]] = input[i]`.
+    /// `output[offsets[keys[i]] + slots[i]] = input[i]`, or `= i` without an input.
     Scatter {
         /// Buckets.
         keys: String,
@@ -53,9 +53,18 @@ pub enum OpKind {
         slots: String,
         /// First place of each bucket.
         offsets: String,
+        /// Elements; `None` moves each element's index.
+        input: Option<String>,
+        /// Sorted elements (or their indices).
+        output: String,
+    },
+    /// `output[i] = input[indices[i]]`.
+    Gather {
+        /// Each element's place in `input`.
+        indices: String,
         /// Elements.
         input: String,
-        /// Sorted elements.
+        /// The elements in the order of `indices`.
         output: String,
     },
     /// Stable ascending sort of `keys` by their low `bits` bits, `values` moved alongside.
@@ -138,6 +147,14 @@ impl Operator {
                 };
                 (&d.name, kind, Some(domain(&d.over, &d.counted)?), &d.enabled)
             }
+            PassEntry::Gather(d) => {
+                let kind = OpKind::Gather {
+                    indices: d.indices.clone(),
+                    input: d.input.clone(),
+                    output: d.output.clone(),
+                };
+                (&d.name, kind, Some(domain(&d.over, &d.counted)?), &d.enabled)
+            }
             PassEntry::Sort(d) => {
                 if !(1..=32).contains(&d.bits) {
                     let why = format!("operator '{}': bits {} is not in 1..=32", d.name, d.bits);
@@ -167,6 +184,7 @@ impl Operator {
             OpKind::Scan { .. } => "exclusive scan",
             OpKind::Count { .. } => "count (counting sort)",
             OpKind::Scatter { .. } => "scatter (counting sort)",
+            OpKind::Gather { .. } => "gather",
             OpKind::Sort { .. } => "radix sort",
         }
     }
@@ -183,7 +201,12 @@ impl Operator {
                 offsets,
                 input,
                 ..
-            } => vec![keys, slots, offsets, input],
+            } => [keys, slots, offsets]
+                .into_iter()
+                .chain(input)
+                .map(String::as_str)
+                .collect(),
+            OpKind::Gather { indices, input, .. } => vec![indices, input],
             OpKind::Sort { keys, values, .. } => vec![keys, values],
         };
         if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
@@ -198,7 +221,7 @@ impl Operator {
             OpKind::Clear { buffer, .. } => vec![buffer],
             OpKind::Scan { output, .. } => vec![output],
             OpKind::Count { counts, slots, .. } => vec![counts, slots],
-            OpKind::Scatter { output, .. } => vec![output],
+            OpKind::Scatter { output, .. } | OpKind::Gather { output, .. } => vec![output],
             OpKind::Sort { keys, values, .. } => vec![keys, values],
         }
     }
@@ -218,13 +241,24 @@ impl Operator {
                 offsets,
                 input,
                 output,
-            } => vec![
-                (keys, Some("u32")),
-                (slots, Some("u32")),
-                (offsets, Some("u32")),
-                (input, None),
-                (output, None),
-            ],
+            } => match input {
+                Some(input) => vec![
+                    (keys, Some("u32")),
+                    (slots, Some("u32")),
+                    (offsets, Some("u32")),
+                    (input, None),
+                    (output, None),
+                ],
+                None => vec![
+                    (keys, Some("u32")),
+                    (slots, Some("u32")),
+                    (offsets, Some("u32")),
+                    (output, Some("u32")),
+                ],
+            },
+            OpKind::Gather { indices, input, output } => {
+                vec![(indices, Some("u32")), (input, None), (output, None)]
+            }
             OpKind::Sort { keys, values, .. } => vec![(keys, Some("u32")), (values, Some("u32"))],
         };
         if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {

@@ -223,7 +223,10 @@ fn control_map(plan: &Plan) -> ControlMap {
         }
     }
     for (o, op) in g.ops.iter().enumerate() {
-        if matches!(op.kind, OpKind::Count { .. } | OpKind::Scatter { .. }) {
+        if matches!(
+            op.kind,
+            OpKind::Count { .. } | OpKind::Scatter { .. } | OpKind::Gather { .. }
+        ) {
             control.op_overflow.insert(OpId(o), word());
         }
     }
@@ -423,7 +426,10 @@ impl Resolved {
             }
             OpKind::Scan { input, output } => vec![input, output],
             OpKind::Count { keys, slots, .. } => vec![keys, slots],
-            OpKind::Scatter { keys, slots, input, .. } => vec![keys, slots, input],
+            OpKind::Scatter { keys, slots, input, .. } => {
+                [keys, slots].into_iter().chain(input).map(String::as_str).collect()
+            }
+            OpKind::Gather { indices, output, .. } => vec![indices, output],
             OpKind::Sort { keys, values, .. } => vec![keys, values],
         };
         for b in per_element {

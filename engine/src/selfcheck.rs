@@ -1,8 +1,9 @@
 //! The engine's collective operators checked against the CPU and timed: an exclusive scan of
 //! `n` words, and a counting sort (clear, count, scan of the bucket counts, scatter) of `n`
 //! 12-byte elements into `buckets` buckets, whose 48-byte elements (a cache vertex's size,
-//! moved as 16-byte vectors) a second scatter places likewise, all from one graph run on any
-//! adapter; the
+//! moved as 16-byte vectors) a second scatter places likewise, and a third scatter places the
+//! elements' indices (the sorting permutation), through which a gather reads the 48-byte
+//! elements into place again, all from one graph run on any adapter; the
 //! radix sort in [`sort`]. The tests run them at the sizes lavapipe allows; `lightgraph
 //! operators` runs them on a GPU.
 
@@ -30,6 +31,8 @@ const GRAPH: &str = r#"// Exclusive scan and counting sort of host-written data 
         Scan(name: "bucket_starts", input: "counts", output: "starts", over: "BUCKETS"),
         Scatter(name: "scatter", keys: "keys", slots: "slots", offsets: "starts", input: "payload", output: "sorted", over: "N"),
         Scatter(name: "scatter_wide", keys: "keys", slots: "slots", offsets: "starts", input: "wide", output: "wide_sorted", over: "N"),
+        Scatter(name: "scatter_index", keys: "keys", slots: "slots", offsets: "starts", output: "order", over: "N"),
+        Gather(name: "gather_wide", indices: "order", input: "wide", output: "wide_gathered", over: "N"),
     ],
     resources: {
         "values": (ty: "u32", count: "max(N, 1)"),
@@ -42,9 +45,11 @@ const GRAPH: &str = r#"// Exclusive scan and counting sort of host-written data 
         "sorted": (ty: "Payload", count: "max(N, 1)"),
         "wide": (ty: "Wide", count: "max(N, 1)"),
         "wide_sorted": (ty: "Wide", count: "max(N, 1)"),
+        "order": (ty: "u32", count: "max(N, 1)"),
+        "wide_gathered": (ty: "Wide", count: "max(N, 1)"),
     },
     constants: { "N": U32(1), "BUCKETS": U32(1) },
-    outputs: ["sums", "slots", "starts", "sorted", "wide_sorted"],
+    outputs: ["sums", "slots", "starts", "sorted", "wide_sorted", "order", "wide_gathered"],
     layouts: { "operators": (kernels: []) },
     default_layout: "operators",
 )
@@ -174,6 +179,18 @@ fn compare(values: &[u32], keys: &[u32], buckets: u64, out: &Outputs) -> Option<
                 out.wide_sorted[place]
             ));
         }
+        if out.order[place] != i as u32 {
+            return Some(format!(
+                "sort of indices: place {place} holds {}, element {i} is there",
+                out.order[place]
+            ));
+        }
+        if out.wide_gathered[place] != want {
+            return Some(format!(
+                "gather through the sorted indices: place {place} holds {:?}, element {i} is {want:?}",
+                out.wide_gathered[place]
+            ));
+        }
     }
     None
 }
@@ -196,6 +213,10 @@ pub struct Outputs {
     pub sorted: Vec<[u32; 3]>,
     /// The sorted 48-byte elements.
     pub wide_sorted: Vec<[u32; 12]>,
+    /// Each place's element index (the sorting permutation).
+    pub order: Vec<u32>,
+    /// The 48-byte elements gathered through `order`.
+    pub wide_gathered: Vec<[u32; 12]>,
     /// GPU seconds of the scan (median of the runs; `None` without timestamps).
     pub scan_seconds: Option<f64>,
     /// GPU seconds of the counting sort: clear, count, scan, scatter (median of the runs).
@@ -259,13 +280,16 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         sort.extend(seconds(&op_kernels[1..5]));
     }
     let read = |name: &str| -> Result<Vec<u32>> { Ok(bytemuck::pod_collect_to_vec(&instance.read(name)?)) };
-    let (mut sums, mut slots, starts) = (read("sums")?, read("slots")?, read("starts")?);
+    let (mut sums, mut slots, starts, mut order) = (read("sums")?, read("slots")?, read("starts")?, read("order")?);
     let mut sorted: Vec<[u32; 3]> = bytemuck::pod_collect_to_vec(&instance.read("sorted")?);
     let mut wide_sorted: Vec<[u32; 12]> = bytemuck::pod_collect_to_vec(&instance.read("wide_sorted")?);
     sums.truncate(n);
     slots.truncate(n);
     sorted.truncate(n);
     wide_sorted.truncate(n);
+    order.truncate(n);
+    let mut wide_gathered: Vec<[u32; 12]> = bytemuck::pod_collect_to_vec(&instance.read("wide_gathered")?);
+    wide_gathered.truncate(n);
     let kernels = op_kernels
         .iter()
         .flatten()
@@ -278,6 +302,8 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         starts,
         sorted,
         wide_sorted,
+        order,
+        wide_gathered,
         scan_seconds: median(scan),
         sort_seconds: median(sort),
         kernels,

@@ -177,7 +177,23 @@ fn operators_are_checked() {
         ),
         (
             "Scatter(name: \"sort\", keys: \"steps\", slots: \"scratch\", offsets: \"summary\", input: \"steps\", output: \"floats\", over: \"N\"),",
-            "operator 'sort' scatters 'steps' (u32) into 'floats' (f32); both must hold the same type",
+            "operator 'sort' moves 'steps' (u32) into 'floats' (f32); both must hold the same type",
+        ),
+        (
+            "Scatter(name: \"order\", keys: \"steps\", slots: \"scratch\", offsets: \"summary\", output: \"floats\", over: \"N\"),",
+            "needs u32 elements in 'floats', which holds 'f32'",
+        ),
+        (
+            "Scatter(name: \"order\", keys: \"steps\", slots: \"scratch\", offsets: \"summary\", output: \"histogram\", over: \"N\"),",
+            "",
+        ),
+        (
+            "Gather(name: \"fetch\", indices: \"steps\", input: \"steps\", output: \"floats\", over: \"N\"),",
+            "operator 'fetch' moves 'steps' (u32) into 'floats' (f32); both must hold the same type",
+        ),
+        (
+            "Gather(name: \"fetch\", indices: \"floats\", input: \"steps\", output: \"scratch\", over: \"N\"),",
+            "needs u32 elements in 'floats', which holds 'f32'",
         ),
         (
             "Scan(name: \"sums\", input: \"floats\", over: \"N\"),",
@@ -271,5 +287,42 @@ fn an_operator_condition_is_located_where_it_stands() {
     assert!(
         e.starts_with(&format!("bad.ron:{line}:")) && e.contains("operator 'wipe': enabled"),
         "{e}"
+    );
+}
+
+#[test]
+fn measured_values_are_checked_and_read_the_ratio() {
+    let measured = |value: &str| {
+        base()
+            .replace("\"BINS\": U32(64) },", "\"BINS\": U32(64), \"SCALE\": F32(1.0) },")
+            .replace(
+                "    counters: [",
+                &format!("    measured: {{ \"SCALE\": (ratio: (\"iterations\", \"walks\"), value: \"{value}\") }},\n    counters: ["),
+            )
+    };
+    let e = error_of(&measured("1 + 2 * (RATIO < WIDTH)"));
+    assert!(
+        e.contains("measured constant 'SCALE': value uses 'WIDTH', which is neither RATIO nor a constant"),
+        "{e}"
+    );
+    let e = error_of(&measured("1 + * RATIO"));
+    assert!(e.contains("measured constant 'SCALE': value:"), "{e}");
+    let g = Graph::from_text(&vfs(), "good.ron", &measured("1 + 2 * (RATIO < BINS / 128)")).unwrap();
+    let m = &g.measured["SCALE"];
+    let constants = [("BINS".to_string(), lightgraph_engine::ConstValue::U32(64))].into();
+    // BINS / 128 = 0.5: a ratio of 0.25 is below it, 0.75 is not, and no walks at all reads 0.
+    assert_eq!(m.value_from(1, 4, &constants), Ok(3.0));
+    assert_eq!(m.value_from(3, 4, &constants), Ok(1.0));
+    assert_eq!(m.value_from(5, 0, &constants), Ok(3.0));
+    let plain = lightgraph_engine::ir::MeasuredDecl {
+        value: None,
+        ..m.clone()
+    };
+    assert_eq!(plain.value_from(3, 4, &constants), Ok(0.75));
+    assert!(
+        plain
+            .value_from(3, 0, &constants)
+            .unwrap_err()
+            .contains("counter 'walks' stayed 0")
     );
 }

@@ -6,8 +6,8 @@
 // the connections count n / LVC_AVERAGE_LENGTH (the measured M / PATHS) against the other
 // strategies. With LVC_MEASURING the light phase only counts the vertices it would store.
 // The cache is put in sub-path order after the light phase by the engine's operators (an
-// exclusive scan of the vertices per sub-path, then a scatter; graphs/bpt-lvc.ron), so every
-// layout picks the same vertices for the same seed.
+// exclusive scan of the vertices per sub-path, a scatter of their indices, a gather of the
+// vertices; graphs/bpt-lvc.ron), so every layout picks the same vertices for the same seed.
 
 // Connections per camera vertex: ceil of the measured average (at least 1).
 fn lvc_connections() -> u32 {
@@ -29,14 +29,19 @@ fn lvc_light_generate(p: ptr<function, LightPath>, index: u32) -> bool {
 // Pass `lvc_bounce` (Loop): at the light sub-path's new vertex, the t = 1 splat, the vertex
 // into the cache (`lvc_store`), and the next direction.
 fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
-    return lvc_light_visit(p, mis_counts(lvc_eta()), 2u);
+    var stored = LVC_NOT_STORED;
+    return lvc_light_visit(p, mis_counts(lvc_eta()), 2u, &stored);
 }
+
+// `lvc_store`'s place of a vertex it did not store.
+const LVC_NOT_STORED: u32 = 0xffffffffu;
 
 // A light sub-path of LVC-BPT or VCM at its new vertex, strategies counted as `counts`: the
 // vertex into the cache when a camera sub-path can still reach it with `reach` segments (2
-// for a connection, 1 for a merge), the t = 1 splat (with connections), and the next
-// direction; false when the sub-path ends.
-fn lvc_light_visit(p: ptr<function, LightPath>, counts: MisCounts, reach: u32) -> bool {
+// for a connection, 1 for a merge; its place in `lvc_staging` into `stored`, left as it was
+// otherwise), the t = 1 splat (with connections), and the next direction; false when the
+// sub-path ends.
+fn lvc_light_visit(p: ptr<function, LightPath>, counts: MisCounts, reach: u32, stored: ptr<function, u32>) -> bool {
     let a = light_path_land(p);
     if (!a.alive) {
         return false;
@@ -46,7 +51,7 @@ fn lvc_light_visit(p: ptr<function, LightPath>, counts: MisCounts, reach: u32) -
     if (!bsdf.is_delta) {
         let v = light_vertex_at(*p, s);
         if ((*p).length + reach <= MAX_PATH_LENGTH) {
-            lvc_store(p, v);
+            *stored = lvc_store(p, v);
         }
         if (counts.vc && !LVC_MEASURING && (*p).length + 1u <= MAX_PATH_LENGTH) {
             let ray = light_vertex_to_camera(v, bsdf, counts);
@@ -64,11 +69,11 @@ fn lvc_light_visit(p: ptr<function, LightPath>, counts: MisCounts, reach: u32) -
 // Stores light vertex `v` of sub-path `p` in arrival order in `lvc_staging` (counted as
 // overflow when the cache is full), with its sub-path (`lvc_owner`) and its rank along the
 // sub-path (`lvc_rank`) for the scatter that puts the cache in sub-path order; the measuring
-// frame only counts it.
-fn lvc_store(p: ptr<function, LightPath>, v: LightVertex) {
+// frame only counts it. Returns its place in `lvc_staging`, or LVC_NOT_STORED.
+fn lvc_store(p: ptr<function, LightPath>, v: LightVertex) -> u32 {
     count(COUNTER_LVC_STORED, 1u);
     if (LVC_MEASURING) {
-        return;
+        return LVC_NOT_STORED;
     }
     let i = atomicAdd(&lvc_count, 1u);
     if (i < arrayLength(&lvc_staging)) {
@@ -77,9 +82,10 @@ fn lvc_store(p: ptr<function, LightPath>, v: LightVertex) {
         lvc_staging[i] = v;
         lvc_owner[i] = (*p).index;
         lvc_rank[i] = rank;
-    } else {
-        count(COUNTER_LVC_OVERFLOW, 1u);
+        return i;
     }
+    count(COUNTER_LVC_OVERFLOW, 1u);
+    return LVC_NOT_STORED;
 }
 
 // Pass `lvc_camera` (Start over PATHS): the camera ray of sample `index` (culled from the

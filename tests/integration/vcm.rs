@@ -47,6 +47,29 @@ fn vcm_without_merging_renders_lvc_bpt() {
     }
 }
 
+/// VCM measures its hash grid's cell scale (`PM_CELL_SCALE`, graphs/vcm.ron) from a frame's
+/// cached vertices found per merge query: 3 on the diffuse box at the default radius, where a
+/// query at 32x32 finds about 0.01 of them, 1 at a radius 17 times larger (about 2 a query).
+#[test]
+fn vcm_measures_larger_cells_where_merges_find_little() {
+    let scene = load_scene("cornell-diffuse").unwrap();
+    let scale = |radius: f32| {
+        let owned = measured(
+            &scene,
+            "vcm",
+            "VCMsk",
+            ((32, 32), 1, 7),
+            &[("PM_RADIUS", ConstValue::F32(radius))],
+        );
+        owned
+            .into_iter()
+            .find(|(name, _)| name == "PM_CELL_SCALE")
+            .map(|(_, v)| v)
+    };
+    assert_eq!(scale(0.003), Some(ConstValue::F32(3.0)));
+    assert_eq!(scale(0.05), Some(ConstValue::F32(1.0)));
+}
+
 /// VCM with VCM_CONNECT false traces PBPM's sub-paths with its random numbers (no light
 /// sampling), merges the same vertices (stored at the same places, their directions in the
 /// photons' 24 bits) with PBPM's weights, and counts the light PBPM counts: the same image
