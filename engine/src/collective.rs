@@ -166,12 +166,13 @@ pub(crate) fn element_entry(name: &str) -> String {
 pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, items: u32) -> Vec<OpKernel> {
     let counted = op.domain.as_ref().and_then(|d| d.counted.as_deref());
     let words = |r: &str| resolved.sizes[r].element_bytes / 4;
+    let resource = |r: &String| BufferRef::Resource(r.clone());
     let element = Groups::elements(WORKGROUP as u64);
     let prefix = format!("lg_op{}", o.0);
     match &op.kind {
         OpKind::Clear { buffer, value, .. } => {
             let mut m = Module::new(false);
-            m.bind("lg_buffer", "array<u32>", BufferRef::Resource(buffer.clone()));
+            m.bind("lg_buffer", "array<u32>", resource(buffer));
             let name = format!("{prefix}_fill");
             // The record's base and count are the first word and the words to fill.
             let _ = write!(
@@ -184,9 +185,9 @@ pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, 
         }
         OpKind::Count { keys, counts, slots } => {
             let mut m = Module::new(true);
-            m.bind("lg_keys", "array<u32>", BufferRef::Resource(keys.clone()));
-            m.bind("lg_counts", "array<atomic<u32>>", BufferRef::Resource(counts.clone()));
-            m.bind("lg_slots", "array<u32>", BufferRef::Resource(slots.clone()));
+            m.bind("lg_keys", "array<u32>", resource(keys));
+            m.bind("lg_counts", "array<atomic<u32>>", resource(counts));
+            m.bind("lg_slots", "array<u32>", resource(slots));
             m.element_count(counted);
             let name = format!("{prefix}_count");
             let overflow = resolved.control.op_overflow[&o];
@@ -204,29 +205,28 @@ pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, 
             input,
             output,
         } => {
-            let buffer = |b: &String| BufferRef::Resource(b.clone());
-            let sorted = [keys, slots, offsets].map(buffer);
-            let moved = input.as_ref().map(|i| (buffer(i), words(i)));
+            let sorted = [keys, slots, offsets].map(resource);
+            let moved = input.as_ref().map(|i| (resource(i), words(i)));
             let overflow = resolved.control.op_overflow[&o];
             vec![scatter_kernel(
                 &prefix,
                 sorted,
                 moved,
-                buffer(output),
+                resource(output),
                 counted,
                 overflow,
             )]
         }
         OpKind::Gather { indices, input, output } => {
-            let buffers = [indices, input, output].map(|b| BufferRef::Resource(b.clone()));
+            let buffers = [indices, input, output].map(resource);
             let overflow = resolved.control.op_overflow[&o];
             vec![gather_kernel(&prefix, buffers, counted, words(input), overflow)]
         }
         OpKind::Scan { input, output } => {
             let scan = Scan {
                 o,
-                input: BufferRef::Resource(input.clone()),
-                output: BufferRef::Resource(output.clone()),
+                input: resource(input),
+                output: resource(output),
                 partials: 0,
                 levels: resolved.op_scratch[&o].len(),
                 length: "lg_n()".to_string(),

@@ -241,21 +241,18 @@ impl Operator {
                 offsets,
                 input,
                 output,
-            } => match input {
-                Some(input) => vec![
-                    (keys, Some("u32")),
+            } => {
+                let mut out = vec![
+                    (keys.as_str(), Some("u32")),
                     (slots, Some("u32")),
                     (offsets, Some("u32")),
-                    (input, None),
-                    (output, None),
-                ],
-                None => vec![
-                    (keys, Some("u32")),
-                    (slots, Some("u32")),
-                    (offsets, Some("u32")),
-                    (output, Some("u32")),
-                ],
-            },
+                ];
+                match input {
+                    Some(input) => out.extend([(input.as_str(), None), (output, None)]),
+                    None => out.push((output, Some("u32"))),
+                }
+                out
+            }
             OpKind::Gather { indices, input, output } => {
                 vec![(indices, Some("u32")), (input, None), (output, None)]
             }

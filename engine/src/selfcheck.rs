@@ -279,17 +279,7 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         scan.extend(seconds(&op_kernels[..1]));
         sort.extend(seconds(&op_kernels[1..5]));
     }
-    let read = |name: &str| -> Result<Vec<u32>> { Ok(bytemuck::pod_collect_to_vec(&instance.read(name)?)) };
-    let (mut sums, mut slots, starts, mut order) = (read("sums")?, read("slots")?, read("starts")?, read("order")?);
-    let mut sorted: Vec<[u32; 3]> = bytemuck::pod_collect_to_vec(&instance.read("sorted")?);
-    let mut wide_sorted: Vec<[u32; 12]> = bytemuck::pod_collect_to_vec(&instance.read("wide_sorted")?);
-    sums.truncate(n);
-    slots.truncate(n);
-    sorted.truncate(n);
-    wide_sorted.truncate(n);
-    order.truncate(n);
-    let mut wide_gathered: Vec<[u32; 12]> = bytemuck::pod_collect_to_vec(&instance.read("wide_gathered")?);
-    wide_gathered.truncate(n);
+    let starts: Vec<u32> = bytemuck::pod_collect_to_vec(&instance.read("starts")?);
     let kernels = op_kernels
         .iter()
         .flatten()
@@ -297,17 +287,24 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         .filter_map(|(name, times)| median(times).map(|t| (name.clone(), t)))
         .collect();
     Ok(Outputs {
-        sums,
-        slots,
+        sums: first_elements(&instance, "sums", n)?,
+        slots: first_elements(&instance, "slots", n)?,
         starts,
-        sorted,
-        wide_sorted,
-        order,
-        wide_gathered,
+        sorted: first_elements(&instance, "sorted", n)?,
+        wide_sorted: first_elements(&instance, "wide_sorted", n)?,
+        order: first_elements(&instance, "order", n)?,
+        wide_gathered: first_elements(&instance, "wide_gathered", n)?,
         scan_seconds: median(scan),
         sort_seconds: median(sort),
         kernels,
     })
+}
+
+/// The first `n` elements of buffer `name` (buffers hold at least one element).
+fn first_elements<T: bytemuck::Pod>(instance: &Instance, name: &str, n: usize) -> Result<Vec<T>> {
+    let mut out: Vec<T> = bytemuck::pod_collect_to_vec(&instance.read(name)?);
+    out.truncate(n);
+    Ok(out)
 }
 
 /// The element the sort carries for element `i` with key `k`.
