@@ -57,7 +57,7 @@ pub struct Groups {
     /// level below.
     pub level: usize,
     /// `Some((tile, words))` when level 0 is not the elements but `words` words per tile of
-    /// `tile` elements (a sort's digit histograms).
+    /// `tile` elements (a sort's digit histograms; a gather's words, one thread each).
     pub per_tile: Option<(u64, u64)>,
 }
 
@@ -303,8 +303,9 @@ fn moved_words(w: u32) -> (&'static str, u32) {
 }
 
 /// The gather over `buffers` (indices, input, output) of elements of `w` words: each element
-/// from the place its index names, written in order (16-byte vectors as the scatter's). An
-/// index past the input is counted as skipped.
+/// from the place its index names, written in order, one thread per moved word (16-byte
+/// vectors as the scatter's), so that a warp's stores are contiguous and the threads of one
+/// element read its words together. An index past the input is counted as skipped.
 fn gather_kernel(prefix: &str, buffers: [BufferRef; 3], counted: Option<&str>, w: u32, overflow: u32) -> OpKernel {
     let mut m = Module::new(true);
     let [indices, input, output] = buffers;
@@ -314,16 +315,17 @@ fn gather_kernel(prefix: &str, buffers: [BufferRef; 3], counted: Option<&str>, w
     m.bind("lg_output", &format!("array<{word}>"), output);
     m.element_count(counted);
     let name = format!("{prefix}_gather");
-    let mut copy = String::new();
-    for k in 0..w {
-        let _ = writeln!(copy, "    lg_output[i * {w}u + {k}u] = lg_input[s * {w}u + {k}u];");
-    }
+    // Thread `i` moves word `k` of element `e`.
     let _ = write!(
         m.text,
-        "{}    if (i >= lg_n()) {{ return; }}\n    let s = lg_indices[i];\n    if (s >= arrayLength(&lg_input) / {w}u || i >= arrayLength(&lg_output) / {w}u) {{\n        atomicAdd(&lg_control[{overflow}], 1u);\n        return;\n    }}\n{copy}}}\n",
+        "{}    let e = i / {w}u;\n    let k = i - e * {w}u;\n    if (e >= lg_n()) {{ return; }}\n    let s = lg_indices[e];\n    if (s >= arrayLength(&lg_input) / {w}u || e >= arrayLength(&lg_output) / {w}u) {{\n        if (k == 0u) {{ atomicAdd(&lg_control[{overflow}], 1u); }}\n        return;\n    }}\n    lg_output[i] = lg_input[s * {w}u + k];\n}}\n",
         element_entry(&name)
     );
-    m.finish(name, Groups::elements(WORKGROUP as u64))
+    let groups = Groups {
+        per_tile: Some((1, w as u64)),
+        ..Groups::elements(WORKGROUP as u64)
+    };
+    m.finish(name, groups)
 }
 
 /// A scan to generate.

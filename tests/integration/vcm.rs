@@ -70,6 +70,41 @@ fn vcm_measures_larger_cells_where_merges_find_little() {
     assert_eq!(scale(0.05), Some(ConstValue::F32(1.0)));
 }
 
+/// A merge walks its box of cells (at most 2 along each axis where the cells are at least the
+/// query's diameter, more where they are smaller, whose buckets may then coincide) and resumes
+/// the walk after every VCM_FOUND_BATCH vertices found: cells of other sizes and other numbers
+/// of buckets must find the same vertices (each once, in its own cell's visit) and render the
+/// same image, at a radius where queries find many. Scales below 0.5 are left out: their long
+/// walks run VCMsk's persistent threads past lavapipe's cap on a shader's loop iterations
+/// (docs/performance.md, "Persistent threads on lavapipe"), which then loses sub-paths.
+#[test]
+fn vcm_cells_of_any_size_find_the_same_vertices() {
+    let scene = load_scene("cornell-glossy-mirrorball").unwrap();
+    let radius = ("PM_RADIUS", ConstValue::F32(0.05));
+    let owned = measured(&scene, "vcm", "VCMsk", ((16, 16), 2, 46), &[radius]);
+    let run = |scale: f32, buckets: f32| {
+        let mut constants = borrowed(&owned);
+        constants.retain(|(name, _)| *name != "PM_CELL_SCALE");
+        constants.extend([
+            radius,
+            ("PM_CELL_SCALE", ConstValue::F32(scale)),
+            ("PM_BUCKETS_PER_PATH", ConstValue::F32(buckets)),
+        ]);
+        render(&scene, "vcm", "VCMsk", (16, 16), 2, 2, 46, &constants)
+    };
+    let reference = run(1.0, 4.0);
+    assert!(reference.counters["pm_found"] > 1000, "too few merges to compare");
+    for (scale, buckets) in [(3.0, 4.0), (0.5, 1.0), (0.7, 2.0), (1.0, 0.25)] {
+        let other = run(scale, buckets);
+        let what = format!("cell scale {scale}, {buckets} buckets a path");
+        assert_eq!(
+            reference.counters["pm_found"], other.counters["pm_found"],
+            "{what}: different vertices merged"
+        );
+        assert_same_render(&reference, &other, &what);
+    }
+}
+
 /// VCM with VCM_CONNECT false traces PBPM's sub-paths with its random numbers (no light
 /// sampling), merges the same vertices (stored at the same places, their directions in the
 /// photons' 24 bits) with PBPM's weights, and counts the light PBPM counts: the same image
