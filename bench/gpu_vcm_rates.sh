@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Issue 13's two VCM rates at the defaults (docs/performance.md, "Sorting the cache by a
-# gather, grid keys in the light phase, a measured cell scale"): three interleaved rounds of
+# Issue 13's two VCM rates at the defaults (docs/performance.md, "A gather a word a thread, a
+# cheaper cell hash", and before it "Sorting the cache by a gather, grid keys in the light
+# phase, a measured cell scale"): three interleaved rounds of
 # LVC-BPTsk and VCMsk on Sponza at 1280x720x1 and of VCMsk (with its default workgroup and with
 # 512 threads a workgroup) and LVC-BPTsk on the diffuse box at 256x256 with 64 iterations a
 # frame; then, on the glossy box with the sun, LivingRoom, ModernHall and VeachBidir, the cell
