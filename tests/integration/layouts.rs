@@ -347,8 +347,9 @@ fn frames_at_once(scene: &LoadedScene, graph: &Graph, layout: &str, n: u32) -> (
 /// against layouts without, at a GPU's sizes: the same rays and the same image at 512×512.
 /// Ignored by default: lavapipe (Mesa 22.3, as in CI) loses a few items in those kernels from
 /// a few thousand items on, differently from run to run (at 64×64, LVC-BPTsk traced 4091 or
-/// 4092 of 4096 camera paths), which the H100 does not (docs/performance.md, "Persistent
-/// threads on lavapipe"). Run it on a GPU: `cargo test --release -- --ignored`.
+/// 4092 of 4096 camera paths): a persistent thread runs the loops of all the items it takes
+/// in one invocation, and lavapipe ends an invocation's loops after 65,535 iterations in all.
+/// The H100 does not (docs/performance.md, "Persistent threads on lavapipe"). Run it on a GPU: `cargo test --release -- --ignored`.
 #[test]
 #[ignore]
 fn persistent_thread_layouts_match_at_gpu_sizes() {
