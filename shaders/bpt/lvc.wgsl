@@ -29,19 +29,30 @@ fn lvc_light_generate(p: ptr<function, LightPath>, index: u32) -> bool {
 // Pass `lvc_bounce` (Loop): at the light sub-path's new vertex, the t = 1 splat, the vertex
 // into the cache (`lvc_store`), and the next direction.
 fn lvc_bounce(p: ptr<function, LightPath>) -> bool {
-    var stored = LVC_NOT_STORED;
+    var stored = lvc_none_stored();
     return lvc_light_visit(p, mis_counts(lvc_eta()), 2u, &stored);
 }
 
 // `lvc_store`'s place of a vertex it did not store.
 const LVC_NOT_STORED: u32 = 0xffffffffu;
 
+// The vertex `lvc_light_visit` stored: its place in `lvc_staging` (LVC_NOT_STORED for none)
+// and its position.
+struct LvcStored {
+    index: u32,
+    position: vec3<f32>,
+}
+
+fn lvc_none_stored() -> LvcStored {
+    return LvcStored(LVC_NOT_STORED, vec3<f32>(0.0));
+}
+
 // A light sub-path of LVC-BPT or VCM at its new vertex, strategies counted as `counts`: the
 // vertex into the cache when a camera sub-path can still reach it with `reach` segments (2
-// for a connection, 1 for a merge; its place in `lvc_staging` into `stored`, left as it was
+// for a connection, 1 for a merge; its place and position into `stored`, left as it was
 // otherwise), the t = 1 splat (with connections), and the next direction; false when the
 // sub-path ends.
-fn lvc_light_visit(p: ptr<function, LightPath>, counts: MisCounts, reach: u32, stored: ptr<function, u32>) -> bool {
+fn lvc_light_visit(p: ptr<function, LightPath>, counts: MisCounts, reach: u32, stored: ptr<function, LvcStored>) -> bool {
     let a = light_path_land(p);
     if (!a.alive) {
         return false;
@@ -51,7 +62,7 @@ fn lvc_light_visit(p: ptr<function, LightPath>, counts: MisCounts, reach: u32, s
     if (!bsdf.is_delta) {
         let v = light_vertex_at(*p, s);
         if ((*p).length + reach <= MAX_PATH_LENGTH) {
-            *stored = lvc_store(p, v);
+            *stored = LvcStored(lvc_store(p, v), v.position);
         }
         if (counts.vc && !LVC_MEASURING && (*p).length + 1u <= MAX_PATH_LENGTH) {
             let ray = light_vertex_to_camera(v, bsdf, counts);

@@ -45,7 +45,7 @@ fn cell_box(center: vec3<f32>, radius: f32) -> CellBox {
 // to mix the high bits down. Its multiplies are independent, so a merge's walk waits a few
 // instructions per cell where lookup3's final mix (21 dependent steps) took several times as
 // long: on an H100 VCMsk 0.8% faster on Sponza, 0.4% on the diffuse box, PPMsk 0.5% on the
-// box (docs/performance.md, "A cheaper cell hash").
+// box (docs/performance.md, "A gather a word a thread, a cheaper cell hash").
 fn hash_cell(a: u32, b: u32, c: u32) -> u32 {
     var h = (a * 0x8da6b343u) ^ (b * 0xd8163841u) ^ (c * 0xcb1ab31fu);
     h ^= h >> 15u;

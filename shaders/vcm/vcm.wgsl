@@ -58,9 +58,9 @@ fn vcm_light_generate(p: ptr<function, LightPath>, index: u32) -> bool {
 // merge can use it) with its grid key and point (`vcm_grid_key`), the t = 1 splat, and the
 // next direction.
 fn vcm_bounce(p: ptr<function, LightPath>) -> bool {
-    var stored = LVC_NOT_STORED;
+    var stored = lvc_none_stored();
     let alive = lvc_light_visit(p, vcm_counts(), select(2u, 1u, VCM_MERGE), &stored);
-    if (VCM_MERGE && stored != LVC_NOT_STORED) {
+    if (VCM_MERGE && stored.index != LVC_NOT_STORED) {
         vcm_grid_key(stored, (*p).index);
     }
     return alive;
@@ -87,18 +87,17 @@ struct GridPoint {
     vertex: u32,
 }
 
-// Cached vertex `i` of light sub-path `owner`, as the light phase stores it: its hash grid
+// Cached vertex `v` of light sub-path `owner`, as the light phase stores it: its hash grid
 // bucket, in the grid of its sub-path's iteration, and its point, for the grid's `Count`,
 // `Scan` and `Scatter` (written here, where a pass of their own read the vertices back: on an
 // H100 the 256x256 box 2% faster; an atomic count here as well was slower).
-fn vcm_grid_key(i: u32, owner: u32) {
+fn vcm_grid_key(v: LvcStored, owner: u32) {
     var iteration = 0u;
     if (PM_ITERATIONS > 1u) {
         iteration = vcm_iteration(owner);
     }
-    let position = lvc_staging[i].position;
-    grid_key[i] = vcm_bucket(cell_of(position), iteration);
-    vcm_points[i] = GridPoint(position, i);
+    grid_key[v.index] = vcm_bucket(cell_of(v.position), iteration);
+    vcm_points[v.index] = GridPoint(v.position, v.index);
 }
 
 // Pass `vcm_camera` (Start over PATHS): LVC-BPT's camera ray of sample `index`.
