@@ -71,6 +71,52 @@ pub struct GraphFile {
     pub layouts: BTreeMap<String, LayoutDecl>,
     /// The layout used when none is asked for.
     pub default_layout: String,
+    /// What the graph estimates and what it cannot sample, as the application states them:
+    /// the engine keeps them for the application's checks (`lightgraph verify`).
+    #[serde(default)]
+    pub coverage: Coverage,
+}
+
+/// A graph's claims about its estimate, for the application: which quantity it estimates
+/// (graphs of one quantity may be compared) and which samples it cannot draw, each under an
+/// optional condition over the constants. The engine does not read the texts.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Coverage {
+    /// The quantity the graph's output estimates, e.g. `"radiance"`.
+    #[serde(default = "radiance")]
+    pub estimates: String,
+    /// What the graph cannot sample.
+    #[serde(default)]
+    pub misses: Vec<MissDecl>,
+}
+
+impl Default for Coverage {
+    fn default() -> Self {
+        Coverage {
+            estimates: radiance(),
+            misses: Vec::new(),
+        }
+    }
+}
+
+fn radiance() -> String {
+    "radiance".to_string()
+}
+
+/// One class of samples a graph cannot draw.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MissDecl {
+    /// The class, in the application's notation (lightgraph: a path class in Heckbert's
+    /// notation, docs/verify.md).
+    pub paths: String,
+    /// Constant expression: the claim holds only where it is non-zero (always without it).
+    #[serde(default)]
+    pub when: Option<String>,
+    /// Why the graph cannot sample them, for reports.
+    #[serde(default)]
+    pub why: String,
 }
 
 /// How the host measures a constant: it runs one frame of the graph (same layout and

@@ -414,6 +414,7 @@ impl Declared {
         self.check_measured(file)?;
         self.check_parameters(file)?;
         self.check_layout_constants(file)?;
+        self.check_coverage(file)?;
         let g = &self.file;
         if !g.layouts.contains_key(&g.default_layout) {
             return Err(self.sources.at_name(
@@ -421,6 +422,27 @@ impl Declared {
                 &g.default_layout,
                 format!("default layout '{}' is not one of the layouts", g.default_layout),
             ));
+        }
+        Ok(())
+    }
+
+    /// Each `coverage.misses` condition parses and names only constants.
+    fn check_coverage(&self, file: &str) -> Result<()> {
+        for miss in &self.file.coverage.misses {
+            let Some(when) = &miss.when else { continue };
+            let unknown = Expr::parse(when).map(|e| {
+                e.names()
+                    .into_iter()
+                    .find(|n| !self.constants.contains_key(n) && !self.derived.contains_key(n))
+            });
+            let why = match unknown {
+                Err(e) => e,
+                Ok(Some(name)) => format!("'{name}' is not a constant of the graph"),
+                Ok(None) => continue,
+            };
+            return Err(self
+                .sources
+                .at_name(file, when, format!("coverage: when: '{when}': {why}")));
         }
         Ok(())
     }
