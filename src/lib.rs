@@ -23,3 +23,4 @@ pub mod stress;
 pub mod study;
 pub mod tev;
 pub mod tune;
+pub mod verify;

@@ -1,9 +1,10 @@
 //! Options shared by the commands: scene, graph, resolution, constants, layout overrides.
 
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
+use lightgraph::compare::RunSpec;
 use lightgraph::reference::Reference;
-use lightgraph::render::{LayoutOverrides, LoadedScene, SessionOptions};
+use lightgraph::render::{LayoutOverrides, LoadedScene, SessionOptions, load_graph};
 use lightgraph::tev::LiveView;
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::ir::StateStorage;
@@ -349,4 +350,32 @@ pub fn si(v: f64) -> String {
         v if v >= 1e3 => format!("{:.2} k", v / 1e3),
         v => format!("{v:.1} "),
     }
+}
+
+/// Checks that `scene` (named by option `flag`) is a file or a built-in scene (loading it, and
+/// the errors of its content, come in its turn).
+pub fn find_scene(scene: &str, flag: &str) -> Result<()> {
+    if !Path::new(scene).is_file() {
+        lightgraph::assets::scene_text(scene).map_err(|e| anyhow!("{flag}: {e}"))?;
+    }
+    Ok(())
+}
+
+/// The estimators a list of `graph[:Layout][@NAME=VALUE...]` names (option `flag`), each
+/// graph and named layout checked, none named twice.
+pub fn estimator_specs(list: &str, flag: &str) -> Result<Vec<RunSpec>> {
+    if list.split(',').all(|s| s.trim().is_empty()) {
+        bail!("{flag} names no estimator; give graphs or graph:Layout pairs, e.g. pt,bpt-lvc:LVC-BPTmk");
+    }
+    let specs = RunSpec::parse_list(list)?;
+    for (i, spec) in specs.iter().enumerate() {
+        if specs[..i].contains(spec) {
+            bail!("{flag} names {spec} twice");
+        }
+        let graph = load_graph(&spec.graph).with_context(|| format!("{flag} {spec}"))?;
+        if let Some(layout) = &spec.layout {
+            named_layout(&graph, Some(layout)).with_context(|| format!("{flag} {spec}"))?;
+        }
+    }
+    Ok(specs)
 }

@@ -16,6 +16,7 @@ pub mod reference;
 pub mod render;
 pub mod stress;
 pub mod study;
+pub mod verify;
 
 use bench::BenchArgs;
 use clap::{Parser, Subcommand};
@@ -28,6 +29,7 @@ use reference::ReferenceArgs;
 use render::RenderArgs;
 use stress::StressArgs;
 use study::StudyArgs;
+use verify::VerifyArgs;
 
 /// The command line: one of the commands with its arguments.
 #[derive(Parser)]
@@ -58,6 +60,9 @@ pub enum Command {
     /// against a reference per scene: error against time per scene and one summary of the
     /// time each takes to the best final error, and the winner.
     Study(StudyArgs),
+    /// Check every estimator against every other on a list of scenes: which pairs agree,
+    /// which differ (and where), predicted from what each graph declares it cannot sample.
+    Verify(VerifyArgs),
     /// Run the numerical stress suite: extreme scenes with every estimator, each checked
     /// against its invariant.
     Stress(StressArgs),
@@ -91,6 +96,7 @@ impl Cli {
             Command::Reference(a) => a.common.assets.clone(),
             Command::Compare(a) => a.common.assets.clone(),
             Command::Study(a) => a.common.assets.clone(),
+            Command::Verify(a) => a.common.assets.clone(),
             Command::Explain(a) => a.common.assets.clone(),
             Command::Export(a) => a.assets.clone(),
             Command::Bench(a) => a.common.assets.clone(),
@@ -106,6 +112,7 @@ impl Cli {
             Command::Merge(a) => merge::merge(a),
             Command::Compare(a) => compare::compare(a),
             Command::Study(a) => study::study(a),
+            Command::Verify(a) => verify::verify(a),
             Command::Explain(a) => explain::explain(a),
             Command::Export(a) => export::export(a),
             Command::Bench(a) => bench::bench(a),

@@ -5,7 +5,7 @@
 use super::args::*;
 use super::compare::{CompareArgs, check_reference, compare_with, defaults_from_reference, open_gpus_or_adapter};
 use super::reference::ReferenceArgs;
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::compare::RunBudget;
@@ -100,9 +100,9 @@ pub fn study(args: StudyArgs) -> Result<()> {
     // Everything named is checked before anything renders: a typo in the last scene or
     // estimator should not cost the others' time.
     for scene in &args.scenes {
-        find_scene(scene)?;
+        find_scene(scene, "--scenes")?;
     }
-    let estimators = estimator_specs(&args.estimators)?;
+    let estimators = estimator_specs(&args.estimators, "--estimators")?;
     let references = references_dir(&args);
     if folders.iter().any(|f| !reference_path(&references, f).exists()) {
         let graph = load_graph(&args.reference_graph).context("--reference-graph")?;
@@ -138,33 +138,6 @@ pub fn study(args: StudyArgs) -> Result<()> {
         args.out.display()
     );
     Ok(())
-}
-
-/// Checks that `scene` is a file or a built-in scene (loading it, and the errors of its
-/// content, come in its turn).
-fn find_scene(scene: &str) -> Result<()> {
-    if !Path::new(scene).is_file() {
-        lightgraph::assets::scene_text(scene).map_err(|e| anyhow!("--scenes: {e}"))?;
-    }
-    Ok(())
-}
-
-/// The estimators of `--estimators`, each graph and named layout checked, none named twice.
-fn estimator_specs(list: &str) -> Result<Vec<RunSpec>> {
-    if list.split(',').all(|s| s.trim().is_empty()) {
-        bail!("--estimators names no estimator; give graphs or graph:Layout pairs, e.g. pt,bpt-lvc:LVC-BPTmk");
-    }
-    let specs = RunSpec::parse_list(list)?;
-    for (i, spec) in specs.iter().enumerate() {
-        if specs[..i].contains(spec) {
-            bail!("--estimators names {spec} twice");
-        }
-        let graph = load_graph(&spec.graph).with_context(|| format!("--estimators {spec}"))?;
-        if let Some(layout) = &spec.layout {
-            named_layout(&graph, Some(layout)).with_context(|| format!("--estimators {spec}"))?;
-        }
-    }
-    Ok(specs)
 }
 
 /// `--references`, or `<out>/references`.

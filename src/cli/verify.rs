@@ -1,0 +1,342 @@
+//! `lightgraph verify`: every estimator against every other on a list of scenes, with the
+//! films' own noise; the report says which pairs agree, which differ (and where), and which
+//! the budget cannot decide (src/verify, docs/verify.md).
+
+use super::args::*;
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use lightgraph::compare::RunSpec;
+use lightgraph::output::{write_exr, write_png};
+use lightgraph::render::{LoadedScene, load_graph};
+use lightgraph::study::scene_folders;
+use lightgraph::verify::batches::{Amount, Budget, RunBatches, render_batches};
+use lightgraph::verify::paths::{describe, scene_kinds};
+use lightgraph::verify::report::{RunLine, map_name, write_map, write_tables};
+use lightgraph::verify::stats::{TestSettings, compare};
+use lightgraph::verify::{
+    DEFAULT_ESTIMATORS, DEFAULT_SCENES, Miss, Outcome, PairResult, claims, expected_gaps, unconfirmed_gaps,
+};
+use lightgraph_engine::{Gpu, Graph};
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// The arguments of `lightgraph verify`.
+#[derive(Args)]
+pub struct VerifyArgs {
+    #[command(flatten)]
+    pub common: Common,
+    /// Scenes, comma-separated: built-in names or scene files.
+    #[arg(long, value_delimiter = ',', default_value = DEFAULT_SCENES)]
+    pub scenes: Vec<String>,
+    /// Estimators, comma-separated `graph[:Layout][@NAME=VALUE...]`: built-in graphs or your
+    /// own graph files [default: every built-in graph of radiance, and VCM's two halves alone].
+    #[arg(long)]
+    pub graphs: Option<String>,
+    /// Estimators verified besides those of --graphs (or the default set), e.g. your own
+    /// graph file.
+    #[arg(long)]
+    pub add: Option<String>,
+    /// Rendering time of each estimator on each scene (set-up off the clock).
+    #[arg(long, value_parser = humantime::parse_duration, default_value = "10s", conflicts_with = "frames")]
+    pub time: Duration,
+    /// Frames of each estimator on each scene instead of a time (reproducible).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: Option<u32>,
+    /// Batches each run is split into: the samples of the standard errors.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..))]
+    pub batches: u32,
+    /// Side of the blocks compared, in pixels.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
+    pub block: u32,
+    /// Family-wise error of each pair's tests: the chance that estimators that agree are
+    /// called different.
+    #[arg(long, default_value_t = 0.01)]
+    pub alpha: f64,
+    /// The probability with which the test must see the differences below.
+    #[arg(long, default_value_t = 0.9)]
+    pub power: f64,
+    /// Relative difference of the image means the test must see for "agree".
+    #[arg(long, default_value_t = 0.01)]
+    pub detect_mean: f64,
+    /// Relative difference of a block the test must see for "agree" ...
+    #[arg(long, default_value_t = 0.1)]
+    pub detect_block: f64,
+    /// ... in the blocks holding this fraction of the image's light.
+    #[arg(long, default_value_t = 0.9)]
+    pub coverage: f64,
+    /// Relative difference of the image means that is not called a difference even where
+    /// significant (0: none), e.g. for photon mapping's blur at a large radius.
+    #[arg(long, default_value_t = 0.0)]
+    pub tolerance_mean: f64,
+    /// The same for a block's mean.
+    #[arg(long, default_value_t = 0.0)]
+    pub tolerance_block: f64,
+    /// Seed of the runs' random streams (each estimator's its own from it).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u32,
+    /// Output folder: verify.md, verify.csv, and per scene each run's EXR and PNG and a map of
+    /// every pair that differs.
+    #[arg(long, default_value = "out/verify")]
+    pub out: PathBuf,
+    /// Exposure of the PNG previews in stops.
+    #[arg(long, default_value_t = 0.0)]
+    pub exposure: f32,
+}
+
+impl VerifyArgs {
+    fn settings(&self) -> Result<TestSettings> {
+        let unit = |name: &str, v: f64| {
+            if !(v > 0.0 && v < 1.0) {
+                bail!("--{name} {v}: must lie between 0 and 1");
+            }
+            Ok(v)
+        };
+        let tolerance = |name: &str, v: f64| {
+            if !(0.0..1.0).contains(&v) {
+                bail!("--{name} {v}: must be at least 0 and below 1");
+            }
+            Ok(v)
+        };
+        Ok(TestSettings {
+            alpha: unit("alpha", self.alpha)?,
+            power: unit("power", self.power)?,
+            detect_mean: unit("detect-mean", self.detect_mean)?,
+            detect_block: unit("detect-block", self.detect_block)?,
+            coverage: unit("coverage", self.coverage)?,
+            tolerance_mean: tolerance("tolerance-mean", self.tolerance_mean)?,
+            tolerance_block: tolerance("tolerance-block", self.tolerance_block)?,
+        })
+    }
+
+    fn budget(&self) -> Budget {
+        Budget {
+            amount: match self.frames {
+                Some(n) => Amount::Frames(n),
+                None => Amount::Time(self.time),
+            },
+            batches: self.batches,
+        }
+    }
+}
+
+/// One estimator: its label, graph and layout, and its own constant settings.
+struct Estimator {
+    label: String,
+    spec: RunSpec,
+    graph: Graph,
+    layout: String,
+}
+
+/// One estimator's run on a scene, with its claims under the run's constants.
+struct Run {
+    label: String,
+    estimates: String,
+    misses: Vec<Miss>,
+    result: RunBatches,
+}
+
+/// Runs `verify`: every estimator on every scene, the pairs compared, the reports written; an
+/// error when a pair is not as predicted or cannot be decided.
+pub fn verify(args: VerifyArgs) -> Result<()> {
+    if let Some(scene) = &args.common.scene {
+        bail!("verify renders the scenes of --scenes, not --scene {scene}: name it there");
+    }
+    let settings = args.settings()?;
+    let estimators = estimators(&args)?;
+    for scene in &args.scenes {
+        find_scene(scene, "--scenes")?;
+    }
+    let folders = scene_folders(&args.scenes)?;
+    let gpu = Gpu::new(args.common.adapter.as_deref())?;
+    eprintln!(
+        "{} | {} estimators on {} scenes, {} each in {} batches",
+        gpu.describe(),
+        estimators.len(),
+        args.scenes.len(),
+        match args.frames {
+            Some(n) => format!("{n} frames"),
+            None => format!("{:?}", args.time),
+        },
+        args.batches
+    );
+    let mut lines = Vec::new();
+    let mut pairs = Vec::new();
+    for (scene, folder) in args.scenes.iter().zip(&folders) {
+        let (scene_lines, scene_pairs) = verify_scene(&args, &settings, &gpu, (scene, folder), &estimators)
+            .with_context(|| format!("scene {scene}"))?;
+        lines.extend(scene_lines);
+        pairs.extend(scene_pairs);
+        // After every scene, so that a run stopped early keeps what it found.
+        write_tables(&args.out, &settings, &lines, &pairs)?;
+    }
+    let md = write_tables(&args.out, &settings, &lines, &pairs)?;
+    println!(
+        "{md}\nwrote {0}/verify.md, verify.csv and per scene each run's EXR and PNG",
+        args.out.display()
+    );
+    let count = |o: Outcome| pairs.iter().filter(|p| p.outcome == o).count();
+    let (unexpected, undecided) = (count(Outcome::UnexpectedDifference), count(Outcome::Undecided));
+    let unconfirmed = unconfirmed_gaps(&pairs);
+    if unexpected > 0 || !unconfirmed.is_empty() {
+        bail!(
+            "{unexpected} pairs differ where nothing declared says they may, and {} declared gaps showed in no pair \
+             (see {})",
+            unconfirmed.len(),
+            args.out.join("verify.md").display()
+        );
+    }
+    if undecided > 0 {
+        bail!("{undecided} pairs could not be decided at this budget: give more --time or --frames");
+    }
+    Ok(())
+}
+
+/// The estimators of `--graphs` (or the default set) and `--add`, loaded and checked before
+/// anything renders.
+fn estimators(args: &VerifyArgs) -> Result<Vec<Estimator>> {
+    let mut list = args.graphs.clone().unwrap_or_else(|| DEFAULT_ESTIMATORS.to_string());
+    if let Some(add) = &args.add {
+        list = format!("{list},{add}");
+    }
+    let mut out = Vec::new();
+    for spec in estimator_specs(&list, "--graphs")? {
+        let graph = load_graph(&spec.graph)?;
+        let (layout, _) = named_layout(&graph, spec.layout.as_deref())?;
+        parse_sets(&spec.sets, &graph.constants).with_context(|| format!("--graphs {spec}"))?;
+        // The claims are checked now, so that a malformed one costs no rendering.
+        claims(&graph, &Default::default())?;
+        let mut label = graph.name.clone();
+        if let Some(layout) = &spec.layout {
+            label += &format!(":{layout}");
+        }
+        for set in &spec.sets {
+            label += &format!("@{set}");
+        }
+        out.push(Estimator {
+            label,
+            spec,
+            graph,
+            layout,
+        });
+    }
+    Ok(out)
+}
+
+/// Renders every estimator on one scene and compares every pair of the same quantity.
+fn verify_scene(
+    args: &VerifyArgs,
+    settings: &TestSettings,
+    gpu: &Gpu,
+    (scene, folder): (&str, &str),
+    estimators: &[Estimator],
+) -> Result<(Vec<RunLine>, Vec<PairResult>)> {
+    let mut scenes = Scenes::new(scene);
+    let mut runs = Vec::new();
+    let mut kinds = None;
+    for (i, e) in estimators.iter().enumerate() {
+        let decl = e.graph.layouts[&e.layout].clone();
+        let kind = scenes.load_for(args.common.bvh, &e.layout, &decl)?;
+        let loaded = scenes.get(kind);
+        kinds.get_or_insert_with(|| scene_kinds(&loaded.compiled));
+        let run = render_run(args, gpu, loaded, e, i as u32).with_context(|| format!("estimator {}", e.label))?;
+        let stem = args.out.join(folder).join(lightgraph::compare::file_stem(&e.label));
+        write_exr(
+            &stem.with_extension("exr"),
+            &run.result.image,
+            &[("estimator", e.label.clone())],
+        )?;
+        write_png(&stem.with_extension("png"), &run.result.image, args.exposure)?;
+        runs.push(run);
+    }
+    let kinds = kinds.context("no estimator to verify")?;
+    eprintln!("verify: {scene} has paths of {}", describe(kinds));
+    let lines = runs
+        .iter()
+        .map(|r| RunLine {
+            scene: folder.to_string(),
+            label: r.label.clone(),
+            frames: r.result.frames,
+            seconds: r.result.seconds,
+            rejected_samples: r.result.rejected_samples,
+            light: r.result.blocks.image().light_and_error(),
+        })
+        .collect();
+    let mut pairs = Vec::new();
+    for (i, a) in runs.iter().enumerate() {
+        for b in runs[i + 1..].iter().filter(|b| b.estimates == a.estimates) {
+            let test = compare(&a.result.blocks, &b.result.blocks, settings);
+            let gaps = expected_gaps((&a.label, &a.misses), (&b.label, &b.misses), kinds);
+            let outcome = Outcome::of(test.verdict, !gaps.is_empty());
+            let pair = PairResult {
+                scene: folder.to_string(),
+                a: a.label.clone(),
+                b: b.label.clone(),
+                gaps,
+                grid_width: a.result.blocks.grid().0,
+                test,
+                outcome,
+            };
+            if let Some(map) = map_name(&pair) {
+                let images = (&a.result.image, &b.result.image);
+                write_map(&args.out.join(map), &pair.test, args.block, images)?;
+            }
+            pairs.push(pair);
+        }
+    }
+    Ok((lines, pairs))
+}
+
+/// Renders one estimator on a scene in batches, with a progress bar; `index` makes its seed
+/// differ from the other estimators'.
+fn render_run(args: &VerifyArgs, gpu: &Gpu, scene: &LoadedScene, e: &Estimator, index: u32) -> Result<Run> {
+    let seed = args.seed.wrapping_mul(1000).wrapping_add(index);
+    let mut common = args.common.clone();
+    common.set = own_sets(&args.common.set, &e.graph);
+    let mut opts = options(&common, scene, &e.graph.constants, seed)?;
+    opts.constants.extend(parse_sets(&e.spec.sets, &e.graph.constants)?);
+    let (estimates, misses) = claims(&e.graph, &opts.constants)?;
+    let bar = ProgressBar::new(args.batches as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix:>32} {bar:30} {pos}/{len} batches {msg} ETA {eta}")
+            .expect("valid template"),
+    );
+    bar.set_prefix(e.label.clone());
+    let start = std::time::Instant::now();
+    let paths = (opts.width * opts.height * opts.samples_per_frame) as f64;
+    let result = render_batches(
+        gpu,
+        scene,
+        (&e.graph, &e.layout),
+        opts,
+        (args.budget(), args.block),
+        |done, frames| {
+            bar.set_position(done as u64);
+            let rate = paths * frames as f64 / start.elapsed().as_secs_f64();
+            bar.set_message(format!("{}samples/s", si(rate)));
+        },
+    )?;
+    bar.finish_with_message(format!(
+        "{} frames, {}samples/s",
+        result.frames,
+        si(paths * result.frames as f64 / result.seconds.max(1e-9))
+    ));
+    Ok(Run {
+        label: e.label.clone(),
+        estimates,
+        misses,
+        result,
+    })
+}
+
+/// The `--set NAME=VALUE` settings whose constant `graph` has: estimators of different graphs
+/// share one `--set` list, each taking its own.
+fn own_sets(sets: &[String], graph: &Graph) -> Vec<String> {
+    sets.iter()
+        .filter(|s| {
+            s.split_once('=')
+                .is_none_or(|(name, _)| graph.constants.contains_key(name))
+        })
+        .cloned()
+        .collect()
+}

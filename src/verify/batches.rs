@@ -1,0 +1,174 @@
+//! One run of `lightgraph verify`: an estimator renders a scene in batches of equal frame
+//! counts, each batch's film taken off the GPU and folded into per-block means
+//! ([`BlockBatches`]) and the run's total.
+
+use super::stats::BlockBatches;
+use crate::render::{Image, LoadedScene, Session, SessionOptions};
+use anyhow::{Result, bail};
+use lightgraph_engine::runtime::MAX_BATCH;
+use lightgraph_engine::{Gpu, Graph};
+use std::time::{Duration, Instant};
+
+/// How much a run renders: a wall-clock time (set-up off the clock) or a number of frames,
+/// split into `batches` batches of equal frame counts.
+#[derive(Debug, Clone, Copy)]
+pub struct Budget {
+    /// Seconds of rendering, or frames.
+    pub amount: Amount,
+    /// Batches (the standard errors' samples).
+    pub batches: u32,
+}
+
+/// A run's amount of rendering.
+#[derive(Debug, Clone, Copy)]
+pub enum Amount {
+    /// Rendering time: the first batch renders for its share and fixes the frames of the rest.
+    Time(Duration),
+    /// Frames, rounded up to whole batches.
+    Frames(u32),
+}
+
+/// What a run rendered.
+pub struct RunBatches {
+    /// Per-block means, batch by batch.
+    pub blocks: BlockBatches,
+    /// The whole run's image (mean and per-frame variance).
+    pub image: Image,
+    /// Frames rendered.
+    pub frames: u32,
+    /// Seconds of rendering (set-up excluded).
+    pub seconds: f64,
+    /// Samples the estimator rejected as NaN, Inf or negative.
+    pub rejected_samples: u64,
+}
+
+/// Renders `graph` in `layout` over `scene` for `budget`, in batches of blocks of `block`
+/// pixels; `progress` sees the batches and frames done.
+pub fn render_batches(
+    gpu: &Gpu,
+    scene: &LoadedScene,
+    (graph, layout): (&Graph, &str),
+    options: SessionOptions,
+    (budget, block): (Budget, u32),
+    mut progress: impl FnMut(u32, u32),
+) -> Result<RunBatches> {
+    if budget.batches < 2 {
+        bail!("verify needs at least 2 batches a run for a standard error");
+    }
+    let size = (options.width, options.height);
+    let mut session = Session::new(gpu, graph, layout, scene, options)?;
+    let at_once = session.frames_at_once();
+    let mut blocks = BlockBatches::new(size, block);
+    let mut total = Totals::new(size);
+    let start = Instant::now();
+    let mut per_batch = match budget.amount {
+        Amount::Frames(n) => Some(n.div_ceil(budget.batches).div_ceil(at_once) * at_once),
+        Amount::Time(_) => None,
+    };
+    for b in 0..budget.batches {
+        let frames = match (per_batch, budget.amount) {
+            (Some(n), _) => render_frames(&mut session, n)?,
+            (None, Amount::Time(t)) => {
+                let n = render_for(&mut session, t / budget.batches)?;
+                per_batch = Some(n);
+                n
+            }
+            (None, Amount::Frames(_)) => unreachable!("frame budgets fix the batch first"),
+        };
+        let taken = session.take_accumulation()?;
+        let sums: Vec<[f64; 3]> = taken.sum.iter().map(|s| [0, 1, 2].map(|c| s[c] as f64)).collect();
+        blocks.add(&sums, frames);
+        total.add(&sums, &taken.sum_sq, frames);
+        progress(b + 1, total.frames);
+    }
+    Ok(RunBatches {
+        blocks,
+        image: total.image(),
+        frames: total.frames,
+        seconds: start.elapsed().as_secs_f64(),
+        rejected_samples: session.counters.get("samples_rejected").copied().unwrap_or(0),
+    })
+}
+
+/// Renders exactly `count` frames.
+fn render_frames(session: &mut Session, count: u32) -> Result<u32> {
+    let most = MAX_BATCH * session.frames_at_once();
+    let mut left = count;
+    while left > 0 {
+        let n = left.min(most);
+        session.render_frames(n)?;
+        left -= n;
+    }
+    Ok(count)
+}
+
+/// Renders for `time` (at least one frame); returns the frames.
+fn render_for(session: &mut Session, time: Duration) -> Result<u32> {
+    let start = Instant::now();
+    let first = session.frames;
+    session.render_frame()?;
+    while start.elapsed() < time {
+        let left = time.saturating_sub(start.elapsed());
+        session.render_for(Some(left), u32::MAX)?;
+    }
+    session.settle()?;
+    Ok(session.frames - first)
+}
+
+/// The run's sums over every batch, for its image.
+struct Totals {
+    size: (u32, u32),
+    frames: u32,
+    sum: Vec<[f64; 3]>,
+    sum_sq: Vec<[f64; 3]>,
+}
+
+impl Totals {
+    fn new(size: (u32, u32)) -> Totals {
+        let n = (size.0 * size.1) as usize;
+        Totals {
+            size,
+            frames: 0,
+            sum: vec![[0.0; 3]; n],
+            sum_sq: vec![[0.0; 3]; n],
+        }
+    }
+
+    fn add(&mut self, sums: &[[f64; 3]], squares: &[[f32; 4]], frames: u32) {
+        self.frames += frames;
+        for ((s, q), (bs, bq)) in self
+            .sum
+            .iter_mut()
+            .zip(self.sum_sq.iter_mut())
+            .zip(sums.iter().zip(squares))
+        {
+            for c in 0..3 {
+                s[c] += bs[c];
+                q[c] += bq[c] as f64;
+            }
+        }
+    }
+
+    fn image(&self) -> Image {
+        let n = self.frames.max(1) as f64;
+        let mean: Vec<[f32; 3]> = self.sum.iter().map(|s| s.map(|v| (v / n) as f32)).collect();
+        let variance = self
+            .sum
+            .iter()
+            .zip(&self.sum_sq)
+            .map(|(s, q)| {
+                [0, 1, 2].map(|c| match n > 1.0 {
+                    true => ((q[c] / n - (s[c] / n).powi(2)) * n / (n - 1.0)).max(0.0) as f32,
+                    false => 0.0,
+                })
+            })
+            .collect();
+        Image {
+            width: self.size.0,
+            height: self.size.1,
+            frames: self.frames,
+            mean,
+            variance,
+        }
+    }
+}

@@ -1,0 +1,483 @@
+//! The statistics of `lightgraph verify`: two runs' images compared block by block and as a
+//! whole, with standard errors from the spread of independent batches of frames.
+//!
+//! A run renders B batches of the same number of frames; each batch's block means are one
+//! sample of the block's value. The spread of the B samples gives the standard error of the
+//! block's mean (the method of batch means): right whatever the correlation between the pixels
+//! of one frame, which light tracing, the BPTs and photon mapping have (a light sub-path or a
+//! photon adds to many pixels). The batches of a progressive photon mapping run have shrinking
+//! radii, so their means differ by more than noise; the spread then overstates the error, which
+//! errs towards "not enough samples", never towards a false "differ".
+//!
+//! Two runs' difference in a block, over its standard error, is Welch's t (degrees of freedom
+//! by Welch-Satterthwaite). Every block's three channels and the image mean's three channels
+//! are one family of tests, corrected by Holm's method to a family-wise error `alpha`: a
+//! correct pair is called "differ" with probability at most `alpha`. The power says what the
+//! test could have seen: the smallest relative difference it detects with probability `power`
+//! in the image mean, and in each block; a pair that shows no difference is "agree" only when
+//! that is small enough (`detect_mean`, and `detect_block` in the blocks that hold `coverage`
+//! of the image's light), otherwise "not enough samples to tell".
+
+use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+
+/// One run's per-block means, batch by batch.
+#[derive(Debug, Clone)]
+pub struct BlockBatches {
+    /// Image width and height.
+    pub size: (u32, u32),
+    /// Block side in pixels (blocks at the right and bottom edges may be smaller).
+    pub block: u32,
+    /// Each batch's per-block mean radiance (blocks in rows, top first).
+    pub batches: Vec<Vec<[f64; 3]>>,
+    /// Each batch's image mean.
+    pub image: Vec<[f64; 3]>,
+}
+
+impl BlockBatches {
+    /// None yet, for images of `size` in blocks of `block` pixels.
+    pub fn new(size: (u32, u32), block: u32) -> BlockBatches {
+        BlockBatches {
+            size,
+            block,
+            batches: Vec::new(),
+            image: Vec::new(),
+        }
+    }
+
+    /// Blocks across and down.
+    pub fn grid(&self) -> (u32, u32) {
+        (self.size.0.div_ceil(self.block), self.size.1.div_ceil(self.block))
+    }
+
+    /// Adds a batch: the per-pixel sums of `frames` frames' estimates (rows, top first).
+    pub fn add(&mut self, sums: &[[f64; 3]], frames: u32) {
+        let (w, h) = self.size;
+        let (gx, gy) = self.grid();
+        let mut blocks = vec![[0.0f64; 3]; (gx * gy) as usize];
+        let mut pixels = vec![0u32; blocks.len()];
+        let mut image = [0.0f64; 3];
+        for y in 0..h {
+            for x in 0..w {
+                let p = sums[(y * w + x) as usize];
+                let b = ((y / self.block) * gx + x / self.block) as usize;
+                pixels[b] += 1;
+                for c in 0..3 {
+                    blocks[b][c] += p[c];
+                    image[c] += p[c];
+                }
+            }
+        }
+        let f = frames.max(1) as f64;
+        for (m, n) in blocks.iter_mut().zip(&pixels) {
+            *m = m.map(|v| v / (f * *n as f64));
+        }
+        self.batches.push(blocks);
+        self.image.push(image.map(|v| v / (f * (w * h) as f64)));
+    }
+
+    /// Per block, the mean over batches and the variance of that mean.
+    pub fn blocks(&self) -> Vec<Estimate> {
+        let n = self.batches.first().map_or(0, Vec::len);
+        (0..n)
+            .map(|b| Estimate::of(self.batches.iter().map(|batch| batch[b])))
+            .collect()
+    }
+
+    /// The image mean and the variance of that mean.
+    pub fn image(&self) -> Estimate {
+        Estimate::of(self.image.iter().copied())
+    }
+}
+
+/// A mean over batches, its variance (the squared standard error) and the batches it came from.
+#[derive(Debug, Clone, Copy)]
+pub struct Estimate {
+    /// Mean per channel.
+    pub mean: [f64; 3],
+    /// Variance of the mean per channel.
+    pub variance: [f64; 3],
+    /// Batches.
+    pub batches: usize,
+}
+
+impl Estimate {
+    /// The mean and its variance over batch values.
+    pub fn of(values: impl Iterator<Item = [f64; 3]> + Clone) -> Estimate {
+        let n = values.clone().count();
+        let mut mean = [0.0; 3];
+        for v in values.clone() {
+            (0..3).for_each(|c| mean[c] += v[c] / n as f64);
+        }
+        let mut variance = [0.0; 3];
+        if n > 1 {
+            for v in values {
+                (0..3).for_each(|c| variance[c] += (v[c] - mean[c]).powi(2));
+            }
+            variance = variance.map(|s| s / ((n - 1) * n) as f64);
+        }
+        Estimate {
+            mean,
+            variance,
+            batches: n,
+        }
+    }
+}
+
+impl Estimate {
+    /// The light of the mean (its channels' sum) and that sum's relative standard error.
+    pub fn light_and_error(&self) -> (f64, f64) {
+        let l = light(self);
+        (l, relative(self.variance.iter().sum::<f64>().sqrt(), l))
+    }
+}
+
+/// What the test of two runs may conclude.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    /// No difference, and the test could have seen one of the stated size.
+    Agree,
+    /// A difference beyond noise (Holm-corrected).
+    Differ,
+    /// No difference seen, but the test could not have seen one of the stated size.
+    Undecided,
+}
+
+impl Verdict {
+    /// The word reports use.
+    pub fn word(self) -> &'static str {
+        match self {
+            Verdict::Agree => "agree",
+            Verdict::Differ => "differ",
+            Verdict::Undecided => "not enough samples to tell",
+        }
+    }
+}
+
+/// The settings of the test.
+#[derive(Debug, Clone, Copy)]
+pub struct TestSettings {
+    /// Family-wise error rate: the probability that a pair that agrees is called "differ".
+    pub alpha: f64,
+    /// Probability with which the test must detect a difference of the sizes below.
+    pub power: f64,
+    /// Relative difference of the image means the test must be able to see.
+    pub detect_mean: f64,
+    /// Relative difference of a block's mean the test must be able to see ...
+    pub detect_block: f64,
+    /// ... in the blocks holding this fraction of the image's light.
+    pub coverage: f64,
+    /// Relative difference of the image means below which a significant one is not called a
+    /// difference (0: every significant one is), e.g. for the blur of photon mapping's radius.
+    pub tolerance_mean: f64,
+    /// The same for a block's mean.
+    pub tolerance_block: f64,
+}
+
+impl Default for TestSettings {
+    fn default() -> Self {
+        TestSettings {
+            alpha: 0.01,
+            power: 0.9,
+            detect_mean: 0.01,
+            detect_block: 0.1,
+            coverage: 0.9,
+            tolerance_mean: 0.0,
+            tolerance_block: 0.0,
+        }
+    }
+}
+
+/// One block's comparison.
+#[derive(Debug, Clone, Copy)]
+pub struct BlockTest {
+    /// Welch's t of the channel with the largest |t| (positive: the first run is brighter).
+    pub t: f64,
+    /// Whether a channel's difference is significant after the correction and the block's
+    /// relative difference exceeds the tolerance.
+    pub rejected: bool,
+    /// The relative difference of the block's light, (a - b) / mean of both.
+    pub difference: f64,
+    /// The relative difference of the block's light the test detects with the stated power.
+    pub detectable: f64,
+    /// The block's light (sum of the channels' means, both runs averaged).
+    pub light: f64,
+}
+
+/// The comparison of two runs.
+#[derive(Debug, Clone)]
+pub struct PairTest {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Per block.
+    pub blocks: Vec<BlockTest>,
+    /// Tests in the family (3 per block with light or difference, 3 for the mean).
+    pub tests: usize,
+    /// The critical |t| of the strictest (first) Holm step at the median degrees of freedom.
+    pub t_critical: f64,
+    /// The image means' light (channel sums) of the two runs.
+    pub light: (f64, f64),
+    /// Relative difference of the image means' light, (a - b) / mean of both.
+    pub mean_difference: f64,
+    /// Welch's t of the image means (the channel with the largest |t|).
+    pub mean_t: f64,
+    /// Whether a channel of the image mean differs after the correction.
+    pub mean_rejected: bool,
+    /// The relative difference of the image mean the test detects with the stated power.
+    pub mean_detectable: f64,
+    /// The fraction of the image's light in blocks where the test detects `detect_block`.
+    pub coverage: f64,
+}
+
+impl PairTest {
+    /// Blocks whose difference is significant.
+    pub fn blocks_rejected(&self) -> usize {
+        self.blocks.iter().filter(|b| b.rejected).count()
+    }
+
+    /// The largest |t| of a block.
+    pub fn max_block_t(&self) -> f64 {
+        self.worst_block().map_or(0.0, |(_, b)| b.t.abs())
+    }
+
+    /// The block with the largest |t|, and its index.
+    pub fn worst_block(&self) -> Option<(usize, &BlockTest)> {
+        self.blocks
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.t.abs().total_cmp(&b.1.t.abs()))
+    }
+}
+
+/// One Welch test: t, degrees of freedom and two-sided p-value.
+#[derive(Debug, Clone, Copy)]
+struct Welch {
+    t: f64,
+    dof: f64,
+    p: f64,
+    se: f64,
+}
+
+/// Welch's test of channel `c` of two estimates; `None` when neither varies and they are
+/// equal (nothing to test: a black block).
+fn welch(a: &Estimate, b: &Estimate, c: usize) -> Option<Welch> {
+    let d = a.mean[c] - b.mean[c];
+    let (va, vb) = (a.variance[c], b.variance[c]);
+    let s2 = va + vb;
+    if s2 <= 0.0 {
+        return (d != 0.0).then_some(Welch {
+            t: d.signum() * f64::INFINITY,
+            dof: 1.0,
+            p: 0.0,
+            se: 0.0,
+        });
+    }
+    let part = |v: f64, n: usize| if n > 1 { v * v / (n - 1) as f64 } else { 0.0 };
+    let dof = (s2 * s2 / (part(va, a.batches) + part(vb, b.batches))).max(1.0);
+    let t = d / s2.sqrt();
+    let p = 2.0 * student(dof).sf(t.abs());
+    Some(Welch {
+        t,
+        dof,
+        p,
+        se: s2.sqrt(),
+    })
+}
+
+fn student(dof: f64) -> StudentsT {
+    StudentsT::new(0.0, 1.0, dof.max(1.0)).expect("positive degrees of freedom")
+}
+
+/// Which of the p-values Holm's step-down method rejects at family-wise error `alpha`.
+pub fn holm(p: &[f64], alpha: f64) -> Vec<bool> {
+    let mut order: Vec<usize> = (0..p.len()).collect();
+    order.sort_by(|&i, &j| p[i].total_cmp(&p[j]));
+    let m = p.len();
+    let mut rejected = vec![false; m];
+    for (k, &i) in order.iter().enumerate() {
+        if p[i] > alpha / (m - k) as f64 {
+            break;
+        }
+        rejected[i] = true;
+    }
+    rejected
+}
+
+/// The relative difference a test of standard error `se` and `dof` degrees of freedom detects
+/// with probability `power` at the per-test level `level` (two-sided), for a value `of`.
+fn detectable(se: f64, dof: f64, level: f64, power: f64, of: f64) -> f64 {
+    if of <= 0.0 {
+        return f64::INFINITY;
+    }
+    let critical = student(dof).inverse_cdf(1.0 - level / 2.0);
+    let z_power = Normal::new(0.0, 1.0).expect("unit normal").inverse_cdf(power);
+    (critical + z_power) * se / of
+}
+
+/// The channel sum of a mean (the light a block holds, for weights and relative sizes).
+fn light(e: &Estimate) -> f64 {
+    e.mean.iter().map(|v| v.abs()).sum()
+}
+
+/// `part / of`, 0 when `of` is 0.
+fn relative(part: f64, of: f64) -> f64 {
+    if of > 0.0 { part / of } else { 0.0 }
+}
+
+/// Compares two runs' blocks and image means.
+pub fn compare(a: &BlockBatches, b: &BlockBatches, settings: &TestSettings) -> PairTest {
+    let (blocks_a, blocks_b) = (a.blocks(), b.blocks());
+    let (image_a, image_b) = (a.image(), b.image());
+    let pairs: Vec<(&Estimate, &Estimate)> = blocks_a
+        .iter()
+        .zip(&blocks_b)
+        .chain(std::iter::once((&image_a, &image_b)))
+        .collect();
+    // The family: every channel with something to test.
+    let tests: Vec<Vec<Option<Welch>>> = pairs
+        .iter()
+        .map(|(x, y)| (0..3).map(|c| welch(x, y, c)).collect())
+        .collect();
+    let flat: Vec<f64> = tests.iter().flatten().flatten().map(|w| w.p).collect();
+    let rejected_flat = holm(&flat, settings.alpha);
+    let m = flat.len().max(1);
+    let level = settings.alpha / m as f64;
+    let mut rejected = rejected_flat.into_iter();
+    let mut results = Vec::new();
+    for (k, ((x, y), channels)) in pairs.iter().zip(&tests).enumerate() {
+        let tolerance = match k + 1 == pairs.len() {
+            true => settings.tolerance_mean,
+            false => settings.tolerance_block,
+        };
+        let mut t = 0.0f64;
+        let mut any = false;
+        let mut se2 = 0.0;
+        let mut dof = f64::INFINITY;
+        for w in channels.iter().flatten() {
+            any |= rejected.next().expect("one verdict per test");
+            if w.t.abs() > t.abs() {
+                t = w.t;
+            }
+            se2 += w.se * w.se;
+            dof = dof.min(w.dof);
+        }
+        let of = 0.5 * (light(x) + light(y));
+        let detect = match channels.iter().flatten().next() {
+            None => f64::INFINITY,
+            Some(_) => detectable(se2.sqrt(), dof, level, settings.power, of),
+        };
+        let difference = relative(light(x) - light(y), of);
+        results.push(BlockTest {
+            t,
+            rejected: any && difference.abs() > tolerance,
+            difference,
+            detectable: detect,
+            light: of,
+        });
+    }
+    let mean = results.pop().expect("the image mean's test");
+    let mut dofs: Vec<f64> = tests.iter().flatten().flatten().map(|w| w.dof).collect();
+    dofs.sort_by(f64::total_cmp);
+    let t_critical = dofs
+        .get(dofs.len() / 2)
+        .map_or(f64::INFINITY, |&d| student(d).inverse_cdf(1.0 - level / 2.0));
+    let total = results.iter().map(|b| b.light).fold(0.0, |s, l| s + l);
+    let covered = results
+        .iter()
+        .filter(|b| b.detectable <= settings.detect_block)
+        .fold(0.0, |s, b| s + b.light);
+    let coverage = relative(covered, total);
+    let (la, lb) = (light(&image_a), light(&image_b));
+    let differ = mean.rejected || results.iter().any(|b| b.rejected);
+    let powerful = mean.detectable <= settings.detect_mean && coverage >= settings.coverage;
+    let verdict = match (differ, powerful) {
+        (true, _) => Verdict::Differ,
+        (false, true) => Verdict::Agree,
+        (false, false) => Verdict::Undecided,
+    };
+    PairTest {
+        verdict,
+        blocks: results,
+        tests: m,
+        t_critical,
+        light: (la, lb),
+        mean_difference: mean.difference,
+        mean_t: mean.t,
+        mean_rejected: mean.rejected,
+        mean_detectable: mean.detectable,
+        coverage,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run of `batches` batches over a 4x4 image in 2x2 blocks: each pixel `value(x, y)` plus
+    /// noise of size `noise` from a fixed sequence.
+    fn run(batches: u32, noise: f64, seed: u64, value: impl Fn(u32, u32) -> f64) -> BlockBatches {
+        let mut r = BlockBatches::new((4, 4), 2);
+        let mut state = seed.wrapping_mul(0x9e3779b97f4a7c15) | 1;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for _ in 0..batches {
+            let sums: Vec<[f64; 3]> = (0..16)
+                .map(|i| {
+                    let v = value(i % 4, i / 4);
+                    [0, 1, 2].map(|_| 10.0 * (v + noise * uniform()))
+                })
+                .collect();
+            r.add(&sums, 10);
+        }
+        r
+    }
+
+    #[test]
+    fn batches_give_block_means_and_their_spread() {
+        let r = run(8, 0.0, 1, |x, y| if x < 2 && y < 2 { 2.0 } else { 1.0 });
+        let blocks = r.blocks();
+        assert_eq!(blocks.len(), 4);
+        assert_eq!(blocks[0].mean, [2.0; 3]);
+        assert_eq!(blocks[3].mean, [1.0; 3]);
+        assert_eq!(blocks[0].variance, [0.0; 3]);
+        assert!((r.image().mean[0] - 1.25).abs() < 1e-12);
+    }
+
+    #[test]
+    fn holm_steps_down() {
+        // m = 4, alpha 0.04: thresholds 0.01, 0.0133, 0.02, 0.04.
+        assert_eq!(holm(&[0.005, 0.012, 0.5, 0.019], 0.04), vec![true, true, false, true]);
+        assert_eq!(holm(&[0.02, 0.012], 0.02), vec![false, false]);
+    }
+
+    #[test]
+    fn equal_runs_agree_and_different_ones_differ() {
+        let settings = TestSettings {
+            detect_mean: 0.05,
+            detect_block: 0.2,
+            ..TestSettings::default()
+        };
+        let a = run(32, 0.2, 1, |_, _| 1.0);
+        let b = run(32, 0.2, 2, |_, _| 1.0);
+        assert_eq!(compare(&a, &b, &settings).verdict, Verdict::Agree);
+        // One block 30% darker: its test rejects, the others do not.
+        let c = run(32, 0.2, 3, |x, y| if x >= 2 && y >= 2 { 0.7 } else { 1.0 });
+        let t = compare(&a, &c, &settings);
+        assert_eq!(t.verdict, Verdict::Differ);
+        assert_eq!(
+            t.blocks.iter().map(|b| b.rejected).collect::<Vec<_>>(),
+            [false, false, false, true]
+        );
+    }
+
+    #[test]
+    fn too_few_samples_are_not_agreement() {
+        // Noise as large as the signal, 4 batches: nothing is seen, and nothing could be.
+        let a = run(4, 1.0, 1, |_, _| 1.0);
+        let b = run(4, 1.0, 2, |_, _| 0.9);
+        assert_eq!(compare(&a, &b, &TestSettings::default()).verdict, Verdict::Undecided);
+    }
+}
