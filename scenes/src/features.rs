@@ -33,6 +33,10 @@ pub const ALL: &[(&str, &str)] = &[
     ("LIGHT_POINT", "point lights"),
     ("LIGHT_SPOT", "spot lights"),
     ("LIGHT_DIRECTIONAL", "directional lights"),
+    (
+        "LIGHT_DELTA",
+        "point, spot or directional lights: lights no path can hit",
+    ),
     ("LIGHT_BACKGROUND", "a constant background"),
     ("LIGHT_ENVIRONMENT", "an environment map"),
 ];
@@ -97,6 +101,10 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
     add("LIGHT_POINT", has(light_kind::POINT));
     add("LIGHT_SPOT", has(light_kind::SPOT));
     add("LIGHT_DIRECTIONAL", has(light_kind::DIRECTIONAL));
+    add(
+        "LIGHT_DELTA",
+        has(light_kind::POINT) || has(light_kind::SPOT) || has(light_kind::DIRECTIONAL),
+    );
     add("LIGHT_BACKGROUND", has(light_kind::BACKGROUND));
     add("LIGHT_ENVIRONMENT", has(light_kind::ENVIRONMENT));
     out

@@ -114,6 +114,14 @@ fn light_path_start_stratified(p: ptr<function, LightPath>, rng: ptr<function, u
     return true;
 }
 
+// Whether a sub-path `light_path_start_stratified` started left a delta light: its d_vc is 0
+// then, and only then for a start that carries light (a light with an area or a direction to
+// sample gives cos / pdf > 0; a start whose cosine is 0 carries none). Valid until the first
+// `scatter`, which photon mapping's sub-paths never call (they keep d_vc as it started).
+fn light_path_from_delta_light(p: LightPath) -> bool {
+    return p.d_vc == 0.0;
+}
+
 // A point of the unit square for sub-path `index` of `count` (`stratum`): stratum
 // index / count of a Z curve over the square (its position in 32-bit fixed point, `jitter`
 // inside the stratum), plus one random shift of its frame (a rotation, so the point is uniform

@@ -6,7 +6,11 @@
 // - SPPM (PM_SPPM): at each vertex, density estimation with the BSDF's diffuse part, and the
 //   sub-path goes on through the other lobes (glossy and delta) only; it ends at a vertex
 //   without them. Every light it hits counts (the glossy continuation is the only estimate of
-//   the light reaching the camera through those lobes);
+//   the light reaching the camera through those lobes). A continued sub-path never hits a
+//   delta light, so the light that reaches a vertex from one through delta lobes alone (a
+//   caustic or the direct light of a point light or the sun, seen in a glossy floor) would be
+//   lost to the glossy lobes: those photons (`photon_delta_chain`) are estimated with the
+//   whole BSDF, at every vertex with a diffuse or a non-delta glossy lobe (`sppm_delta_chains`);
 // - PBPM (PM_PBPM): continues as a path tracer (full BSDF, Russian roulette) and estimates
 //   the density at every non-delta vertex, combined by MIS over the vertices (dVM,
 //   shaders/pm/scatter.wgsl).
@@ -21,6 +25,18 @@
 const PM_PPM: u32 = 0u;
 const PM_SPPM: u32 = 1u;
 const PM_PBPM: u32 = 2u;
+
+#if LIGHT_DELTA
+const PM_DELTA_LIGHTS: bool = true;
+#else
+const PM_DELTA_LIGHTS: bool = false;
+#endif
+
+// Whether SPPM estimates the photons of delta chains with the whole BSDF (see the top): only
+// in scenes with delta lights, whose photons can be such.
+fn sppm_delta_chains() -> bool {
+    return PM_MODE == PM_SPPM && PM_DELTA_LIGHTS;
+}
 
 const MERGE_SPECULAR_PATH: u32 = 1u;   // every vertex so far was left through a delta lobe
 const MERGE_PENDING: u32 = 2u;         // a density estimation waits at the vertex below
@@ -169,11 +185,12 @@ fn pm_vertex(p: ptr<function, MergePath>) -> bool {
     var go_on = true;
     var next = bsdf;
     if (PM_MODE == PM_SPPM) {
-        if (bsdf_has_diffuse(bsdf)) {
+        next = bsdf_glossy_part(bsdf);
+        let rough = next.valid && !next.is_delta;
+        if (bsdf_has_diffuse(bsdf) || (sppm_delta_chains() && rough)) {
             merge_leave_pending(p, s);
         }
         go_on = bsdf_has_glossy(bsdf);
-        next = bsdf_glossy_part(bsdf);
     } else if (!bsdf.is_delta) {
         merge_leave_pending(p, s);
         go_on = PM_MODE == PM_PBPM;
@@ -227,15 +244,18 @@ fn merge_begin(p: MergePath) -> Merge {
 
 // A part of the density estimation pending at the sub-path's vertex (the structures'
 // contract: a gather that splits a query over threads begins each part so; not counted
-// again): this frame's radius, the BSDF there (SPPM's diffuse part; a Lambertian's value apart)
-// and nothing found yet.
+// again): this frame's radius, the BSDF there (SPPM's diffuse part, or its whole BSDF with
+// `sppm_delta_chains`; a Lambertian's value apart: SPPM's diffuse part's) and nothing found yet.
 fn merge_resume(p: MergePath) -> Merge {
     var m = merge_unset(p.merge);
     m.bsdf = pending_merge_bsdf(p.merge);
     if (PM_MODE == PM_SPPM) {
-        m.bsdf = bsdf_diffuse_part(m.bsdf);
-    }
-    if (PM_MODE != PM_PBPM) {
+        let diffuse = bsdf_diffuse_part(m.bsdf);
+        m.lambertian_f = bsdf_lambertian_f(diffuse);
+        if (!sppm_delta_chains()) {
+            m.bsdf = diffuse;
+        }
+    } else if (PM_MODE == PM_PPM) {
         m.lambertian_f = bsdf_lambertian_f(m.bsdf);
     }
     return m;
@@ -270,13 +290,24 @@ fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
         return;
     }
     let towards = photon_direction(photon);
+    if (sppm_delta_chains() && photon_delta_chain(photon)) {
+        (*m).sum += bsdf_eval((*m).bsdf, towards).f * photon.throughput * weight;
+        return;
+    }
     if ((*m).lambertian_f.x >= 0.0) {
         if (dot(towards, (*m).bsdf.frame.n) >= EPS_COSINE) {
             (*m).flux += photon.throughput * weight;
         }
         return;
     }
-    let e = bsdf_eval((*m).bsdf, towards);
+    var b = (*m).bsdf;
+    if (sppm_delta_chains()) {
+        b = bsdf_diffuse_part(b);
+        if (!b.valid) {
+            return;
+        }
+    }
+    let e = bsdf_eval(b, towards);
     if (is_black(e.f)) {
         return;
     }

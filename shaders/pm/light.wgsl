@@ -5,12 +5,14 @@
 
 // A light sub-path of photon mapping: the light tracing state, its dVM, the photon stored at
 // its last vertex (PM_NONE if none: for the original stochastic grid's insertion, a pass of
-// its own after `pm_bounce`), and whether it goes on (`pm_light_continue` ends it).
+// its own after `pm_bounce`), whether it goes on (`pm_light_continue` ends it), and for SPPM
+// whether it left a delta light through delta lobes alone (`sppm_delta_chains`).
 struct PhotonPath {
     light: LightPath,
     d_vm: f32,
     stored: u32,
     alive: u32,
+    delta_chain: u32,
 }
 
 const PM_NONE: u32 = 0xffffffffu;
@@ -25,6 +27,7 @@ fn pm_light_generate(p: ptr<function, PhotonPath>, index: u32) -> bool {
     var light: LightPath;
     let started = light_generate_stratified(&light, index, PM_LIGHT_STARTS);
     (*p).light = light;
+    (*p).delta_chain = select(0u, 1u, sppm_delta_chains() && light_path_from_delta_light(light));
     return started;
 }
 
@@ -68,7 +71,8 @@ fn pm_visit_light_vertex(p: ptr<function, PhotonPath>) -> bool {
             if (i < arrayLength(&pm_staging)) {
                 let towards = -(*p).light.direction;
                 let position = light_vertex_position(a.s, towards);
-                pm_staging[i] = Photon(position, (*p).d_vm, (*p).light.throughput, photon_pack(towards, length));
+                let packed = photon_pack(towards, length, (*p).delta_chain != 0u);
+                pm_staging[i] = Photon(position, (*p).d_vm, (*p).light.throughput, packed);
                 (*p).stored = i;
             } else {
                 count(COUNTER_PM_OVERFLOW, 1u);
@@ -88,5 +92,8 @@ fn pm_visit_light_vertex(p: ptr<function, PhotonPath>) -> bool {
     (*p).light.direction = r.direction;
     (*p).light.throughput = r.throughput;
     (*p).d_vm = r.d_vm;
+    if (!r.specular) {
+        (*p).delta_chain = 0u;
+    }
     return true;
 }

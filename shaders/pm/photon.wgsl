@@ -24,7 +24,9 @@
 // A photon (32 bytes): where it landed (moved off the surface to the side it arrived from, as
 // a cache vertex is: `light_vertex_position`), PBPM's MIS quantity, the light sub-path's throughput
 // there, and the direction it arrived from (octahedral, 12 bits a component) with the
-// segments from the light (8 bits).
+// segments from the light (7 bits) and whether its sub-path left a delta light through delta
+// lobes alone (the top bit, `photon_delta_chain`: light no camera sub-path can reach by
+// continuing, shaders/pm/camera.wgsl).
 struct Photon {
     position: vec3<f32>,
     d_vm: f32,
@@ -48,9 +50,13 @@ fn decode_octahedral_24(w: u32) -> vec3<f32> {
     return decode_octahedral(((w & 0xfffu) << 4u) | (((w >> 12u) & 0xfffu) << 20u));
 }
 
-// Packs the direction towards the previous vertex (24 bits) and the sub-path's length.
-fn photon_pack(towards: vec3<f32>, length: u32) -> u32 {
-    return octahedral_24(encode_octahedral(towards)) | (min(length, 255u) << 24u);
+const PHOTON_DELTA_CHAIN: u32 = 0x80000000u;
+
+// Packs the direction towards the previous vertex (24 bits), the sub-path's length and
+// whether it came from a delta light through delta lobes alone.
+fn photon_pack(towards: vec3<f32>, length: u32, delta_chain: bool) -> u32 {
+    let chain = select(0u, PHOTON_DELTA_CHAIN, delta_chain);
+    return octahedral_24(encode_octahedral(towards)) | (min(length, 127u) << 24u) | chain;
 }
 
 // The direction towards the previous vertex of the light sub-path (unit length).
@@ -60,7 +66,12 @@ fn photon_direction(p: Photon) -> vec3<f32> {
 
 // Segments from the light to the photon.
 fn photon_length(p: Photon) -> u32 {
-    return p.direction_length >> 24u;
+    return (p.direction_length >> 24u) & 0x7fu;
+}
+
+// Whether the photon's sub-path left a delta light and was scattered by delta lobes alone.
+fn photon_delta_chain(p: Photon) -> bool {
+    return (p.direction_length & PHOTON_DELTA_CHAIN) != 0u;
 }
 
 // The photons stored this frame (at most the capacity).
