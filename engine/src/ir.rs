@@ -89,6 +89,10 @@ pub struct Coverage {
     /// What the graph cannot sample.
     #[serde(default)]
     pub misses: Vec<MissDecl>,
+    /// Why the estimate is biased at a finite budget, if it is (a consistent estimator, e.g.
+    /// one that blurs by a radius that shrinks), under an optional condition.
+    #[serde(default)]
+    pub biased: Option<BiasDecl>,
 }
 
 impl Default for Coverage {
@@ -96,8 +100,20 @@ impl Default for Coverage {
         Coverage {
             estimates: radiance(),
             misses: Vec::new(),
+            biased: None,
         }
     }
+}
+
+/// A graph's claim that its estimate is biased at a finite budget.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BiasDecl {
+    /// Why, for reports.
+    pub why: String,
+    /// Constant expression: the claim holds only where it is non-zero (always without it).
+    #[serde(default)]
+    pub when: Option<String>,
 }
 
 fn radiance() -> String {

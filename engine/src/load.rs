@@ -426,10 +426,16 @@ impl Declared {
         Ok(())
     }
 
-    /// Each `coverage.misses` condition parses and names only constants.
+    /// Each `coverage` condition parses and names only constants.
     fn check_coverage(&self, file: &str) -> Result<()> {
-        for miss in &self.file.coverage.misses {
-            let Some(when) = &miss.when else { continue };
+        let coverage = &self.file.coverage;
+        let conditions = coverage
+            .misses
+            .iter()
+            .map(|m| &m.when)
+            .chain(coverage.biased.iter().map(|b| &b.when));
+        for when in conditions {
+            let Some(when) = when else { continue };
             let unknown = Expr::parse(when).map(|e| {
                 e.names()
                     .into_iter()

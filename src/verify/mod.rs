@@ -39,23 +39,37 @@ pub struct Miss {
     pub why: String,
 }
 
-/// What a graph with `constants` claims: the quantity it estimates and the path classes it
-/// cannot sample. A malformed class or condition is an error at its place in the graph file.
-pub fn claims(graph: &Graph, constants: &BTreeMap<String, ConstValue>) -> Result<(String, Vec<Miss>)> {
+/// What a graph claims under its constants (its `coverage`).
+#[derive(Debug, Clone)]
+pub struct Claims {
+    /// The quantity its output estimates.
+    pub estimates: String,
+    /// The path classes it cannot sample.
+    pub misses: Vec<Miss>,
+    /// Why its estimate is biased at a finite budget, if it is.
+    pub bias: Option<String>,
+}
+
+/// What a graph with `constants` claims: the quantity it estimates, the path classes it
+/// cannot sample and its bias. A malformed class or condition is an error at its place in the
+/// graph file.
+pub fn claims(graph: &Graph, constants: &BTreeMap<String, ConstValue>) -> Result<Claims> {
     let coverage = &graph.declared.file.coverage;
     let text = graph.vfs.read(&graph.file).unwrap_or_default();
     let at = |name: &str| Location::of_name(&graph.file, &text, name);
     let mut vars: BTreeMap<String, f64> = graph.constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
     vars.extend(constants.iter().map(|(k, v)| (k.clone(), v.as_f64())));
+    let holds = |when: &Option<String>| -> Result<bool> {
+        let Some(when) = when else { return Ok(true) };
+        let value = Expr::parse(when)
+            .and_then(|e| e.eval(&vars))
+            .map_err(|e| anyhow!("{}: coverage: when: '{when}': {e}", at(when)))?;
+        Ok(value != 0.0)
+    };
     let mut misses = Vec::new();
     for m in &coverage.misses {
-        if let Some(when) = &m.when {
-            let on = Expr::parse(when)
-                .and_then(|e| e.eval(&vars))
-                .map_err(|e| anyhow!("{}: coverage: when: '{when}': {e}", at(when)))?;
-            if on == 0.0 {
-                continue;
-            }
+        if !holds(&m.when)? {
+            continue;
         }
         let class = PathClass::parse(&m.paths).map_err(|e| anyhow!("{}: coverage: {e}", at(&m.paths)))?;
         misses.push(Miss {
@@ -64,7 +78,15 @@ pub fn claims(graph: &Graph, constants: &BTreeMap<String, ConstValue>) -> Result
             why: m.why.clone(),
         });
     }
-    Ok((coverage.estimates.clone(), misses))
+    let bias = match &coverage.biased {
+        Some(b) if holds(&b.when)? => Some(b.why.clone()),
+        _ => None,
+    };
+    Ok(Claims {
+        estimates: coverage.estimates.clone(),
+        misses,
+        bias,
+    })
 }
 
 /// A class of paths one estimator cannot sample and another can, which may make them differ.

@@ -71,17 +71,19 @@ fn markdown(settings: &TestSettings, runs: &[RunLine], pairs: &[PairResult]) -> 
     let mut md = String::from("# lightgraph verify\n\n");
     let _ = writeln!(
         md,
-        "Block and image-mean Welch tests, Holm-corrected to a family-wise error of {} per pair; \
-         \"agree\" needs the power ({:.0}%) to see a {:.1}% difference of the image mean and a {:.0}% \
-         difference in the blocks holding {:.0}% of the light; differences below {:.1}% (mean) and {:.1}% (block) \
-         are tolerated (docs/verify.md).\n",
+        "Block and image-mean Welch tests, Holm-corrected to a family-wise error of {} over the run's {} pairs \
+         ({:.2e} a pair); \"agree\" needs the power ({:.0}%) to see a {:.1}% difference of the image mean and a {:.0}% \
+         difference in the blocks holding {:.0}% of the light; in pairs with an estimator biased at a finite budget, \
+         differences below {:.1}% (mean) and {:.1}% (block) are tolerated (docs/verify.md).\n",
         settings.alpha,
+        settings.pairs,
+        settings.pair_alpha(),
         settings.power * 100.0,
         settings.detect_mean * 100.0,
         settings.detect_block * 100.0,
         settings.coverage * 100.0,
-        settings.tolerance_mean * 100.0,
-        settings.tolerance_block * 100.0
+        settings.bias_tolerance_mean * 100.0,
+        settings.bias_tolerance_block * 100.0
     );
     md.push_str(
         "| scene | estimator | frames | seconds | image light | its relative error | rejected samples |\n\

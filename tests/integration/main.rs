@@ -30,3 +30,4 @@ mod subgroups;
 mod tev;
 mod textures;
 mod vcm;
+mod verify;
