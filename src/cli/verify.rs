@@ -11,7 +11,7 @@ use lightgraph::output::{write_exr, write_png};
 use lightgraph::render::{LoadedScene, load_graph};
 use lightgraph::study::scene_folders;
 use lightgraph::verify::batches::{Amount, Budget, RunBatches, render_batches};
-use lightgraph::verify::paths::{describe, scene_kinds};
+use lightgraph::verify::paths::{Kinds, describe, scene_kinds};
 use lightgraph::verify::report::{RunLine, map_name, write_map, write_tables};
 use lightgraph::verify::stats::{TestSettings, compare};
 use lightgraph::verify::{
@@ -242,7 +242,24 @@ fn estimators(args: &VerifyArgs) -> Result<Vec<Estimator>> {
             layout,
         });
     }
+    check_sets(&args.common.set, &out)?;
     Ok(out)
+}
+
+/// Checks that every `--set NAME=VALUE` names a constant of at least one estimator's graph
+/// (each takes its own, `own_sets`): a mistyped name is an error, not a setting no graph reads.
+fn check_sets(sets: &[String], estimators: &[Estimator]) -> Result<()> {
+    for set in sets {
+        let name = set.split_once('=').map_or(set.as_str(), |(name, _)| name);
+        if !estimators.iter().any(|e| e.graph.constants.contains_key(name)) {
+            let graphs: Vec<&str> = estimators.iter().map(|e| e.graph.name.as_str()).collect();
+            bail!(
+                "--set {set}: no graph of the run ({}) has a constant {name}",
+                graphs.join(", ")
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Renders every estimator on one scene and compares every pair of the same quantity.
@@ -253,6 +270,30 @@ fn verify_scene(
     (scene, folder): (&str, &str),
     estimators: &[Estimator],
 ) -> Result<(Vec<RunLine>, Vec<PairResult>)> {
+    let (runs, kinds) = render_runs(args, gpu, (scene, folder), estimators)?;
+    eprintln!("verify: {scene} has paths of {}", describe(kinds));
+    let lines = runs
+        .iter()
+        .map(|r| RunLine {
+            scene: folder.to_string(),
+            label: r.label.clone(),
+            frames: r.result.frames,
+            seconds: r.result.seconds,
+            rejected_samples: r.result.rejected_samples,
+            light: r.result.blocks.image().light_and_error(),
+        })
+        .collect();
+    Ok((lines, compare_runs(args, settings, folder, &runs, kinds)?))
+}
+
+/// Renders every estimator on `scene` and writes each run's EXR and PNG into its folder;
+/// returns the runs and the vertex kinds of the scene's paths.
+fn render_runs(
+    args: &VerifyArgs,
+    gpu: &Gpu,
+    (scene, folder): (&str, &str),
+    estimators: &[Estimator],
+) -> Result<(Vec<Run>, Kinds)> {
     let mut scenes = Scenes::new(scene);
     let mut runs = Vec::new();
     let mut kinds = None;
@@ -271,19 +312,18 @@ fn verify_scene(
         write_png(&stem.with_extension("png"), &run.result.image, args.exposure)?;
         runs.push(run);
     }
-    let kinds = kinds.context("no estimator to verify")?;
-    eprintln!("verify: {scene} has paths of {}", describe(kinds));
-    let lines = runs
-        .iter()
-        .map(|r| RunLine {
-            scene: folder.to_string(),
-            label: r.label.clone(),
-            frames: r.result.frames,
-            seconds: r.result.seconds,
-            rejected_samples: r.result.rejected_samples,
-            light: r.result.blocks.image().light_and_error(),
-        })
-        .collect();
+    Ok((runs, kinds.context("no estimator to verify")?))
+}
+
+/// Compares every pair of `runs` of the same quantity on a scene whose paths have `kinds`,
+/// writing a map of every pair that differs.
+fn compare_runs(
+    args: &VerifyArgs,
+    settings: &TestSettings,
+    folder: &str,
+    runs: &[Run],
+    kinds: Kinds,
+) -> Result<Vec<PairResult>> {
     let mut pairs = Vec::new();
     for (i, a) in runs.iter().enumerate() {
         for b in runs[i + 1..]
@@ -310,7 +350,7 @@ fn verify_scene(
             pairs.push(pair);
         }
     }
-    Ok((lines, pairs))
+    Ok(pairs)
 }
 
 /// Renders one estimator on a scene in batches, with a progress bar; `index` makes its seed

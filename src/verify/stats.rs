@@ -369,63 +369,30 @@ pub fn compare(a: &BlockBatches, b: &BlockBatches, settings: &TestSettings, bias
         .zip(&blocks_b)
         .chain(std::iter::once((&image_a, &image_b)))
         .collect();
-    // The family: every channel with something to test.
+    // The family: every channel with something to test, Holm-corrected together.
     let floor = ROUNDING * 0.5 * (light(&image_a) + light(&image_b));
     let tests: Vec<Vec<Option<Welch>>> = pairs
         .iter()
         .map(|(x, y)| (0..3).map(|c| welch(x, y, c, floor)).collect())
         .collect();
-    let flat: Vec<f64> = tests.iter().flatten().flatten().map(|w| w.p).collect();
-    let rejected_flat = holm(&flat, settings.pair_alpha());
-    let m = flat.len().max(1);
+    let p: Vec<f64> = tests.iter().flatten().flatten().map(|w| w.p).collect();
+    let mut rejected = holm(&p, settings.pair_alpha()).into_iter();
+    let m = p.len().max(1);
     let level = settings.pair_alpha() / m as f64;
-    let mut rejected = rejected_flat.into_iter();
-    let mut results = Vec::new();
-    for (k, ((x, y), channels)) in pairs.iter().zip(&tests).enumerate() {
+    let mut results: Vec<BlockTest> = Vec::new();
+    for (k, (&(x, y), channels)) in pairs.iter().zip(&tests).enumerate() {
         let tolerance = match (biased, k + 1 == pairs.len()) {
             (false, _) => 0.0,
             (true, true) => settings.bias_tolerance_mean,
             (true, false) => settings.bias_tolerance_block,
         };
-        let mut t = 0.0f64;
-        let mut any = false;
-        let mut se2 = 0.0;
-        let mut dof = f64::INFINITY;
-        for w in channels.iter().flatten() {
-            any |= rejected.next().expect("one verdict per test");
-            if w.t.abs() > t.abs() {
-                t = w.t;
-            }
-            se2 += w.se * w.se;
-            dof = dof.min(w.dof);
-        }
-        let of = 0.5 * (light(x) + light(y));
-        let detect = match channels.iter().flatten().next() {
-            None => f64::INFINITY,
-            Some(_) => detectable(se2.sqrt(), dof, level, settings.power, of),
-        };
-        let difference = relative(light(x) - light(y), of);
-        results.push(BlockTest {
-            t,
-            rejected: any && difference.abs() > tolerance,
-            difference,
-            detectable: detect,
-            light: of,
-        });
+        // Every channel's verdict is taken (no short cut), so the next block starts at its own.
+        let n = channels.iter().flatten().count();
+        let found = (&mut rejected).take(n).fold(false, |any, r| any | r);
+        results.push(block_test((x, y), channels, found, tolerance, (level, settings.power)));
     }
     let mean = results.pop().expect("the image mean's test");
-    let mut dofs: Vec<f64> = tests.iter().flatten().flatten().map(|w| w.dof).collect();
-    dofs.sort_by(f64::total_cmp);
-    let t_critical = dofs
-        .get(dofs.len() / 2)
-        .map_or(f64::INFINITY, |&d| student(d).inverse_cdf(1.0 - level / 2.0));
-    let total = results.iter().map(|b| b.light).fold(0.0, |s, l| s + l);
-    let covered = results
-        .iter()
-        .filter(|b| b.detectable <= settings.detect_block)
-        .fold(0.0, |s, b| s + b.light);
-    let coverage = relative(covered, total);
-    let (la, lb) = (light(&image_a), light(&image_b));
+    let coverage = coverage(&results, settings.detect_block);
     let differ = mean.rejected || results.iter().any(|b| b.rejected);
     let powerful = mean.detectable <= settings.detect_mean && coverage >= settings.coverage;
     let verdict = match (differ, powerful) {
@@ -437,14 +404,65 @@ pub fn compare(a: &BlockBatches, b: &BlockBatches, settings: &TestSettings, bias
         verdict,
         blocks: results,
         tests: m,
-        t_critical,
-        light: (la, lb),
+        t_critical: median_critical(&tests, level),
+        light: (light(&image_a), light(&image_b)),
         mean_difference: mean.difference,
         mean_t: mean.t,
         mean_rejected: mean.rejected,
         mean_detectable: mean.detectable,
         coverage,
     }
+}
+
+/// One block's (or the mean's) summary from its channels' tests: the largest |t|, whether it
+/// differs (`found` significant and beyond `tolerance`), and what it could have detected at the
+/// per-test `level` with `power`.
+fn block_test(
+    (x, y): (&Estimate, &Estimate),
+    channels: &[Option<Welch>],
+    found: bool,
+    tolerance: f64,
+    (level, power): (f64, f64),
+) -> BlockTest {
+    let tested: Vec<&Welch> = channels.iter().flatten().collect();
+    let t = tested
+        .iter()
+        .map(|w| w.t)
+        .fold(0.0, |m: f64, t| if t.abs() > m.abs() { t } else { m });
+    let se = tested.iter().map(|w| w.se * w.se).sum::<f64>().sqrt();
+    let dof = tested.iter().map(|w| w.dof).fold(f64::INFINITY, f64::min);
+    let of = 0.5 * (light(x) + light(y));
+    let detectable = match tested.is_empty() {
+        true => f64::INFINITY,
+        false => detectable(se, dof, level, power, of),
+    };
+    let difference = relative(light(x) - light(y), of);
+    BlockTest {
+        t,
+        rejected: found && difference.abs() > tolerance,
+        difference,
+        detectable,
+        light: of,
+    }
+}
+
+/// The fraction of the blocks' light in blocks whose detectable difference is at most
+/// `detect`.
+fn coverage(blocks: &[BlockTest], detect: f64) -> f64 {
+    let total = blocks.iter().fold(0.0, |s, b| s + b.light);
+    let covered = blocks
+        .iter()
+        .filter(|b| b.detectable <= detect)
+        .fold(0.0, |s, b| s + b.light);
+    relative(covered, total)
+}
+
+/// The critical |t| at the per-test `level` for the median degrees of freedom of the tests.
+fn median_critical(tests: &[Vec<Option<Welch>>], level: f64) -> f64 {
+    let mut dofs: Vec<f64> = tests.iter().flatten().flatten().map(|w| w.dof).collect();
+    dofs.sort_by(f64::total_cmp);
+    dofs.get(dofs.len() / 2)
+        .map_or(f64::INFINITY, |&d| student(d).inverse_cdf(1.0 - level / 2.0))
 }
 
 #[cfg(test)]

@@ -28,8 +28,6 @@ const SETTINGS: &[&str] = &[
     "16",
     "--block",
     "8",
-    "--set",
-    "PM_RADIUS=0.02",
     "--detect-mean",
     "0.07",
     "--detect-block",
@@ -37,6 +35,9 @@ const SETTINGS: &[&str] = &[
     "--coverage",
     "0.75",
 ];
+
+/// The merge radius of the runs with photon mapping or VCM (see the module comment).
+const PM_RADIUS: [&str; 2] = ["--set", "PM_RADIUS=0.02"];
 
 /// One row of verify.csv: (scene, a, b, verdict, outcome).
 type Row = (String, String, String, String, String);
@@ -76,7 +77,15 @@ fn verdict<'r>(rows: &'r [Row], scene: &str, a: &str, b: &str) -> &'r str {
 
 #[test]
 fn every_estimator_agrees_where_it_should_on_the_diffuse_and_the_point_light_boxes() {
-    let (status, stderr, _, rows) = verify("verify-boxes", &["--scenes", "cornell-diffuse,cornell-glossy-point"]);
+    let (status, stderr, _, rows) = verify(
+        "verify-boxes",
+        &[
+            "--scenes",
+            "cornell-diffuse,cornell-glossy-point",
+            PM_RADIUS[0],
+            PM_RADIUS[1],
+        ],
+    );
     assert_eq!(status, Some(0), "{stderr}");
     // 11 estimators, every pair on both scenes, each decided and as predicted.
     assert_eq!(rows.len(), 2 * 55);
@@ -114,6 +123,8 @@ fn every_declared_gap_shows_on_the_sun_and_point_light_boxes() {
             "--graphs",
             "pt,lt,bpt-lvc,vcm",
             "--check-gaps",
+            PM_RADIUS[0],
+            PM_RADIUS[1],
         ],
     );
     assert_eq!(status, Some(0), "{stderr}");
@@ -189,4 +200,21 @@ fn a_malformed_path_class_is_an_error_at_its_line() {
     ]);
     assert!(stderr.contains(&format!("pt-reversed.ron:{line}:")), "{stderr}");
     assert!(stderr.contains("must read from a light"), "{stderr}");
+}
+
+#[test]
+fn a_set_no_graph_has_is_an_error() {
+    let stderr = fails(&[
+        "verify",
+        "--graphs",
+        "pt,lt",
+        "--set",
+        "PM_RADUIS=0.02",
+        "--scenes",
+        "cornell-diffuse",
+    ]);
+    assert!(
+        stderr.contains("no graph of the run (pt, lt) has a constant PM_RADUIS"),
+        "{stderr}"
+    );
 }
