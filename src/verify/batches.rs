@@ -3,6 +3,7 @@
 //! ([`BlockBatches`]) and the run's total.
 
 use super::stats::BlockBatches;
+use crate::reference::Reference;
 use crate::render::{Image, LoadedScene, Session, SessionOptions};
 use anyhow::{Result, bail};
 use lightgraph_engine::runtime::MAX_BATCH;
@@ -59,7 +60,8 @@ pub fn render_batches(
     let mut session = Session::new(gpu, graph, layout, scene, options)?;
     let at_once = session.frames_at_once();
     let mut blocks = BlockBatches::new(size, block);
-    let mut total = Totals::new(size);
+    // The run's f64 sums over every batch, for its image.
+    let mut total = Reference::new(size, Default::default());
     let start = Instant::now();
     let mut per_batch = match budget.amount {
         Amount::Frames(n) => Some(n.div_ceil(budget.batches).div_ceil(at_once) * at_once),
@@ -78,13 +80,13 @@ pub fn render_batches(
         let taken = session.take_accumulation()?;
         let sums: Vec<[f64; 3]> = taken.sum.iter().map(|s| [0, 1, 2].map(|c| s[c] as f64)).collect();
         blocks.add(&sums, frames);
-        total.add(&sums, &taken.sum_sq, frames);
-        progress(b + 1, total.frames);
+        total.absorb(&taken)?;
+        progress(b + 1, total.frames as u32);
     }
     Ok(RunBatches {
         blocks,
         image: total.image(),
-        frames: total.frames,
+        frames: total.frames as u32,
         seconds: start.elapsed().as_secs_f64(),
         rejected_samples: session.counters.get("samples_rejected").copied().unwrap_or(0),
     })
@@ -113,62 +115,4 @@ fn render_for(session: &mut Session, time: Duration) -> Result<u32> {
     }
     session.settle()?;
     Ok(session.frames - first)
-}
-
-/// The run's sums over every batch, for its image.
-struct Totals {
-    size: (u32, u32),
-    frames: u32,
-    sum: Vec<[f64; 3]>,
-    sum_sq: Vec<[f64; 3]>,
-}
-
-impl Totals {
-    fn new(size: (u32, u32)) -> Totals {
-        let n = (size.0 * size.1) as usize;
-        Totals {
-            size,
-            frames: 0,
-            sum: vec![[0.0; 3]; n],
-            sum_sq: vec![[0.0; 3]; n],
-        }
-    }
-
-    fn add(&mut self, sums: &[[f64; 3]], squares: &[[f32; 4]], frames: u32) {
-        self.frames += frames;
-        for ((s, q), (bs, bq)) in self
-            .sum
-            .iter_mut()
-            .zip(self.sum_sq.iter_mut())
-            .zip(sums.iter().zip(squares))
-        {
-            for c in 0..3 {
-                s[c] += bs[c];
-                q[c] += bq[c] as f64;
-            }
-        }
-    }
-
-    fn image(&self) -> Image {
-        let n = self.frames.max(1) as f64;
-        let mean: Vec<[f32; 3]> = self.sum.iter().map(|s| s.map(|v| (v / n) as f32)).collect();
-        let variance = self
-            .sum
-            .iter()
-            .zip(&self.sum_sq)
-            .map(|(s, q)| {
-                [0, 1, 2].map(|c| match n > 1.0 {
-                    true => ((q[c] / n - (s[c] / n).powi(2)) * n / (n - 1.0)).max(0.0) as f32,
-                    false => 0.0,
-                })
-            })
-            .collect();
-        Image {
-            width: self.size.0,
-            height: self.size.1,
-            frames: self.frames,
-            mean,
-            variance,
-        }
-    }
 }
