@@ -72,7 +72,7 @@ pub struct GraphFile {
     /// The layout used when none is asked for.
     pub default_layout: String,
     /// What the graph estimates and what it cannot sample, as the application states them:
-    /// the engine keeps them for the application's checks (`lightgraph verify`).
+    /// the engine keeps them for the application's checks.
     #[serde(default)]
     pub coverage: Coverage,
 }
@@ -80,12 +80,12 @@ pub struct GraphFile {
 /// A graph's claims about its estimate, for the application: which quantity it estimates
 /// (graphs of one quantity may be compared) and which samples it cannot draw, each under an
 /// optional condition over the constants. The engine does not read the texts.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Coverage {
-    /// The quantity the graph's output estimates, e.g. `"radiance"`.
-    #[serde(default = "radiance")]
-    pub estimates: String,
+    /// The quantity the graph's output estimates (the application's default when absent).
+    #[serde(default)]
+    pub estimates: Option<String>,
     /// What the graph cannot sample.
     #[serde(default)]
     pub misses: Vec<MissDecl>,
@@ -93,16 +93,6 @@ pub struct Coverage {
     /// one that blurs by a radius that shrinks), under an optional condition.
     #[serde(default)]
     pub biased: Option<BiasDecl>,
-}
-
-impl Default for Coverage {
-    fn default() -> Self {
-        Coverage {
-            estimates: radiance(),
-            misses: Vec::new(),
-            biased: None,
-        }
-    }
 }
 
 /// A graph's claim that its estimate is biased at a finite budget.
@@ -116,16 +106,11 @@ pub struct BiasDecl {
     pub when: Option<String>,
 }
 
-fn radiance() -> String {
-    "radiance".to_string()
-}
-
 /// One class of samples a graph cannot draw.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MissDecl {
-    /// The class, in the application's notation (lightgraph: a path class in Heckbert's
-    /// notation, docs/verify.md).
+    /// The class, in the application's notation.
     pub paths: String,
     /// Constant expression: the claim holds only where it is non-zero (always without it).
     #[serde(default)]

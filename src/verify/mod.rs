@@ -28,6 +28,9 @@ pub const DEFAULT_SCENES: &str = "cornell-diffuse,cornell-glossy-sun,cornell-glo
 pub const DEFAULT_ESTIMATORS: &str =
     "pt,lt,bpt-naive,bpt-streaming,bpt-lvc,ppm,sppm,pbpm,vcm,vcm@VCM_MERGE=false,vcm@VCM_CONNECT=false";
 
+/// The quantity a graph estimates when its `coverage` names none.
+pub const DEFAULT_QUANTITY: &str = "radiance";
+
 /// A class of paths a graph declares it cannot sample, active under its constants.
 #[derive(Debug, Clone)]
 pub struct Miss {
@@ -83,7 +86,10 @@ pub fn claims(graph: &Graph, constants: &BTreeMap<String, ConstValue>) -> Result
         _ => None,
     };
     Ok(Claims {
-        estimates: coverage.estimates.clone(),
+        estimates: coverage
+            .estimates
+            .clone()
+            .unwrap_or_else(|| DEFAULT_QUANTITY.to_string()),
         misses,
         bias,
     })
