@@ -31,6 +31,12 @@ pub mod material_flags {
     /// A transmissive PBR material is a thin sheet: light passes straight through it, and its
     /// dielectric reflects as a slab of two faces.
     pub const THIN_WALLED: u32 = 8;
+    /// The PBR specular layer's microfacets follow Beckmann's distribution (else GGX).
+    pub const BECKMANN: u32 = 16;
+    /// Mitsuba's plastic: the PBR diffuse base with the coating's internal scattering.
+    pub const PLASTIC: u32 = 32;
+    /// With `PLASTIC`: the internal scattering is nonlinear in the base colour.
+    pub const PLASTIC_NONLINEAR: u32 = 64;
 }
 
 /// Primitive kinds, as `Primitive::kind` stores them.
