@@ -738,6 +738,40 @@ mod tests {
     }
 
     #[test]
+    fn the_layout_is_read_from_a_scene_file_and_reaches_the_gpu() {
+        use crate::model::Light;
+        let scene = |layout: &str| {
+            let text = format!(
+                "Scene(camera: (position: (0, 3, 0), look: Target((0, 0, 0)), up: (0, 0, 1), fov_degrees: 20.0),
+                    materials: {{\"white\": (diffuse: (1, 1, 1))}},
+                    shapes: [Quad(corners: ((-1, 0, -1), (-1, 0, 1), (1, 0, 1), (1, 0, -1)), material: \"white\")],
+                    lights: [Environment(file: \"two.exr\"{layout})])"
+            );
+            let mut scene = crate::parse_scene("two.ron", &text).unwrap();
+            let Light::Environment { map, .. } = &mut scene.lights[0] else {
+                panic!()
+            };
+            *map = Some(std::sync::Arc::new(varied_map(3, 2)));
+            crate::CompiledScene::new(&scene).unwrap()
+        };
+        for (text, layout, rows) in [
+            ("", TexelLayout::Centred, 3),
+            (", layout: Centred", TexelLayout::Centred, 3),
+            (", layout: PoleToPole", TexelLayout::PoleToPole, 1),
+        ] {
+            let compiled = scene(text);
+            assert_eq!(
+                compiled.environment.pole_to_pole,
+                (layout == TexelLayout::PoleToPole) as u32
+            );
+            let d = varied_map(3, 2).distribution(layout);
+            assert_eq!(d.patches.rows(), rows);
+            assert_eq!(compiled.env_cdf.len(), rows * 4 + 2 * rows + 1, "{text}");
+            assert_eq!((compiled.env_cdf, compiled.env_texels), (d.cdf, d.texels));
+        }
+    }
+
+    #[test]
     fn bad_maps_are_refused() {
         assert!(
             EnvironmentMap::new(2, 2, vec![[1.0; 3]; 3])
