@@ -1,9 +1,10 @@
 //! A scene's shapes and lights flattened into what the GPU reads: primitives (triangles and
 //! spheres) with their vertex attributes and area lights, then the scene's other lights.
 
+use crate::MAX_COORDINATE;
+use crate::environment::{self, TexelLayout};
 use crate::gpu::{self, GpuEnvironment, GpuLight, GpuPrimitive, GpuTriangleAttributes, light_kind, primitive_kind};
 use crate::model::{self, Light, Scene, Shape};
-use crate::{MAX_COORDINATE, environment};
 use bytemuck::Zeroable;
 use glam::Vec3;
 use std::collections::BTreeMap;
@@ -194,6 +195,7 @@ pub(crate) fn push_scene_lights(lights: &[Light], out: &mut Vec<GpuLight>) -> Re
                 file,
                 scale,
                 rotation_degrees,
+                layout,
                 map,
             } => {
                 let map = map.as_ref().ok_or_else(|| {
@@ -208,8 +210,9 @@ pub(crate) fn push_scene_lights(lights: &[Light], out: &mut Vec<GpuLight>) -> Re
                     height: map.height,
                     cos_rotation: cos,
                     sin_rotation: sin,
+                    pole_to_pole: (*layout == TexelLayout::PoleToPole) as u32,
                 };
-                sky.distribution = Some(map.distribution());
+                sky.distribution = Some(map.distribution(*layout));
             }
         }
         out.push(l);

@@ -265,8 +265,8 @@ pub struct GpuAliasEntry {
     pub pmf: f32,
 }
 
-/// The environment map's shape and orientation (`Environment` in WGSL); its texels and
-/// sampling distribution are the `env_texels` and `env_cdf` resources.
+/// The environment map's shape, orientation and texel layout (`Environment` in WGSL); its
+/// texels and sampling distribution are the `env_texels` and `env_cdf` resources.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct GpuEnvironment {
@@ -278,6 +278,9 @@ pub struct GpuEnvironment {
     pub cos_rotation: f32,
     /// Sine of the map's rotation about +Y.
     pub sin_rotation: f32,
+    /// 1 when the texel rows span pole to pole ([`crate::environment::TexelLayout::PoleToPole`]),
+    /// 0 when they sit at their centres.
+    pub pole_to_pole: u32,
 }
 
 /// Bits of `TextureInfo::flags`.

@@ -356,7 +356,7 @@ pub struct CompiledScene {
     pub light_alias: Vec<GpuAliasEntry>,
     /// The environment map's size and rotation (width 0 when the scene has none).
     pub environment: GpuEnvironment,
-    /// The environment map's texels and sampling density ([`environment::Distribution`]);
+    /// The environment map's texels and sampling weights ([`environment::Distribution`]);
     /// one zero texel when there is no map.
     pub env_texels: Vec<[f32; 4]>,
     /// The environment map's CDFs; `[0, 1]` when there is no map.

@@ -375,7 +375,8 @@ pub enum Light {
     },
     /// An equirectangular environment map seen in every direction nothing else is
     /// (`.hdr` or `.exr`, a path below the asset root): +Y is up (the top row), the image's
-    /// centre column looks along −Z and u grows towards +X (u = 0 and 1 are +Z).
+    /// centre column looks along −Z and u grows towards +X (u = 0 and 1 are +Z); filtered
+    /// bilinearly (see [`crate::environment`]).
     Environment {
         /// The image file, below the asset root.
         file: String,
@@ -385,6 +386,10 @@ pub enum Light {
         /// Rotation of the map about +Y, counter-clockwise seen from above.
         #[serde(default)]
         rotation_degrees: f32,
+        /// Where the texels sit, between which the radiance is interpolated bilinearly:
+        /// `Centred` (the default) or `PoleToPole` (Mitsuba's envmap, set by its importer).
+        #[serde(default)]
+        layout: crate::environment::TexelLayout,
         /// The decoded map, once the scene's assets are resolved.
         #[serde(skip)]
         map: Option<std::sync::Arc<crate::environment::EnvironmentMap>>,

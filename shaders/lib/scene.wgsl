@@ -203,12 +203,13 @@ struct AliasEntry {
     pmf: f32,
 }
 
-// The environment map's size (width 0: none) and rotation about +Y.
+// The environment map's size (width 0: none), rotation about +Y and texel layout.
 struct Environment {
     width: u32,
     height: u32,
     cos_rotation: f32,
     sin_rotation: f32,
+    pole_to_pole: u32,      // 1: texel rows at v = j / (h - 1) (Mitsuba); 0: at their centres
 }
 
 // Moves `p` off its surface along `n` (which points to the side the new ray leaves on), by
