@@ -101,7 +101,9 @@ fn env_pdf_uv(row: u32, weight: f32) -> f32 {
 // with which `env_sample` picks that direction.
 fn env_lookup(direction: vec3<f32>) -> vec4<f32> {
     let d = env_to_map(direction);
-    let uv = vec2<f32>(0.5 + atan2(d.x, -d.z) * (0.5 * INV_PI), acos(clamp(d.y, -1.0, 1.0)) * INV_PI);
+    // theta by atan2, not acos(d.y): acos loses digits near the poles, where the density
+    // grows as 1 / sin(theta).
+    let uv = vec2<f32>(0.5 + atan2(d.x, -d.z) * (0.5 * INV_PI), atan2(length(d.xz), d.y) * INV_PI);
     let p = env_locate(uv);
     let c = p.corners;
     let t = env_bilerp(env_texels[c.x], env_texels[c.y], env_texels[c.z], env_texels[c.w], p.st);
