@@ -36,6 +36,7 @@ pub const ALL: &[(&str, &str)] = &[
         "SHADING_NORMALS",
         "interpolated vertex normals shading triangles (with the adjoint BSDF's correction)",
     ),
+    ("THIN_LENS", "a thin-lens camera: depth of field"),
     ("LIGHT_AREA", "emissive triangles"),
     ("LIGHT_PUNCTUAL", "point or spot lights"),
     ("LIGHT_POINT", "point lights"),
@@ -114,6 +115,7 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
         "SHADING_NORMALS",
         scene.attributes.iter().any(|a| a.flags & attribute_flags::NORMALS != 0),
     );
+    add("THIN_LENS", scene.thin_lens);
     let has = |kind: u32| scene.lights.iter().any(|l| l.kind == kind);
     add("LIGHT_AREA", has(light_kind::AREA));
     add("LIGHT_PUNCTUAL", has(light_kind::POINT) || has(light_kind::SPOT));

@@ -469,6 +469,7 @@ fn cameras(document: &gltf::Document, nodes: &[Option<(Option<String>, Mat4)>]) 
                 up: up.to_array(),
                 fov_degrees: p.yfov().to_degrees(),
                 fov_axis: FovAxis::Vertical,
+                lens: None,
             },
             aspect_ratio: p.aspect_ratio(),
         });

@@ -82,12 +82,12 @@ pub struct GpuCamera {
     pub height: f32,
     /// Right vector scaled by tan(horizontal fov / 2).
     pub right: [f32; 3],
-    /// Unused.
-    pub pad0: f32,
+    /// The thin lens's radius (0: a pinhole).
+    pub lens_radius: f32,
     /// Up vector scaled by tan(vertical fov / 2).
     pub up: [f32; 3],
-    /// Unused.
-    pub pad1: f32,
+    /// The thin lens's distance to the plane in focus, along `forward`.
+    pub focus_distance: f32,
 }
 
 /// A triangle or sphere (`Primitive` in WGSL), in BVH order.

@@ -329,6 +329,7 @@ pub fn default_camera(scene: &Scene) -> Camera {
         up: [0.0, 1.0, 0.0],
         fov_degrees,
         fov_axis: FovAxis::Smaller,
+        lens: None,
     }
 }
 
@@ -374,6 +375,8 @@ pub struct CompiledScene {
     pub bvh_time: Duration,
     /// Primitives reaching beyond ±[`TRACED_EXTENT`], whose boxes the BVH clips there.
     pub clipped_primitives: usize,
+    /// Whether the camera has a thin lens (depth of field).
+    pub thin_lens: bool,
 }
 
 fn v3(a: [f32; 3]) -> Vec3 {
@@ -462,6 +465,7 @@ impl CompiledScene {
             bvh_depth,
             bvh_time,
             clipped_primitives,
+            thin_lens: scene.camera.as_ref().is_some_and(|c| c.lens.is_some()),
         })
     }
 
@@ -490,9 +494,9 @@ impl CompiledScene {
             forward: forward.into(),
             height: height as f32,
             right: (right * tx).into(),
-            pad0: 0.0,
+            lens_radius: c.lens.map_or(0.0, |l| l.aperture_radius),
             up: (up * ty).into(),
-            pad1: 0.0,
+            focus_distance: c.lens.map_or(0.0, |l| l.focus_distance),
         }
     }
 

@@ -84,6 +84,21 @@ pub struct Camera {
     /// The image axis the field of view spans.
     #[serde(default)]
     pub fov_axis: FovAxis,
+    /// A thin lens instead of a pinhole: depth of field.
+    #[serde(default)]
+    pub lens: Option<ThinLens>,
+}
+
+/// A thin lens (Mitsuba's `thinlens`): rays start at uniform points of a disk of radius
+/// `aperture_radius` across the view direction and meet on the plane in focus, at
+/// `focus_distance` along the view direction.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ThinLens {
+    /// The lens's radius (scene units).
+    pub aperture_radius: f32,
+    /// The distance of the plane in focus from the lens, along the view direction.
+    pub focus_distance: f32,
 }
 
 /// The camera's view direction.

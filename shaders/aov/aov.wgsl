@@ -17,8 +17,9 @@ fn aov_sample(s: ptr<function, AovSample>, index: u32) -> bool {
     let pixel = index % PIXELS;
     (*s).pixel = pixel;
     var rng = rng_seed(frame.seed, frame.index, index);
-    var origin = camera.position;
-    var direction = camera_jittered_direction(pixel, &rng);
+    let ray = camera_jittered_ray(pixel, &rng);
+    var origin = ray.origin;
+    var direction = ray.direction;
     var travelled = 0.0;
     for (var bounce = 0u; bounce < MAX_PATH_LENGTH; bounce += 1u) {
         count(select(COUNTER_RAYS_EXTENSION, COUNTER_RAYS_PRIMARY, bounce == 0u), 1u);

@@ -65,7 +65,10 @@ fn lvc_light_visit(p: ptr<function, LightPath>, counts: MisCounts, reach: u32, s
             *stored = LvcStored(lvc_store(p, v), v.position);
         }
         if (counts.vc && !LVC_MEASURING && (*p).length + 1u <= MAX_PATH_LENGTH) {
-            let ray = light_vertex_to_camera(v, bsdf, counts);
+            var rng = (*p).rng;
+            let lens = camera_lens_sample(&rng);
+            (*p).rng = rng;
+            let ray = light_vertex_to_camera(v, bsdf, counts, lens);
             if (!is_black(ray.contribution)) {
                 emit_splat(ray);
             }

@@ -45,7 +45,10 @@ fn bpt_light_visit(lp: ptr<function, LightPath>, a: Arrival, film_base: u32) -> 
     r.store = false;
     if (!a.bsdf.is_delta) {
         r.vertex = light_vertex_at(*lp, a.s);
-        var ray = light_vertex_to_camera(r.vertex, a.bsdf, mis_counts(1.0));
+        var rng = (*lp).rng;
+        let lens = camera_lens_sample(&rng);
+        (*lp).rng = rng;
+        var ray = light_vertex_to_camera(r.vertex, a.bsdf, mis_counts(1.0), lens);
         ray.pixel += film_base;
         if (!is_black(ray.contribution)) {
             emit_shadow(ray);
@@ -60,9 +63,9 @@ fn bpt_light_visit(lp: ptr<function, LightPath>, a: Arrival, film_base: u32) -> 
 // `index` takes pixel index % PIXELS in NaiveBPT and StreamingBPT, and that pixel in tile
 // order in LVC-BPT and VCM (as in photon mapping, so that a workgroup's vertices are close).
 fn camera_subpath_start(pixel: u32, rng: ptr<function, u32>) -> CameraSubpath {
-    let direction = camera_jittered_direction(pixel, rng);
-    let d_vcm = mis_clamp(mis_pow(f32(PIXELS) / camera_pdf_w(dot(direction, camera.forward))));
-    return CameraSubpath(camera.position, pixel, direction, 0u, vec3<f32>(1.0), *rng, d_vcm, 0.0, 0.0, 0u, vec2<f32>(0.0));
+    let ray = camera_jittered_ray(pixel, rng);
+    let d_vcm = mis_clamp(mis_pow(f32(PIXELS) / camera_pdf_w(dot(ray.direction, camera.forward))));
+    return CameraSubpath(ray.origin, pixel, ray.direction, 0u, vec3<f32>(1.0), *rng, d_vcm, 0.0, 0.0, 0u, vec2<f32>(0.0));
 }
 
 // The trace passes of camera sub-paths: the closest hit of the sub-path's ray.

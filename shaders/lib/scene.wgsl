@@ -16,9 +16,9 @@ struct Camera {
     forward: vec3<f32>,
     height: f32,
     right: vec3<f32>,       // scaled by tan(horizontal fov / 2)
-    pad0: f32,
+    lens_radius: f32,       // THIN_LENS: the lens's radius (0: a pinhole)
     up: vec3<f32>,          // scaled by tan(vertical fov / 2)
-    pad1: f32,
+    focus_distance: f32,    // THIN_LENS: the distance along `forward` to the plane in focus
 }
 
 const PRIMITIVE_TRIANGLE: u32 = 0u;

@@ -9,7 +9,10 @@ fn light_bounce(p: ptr<function, LightPath>) -> bool {
     let s = a.s;
     let bsdf = a.bsdf;
     if (!bsdf.is_delta && (*p).length + 1u <= MAX_PATH_LENGTH) {
-        let ray = light_vertex_to_camera(light_vertex_at(*p, s), bsdf, mis_counts(1.0));
+        var rng = (*p).rng;
+        let lens = camera_lens_sample(&rng);
+        (*p).rng = rng;
+        let ray = light_vertex_to_camera(light_vertex_at(*p, s), bsdf, mis_counts(1.0), lens);
         if (!is_black(ray.contribution)) {
             emit_shadow(ray);
         }

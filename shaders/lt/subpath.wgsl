@@ -250,16 +250,19 @@ fn light_vertex_bsdf(v: LightVertex) -> Bsdf {
     return bsdf;
 }
 
-// The t = 1 strategy: connects a light vertex to the camera, weighed against the other
-// strategies as `counts` count them. Returns the shadow ray towards the camera with the
-// contribution to its pixel; a zero contribution when the camera cannot see the vertex.
-fn light_vertex_to_camera(v: LightVertex, bsdf: Bsdf, counts: MisCounts) -> ShadowRay {
+// The t = 1 strategy: connects a light vertex to the camera (to the lens point of `lens`,
+// `camera_lens_sample`), weighed against the other strategies as `counts` count them. Returns
+// the shadow ray towards the camera with the contribution to its pixel; a zero contribution
+// when the camera cannot see the vertex. A thin lens's point is picked with density
+// 1 / lens area, which cancels the lens area in its importance: the pinhole's formula holds.
+fn light_vertex_to_camera(v: LightVertex, bsdf: Bsdf, counts: MisCounts, lens: vec2<f32>) -> ShadowRay {
     var ray = ShadowRay(v.position, 0u, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
-    let raster = camera_raster(v.position);
+    let lens_point = camera_lens_point(lens);
+    let raster = camera_raster(v.position, lens_point);
     if (raster.z <= 0.0 || !bsdf.valid) {
         return ray;
     }
-    let to_camera = camera.position - v.position;
+    let to_camera = lens_point - v.position;
     let distance2 = dot(to_camera, to_camera);
     let distance = sqrt(distance2);
     let direction = to_camera / distance;

@@ -151,9 +151,10 @@ struct Merge {
 fn pm_camera(p: ptr<function, MergePath>, index: u32) -> bool {
     var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
     let pixel = camera_tiled_pixel(index % PIXELS);
-    (*p).origin = camera.position;
+    let ray = camera_jittered_ray(pixel, &rng);
+    (*p).origin = ray.origin;
     (*p).pixel = pixel;
-    (*p).direction = camera_jittered_direction(pixel, &rng);
+    (*p).direction = ray.direction;
     (*p).length = 0u;
     (*p).throughput = vec3<f32>(1.0);
     (*p).rng = rng;

@@ -14,8 +14,9 @@ fn generate(path: ptr<function, CameraPath>, index: u32) -> bool {
     let jitter = rng_vec2(&rng);
     let x = f32(pixel % WIDTH) + jitter.x;
     let y = f32(pixel / WIDTH) + jitter.y;
-    (*path).origin = camera.position;
-    (*path).direction = camera_direction(x, y);
+    let ray = camera_ray(x, y, camera_lens_sample(&rng));
+    (*path).origin = ray.origin;
+    (*path).direction = ray.direction;
     (*path).pixel = f.film_base + pixel;
     (*path).length = 0u;
     (*path).throughput = vec3<f32>(1.0);

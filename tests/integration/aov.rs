@@ -54,6 +54,7 @@ fn textured_plane() -> LoadedScene {
             up: [0.0, 1.0, 0.0],
             fov_degrees: FOV,
             fov_axis: FovAxis::Horizontal,
+            lens: None,
         }),
         gltf_camera: None,
         resolution: (W, H),

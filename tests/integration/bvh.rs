@@ -153,6 +153,7 @@ fn scene_of(shapes: Vec<Shape>) -> Scene {
             up: [0.0, 1.0, 0.0],
             fov_degrees: 45.0,
             fov_axis: FovAxis::Horizontal,
+            lens: None,
         }),
         gltf_camera: None,
         resolution: (1, 1),

@@ -123,7 +123,7 @@ fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
     check!(
         "Camera",
         GpuCamera,
-        [position, width, forward, height, right, pad0, up, pad1]
+        [position, width, forward, height, right, lens_radius, up, focus_distance]
     );
     check!("PrimitiveFields", GpuPrimitive, [a, material, b, light, c, kind]);
     let (size, _) = struct_layout(module, "Primitive").expect("Primitive");

@@ -44,6 +44,7 @@ fn camera_looking_down(z: f32, fov_degrees: f32) -> Camera {
         up: [0.0, 1.0, 0.0],
         fov_degrees,
         fov_axis: FovAxis::Horizontal,
+        lens: None,
     }
 }
 

@@ -6,7 +6,7 @@
 
 use super::transform;
 use super::xml::{Context, Props, Result};
-use crate::model::{Camera, FovAxis, Look};
+use crate::model::{Camera, FovAxis, Look, ThinLens};
 use glam::{Mat4, Vec3};
 use roxmltree::Node;
 
@@ -14,15 +14,11 @@ use roxmltree::Node;
 pub fn sensor<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<(Camera, (u32, u32))> {
     let kind = ctx.plugin_type(node)?;
     let props = Props::new(node);
-    match kind.as_str() {
-        "perspective" => {}
-        "thinlens" => ctx.warn(node, "rendered as a pinhole camera (perspective): no depth of field"),
-        _ => return Err(ctx.error(node, "only perspective sensors are supported")),
-    }
-    if kind == "thinlens" {
-        props.float(ctx, "aperture_radius")?;
-        props.float(ctx, "focus_distance")?;
-    }
+    let lens = match kind.as_str() {
+        "perspective" => None,
+        "thinlens" => thin_lens(ctx, &props)?,
+        _ => return Err(ctx.error(node, "only perspective and thinlens sensors are supported")),
+    };
     let size = match props.nested(ctx, "film")?.first() {
         Some(&film) => film_size(ctx, film)?,
         None => (768, 576),
@@ -51,17 +47,40 @@ pub fn sensor<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<(
                 .parse()
                 .map_err(|_| ctx.error(node, format!("focal_length '{text}' is not a length in mm")))?;
             let diagonal = (36f32.hypot(24.0) / (2.0 * mm)).atan().to_degrees() * 2.0;
-            return finish(ctx, &props, m, diagonal, "diagonal", size);
+            return finish(ctx, &props, (m, lens), diagonal, "diagonal", size);
         }
     };
     let axis = props.string(ctx, "fov_axis")?.unwrap_or_else(|| "x".into());
-    finish(ctx, &props, m, fov, &axis, size)
+    finish(ctx, &props, (m, lens), fov, &axis, size)
 }
 
+/// A `thinlens` sensor's lens: `aperture_radius` (required, as in Mitsuba 3) and
+/// `focus_distance` (Mitsuba's default: the far clip distance, 10^4); `None` for a radius of 0.
+fn thin_lens(ctx: &mut Context, props: &Props) -> Result<Option<ThinLens>> {
+    let node = props.node();
+    let Some(aperture_radius) = props.float(ctx, "aperture_radius")? else {
+        return Err(ctx.error(node, "a thinlens sensor needs its aperture_radius"));
+    };
+    let far_clip = props.float(ctx, "far_clip")?.unwrap_or(1e4);
+    let focus_distance = props.float(ctx, "focus_distance")?.unwrap_or(far_clip);
+    if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
+        return Err(ctx.error(node, format!("aperture_radius {aperture_radius} is not a radius")));
+    }
+    if !(focus_distance > 0.0 && focus_distance.is_finite()) {
+        return Err(ctx.error(node, format!("focus_distance {focus_distance} is not a distance")));
+    }
+    Ok((aperture_radius > 0.0).then_some(ThinLens {
+        aperture_radius,
+        focus_distance,
+    }))
+}
+
+/// The camera of `to_world` `m` with `lens`, a field of view `fov` across `axis`, and the film
+/// `size`.
 fn finish(
     ctx: &mut Context,
     props: &Props,
-    m: Mat4,
+    (m, lens): (Mat4, Option<ThinLens>),
     fov: f32,
     axis: &str,
     size: (u32, u32),
@@ -97,6 +116,7 @@ fn finish(
             up: m.transform_vector3(Vec3::Y).normalize().to_array(),
             fov_degrees,
             fov_axis,
+            lens,
         },
         size,
     ))
@@ -147,6 +167,36 @@ mod tests {
         let Look::Forward(f) = c.look else { panic!() };
         assert!((Vec3::from(f) - Vec3::NEG_Z).length() < 1e-6);
         assert_eq!((c.fov_degrees, c.fov_axis), (40.0, FovAxis::Vertical));
+    }
+
+    #[test]
+    fn thin_lenses_keep_their_aperture_and_focus() {
+        let lens = |props: &str| {
+            let (c, w) = convert(&format!(
+                "<sensor type=\"thinlens\"><float name=\"fov\" value=\"40\"/>{props}</sensor>"
+            ));
+            (c.map(|(c, _)| c.lens), w)
+        };
+        let (l, w) =
+            lens("<float name=\"aperture_radius\" value=\"0.1\"/><float name=\"focus_distance\" value=\"3\"/>");
+        assert_eq!(
+            l.unwrap(),
+            Some(ThinLens {
+                aperture_radius: 0.1,
+                focus_distance: 3.0
+            })
+        );
+        assert!(w.is_empty(), "{w:?}");
+        // Mitsuba 3 focuses at the far clip distance by default; a radius of 0 is a pinhole.
+        let (l, _) = lens("<float name=\"aperture_radius\" value=\"0.1\"/>");
+        assert_eq!(l.unwrap().unwrap().focus_distance, 1e4);
+        let (l, _) = lens("<float name=\"aperture_radius\" value=\"0\"/>");
+        assert_eq!(l.unwrap(), None);
+        let (l, _) = lens("<float name=\"focus_distance\" value=\"3\"/>");
+        assert!(l.unwrap_err().message.contains("needs its aperture_radius"));
+        let (l, _) =
+            lens("<float name=\"aperture_radius\" value=\"0.1\"/><float name=\"focus_distance\" value=\"-1\"/>");
+        assert!(l.unwrap_err().message.contains("is not a distance"));
     }
 
     #[test]

@@ -535,7 +535,9 @@ mod tests {
         let (m, _) = convert("<bsdf type=\"roughdielectric\"><string name=\"int_ior\" value=\"water\"/></bsdf>");
         let p = m.unwrap().pbr.unwrap();
         assert!((p.ior - 1.333 / 1.000277).abs() < 1e-5 && (p.roughness - 0.1f32.sqrt()).abs() < 1e-6);
-        // VeachBidir's lamp: F0 from eta and k, Beckmann warned about.
+        // Mitsuba's default distribution is Beckmann's.
+        assert_eq!(p.distribution, Microfacet::Beckmann);
+        // VeachBidir's lamp: F0 from eta and k, Beckmann as the file says, without warning.
         let (m, w) = convert(
             "<bsdf type=\"roughconductor\"><float name=\"alpha\" value=\"0.25\"/><string name=\"distribution\" value=\"beckmann\"/>\
              <rgb name=\"eta\" value=\"2.8656, 2.11918, 1.94008\"/><rgb name=\"k\" value=\"3.03233, 2.05611, 1.61629\"/></bsdf>",
@@ -543,17 +545,23 @@ mod tests {
         let p = m.unwrap().pbr.unwrap();
         assert_eq!((p.metallic, p.roughness), (1.0, 0.5));
         assert!((p.base_color[0] - 0.52513).abs() < 1e-4, "{:?}", p.base_color);
-        assert_eq!(w.len(), 1);
-        assert!(
-            w[0].starts_with("m.xml:1:1: <bsdf type=\"roughconductor\">: the beckmann"),
-            "{w:?}"
-        );
+        assert_eq!(p.distribution, Microfacet::Beckmann);
+        assert!(w.is_empty(), "{w:?}");
+        let (m, w) = convert("<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/></bsdf>");
+        assert_eq!(m.unwrap().pbr.unwrap().distribution, Microfacet::Ggx);
+        assert!(w.is_empty(), "{w:?}");
+        let (m, w) = convert("<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"phong\"/></bsdf>");
+        assert_eq!(m.unwrap().pbr.unwrap().distribution, Microfacet::Beckmann);
+        assert!(w[0].contains("the phong distribution is rendered as Beckmann"), "{w:?}");
         let (m, _) = convert("<bsdf type=\"conductor\"/>");
         assert_eq!(m.unwrap().pbr.unwrap().base_color, [1.0; 3]);
         let (m, _) = convert("<bsdf type=\"roughplastic\"><rgb name=\"diffuseReflectance\" value=\"0.5\"/></bsdf>");
         let p = m.unwrap().pbr.unwrap();
         assert_eq!((p.base_color, p.metallic, p.transmission), ([0.5; 3], 0.0, 0.0));
         assert!((p.ior - 1.49 / 1.000277).abs() < 1e-5);
+        assert_eq!(p.plastic, Some(Plastic { nonlinear: false }));
+        let (m, _) = convert("<bsdf type=\"plastic\"><boolean name=\"nonlinear\" value=\"true\"/></bsdf>");
+        assert_eq!(m.unwrap().pbr.unwrap().plastic, Some(Plastic { nonlinear: true }));
     }
 
     #[test]
