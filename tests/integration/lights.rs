@@ -292,7 +292,9 @@ fn lambertian_surfaces_under_two_texel_maps_reflect_the_filtered_irradiance() {
     // a + (b − a)(1/4 − 1/(2π)). The nearest texel would give a.
     let floor = "camera: (position: (0, 3, 0), look: Target((0, 0, 0)), up: (0, 0, 1), fov_degrees: 20.0)";
     let floor_quad = "Quad(corners: ((-1, 0, -1), (-1, 0, 1), (1, 0, 1), (1, 0, -1)), material: \"white\")";
-    let cases: [(&str, (usize, usize), &str, &str, &str, [f64; 3]); 4] = [
+    // (what, map size, layout, camera, quad, expected radiance)
+    type Case<'a> = (&'a str, (usize, usize), &'a str, &'a str, &'a str, [f64; 3]);
+    let cases: [Case; 4] = [
         (
             "wall, 2 x 1, centred",
             (2, 1),
