@@ -63,16 +63,26 @@ impl Mesh {
 }
 
 /// The object-space mesh of a shape of `kind` other than `sphere` (see [`sphere`]), with the
-/// properties the kind reads; `None` for a kind this importer does not know.
+/// properties the kind reads; `None` for a kind this importer does not know. Meshes read
+/// from files without normals get area-weighted vertex normals (as Mitsuba computes them).
 pub fn mesh(ctx: &mut Context, props: &Props, kind: &str) -> Result<Option<Mesh>> {
     Ok(Some(match kind {
-        "obj" => obj(ctx, props)?,
-        "ply" => ply(ctx, props)?,
+        "obj" => smoothed(obj(ctx, props)?),
+        "ply" => smoothed(ply(ctx, props)?),
+        "serialized" => serialized(ctx, props)?,
         "rectangle" => rectangle(),
         "disk" => disk(),
         "cube" => cube(),
         _ => return Ok(None),
     }))
+}
+
+/// `mesh` with area-weighted vertex normals when it has none.
+fn smoothed(mut mesh: Mesh) -> Mesh {
+    if mesh.normals.is_none() {
+        mesh.smooth_normals();
+    }
+    mesh
 }
 
 /// Mitsuba's rectangle: [-1, 1]² in the plane z = 0, facing +Z.
@@ -170,6 +180,29 @@ pub fn sphere(center: Vec3, radius: f32) -> Mesh {
         }
     }
     out
+}
+
+/// Mesh `shape_index` (default 0) of a `serialized` file; smooth normals unless the file has
+/// normals or asks for face normals.
+fn serialized(ctx: &mut Context, props: &Props) -> Result<Mesh> {
+    let node = props.node();
+    let index = match props.integer(ctx, "shape_index")? {
+        None => 0,
+        Some(i) if i >= 0 => i as u64,
+        Some(i) => return Err(ctx.error(node, format!("shape_index {i} is negative"))),
+    };
+    let path = props.file(ctx, "a serialized shape")?;
+    let in_file = |e: String| ctx.error(node, format!("{}: {e}", path.display()));
+    let bytes = std::fs::read(&path).map_err(|e| in_file(e.to_string()))?;
+    let read = super::serialized::parse(&bytes, index).map_err(in_file)?;
+    Ok(if read.face_normals {
+        Mesh {
+            normals: None,
+            ..read.mesh
+        }
+    } else {
+        smoothed(read.mesh)
+    })
 }
 
 fn obj(ctx: &mut Context, props: &Props) -> Result<Mesh> {
