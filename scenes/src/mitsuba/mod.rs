@@ -15,6 +15,7 @@ pub mod export;
 pub mod materials;
 pub mod serialized;
 pub mod shapes;
+pub mod textures;
 pub mod transform;
 pub mod xml;
 
@@ -124,7 +125,7 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         integrator,
         gltf: None,
         gltf_diffuse: false,
-        textures: builder.materials.textures,
+        textures: builder.materials.images.textures,
     };
     scene.materials = builder.materials.materials;
     match camera {
