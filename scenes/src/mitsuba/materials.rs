@@ -112,14 +112,16 @@ impl Materials {
             }
             "conductor" | "roughconductor" => {
                 let f0 = conductor_f0(ctx, &props)?;
-                let tint = rgb_or_white(ctx, &props, "specular_reflectance", "specular reflectance")?;
+                let (tint, texture) = self.tint(ctx, &props, "specular_reflectance")?;
                 let roughness = roughness(ctx, &props, kind == "roughconductor")?;
-                pbr(Pbr {
+                let mut p = Pbr {
                     base_color: std::array::from_fn(|i| (f0[i] * tint[i]).clamp(0.0, 1.0)),
                     metallic: 1.0,
                     roughness,
                     ..Default::default()
-                })
+                };
+                p.textures.base_color = texture;
+                pbr(p)
             }
             "plastic" | "roughplastic" => {
                 let ior = ratio_of_iors(ctx, &props, 1.49)?;
@@ -203,6 +205,24 @@ impl Materials {
             [one] => self.bsdf(ctx, one, depth + 1),
             _ => Err(ctx.error(props.node(), "needs exactly one nested bsdf")),
         }
+    }
+
+    /// The colour property `name` as a factor and a texture multiplying it: white when absent,
+    /// a constant 0.5 for an unsupported texture (warned).
+    fn tint<'a, 'i>(
+        &mut self,
+        ctx: &mut Context<'a, 'i>,
+        props: &Props<'a, 'i>,
+        name: &str,
+    ) -> Result<([f32; 3], Option<TextureRef>)> {
+        Ok(match props.color(ctx, name)? {
+            None => ([1.0; 3], None),
+            Some(Color::Rgb(c)) => (c, None),
+            Some(Color::Texture(t)) => match self.texture(ctx, t)? {
+                Some(r) => ([1.0; 3], Some(r)),
+                None => ([0.5; 3], None),
+            },
+        })
     }
 
     /// A Lambertian of `reflectance` (Mitsuba's default 0.5): the SmallVCM lobe, or a
