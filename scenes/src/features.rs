@@ -4,7 +4,7 @@
 //! kernel carries no texture, microfacet or environment-map code.
 
 use crate::CompiledScene;
-use crate::gpu::{light_kind, material_flags, primitive_kind};
+use crate::gpu::{attribute_flags, light_kind, material_flags, primitive_kind};
 use std::collections::BTreeSet;
 
 /// Every feature flag, with what it compiles in.
@@ -24,10 +24,18 @@ pub const ALL: &[(&str, &str)] = &[
         "thin-walled transmission of glTF materials: unbent, through a slab",
     ),
     (
+        "BSDF_BECKMANN",
+        "Beckmann microfacets (Mitsuba's default distribution) beside GGX",
+    ),
+    (
         "TEXTURES",
         "texture lookups (base colour, metallic-roughness, emission)",
     ),
     ("ALPHA_MASK", "alpha-masked cut-outs in ray traversal"),
+    (
+        "SHADING_NORMALS",
+        "interpolated vertex normals shading triangles (with the adjoint BSDF's correction)",
+    ),
     ("LIGHT_AREA", "emissive triangles"),
     ("LIGHT_PUNCTUAL", "point or spot lights"),
     ("LIGHT_POINT", "point lights"),
@@ -82,6 +90,13 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
             .any(|m| m.flags & material_flags::PBR != 0 && m.flags & material_flags::THIN_WALLED != 0),
     );
     add(
+        "BSDF_BECKMANN",
+        scene
+            .materials
+            .iter()
+            .any(|m| m.flags & material_flags::PBR != 0 && m.flags & material_flags::BECKMANN != 0),
+    );
+    add(
         "TEXTURES",
         scene
             .materials
@@ -94,6 +109,10 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
             .materials
             .iter()
             .any(|m| m.flags & material_flags::ALPHA_MASK != 0),
+    );
+    add(
+        "SHADING_NORMALS",
+        scene.attributes.iter().any(|a| a.flags & attribute_flags::NORMALS != 0),
     );
     let has = |kind: u32| scene.lights.iter().any(|l| l.kind == kind);
     add("LIGHT_AREA", has(light_kind::AREA));

@@ -1,9 +1,10 @@
 //! A scene's shapes and lights flattened into what the GPU reads: primitives (triangles and
 //! spheres) with their vertex attributes and area lights, then the scene's other lights.
 
+use crate::MAX_COORDINATE;
+use crate::environment::{self, TexelLayout};
 use crate::gpu::{self, GpuEnvironment, GpuLight, GpuPrimitive, GpuTriangleAttributes, light_kind, primitive_kind};
 use crate::model::{self, Light, Scene, Shape};
-use crate::{MAX_COORDINATE, environment};
 use bytemuck::Zeroable;
 use glam::Vec3;
 use std::collections::BTreeMap;
@@ -36,7 +37,9 @@ pub(crate) fn flatten_shapes(scene: &Scene, material_index: &BTreeMap<&str, u32>
                 vertices,
                 material,
                 emission,
-            } => g.push_triangle(vertices.map(v3), material_index[material.as_str()], *emission),
+            } => {
+                g.push_triangle(vertices.map(v3), material_index[material.as_str()], *emission);
+            }
             Shape::Quad {
                 corners,
                 material,
@@ -69,9 +72,12 @@ pub(crate) fn flatten_shapes(scene: &Scene, material_index: &BTreeMap<&str, u32>
                         }
                         _ => *emission,
                     };
-                    g.push_triangle(t.map(|i| v3(positions[i as usize])), m, emission);
+                    let corners = t.map(|i| v3(positions[i as usize]));
+                    let emits = g.push_triangle(corners, m, emission);
                     if let Some(a) = &mut g.attributes {
-                        a.push(triangle_attributes(*t, uvs.as_deref(), normals.as_deref()));
+                        // Emitters are shaded with their geometric normal (the lights' own).
+                        let normals = normals.as_deref().filter(|_| !emits);
+                        a.push(triangle_attributes(*t, corners, uvs.as_deref(), normals));
                     }
                 }
             }
@@ -96,8 +102,9 @@ pub(crate) fn flatten_shapes(scene: &Scene, material_index: &BTreeMap<&str, u32>
 }
 
 impl Geometry {
-    /// A triangle of material `material`, and its area light where `emission` is not black.
-    fn push_triangle(&mut self, v: [Vec3; 3], material: u32, emission: Option<[f32; 3]>) {
+    /// A triangle of material `material`, and its area light where `emission` is not black
+    /// (then true).
+    fn push_triangle(&mut self, v: [Vec3; 3], material: u32, emission: Option<[f32; 3]>) -> bool {
         let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
         let light = match emission {
             Some(radiance) if radiance.iter().any(|&c| c > 0.0) => {
@@ -114,6 +121,7 @@ impl Geometry {
             c: e2.into(),
             kind: primitive_kind::TRIANGLE,
         });
+        light >= 0
     }
 }
 
@@ -187,6 +195,7 @@ pub(crate) fn push_scene_lights(lights: &[Light], out: &mut Vec<GpuLight>) -> Re
                 file,
                 scale,
                 rotation_degrees,
+                layout,
                 map,
             } => {
                 let map = map.as_ref().ok_or_else(|| {
@@ -201,8 +210,9 @@ pub(crate) fn push_scene_lights(lights: &[Light], out: &mut Vec<GpuLight>) -> Re
                     height: map.height,
                     cos_rotation: cos,
                     sin_rotation: sin,
+                    pole_to_pole: (*layout == TexelLayout::PoleToPole) as u32,
                 };
-                sky.distribution = Some(map.distribution());
+                sky.distribution = Some(map.distribution(*layout));
             }
         }
         out.push(l);
@@ -214,11 +224,18 @@ fn v3(a: [f32; 3]) -> Vec3 {
     Vec3::from_array(a)
 }
 
-/// The attributes of mesh triangle `t`: its vertices' texture coordinates ((0, 0) without),
-/// and their normals when all three are finite and non-zero (else the geometric normal
-/// shades it).
+/// The sine of the largest angle between a vertex normal and the geometric normal (either
+/// facing) at which a triangle still counts as flat (its vertex normals dropped): 1e-4
+/// radians, about the precision of the normals' octahedral encoding.
+const FLAT_SIN: f32 = 1e-4;
+
+/// The attributes of mesh triangle `t` with corners `corners`: its vertices' texture
+/// coordinates ((0, 0) without), and their normals when all three are finite and non-zero
+/// and one of them differs from the triangle's geometric normal (else the geometric normal
+/// shades it: no scene pays for shading normals that change nothing).
 fn triangle_attributes(
     t: [u32; 3],
+    corners: [Vec3; 3],
     uvs: Option<&[[f32; 2]]>,
     normals: Option<&[model::Vec3]>,
 ) -> GpuTriangleAttributes {
@@ -231,7 +248,11 @@ fn triangle_attributes(
     };
     if let Some(n) = normals {
         let n = t.map(|i| v3(n[i as usize]));
-        if n.iter().all(|n| n.is_finite() && n.length_squared() > 0.0) {
+        let ng = (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .normalize_or_zero();
+        let flat = n.iter().all(|n| n.normalize_or_zero().cross(ng).length() <= FLAT_SIN);
+        if !flat && n.iter().all(|n| n.is_finite() && n.length_squared() > 0.0) {
             [a.n0, a.n1, a.n2] = n.map(|n| gpu::encode_octahedral(n.normalize().to_array()));
             a.flags = gpu::attribute_flags::NORMALS;
         }

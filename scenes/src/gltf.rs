@@ -543,6 +543,7 @@ impl MaterialImport<'_> {
                     thin_walled,
                     emission,
                     textures,
+                    ..Default::default()
                 }),
                 ..Default::default()
             },

@@ -31,6 +31,12 @@ pub mod material_flags {
     /// A transmissive PBR material is a thin sheet: light passes straight through it, and its
     /// dielectric reflects as a slab of two faces.
     pub const THIN_WALLED: u32 = 8;
+    /// The PBR specular layer's microfacets follow Beckmann's distribution (else GGX).
+    pub const BECKMANN: u32 = 16;
+    /// Mitsuba's plastic: the PBR diffuse base with the coating's internal scattering.
+    pub const PLASTIC: u32 = 32;
+    /// With `PLASTIC`: the internal scattering is nonlinear in the base colour.
+    pub const PLASTIC_NONLINEAR: u32 = 64;
 }
 
 /// Primitive kinds, as `Primitive::kind` stores them.
@@ -259,8 +265,8 @@ pub struct GpuAliasEntry {
     pub pmf: f32,
 }
 
-/// The environment map's shape and orientation (`Environment` in WGSL); its texels and
-/// sampling distribution are the `env_texels` and `env_cdf` resources.
+/// The environment map's shape, orientation and texel layout (`Environment` in WGSL); its
+/// texels and sampling distribution are the `env_texels` and `env_cdf` resources.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct GpuEnvironment {
@@ -272,6 +278,9 @@ pub struct GpuEnvironment {
     pub cos_rotation: f32,
     /// Sine of the map's rotation about +Y.
     pub sin_rotation: f32,
+    /// 1 when the texel rows span pole to pole ([`crate::environment::TexelLayout::PoleToPole`]),
+    /// 0 when they sit at their centres.
+    pub pole_to_pole: u32,
 }
 
 /// Bits of `TextureInfo::flags`.

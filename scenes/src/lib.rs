@@ -356,7 +356,7 @@ pub struct CompiledScene {
     pub light_alias: Vec<GpuAliasEntry>,
     /// The environment map's size and rotation (width 0 when the scene has none).
     pub environment: GpuEnvironment,
-    /// The environment map's texels and sampling density ([`environment::Distribution`]);
+    /// The environment map's texels and sampling weights ([`environment::Distribution`]);
     /// one zero texel when there is no map.
     pub env_texels: Vec<[f32; 4]>,
     /// The environment map's CDFs; `[0, 1]` when there is no map.
@@ -623,7 +623,7 @@ fn gpu_material(
             GpuMaterial {
                 diffuse: p.base_color,
                 ior: p.ior,
-                flags: two_sided | gpu::material_flags::PBR | mask | thin,
+                flags: two_sided | gpu::material_flags::PBR | mask | thin | pbr_model_flags(p),
                 emission: p.emission,
                 metallic: p.metallic,
                 roughness: p.roughness,
@@ -637,6 +637,22 @@ fn gpu_material(
             }
         }
     })
+}
+
+/// The flags of a PBR material's microfacet distribution and plastic model.
+fn pbr_model_flags(p: &model::Pbr) -> u32 {
+    let beckmann = match p.distribution {
+        model::Microfacet::Ggx => 0,
+        model::Microfacet::Beckmann => gpu::material_flags::BECKMANN,
+    };
+    let plastic = match p.plastic {
+        None => 0,
+        Some(model::Plastic { nonlinear: false }) => gpu::material_flags::PLASTIC,
+        Some(model::Plastic { nonlinear: true }) => {
+            gpu::material_flags::PLASTIC | gpu::material_flags::PLASTIC_NONLINEAR
+        }
+    };
+    beckmann | plastic
 }
 
 /// The largest coordinate (or sphere radius) a shape may have: as far as a ray travels

@@ -135,9 +135,11 @@ pub struct Material {
     pub pbr: Option<Pbr>,
 }
 
-/// glTF 2.0's metallic-roughness material: a diffuse base under a GGX microfacet specular
-/// layer, metals tinted by the base colour, and optional transmission through a dielectric:
-/// the surface of a solid volume (refracting), or a thin-walled sheet (`thin_walled`).
+/// glTF 2.0's metallic-roughness material: a diffuse base under a microfacet specular layer
+/// (GGX, or Beckmann: `distribution`), metals tinted by the base colour, and optional
+/// transmission through a dielectric: the surface of a solid volume (refracting), or a
+/// thin-walled sheet (`thin_walled`). With `plastic`, Mitsuba's plastic: the diffuse base
+/// also returns the light its coating reflects back into it.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Pbr {
@@ -147,9 +149,15 @@ pub struct Pbr {
     /// Metalness in [0, 1].
     #[serde(default)]
     pub metallic: f32,
-    /// Perceptual roughness in [0, 1] (GGX alpha = roughness^2).
+    /// Perceptual roughness in [0, 1] (the distribution's alpha = roughness^2).
     #[serde(default = "unit")]
     pub roughness: f32,
+    /// The microfacet distribution of the specular layer.
+    #[serde(default)]
+    pub distribution: Microfacet,
+    /// Mitsuba's `plastic` and `roughplastic`: the diffuse base's internal scattering.
+    #[serde(default)]
+    pub plastic: Option<Plastic>,
     /// Transmission weight in [0, 1] (KHR_materials_transmission).
     #[serde(default)]
     pub transmission: f32,
@@ -176,6 +184,30 @@ pub struct Pbr {
     pub textures: PbrTextures,
 }
 
+/// A microfacet distribution of normals, with Smith's masking-shadowing.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+pub enum Microfacet {
+    /// Trowbridge-Reitz (glTF's).
+    #[default]
+    Ggx,
+    /// Beckmann-Spizzichino (Mitsuba's default).
+    Beckmann,
+}
+
+/// Mitsuba's plastic: a diffuse base of reflectance `base_color` under a smooth or rough
+/// dielectric coating of index `ior`. The light the base reflects is refracted out through
+/// the coating, and the part the coating reflects back inside (its internal diffuse Fresnel
+/// reflectance F_dr) reaches the base again, scattered anew: the diffuse lobe is
+/// base / (1 - F_dr) (`nonlinear`: base / (1 - base F_dr), a deeper colour) times
+/// (1 - F(cos_o)) (1 - F(cos_i)) / (pi ior^2).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plastic {
+    /// Whether the internal scattering is a geometric series in the base's colour.
+    #[serde(default)]
+    pub nonlinear: bool,
+}
+
 fn white() -> Rgb {
     [1.0; 3]
 }
@@ -193,6 +225,8 @@ impl Default for Pbr {
             transmission: 0.0,
             ior: default_ior(),
             thin_walled: false,
+            distribution: Microfacet::Ggx,
+            plastic: None,
             emission: [0.0; 3],
             alpha: 1.0,
             alpha_cutoff: None,
@@ -341,7 +375,8 @@ pub enum Light {
     },
     /// An equirectangular environment map seen in every direction nothing else is
     /// (`.hdr` or `.exr`, a path below the asset root): +Y is up (the top row), the image's
-    /// centre column looks along −Z and u grows towards +X (u = 0 and 1 are +Z).
+    /// centre column looks along −Z and u grows towards +X (u = 0 and 1 are +Z); filtered
+    /// bilinearly (see [`crate::environment`]).
     Environment {
         /// The image file, below the asset root.
         file: String,
@@ -351,6 +386,10 @@ pub enum Light {
         /// Rotation of the map about +Y, counter-clockwise seen from above.
         #[serde(default)]
         rotation_degrees: f32,
+        /// Where the texels sit, between which the radiance is interpolated bilinearly:
+        /// `Centred` (the default) or `PoleToPole` (Mitsuba's envmap, set by its importer).
+        #[serde(default)]
+        layout: crate::environment::TexelLayout,
         /// The decoded map, once the scene's assets are resolved.
         #[serde(skip)]
         map: Option<std::sync::Arc<crate::environment::EnvironmentMap>>,

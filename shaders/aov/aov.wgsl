@@ -29,7 +29,7 @@ fn aov_sample(s: ptr<function, AovSample>, index: u32) -> bool {
         let surface = surface_at(hit, origin, direction);
         travelled += hit.t;
         let m = material_at(surface.material, surface.tex);
-        let bsdf = bsdf_setup(m, surface.normal, -direction);
+        let bsdf = bsdf_setup(m, surface.normal, surface.shading_normal, -direction);
         if (!bsdf.valid) {
             return false;
         }

@@ -94,7 +94,7 @@ fn camera_arrive(c: ptr<function, CameraSubpath>, counts: MisCounts) -> Arrival 
     }
     let t = (*c).hit_t;
     a.s = surface_at(Hit(t, (*c).hit_primitive, (*c).hit_uv, true), (*c).origin, direction);
-    a.bsdf = bsdf_setup(material_at(a.s.material, a.s.tex), a.s.normal, -direction);
+    a.bsdf = surface_bsdf(a.s, -direction);
     if (!a.bsdf.valid) {
         return a;
     }
@@ -264,11 +264,14 @@ struct CameraVertex {
     extent: f32,
     throughput: vec3<f32>,
     d_vcm: f32,
-    normal: vec3<f32>,
+    normal: vec3<f32>,          // geometric
     d_vc: f32,
     towards: vec3<f32>,         // towards the previous vertex
     material: u32,
     tex: vec2<f32>,
     pixel: u32,
     length: u32,
+#if SHADING_NORMALS
+    shading: vec3<f32>,
+#endif
 }

@@ -107,16 +107,43 @@ fn sbpt_camera_vertex(p: ptr<function, StreamingSample>, c: ptr<function, Camera
     camera_emit_direct(v);
     let s = v.a.s;
     if (!v.a.bsdf.is_delta && (*c).length + 2u <= MAX_PATH_LENGTH && (*p).light_count > 0u) {
-        sbpt_camera_vertices[sbpt_vertex_at((*p).camera_count)] = CameraVertex(
-            s.position, s.extent, (*c).throughput, (*c).d_vcm, s.normal, (*c).d_vc,
-            -(*c).direction, s.material, s.tex, (*c).pixel, (*c).length,
-        );
+        sbpt_camera_vertices[sbpt_vertex_at((*p).camera_count)] = camera_vertex_at(*c, s);
         (*p).camera_count += 1u;
     }
     var rng = v.rng;
     let alive = camera_scatter(c, v.a, mis_counts(1.0), &rng);
     (*c).rng = rng;
     return alive;
+}
+
+// The vertex to keep of camera sub-path `c` at its surface `s`.
+fn camera_vertex_at(c: CameraSubpath, s: Surface) -> CameraVertex {
+    var v: CameraVertex;
+    v.position = s.position;
+    v.extent = s.extent;
+    v.throughput = c.throughput;
+    v.d_vcm = c.d_vcm;
+    v.normal = s.normal;
+    v.d_vc = c.d_vc;
+    v.towards = -c.direction;
+    v.material = s.material;
+    v.tex = s.tex;
+    v.pixel = c.pixel;
+    v.length = c.length;
+#if SHADING_NORMALS
+    v.shading = s.shading_normal;
+#endif
+    return v;
+}
+
+// The surface a kept camera vertex lies on (what its BSDF and connections need of it).
+fn camera_vertex_surface(v: CameraVertex) -> Surface {
+#if SHADING_NORMALS
+    let shading = v.shading;
+#else
+    let shading = v.normal;
+#endif
+    return Surface(v.position, v.normal, v.material, -1, v.extent, v.tex, shading);
 }
 
 // Every pair of stored vertices that makes a path of at most MAX_PATH_LENGTH segments, into
@@ -137,8 +164,8 @@ fn sbpt_emit_pairs(p: ptr<function, StreamingSample>) {
 // Pass `sbpt_connect` (Step over VertexPair): the connection of one pair, as a shadow ray.
 fn sbpt_connect(pair: ptr<function, VertexPair>) -> bool {
     let cv = (*pair).camera;
-    let s = Surface(cv.position, cv.normal, cv.material, -1, cv.extent, cv.tex, cv.normal);
-    let bsdf = bsdf_setup(material_at(cv.material, cv.tex), cv.normal, cv.towards);
+    let s = camera_vertex_surface(cv);
+    let bsdf = surface_bsdf(s, cv.towards);
     let c = CameraSubpath(
         cv.position, cv.pixel, -cv.towards, cv.length, cv.throughput, 0u, cv.d_vcm, cv.d_vc,
         0.0, 0u, vec2<f32>(0.0),

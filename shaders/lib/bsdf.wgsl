@@ -28,6 +28,9 @@ struct Bsdf {
     alpha: f32,                 // GGX alpha; 0: the specular lobes are smooth (delta)
     spec_prob: f32,             // probability of the rough specular lobe (reflection and refraction)
     adjoint: bool,              // importance transport: refraction without the eta^2 scaling
+#if SHADING_NORMALS
+    ng: vec3<f32>,              // the geometric normal in the local (shading) frame
+#endif
 }
 
 // The lobes a part leaves out (`bsdf_diffuse_part`, `bsdf_glossy_part`), as bits of its
@@ -60,16 +63,29 @@ fn fresnel_dielectric(cos_incident: f32, ior: f32) -> vec2<f32> {
     return vec2<f32>(0.5 * (r_parallel * r_parallel + r_perpendicular * r_perpendicular), cos_t);
 }
 
-fn bsdf_setup(material: Material, normal: vec3<f32>, towards_previous: vec3<f32>) -> Bsdf {
+// The BSDF at surface `s` for a path arriving from `towards_previous`, with the material
+// resolved there.
+fn surface_bsdf(s: Surface, towards_previous: vec3<f32>) -> Bsdf {
+    return bsdf_setup(material_at(s.material, s.tex), s.normal, s.shading_normal, towards_previous);
+}
+
+// The BSDF of `material` at a surface of geometric normal `ng` and shading normal `ns` (on
+// the same side; equal without vertex normals), for a path arriving from `towards_previous`.
+fn bsdf_setup(material: Material, ng: vec3<f32>, ns: vec3<f32>, towards_previous: vec3<f32>) -> Bsdf {
     var m = material;
     var b: Bsdf;
     // A two-sided material scatters on the side the path arrives from.
     let two_sided = (m.flags & MATERIAL_TWO_SIDED) != 0u;
-    let n = select(normal, -normal, two_sided && dot(normal, towards_previous) < 0.0);
-    b.frame = frame_from_z(n);
+    let flip = two_sided && dot(ng, towards_previous) < 0.0;
+    b.frame = frame_from_z(select(ns, -ns, flip));
     b.fix = to_local(b.frame, towards_previous);
     b.m = m;
     b.valid = abs(b.fix.z) >= EPS_COSINE;
+#if SHADING_NORMALS
+    // Exactly +z where the normals are one (no rounding makes such a vertex look shaded).
+    b.ng = select(to_local(b.frame, select(ng, -ng, flip)), vec3<f32>(0.0, 0.0, 1.0), all(ns == ng));
+    b.valid = b.valid && b.fix.z * dot(b.ng, b.fix) > 0.0;
+#endif
     b.adjoint = false;
     if (!b.valid) {
         return b;
@@ -264,11 +280,17 @@ fn bsdf_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     return e;
 }
 
-// When the BSDF's non-delta part is a Lambertian alone (not glTF's model, no Phong lobe): the
+// When the BSDF's non-delta part is a Lambertian alone (not glTF's model, no Phong lobe, no
+// shading normal other than the geometric one): the
 // value of `bsdf_eval(b, w).f` for every direction w with dot(w, b.frame.n) >= EPS_COSINE
 // (it is 0 for the others). Otherwise -1. A sum of such values over many directions (a
 // density estimation's) can then take the value out.
 fn bsdf_lambertian_f(b: Bsdf) -> vec3<f32> {
+#if SHADING_NORMALS
+    if (bsdf_is_shaded(b)) {
+        return vec3<f32>(-1.0);
+    }
+#endif
 #if BSDF_PBR
     if (b.pbr) {
         return vec3<f32>(-1.0);
@@ -287,8 +309,52 @@ fn bsdf_lambertian_f(b: Bsdf) -> vec3<f32> {
 
 // Evaluates for a world direction.
 fn bsdf_eval(b: Bsdf, world_gen: vec3<f32>) -> BsdfEval {
-    return bsdf_eval_local(b, to_local(b.frame, world_gen));
+    let gen = to_local(b.frame, world_gen);
+    var e = bsdf_eval_local(b, gen);
+#if SHADING_NORMALS
+    e.f *= bsdf_shading_factor(b, gen);
+#endif
+    return e;
 }
+
+// `bsdf_eval` for a density estimation (photon mapping's and VCM's merges) of light that
+// arrived from `world_gen`: a photon's density is per unit area of the surface, so its
+// incident cosine is the geometric one; with shading normals the value carries
+// |gen.ns| / |gen.ng| as well, so that merges converge to what the estimators that sample
+// light by direction converge to (they weigh it with the shading cosine).
+fn bsdf_eval_merge(b: Bsdf, world_gen: vec3<f32>) -> BsdfEval {
+    var e = bsdf_eval(b, world_gen);
+#if SHADING_NORMALS
+    let gen = to_local(b.frame, world_gen);
+    let g = dot(b.ng, gen);
+    // g = 0 is a direction the normals disagree about: e.f is 0 already.
+    if (g != 0.0) {
+        e.f *= abs(gen.z / g);
+    }
+#endif
+    return e;
+}
+
+#if SHADING_NORMALS
+// The factor shading normals put on the BSDF's value for local direction `gen` (see the top
+// of this file): 0 where the geometric and the shading normal disagree on gen's side; for
+// importance transport, the adjoint correction |fix.ns| |gen.ng| / (|fix.ng| |gen.ns|).
+fn bsdf_shading_factor(b: Bsdf, gen: vec3<f32>) -> f32 {
+    let g_gen = dot(b.ng, gen);
+    if (g_gen * gen.z <= 0.0) {
+        return 0.0;
+    }
+    if (b.adjoint) {
+        return abs((b.fix.z * g_gen) / (dot(b.ng, b.fix) * gen.z));
+    }
+    return 1.0;
+}
+
+// Whether the shading normal differs from the geometric one at this vertex.
+fn bsdf_is_shaded(b: Bsdf) -> bool {
+    return b.ng.z < 1.0;
+}
+#endif
 
 struct BsdfSample {
     direction: vec3<f32>,       // world
@@ -300,6 +366,15 @@ struct BsdfSample {
 
 // Samples a direction with three uniform numbers; f = 0 means the sample is void.
 fn bsdf_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
+    var s = bsdf_sample_lobes(b, u);
+#if SHADING_NORMALS
+    s.f *= bsdf_shading_factor(b, to_local(b.frame, s.direction));
+#endif
+    return s;
+}
+
+// `bsdf_sample` without the shading normals' factor.
+fn bsdf_sample_lobes(b: Bsdf, u: vec3<f32>) -> BsdfSample {
 #if BSDF_PBR
     if (b.pbr) {
         return pbr_sample(b, u);
@@ -441,6 +516,91 @@ fn pbr_fresnel(m: Material, cos_w: f32) -> vec2<f32> {
     return fresnel_dielectric(cos_w, m.ior);
 }
 
+// Whether the material's microfacets follow Beckmann's distribution (else GGX's).
+fn pbr_beckmann(m: Material) -> bool {
+#if BSDF_BECKMANN
+    return (m.flags & MATERIAL_BECKMANN) != 0u;
+#else
+    return false;
+#endif
+}
+
+// The microfacet distribution's density of normals `h` at the BSDF's alpha.
+fn pbr_d(b: Bsdf, h: vec3<f32>) -> f32 {
+#if BSDF_BECKMANN
+    if (pbr_beckmann(b.m)) {
+        return beckmann_d(h, b.alpha);
+    }
+#endif
+    return ggx_d(h, b.alpha);
+}
+
+// The distribution's Smith Lambda for direction `w`.
+fn pbr_lambda(b: Bsdf, w: vec3<f32>) -> f32 {
+#if BSDF_BECKMANN
+    if (pbr_beckmann(b.m)) {
+        return beckmann_lambda(w, b.alpha);
+    }
+#endif
+    return ggx_lambda(w, b.alpha);
+}
+
+// Masking of direction `w`.
+fn pbr_g1(b: Bsdf, w: vec3<f32>) -> f32 {
+    return 1.0 / (1.0 + pbr_lambda(b, w));
+}
+
+// Height-correlated masking-shadowing of the pair `o`, `i` (either side of the surface).
+fn pbr_g2(b: Bsdf, o: vec3<f32>, i: vec3<f32>) -> f32 {
+    return 1.0 / (1.0 + pbr_lambda(b, o) + pbr_lambda(b, i));
+}
+
+// Density of sampling the microfacet normal `h` with `pbr_sample_visible` from `w` (w.z > 0):
+// G1(w) max(0, w.h) D(h) / w.z.
+fn pbr_visible_pdf(b: Bsdf, w: vec3<f32>, h: vec3<f32>) -> f32 {
+    let wh = dot(w, h);
+    if (wh <= 0.0 || w.z <= 0.0) {
+        return 0.0;
+    }
+    return pbr_g1(b, w) * wh * pbr_d(b, h) / w.z;
+}
+
+// A microfacet normal visible from `w` (w.z > 0), with density `pbr_visible_pdf`.
+fn pbr_sample_visible(b: Bsdf, w: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+#if BSDF_BECKMANN
+    if (pbr_beckmann(b.m)) {
+        return beckmann_sample_visible(w, b.alpha, u);
+    }
+#endif
+    return ggx_sample_visible(w, b.alpha, u);
+}
+
+// The diffuse base's reflectance as its lobe weighs it: the base colour; for Mitsuba's plastic
+// (MATERIAL_PLASTIC), the base with the light the coating reflects back into it, scattered
+// again: base / (1 - F_dr) (nonlinear: base / (1 - base F_dr)), F_dr the coating's internal
+// diffuse reflectance, and over ior^2 (radiance leaving into the outer medium spreads over
+// the wider solid angle). With the (1 - F(cos_o)) (1 - F(cos_i)) of the lobe, a white linear
+// plastic reflects 1 in all (F_dr's identity 1 - F_dr(outside) = ior^2 (1 - F_dr(inside))).
+fn pbr_diffuse_reflectance(m: Material) -> vec3<f32> {
+    if ((m.flags & MATERIAL_PLASTIC) == 0u) {
+        return m.diffuse;
+    }
+    let inside = fresnel_diffuse_reflectance(1.0 / m.ior);
+    let kept = select(vec3<f32>(inside), m.diffuse * inside, (m.flags & MATERIAL_PLASTIC_NONLINEAR) != 0u);
+    return m.diffuse / ((vec3<f32>(1.0) - kept) * (m.ior * m.ior));
+}
+
+// The hemispherical average of the Fresnel reflectance, weighted by the cosine, of light
+// arriving in a medium of relative index `eta` (the index beyond over the index it is in):
+// the fits Mitsuba uses (Egan and Hilgeman 1973 below 1, d'Eon and Irving 2011 above).
+fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
+    let inv = 1.0 / eta;
+    if (eta < 1.0) {
+        return 0.0636 * inv + eta * (eta * -1.4399 + 0.7099) + 0.6681;
+    }
+    return 0.919317 + inv * (-3.4793 + inv * (6.75335 + inv * (-7.80989 + inv * (4.98554 - inv * 1.36881))));
+}
+
 fn pbr_setup(bsdf: Bsdf) -> Bsdf {
     var b = bsdf;
     let m = b.m;
@@ -575,7 +735,7 @@ fn pbr_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     let f_i = pbr_fresnel(m, gen.z).x;
     if (outside_o && outside_i && (m.flags & BSDF_NO_DIFFUSE) == 0u) {
         let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * (1.0 - f_o) * (1.0 - f_i) * INV_PI;
-        e.f += m.diffuse * diffuse;
+        e.f += pbr_diffuse_reflectance(m) * diffuse;
         e.pdf_forward += lobes_o.y * gen.z * INV_PI;
         e.pdf_reverse += lobes_i.y * o.z * INV_PI;
     }
@@ -605,16 +765,16 @@ fn pbr_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     }
     let f = fresnel_dielectric(s * c_o, m.ior).x;
     let denom = c_o + eta * c_i;
-    let d = ggx_d(h, alpha);
-    let value = (1.0 - f) * d * ggx_g2(wo, wi, alpha) * c_o * (-c_i) / (wo.z * (-wi.z) * denom * denom);
+    let d = pbr_d(b, h);
+    let value = (1.0 - f) * d * pbr_g2(b, wo, wi) * c_o * (-c_i) / (wo.z * (-wi.z) * denom * denom);
     let tint = (1.0 - m.metallic) * m.transmission * m.diffuse;
     e.f = tint * value * select(1.0, eta * eta, b.adjoint);
     // The reverse choice is made at `gen` (inside if `fix` is outside): the same Fresnel
     // factor (reflectance is equal at both angles of a refraction), other weights.
     let p_forward = 1.0 - pbr_reflect_prob(pbr_spec_weights(b, outside_o, c_o, f));
     let p_reverse = 1.0 - pbr_reflect_prob(pbr_spec_weights(b, outside_i, -c_i, f));
-    let vis_o = ggx_g1(wo, alpha) * c_o * d / wo.z;
-    let vis_i = ggx_g1(wi, alpha) * (-c_i) * d / (-wi.z);
+    let vis_o = pbr_g1(b, wo) * c_o * d / wo.z;
+    let vis_i = pbr_g1(b, wi) * (-c_i) * d / (-wi.z);
     e.pdf_forward = lobes_o.x * p_forward * vis_o * eta * eta * (-c_i) / (denom * denom);
     e.pdf_reverse = lobes_i.x * p_reverse * vis_i * c_o / (denom * denom);
     return e;
@@ -639,14 +799,14 @@ fn pbr_eval_mirrored(b: Bsdf, gen: vec3<f32>, e: BsdfEval, spec_i: f32) -> BsdfE
         return r;
     }
     let f = pbr_fresnel(b.m, s * c).x;
-    let lobe = ggx_d(h, b.alpha) * ggx_g2(wo, wi, b.alpha) / (4.0 * wo.z * wi.z);
+    let lobe = pbr_d(b, h) * pbr_g2(b, wo, wi) / (4.0 * wo.z * wi.z);
     let tint = (1.0 - b.m.metallic) * b.m.transmission * b.m.diffuse;
     r.f += select(pbr_spec_color(b, outside_o, c, f), (1.0 - f) * tint, transmits) * lobe;
     // Each direction picks reflection or transmission with the weights of its own side.
     let p_o = pbr_reflect_prob(pbr_spec_weights(b, outside_o, c, f));
     let p_i = pbr_reflect_prob(pbr_spec_weights(b, outside_i, c, f));
-    r.pdf_forward += b.spec_prob * select(p_o, 1.0 - p_o, transmits) * ggx_visible_pdf(wo, h, b.alpha) / (4.0 * c);
-    r.pdf_reverse += spec_i * select(p_i, 1.0 - p_i, transmits) * ggx_visible_pdf(wi, h, b.alpha) / (4.0 * c);
+    r.pdf_forward += b.spec_prob * select(p_o, 1.0 - p_o, transmits) * pbr_visible_pdf(b, wo, h) / (4.0 * c);
+    r.pdf_reverse += spec_i * select(p_i, 1.0 - p_i, transmits) * pbr_visible_pdf(b, wi, h) / (4.0 * c);
     return r;
 }
 
@@ -691,7 +851,7 @@ fn pbr_sample(b: Bsdf, u: vec3<f32>) -> BsdfSample {
         let outside = o.z > 0.0;
         let side = select(-1.0, 1.0, outside);
         let wo = vec3<f32>(o.xy, side * o.z);
-        let h = ggx_sample_visible(wo, b.alpha, u.xy);
+        let h = pbr_sample_visible(b, wo, u.xy);
         let c = dot(wo, h);
         if (c <= 0.0) {
             return s;

@@ -429,8 +429,9 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
 
 // Where a ray hit: position (recomputed on the primitive for accuracy), unit geometric
 // normal, material, area light, the primitive's extent (for offset_ray_origin), texture
-// coordinates, and the unit shading normal (interpolated vertex normals on the geometric
-// normal's side; the geometric normal on spheres and triangles without vertex normals).
+// coordinates, and the unit shading normal (with SHADING_NORMALS, interpolated vertex normals
+// on the geometric normal's side; the geometric normal on spheres, triangles without vertex
+// normals, and in scenes without them).
 struct Surface {
     position: vec3<f32>,
     normal: vec3<f32>,
@@ -453,6 +454,10 @@ fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
     let position = p.a + hit.uv.x * p.b + hit.uv.y * p.c;
     let ng = triangle_normal(p.b, p.c);
     let tex = surface_tex(hit.primitive, hit.uv);
+#if SHADING_NORMALS
     let ns = shading_normal(hit.primitive, hit.uv, ng);
+#else
+    let ns = ng;
+#endif
     return Surface(position, ng, p.material, p.light, triangle_extent(p.a, p.b, p.c), tex, ns);
 }

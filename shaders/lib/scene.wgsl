@@ -100,7 +100,7 @@ struct Material {
     phong: vec3<f32>,
     ior: f32,               // negative: perfect mirror
     mirror: vec3<f32>,
-    flags: u32,             // MATERIAL_TWO_SIDED, MATERIAL_PBR, MATERIAL_ALPHA_MASK, MATERIAL_THIN_WALLED
+    flags: u32,             // MATERIAL_TWO_SIDED, MATERIAL_PBR, MATERIAL_ALPHA_MASK, MATERIAL_THIN_WALLED, ...
     emission: vec3<f32>,    // emitted radiance factor (glTF emissiveFactor x strength)
     metallic: f32,
     roughness: f32,
@@ -117,6 +117,9 @@ const MATERIAL_TWO_SIDED: u32 = 1u;
 const MATERIAL_PBR: u32 = 2u;
 const MATERIAL_ALPHA_MASK: u32 = 4u;
 const MATERIAL_THIN_WALLED: u32 = 8u;   // transmission through a thin sheet (PBR, BSDF_THIN_WALLED)
+const MATERIAL_BECKMANN: u32 = 16u;     // PBR microfacets of Beckmann's distribution (BSDF_BECKMANN)
+const MATERIAL_PLASTIC: u32 = 32u;      // Mitsuba's plastic: the diffuse base's internal scattering
+const MATERIAL_PLASTIC_NONLINEAR: u32 = 64u;
 
 // One material slot's texture: its image at texels[offset ..] (width x height, rows from the
 // top, RGBA8 with R in the low byte), sampled at uv' = (dot(row0, (u, v, 1)),
@@ -201,12 +204,13 @@ struct AliasEntry {
     pmf: f32,
 }
 
-// The environment map's size (width 0: none) and rotation about +Y.
+// The environment map's size (width 0: none), rotation about +Y and texel layout.
 struct Environment {
     width: u32,
     height: u32,
     cos_rotation: f32,
     sin_rotation: f32,
+    pole_to_pole: u32,      // 1: texel rows at v = j / (h - 1) (Mitsuba); 0: at their centres
 }
 
 // Moves `p` off its surface along `n` (which points to the side the new ray leaves on), by

@@ -59,11 +59,12 @@ struct LightPath {
     index: u32,             // the sub-path's index in the frame
 }
 
-// A stored light sub-path vertex (48 bytes): position moved off the surface to the side the
-// sub-path arrived from (the only side a connection can reach), throughput, MIS quantities,
-// the geometric normal and the direction towards the previous vertex octahedrally packed,
-// material index (24 bits) with the sub-path length (8 bits), and the texture coordinates
-// wrapped to [0, 1) in 16 bits each (repeating textures look the same).
+// A stored light sub-path vertex (48 bytes; 64 with shading normals): position moved off the
+// surface to the side the sub-path arrived from (the only side a connection can reach),
+// throughput, MIS quantities, the geometric normal and the direction towards the previous
+// vertex octahedrally packed, material index (24 bits) with the sub-path length (8 bits),
+// the texture coordinates wrapped to [0, 1) in 16 bits each (repeating textures look the
+// same), and the shading normal, octahedrally packed, in scenes with vertex normals.
 struct LightVertex {
     position: vec3<f32>,
     d_vcm: f32,
@@ -73,6 +74,9 @@ struct LightVertex {
     fix: u32,
     material_length: u32,
     tex: u32,
+#if SHADING_NORMALS
+    shading: u32,
+#endif
 }
 
 // Which stratum of the light a sub-path starts in: sub-path `index` of the `count` of frame
@@ -161,7 +165,7 @@ fn light_path_surface(p: LightPath) -> Surface {
 
 // The BSDF at the hit, for importance transport.
 fn light_path_bsdf(p: LightPath, s: Surface) -> Bsdf {
-    var bsdf = bsdf_setup(material_at(s.material, s.tex), s.normal, -p.direction);
+    var bsdf = surface_bsdf(s, -p.direction);
     bsdf.adjoint = true;
     return bsdf;
 }
@@ -213,11 +217,19 @@ fn light_vertex_position(s: Surface, towards: vec3<f32>) -> vec3<f32> {
 // The vertex to store for a sub-path at surface `s` (after `light_path_arrive`).
 fn light_vertex_at(p: LightPath, s: Surface) -> LightVertex {
     let towards = -p.direction;
-    let position = light_vertex_position(s, towards);
-    return LightVertex(
-        position, p.d_vcm, p.throughput, p.d_vc, encode_octahedral(s.normal), encode_octahedral(towards),
-        min(s.material, 0xffffffu) | (min(p.length, 255u) << 24u), pack2x16unorm(fract(s.tex)),
-    );
+    var v: LightVertex;
+    v.position = light_vertex_position(s, towards);
+    v.d_vcm = p.d_vcm;
+    v.throughput = p.throughput;
+    v.d_vc = p.d_vc;
+    v.normal = encode_octahedral(s.normal);
+    v.fix = encode_octahedral(towards);
+    v.material_length = min(s.material, 0xffffffu) | (min(p.length, 255u) << 24u);
+    v.tex = pack2x16unorm(fract(s.tex));
+#if SHADING_NORMALS
+    v.shading = encode_octahedral(s.shading_normal);
+#endif
+    return v;
 }
 
 // A stored vertex's length (segments from the light).
@@ -228,7 +240,12 @@ fn light_vertex_length(v: LightVertex) -> u32 {
 // The BSDF at a stored vertex.
 fn light_vertex_bsdf(v: LightVertex) -> Bsdf {
     let m = material_at(v.material_length & 0xffffffu, unpack2x16unorm(v.tex));
-    var bsdf = bsdf_setup(m, decode_octahedral(v.normal), decode_octahedral(v.fix));
+#if SHADING_NORMALS
+    let shading = v.shading;
+#else
+    let shading = v.normal;
+#endif
+    var bsdf = bsdf_setup(m, decode_octahedral(v.normal), decode_octahedral(shading), decode_octahedral(v.fix));
     bsdf.adjoint = true;
     return bsdf;
 }

@@ -69,8 +69,9 @@ fn pm_extent() -> f32 {
 }
 
 // A density estimation left pending at a camera vertex for a gather pass (photon mapping's
-// and VCM's): the vertex, what its BSDF is set up from (material, texture coordinates, shading
-// normal and the direction towards the previous vertex), unrounded, so that the gather's BSDF
+// and VCM's): the vertex, what its BSDF is set up from (material, texture coordinates, the
+// geometric normal, the shading normal with SHADING_NORMALS, and the direction towards the
+// previous vertex), unrounded, so that the gather's BSDF
 // is the one the vertex had (VCM merging at the vertex renders what PBPM and VCM's gather
 // render); the camera sub-path's throughput and dVM there, and its length (segments).
 struct PendingMerge {
@@ -82,16 +83,36 @@ struct PendingMerge {
     length: u32,
     fix: vec3<f32>,
     tex: vec2<f32>,
+#if SHADING_NORMALS
+    shading: vec3<f32>,
+#endif
 }
 
 // The estimation to leave pending at surface `s`, reached from `towards`.
 fn pending_merge_at(s: Surface, towards: vec3<f32>, throughput: vec3<f32>, d_vm: f32, length: u32) -> PendingMerge {
-    return PendingMerge(s.position, s.material, throughput, d_vm, s.normal, length, towards, s.tex);
+    var m: PendingMerge;
+    m.position = s.position;
+    m.material = s.material;
+    m.throughput = throughput;
+    m.d_vm = d_vm;
+    m.normal = s.normal;
+    m.length = length;
+    m.fix = towards;
+    m.tex = s.tex;
+#if SHADING_NORMALS
+    m.shading = s.shading_normal;
+#endif
+    return m;
 }
 
 // The BSDF at a pending estimation's vertex, as the camera sub-path set it up there.
 fn pending_merge_bsdf(m: PendingMerge) -> Bsdf {
-    return bsdf_setup(material_at(m.material, m.tex), m.normal, m.fix);
+#if SHADING_NORMALS
+    let shading = m.shading;
+#else
+    let shading = m.normal;
+#endif
+    return bsdf_setup(material_at(m.material, m.tex), m.normal, shading, m.fix);
 }
 
 // A camera sub-path between passes, with the density estimation pending at its last vertex.
@@ -171,7 +192,7 @@ fn pm_vertex(p: ptr<function, MergePath>) -> bool {
         return true;
     }
     let s = surface_at(Hit((*p).hit_t, (*p).hit_primitive, (*p).hit_uv, true), (*p).origin, direction);
-    let bsdf = bsdf_setup(material_at(s.material, s.tex), s.normal, -direction);
+    let bsdf = surface_bsdf(s, -direction);
     if (s.light >= 0 && merge_counts_emission(*p)) {
         let le = area_light_radiance(u32(s.light), direction);
         if (le.w > 0.0) {
@@ -291,7 +312,7 @@ fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
     }
     let towards = photon_direction(photon);
     if (sppm_delta_chains() && photon_delta_chain(photon)) {
-        (*m).sum += bsdf_eval((*m).bsdf, towards).f * photon.throughput * weight;
+        (*m).sum += bsdf_eval_merge((*m).bsdf, towards).f * photon.throughput * weight;
         return;
     }
     if ((*m).lambertian_f.x >= 0.0) {
@@ -307,7 +328,7 @@ fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
             return;
         }
     }
-    let e = bsdf_eval(b, towards);
+    let e = bsdf_eval_merge(b, towards);
     if (is_black(e.f)) {
         return;
     }

@@ -20,7 +20,7 @@ fn logic(path: ptr<function, CameraPath>) -> bool {
         return false;
     }
     let s = path_surface(*path);
-    let bsdf = bsdf_setup(material_at(s.material, s.tex), s.normal, -(*path).direction);
+    let bsdf = surface_bsdf(s, -(*path).direction);
     if (!bsdf.valid) {
         return false;
     }

@@ -92,5 +92,5 @@ fn path_vertex_taken(path: CameraPath) -> PathVertex {
     }
 #endif
     let s = path_surface(path);
-    return PathVertex(s, bsdf_setup(material_at(s.material, s.tex), s.normal, -path.direction), false);
+    return PathVertex(s, surface_bsdf(s, -path.direction), false);
 }

@@ -261,7 +261,7 @@ fn vcm_merge_vertex(m: ptr<function, Merge>, v: LightVertex, camera_d_vcm: f32, 
         return;
     }
     let towards = decode_octahedral_24(octahedral_24(v.fix));
-    let e = bsdf_eval((*m).bsdf, towards);
+    let e = bsdf_eval_merge((*m).bsdf, towards);
     if (is_black(e.f)) {
         return;
     }

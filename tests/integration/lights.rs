@@ -9,12 +9,13 @@ use lightgraph::render::LoadedScene;
 use lightgraph_engine::ConstValue;
 use lightgraph_scenes::alias::luminance;
 use lightgraph_scenes::bvh::BvhKind;
-use lightgraph_scenes::environment::{EnvironmentMap, texel_solid_angle, uv};
+use lightgraph_scenes::environment::{EnvironmentMap, PatchPoint, TexelLayout, uv};
 use lightgraph_scenes::model::Light;
 use std::path::{Path, PathBuf};
 
-/// The chi-square tests in this file (area light, environment map, light picks).
-const CHI2_TESTS: u32 = 3;
+/// The chi-square tests in this file (area light, environment map in two layouts, light
+/// picks).
+const CHI2_TESTS: u32 = 4;
 
 const CAMERA: &str = "camera: (position: (0, 0, -4), look: Target((0, 0, 0)), up: (0, 1, 0), fov_degrees: 40.0)";
 
@@ -140,81 +141,203 @@ fn environment_scene(lights: &str) -> String {
 }
 
 #[test]
-fn environment_sampling_reproduces_the_maps_luminance() {
+fn environment_sampling_follows_the_filtered_maps_pdf() {
     let (w, h) = (16, 8);
-    // Luminances from 0.03 to about 40, with a bright patch; no texel is black so that a
-    // sample rounded across a texel boundary cannot land where nothing is expected.
+    // Luminances from 0.03 to about 40, with a bright patch and one black texel (sampled only
+    // where its lit neighbours make the bilinear density nonzero).
     let texel = |x: usize, y: usize| {
         let base = 0.05 + 0.3 * ((x * 7 + y * 3) % 11) as f32;
-        if (5..8).contains(&x) && (2..4).contains(&y) {
+        if (x, y) == (10, 5) {
+            [0.0; 3]
+        } else if (5..8).contains(&x) && (2..4).contains(&y) {
             [40.0, 35.0, 30.0]
         } else {
             [base, 0.5 * base, 2.0 * base]
         }
     };
-    let root = environment_root("sampling", "sky.exr", w, h, texel);
-    let (scale, rotation) = (2.0f64, 30.0f64);
-    let text = environment_scene("Environment(file: \"sky.exr\", scale: 2.0, rotation_degrees: 30.0)");
-    let s = LoadedScene::parse("env.ron", &text, BvhKind::Bvh2, Some(&root)).unwrap();
-    std::fs::remove_dir_all(&root).unwrap();
-    let light = s.compiled.info.background as u32;
-    let samples = illuminate(&s, light, [0.0; 3], 512, 256);
-    // The expected distribution, from the map on the CPU: texel probability ∝ luminance ×
-    // solid angle, uniform in (u, v) within the texel, so the solid-angle density at polar
-    // angle θ in a row from θ_top to θ_bottom is luminance / ∫ luminance dω ×
-    // (cos θ_top − cos θ_bottom) / (Δθ sin θ).
-    let lum: Vec<f64> = (0..w * h).map(|k| luminance(texel(k % w, k / w))).collect();
-    let total: f64 = (0..w * h).map(|k| lum[k] * texel_solid_angle(k / w, w, h)).sum();
-    let expected_pdf = |texel_index: usize, sin_theta: f64| {
-        let row = texel_index / w;
-        let dtheta = std::f64::consts::PI / h as f64;
-        let band = (row as f64 * dtheta).cos() - ((row + 1) as f64 * dtheta).cos();
-        lum[texel_index] / total * band / (dtheta * sin_theta)
-    };
-    let (sin, cos) = rotation.to_radians().sin_cos();
-    let mut observed = vec![0.0; w * h];
-    let mut checked = 0;
-    for (k, (d, record)) in samples.iter().enumerate() {
-        assert_eq!(d[3], 1.0, "sample {k} carries light");
-        let d = [d[0] as f64, d[1] as f64, d[2] as f64];
-        // World to map: the inverse of the rotation about +Y.
-        let m = [cos * d[0] - sin * d[2], d[1], sin * d[0] + cos * d[2]];
-        let (u, v) = uv(m);
-        let texel_index = ((v * h as f64) as usize).min(h - 1) * w + ((u * w as f64) as usize).min(w - 1);
-        observed[texel_index] += 1.0;
-        // sin θ from the horizontal components: exact near the poles, where the density
-        // grows as 1 / sin θ and 1 - cos² θ would lose the digits.
-        let sin_theta = m[0].hypot(m[2]) / (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
-        let expected_pdf = expected_pdf(texel_index, sin_theta);
-        let [pdf, lookup_pdf, lookup_lum, radiance_lum] = record.map(|v| v as f64);
-        // f32 trigonometry within about 1e-6 of a texel boundary may put the sampled and the
-        // looked-up direction in neighbouring texels (a rare MIS weight off by the ratio of
-        // two texels, not a bias of the estimate), so the values are compared for samples
-        // inside their texel; all samples count in the chi-square test.
-        let inside = |x: f64, n: usize| ((x * n as f64).fract() - 0.5).abs() < 0.49;
-        if inside(u, w) && inside(v, h) {
-            assert!(
-                (pdf - lookup_pdf).abs() <= 1e-4 * pdf,
-                "sample {k}: sampled pdf {pdf}, lookup {lookup_pdf}"
-            );
-            assert!(
-                (radiance_lum - lookup_lum).abs() <= 1e-4 * radiance_lum,
-                "sample {k}: radiance"
-            );
-            assert!(
-                (pdf - expected_pdf).abs() <= 1e-3 * expected_pdf,
-                "sample {k}: pdf {pdf}, the map gives {expected_pdf}"
-            );
-            assert!((radiance_lum - scale * lum[texel_index]).abs() <= 1e-4 * radiance_lum);
-            checked += 1;
+    let texels: Vec<[f32; 3]> = (0..w * h).map(|k| texel(k % w, k / w)).collect();
+    let map = EnvironmentMap::new(w as u32, h as u32, texels).unwrap();
+    for (layout, name) in [
+        (TexelLayout::Centred, "Centred"),
+        (TexelLayout::PoleToPole, "PoleToPole"),
+    ] {
+        let root = environment_root(&format!("sampling-{name}"), "sky.exr", w, h, texel);
+        let (scale, rotation) = (2.0f64, 30.0f64);
+        let text = environment_scene(&format!(
+            "Environment(file: \"sky.exr\", scale: 2.0, rotation_degrees: 30.0, layout: {name})"
+        ));
+        let s = LoadedScene::parse("env.ron", &text, BvhKind::Bvh2, Some(&root)).unwrap();
+        std::fs::remove_dir_all(&root).unwrap();
+        let light = s.compiled.info.background as u32;
+        let samples = illuminate(&s, light, [0.0; 3], 512, 256);
+        // The expected distribution from the host's mirror of the GPU's: each patch split in
+        // 2 x 2 bins, whose probability the midpoint rule gives exactly (the density over
+        // (u, v) is bilinear within a patch).
+        let d = map.distribution(layout);
+        let p = d.patches;
+        let bin = |q: &PatchPoint| (q.row * w + q.col) * 4 + (q.st[0] >= 0.5) as usize + 2 * (q.st[1] >= 0.5) as usize;
+        let mut probability = vec![0.0; p.rows() * w * 4];
+        for row in 0..p.rows() {
+            for col in 0..w {
+                for st in [[0.25, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]] {
+                    let q = PatchPoint { row, col, st };
+                    let (u, v) = p.uv(&q);
+                    probability[bin(&q)] = d.pdf(u, v) * (p.edge(row + 1) - p.edge(row)) / w as f64 / 4.0;
+                }
+            }
         }
+        let (sin, cos) = rotation.to_radians().sin_cos();
+        let mut observed = vec![0.0; probability.len()];
+        let mut checked = 0;
+        for (k, (dir, record)) in samples.iter().enumerate() {
+            assert_eq!(dir[3], 1.0, "{name}: sample {k} carries light");
+            let dir = [dir[0] as f64, dir[1] as f64, dir[2] as f64];
+            // World to map: the inverse of the rotation about +Y.
+            let m = [cos * dir[0] - sin * dir[2], dir[1], sin * dir[0] + cos * dir[2]];
+            let (u, v) = uv(m);
+            let q = p.locate(u, v);
+            observed[bin(&q)] += 1.0;
+            // sin θ from the horizontal components: exact near the poles, where the density
+            // grows as 1 / sin θ and 1 - cos² θ would lose the digits.
+            let sin_theta = m[0].hypot(m[2]) / (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+            let expected_pdf = d.pdf(u, v) / (2.0 * std::f64::consts::PI * std::f64::consts::PI * sin_theta);
+            let expected_lum = scale * luminance(map.radiance(layout, u, v).map(|c| c as f32));
+            let [pdf, lookup_pdf, lookup_lum, radiance_lum] = record.map(|v| v as f64);
+            // The density jumps between patch rows, so f32 trigonometry within about 1e-6 of a
+            // row's edge may put the sampled and the looked-up direction on different sides
+            // (a rare MIS weight off by the ratio of two rows' densities, not a bias); and
+            // near the black texel's corner the filtered values vanish, so that the f32
+            // position's error is a larger part of them. The values are compared for samples
+            // away from their patch's edges (where they are at least a tenth of the nearest
+            // lit corner's); all samples count in the chi-square test.
+            // The lookup finds (u, v) again from the f32 direction by atan2 (with acos(y), whose
+            // digits go near the poles, the two differed by 1.2e-3 there on lavapipe).
+            let inside = q.st.iter().all(|x| (x - 0.5).abs() < 0.45);
+            if inside {
+                assert!(
+                    (pdf - lookup_pdf).abs() <= 1e-4 * pdf,
+                    "{name}: sample {k}: sampled pdf {pdf}, lookup {lookup_pdf}"
+                );
+                assert!(
+                    (radiance_lum - lookup_lum).abs() <= 1e-4 * radiance_lum,
+                    "{name}: sample {k}: radiance {radiance_lum}, lookup {lookup_lum}"
+                );
+                assert!(
+                    (pdf - expected_pdf).abs() <= 1e-3 * expected_pdf,
+                    "{name}: sample {k}: pdf {pdf}, the host's mirror gives {expected_pdf}"
+                );
+                assert!(
+                    (radiance_lum - expected_lum).abs() <= 1e-3 * expected_lum,
+                    "{name}: sample {k}: radiance {radiance_lum}, the host's mirror gives {expected_lum}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(
+            checked as f64 > 0.5 * samples.len() as f64,
+            "{name}: {checked} samples checked"
+        );
+        let n = samples.len() as f64;
+        let expected: Vec<f64> = probability.iter().map(|p| p * n).collect();
+        assert_counts_fit(&observed, &expected, &format!("environment sampling ({name})"));
     }
-    assert!(checked as f64 > 0.9 * samples.len() as f64, "{checked} samples checked");
-    let n = samples.len() as f64;
-    let expected: Vec<f64> = (0..w * h)
-        .map(|k| lum[k] * texel_solid_angle(k / w, w, h) / total * n)
-        .collect();
-    assert_counts_fit(&observed, &expected, "environment sampling");
+}
+
+/// Renders `scene` (a white Lambertian quad filling the view under a two-texel map) with
+/// path tracing and compares every pixel's mean with the analytic radiance `expected`,
+/// within 4 standard errors of the image mean (each required under 1.5% of the value, so a
+/// bias of a few percent, such as the nearest texel's instead of the filtered radiance,
+/// fails).
+fn assert_lambertian_radiance(what: &str, scene: &LoadedScene, expected: [f64; 3]) {
+    let r = render(scene, "pt", "NaivePTsk", (16, 16), 16, 16, 5, &[]);
+    let (mean, se, n) = region(&r.image, |_, _| true);
+    assert_eq!(n, 256);
+    for c in 0..3 {
+        eprintln!(
+            "{what} channel {c}: {:.5} +- {:.5} (expected {:.5})",
+            mean[c], se[c], expected[c]
+        );
+        assert!(
+            se[c] < 0.015 * expected[c],
+            "{what} channel {c}: standard error {} too large to test {}",
+            se[c],
+            expected[c]
+        );
+        assert!(
+            (mean[c] - expected[c]).abs() < 4.0 * se[c],
+            "{what} channel {c}: {} ± {}, expected {}",
+            mean[c],
+            se[c],
+            expected[c]
+        );
+    }
+}
+
+#[test]
+fn lambertian_surfaces_under_two_texel_maps_reflect_the_filtered_irradiance() {
+    use std::f64::consts::PI;
+    // Texels a and b, each channel a different pair: (0, 1), (1, 0) and (0.5, 0.5).
+    let (a, b) = ([0.0f32, 1.0, 0.5], [1.0f32, 0.0, 0.5]);
+    let channels = |f: fn(f64, f64) -> f64| -> [f64; 3] { std::array::from_fn(|c| f(a[c] as f64, b[c] as f64)) };
+    // A white (albedo 1) quad at x = 0 facing +X under a 2 x 1 map (a at u = 1/4, looking
+    // along -X; b at u = 3/4, +X; wrapping through u = 0, +Z), seen from +X: its hemisphere is
+    // u in (1/2, 1), where the radiance blends from (a + b)/2 to b and back, and it reflects
+    // (1/π) ∫ L cos dω = (a + b + 2 (b − a)/π) / 2 in either layout (the map has one row).
+    // The nearest texel would give b.
+    let wall = "camera: (position: (3, 0, 0), look: Target((0, 0, 0)), up: (0, 1, 0), fov_degrees: 20.0)";
+    let wall_quad = "Quad(corners: ((0, -1, -1), (0, 1, -1), (0, 1, 1), (0, -1, 1)), material: \"white\")";
+    // A white quad at y = 0 facing +Y under a 1 x 2 map (a on top, b below), seen from above:
+    // the radiance at θ from +Y blends a into b, from pole to pole (3a + b)/4 is reflected,
+    // centred (a up to θ = π/4, then linear to the horizon's (a + b)/2)
+    // a + (b − a)(1/4 − 1/(2π)). The nearest texel would give a.
+    let floor = "camera: (position: (0, 3, 0), look: Target((0, 0, 0)), up: (0, 0, 1), fov_degrees: 20.0)";
+    let floor_quad = "Quad(corners: ((-1, 0, -1), (-1, 0, 1), (1, 0, 1), (1, 0, -1)), material: \"white\")";
+    let cases: [(&str, (usize, usize), &str, &str, &str, [f64; 3]); 4] = [
+        (
+            "wall, 2 x 1, centred",
+            (2, 1),
+            "Centred",
+            wall,
+            wall_quad,
+            channels(|a, b| (a + b + 2.0 * (b - a) / PI) / 2.0),
+        ),
+        (
+            "wall, 2 x 1, pole to pole",
+            (2, 1),
+            "PoleToPole",
+            wall,
+            wall_quad,
+            channels(|a, b| (a + b + 2.0 * (b - a) / PI) / 2.0),
+        ),
+        (
+            "floor, 1 x 2, pole to pole",
+            (1, 2),
+            "PoleToPole",
+            floor,
+            floor_quad,
+            channels(|a, b| (3.0 * a + b) / 4.0),
+        ),
+        (
+            "floor, 1 x 2, centred",
+            (1, 2),
+            "Centred",
+            floor,
+            floor_quad,
+            channels(|a, b| a + (b - a) * (0.25 - 0.5 / PI)),
+        ),
+    ];
+    for (k, (what, (w, h), layout, camera, quad, expected)) in cases.into_iter().enumerate() {
+        let root = environment_root(&format!("two-texel-{k}"), "two.exr", w, h, |x, y| {
+            if x + y == 0 { a } else { b }
+        });
+        let text = format!(
+            "Scene({camera}, materials: {{\"white\": (diffuse: (1, 1, 1))}}, shapes: [{quad}],
+                lights: [Environment(file: \"two.exr\", layout: {layout})])"
+        );
+        let s = LoadedScene::parse("two.ron", &text, BvhKind::Bvh2, Some(&root)).unwrap();
+        std::fs::remove_dir_all(&root).unwrap();
+        assert_lambertian_radiance(what, &s, expected);
+    }
 }
 
 #[test]

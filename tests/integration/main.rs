@@ -22,6 +22,7 @@ mod probe;
 mod reference;
 mod resolve;
 mod scenes;
+mod shading;
 mod shards;
 mod specialize;
 mod stress;

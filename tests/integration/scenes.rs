@@ -208,6 +208,6 @@ fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
     check!(
         "Environment",
         GpuEnvironment,
-        [width, height, cos_rotation, sin_rotation]
+        [width, height, cos_rotation, sin_rotation, pole_to_pole]
     );
 }

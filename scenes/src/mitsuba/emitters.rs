@@ -4,7 +4,7 @@
 
 use super::transform::to_world;
 use super::xml::{Color, Context, Props, Result};
-use crate::environment::EnvironmentMap;
+use crate::environment::{EnvironmentMap, TexelLayout};
 use crate::model::{Light, Rgb};
 use glam::{Mat4, Vec3};
 use roxmltree::Node;
@@ -124,8 +124,8 @@ fn direction(ctx: &Context, node: Node, m: Mat4) -> Result<[f32; 3]> {
 }
 
 /// An `envmap`: Mitsuba's equirectangular map is lightgraph's turned by 180 degrees about
-/// +Y (its u = 0 looks along -Z, lightgraph's along +Z), plus to_world's rotation about +Y;
-/// other rotations are unsupported.
+/// +Y (its u = 0 looks along -Z, lightgraph's along +Z), plus to_world's rotation about +Y
+/// (other rotations are unsupported); its rows span pole to pole ([`TexelLayout::PoleToPole`]).
 fn envmap(ctx: &mut Context, props: &Props) -> Result<Light> {
     let node = props.node();
     let path = props.file(ctx, "an envmap")?;
@@ -146,6 +146,7 @@ fn envmap(ctx: &mut Context, props: &Props) -> Result<Light> {
         file: path.display().to_string(),
         scale,
         rotation_degrees: beta + 180.0,
+        layout: TexelLayout::PoleToPole,
         map: Some(std::sync::Arc::new(map)),
     })
 }
@@ -204,6 +205,30 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn an_envmap_is_filtered_with_its_rows_from_pole_to_pole() {
+        let path = std::env::temp_dir().join(format!("lightgraph-envmap-{}.exr", std::process::id()));
+        exr::prelude::write_rgb_file(&path, 4, 3, |x, y| (x as f32, y as f32, 1.0)).unwrap();
+        let (l, w) = convert(&format!(
+            "<emitter type=\"envmap\"><string name=\"filename\" value=\"{}\"/><float name=\"scale\" value=\"2\"/></emitter>",
+            path.display()
+        ));
+        std::fs::remove_file(&path).unwrap();
+        assert!(w.is_empty(), "{w:?}");
+        let Some(Light::Environment {
+            scale,
+            rotation_degrees,
+            layout,
+            map,
+            ..
+        }) = l.unwrap()
+        else {
+            panic!()
+        };
+        assert_eq!((scale, rotation_degrees, layout), (2.0, 180.0, TexelLayout::PoleToPole));
+        assert_eq!(map.map(|m| (m.width, m.height)), Some((4, 3)));
     }
 
     #[test]

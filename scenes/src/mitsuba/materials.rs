@@ -6,7 +6,7 @@
 
 use super::textures::Images;
 use super::xml::{Color, Context, Props, Result};
-use crate::model::{Material, Pbr};
+use crate::model::{Material, Microfacet, Pbr, Plastic};
 use crate::texture::{Texture, TextureRef};
 use roxmltree::Node;
 
@@ -98,13 +98,14 @@ impl Materials {
             }
             "dielectric" | "thindielectric" | "roughdielectric" => {
                 let ior = ratio_of_iors(ctx, &props, 1.5046)?;
-                let roughness = roughness(ctx, &props, kind == "roughdielectric")?;
+                let (roughness, distribution) = roughness(ctx, &props, kind == "roughdielectric")?;
                 let base_color = rgb_or_white(ctx, &props, "specular_transmittance", "transmittance")?;
                 white_or_warn(ctx, &props, "specular_reflectance")?;
                 pbr(Pbr {
                     base_color,
                     transmission: 1.0,
                     roughness,
+                    distribution,
                     ior,
                     thin_walled: kind == "thindielectric",
                     ..Default::default()
@@ -113,11 +114,12 @@ impl Materials {
             "conductor" | "roughconductor" => {
                 let f0 = conductor_f0(ctx, &props)?;
                 let (tint, texture) = self.tint(ctx, &props, "specular_reflectance")?;
-                let roughness = roughness(ctx, &props, kind == "roughconductor")?;
+                let (roughness, distribution) = roughness(ctx, &props, kind == "roughconductor")?;
                 let mut p = Pbr {
                     base_color: std::array::from_fn(|i| (f0[i] * tint[i]).clamp(0.0, 1.0)),
                     metallic: 1.0,
                     roughness,
+                    distribution,
                     ..Default::default()
                 };
                 p.textures.base_color = texture;
@@ -125,19 +127,16 @@ impl Materials {
             }
             "plastic" | "roughplastic" => {
                 let ior = ratio_of_iors(ctx, &props, 1.49)?;
-                let roughness = roughness(ctx, &props, kind == "roughplastic")?;
-                if props.boolean(ctx, "nonlinear")? == Some(true) {
-                    ctx.warn(
-                        node,
-                        "nonlinear=true (internal scattering's colour shift) is not modelled",
-                    );
-                }
+                let (roughness, distribution) = roughness(ctx, &props, kind == "roughplastic")?;
+                let nonlinear = props.boolean(ctx, "nonlinear")? == Some(true);
                 white_or_warn(ctx, &props, "specular_reflectance")?;
                 let reflectance = props.color(ctx, "diffuse_reflectance")?;
                 let mut m = self.diffuse(ctx, reflectance)?;
                 let p = as_pbr(&mut m);
                 p.ior = ior;
                 p.roughness = roughness;
+                p.distribution = distribution;
+                p.plastic = Some(Plastic { nonlinear });
                 m
             }
             "twosided" => {
@@ -374,18 +373,32 @@ fn ratio_of_iors(ctx: &Context, props: &Props, int_default: f32) -> Result<f32> 
 }
 
 /// The perceptual roughness of a microfacet bsdf (sqrt of Mitsuba's alpha, default 0.1), or
-/// 0 for a smooth one; Beckmann and anisotropic roughness are approximated with a warning.
-fn roughness(ctx: &mut Context, props: &Props, rough: bool) -> Result<f32> {
+/// 0 for a smooth one, and its `distribution` (Mitsuba's default: Beckmann); anisotropic
+/// roughness is approximated with a warning.
+fn roughness(ctx: &mut Context, props: &Props, rough: bool) -> Result<(f32, Microfacet)> {
     if !rough {
-        return Ok(0.0);
+        return Ok((0.0, Microfacet::Beckmann));
     }
+    let distribution = match props.string(ctx, "distribution")?.as_deref() {
+        None | Some("beckmann") => Microfacet::Beckmann,
+        Some("ggx") => Microfacet::Ggx,
+        Some(d) => {
+            // Mitsuba 0.6's `phong` and `as` (Ashikhmin-Shirley) distributions.
+            let node = props.get("distribution").unwrap_or(props.node());
+            ctx.warn(
+                node,
+                format!("the {d} distribution is rendered as Beckmann of the same alpha"),
+            );
+            Microfacet::Beckmann
+        }
+    };
     let node = props.node();
     if let Some(t) = props
         .get("alpha")
         .filter(|a| a.has_tag_name("texture") || a.has_tag_name("ref"))
     {
         ctx.warn(t, "a textured roughness is not supported: alpha 0.1 is used");
-        return Ok(0.1f32.sqrt());
+        return Ok((0.1f32.sqrt(), distribution));
     }
     let alpha = match (
         props.float(ctx, "alpha")?,
@@ -405,14 +418,7 @@ fn roughness(ctx: &mut Context, props: &Props, rough: bool) -> Result<f32> {
     if !(0.0..=4.0).contains(&alpha) {
         return Err(ctx.error(node, format!("alpha {alpha} is not a roughness")));
     }
-    match props.string(ctx, "distribution")?.as_deref() {
-        None | Some("ggx") => {}
-        Some(d) => ctx.warn(
-            node,
-            format!("the {d} distribution is rendered as GGX of the same alpha"),
-        ),
-    }
-    Ok(alpha.sqrt().min(1.0))
+    Ok((alpha.sqrt().min(1.0), distribution))
 }
 
 /// A conductor's reflectance at normal incidence, from `eta` and `k` or its `material`
