@@ -297,10 +297,12 @@ pub mod texture_flags {
     pub const WRAP_CLAMP: u32 = 1;
     /// Wrap mode: mirrored repeat.
     pub const WRAP_MIRROR: u32 = 2;
+    /// Nearest-texel lookups instead of bilinear ones.
+    pub const NEAREST: u32 = 32;
 }
 
 /// One material slot's texture (`TextureInfo` in WGSL): where its image lies in the texel
-/// buffer, its size, wrap modes and sRGB flag, and the KHR_texture_transform matrix.
+/// buffer, its size, wrap modes, sRGB and nearest flags, and the KHR_texture_transform matrix.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct GpuTextureInfo {

@@ -1,5 +1,5 @@
 //! Textures: decoded images (RGBA8) and the references materials make to them (wrap modes,
-//! KHR_texture_transform), packed for the GPU into one texel buffer and a table of
+//! KHR_texture_transform, nearest or bilinear filtering, colour encoding), packed for the GPU into one texel buffer and a table of
 //! [`GpuTextureInfo`]s (lavapipe has no binding arrays).
 
 use crate::gpu::{GpuTextureInfo, texture_flags};
@@ -67,23 +67,32 @@ pub struct TextureRef {
     pub transform: [[f32; 3]; 2],
     /// The texture coordinate set it reads (glTF TEXCOORD_n).
     pub tex_coord: u32,
+    /// Nearest-texel lookups (otherwise bilinear between the four nearest texel centres).
+    pub nearest: bool,
+    /// The colour channels are linear even where the material slot reads sRGB (Mitsuba's
+    /// `raw` bitmaps, procedural textures baked to texels).
+    pub linear: bool,
 }
 
 impl TextureRef {
-    /// A reference to `texture` with repeat wrapping and no transform.
+    /// A reference to `texture` with repeat wrapping, no transform, bilinear filtering and
+    /// the slot's colour encoding.
     pub fn new(texture: u32) -> TextureRef {
         TextureRef {
             texture,
             wrap: [Wrap::Repeat; 2],
             transform: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             tex_coord: 0,
+            nearest: false,
+            linear: false,
         }
     }
 }
 
 impl TextureRef {
     /// The mean linear colour of the texture over the triangle with texture coordinates
-    /// `uv` (decoded from sRGB when `srgb`): the nearest texels at 15 points spread evenly
+    /// `uv` (decoded from sRGB when `srgb` and the reference is not [`TextureRef::linear`]):
+    /// the nearest texels at 15 points spread evenly
     /// over the triangle. Used to give an emissive triangle with an emissive texture one
     /// radiance as an area light.
     pub fn mean_over_triangle(&self, textures: &[Texture], uv: [[f32; 2]; 3], srgb: bool) -> [f32; 3] {
@@ -94,6 +103,7 @@ impl TextureRef {
             return [1.0; 3];
         };
         const N: u32 = 5;
+        let srgb = srgb && !self.linear;
         let mut sum = [0f64; 3];
         let mut count = 0;
         for i in 0..N {
@@ -176,10 +186,12 @@ impl PackedTextures {
         Ok(packed)
     }
 
-    /// Adds the table entry of `r` (sRGB-decoded when `srgb`) and returns its index.
+    /// Adds the table entry of `r` (sRGB-decoded when `srgb` and `r` is not
+    /// [`TextureRef::linear`]) and returns its index.
     pub fn add(&mut self, r: &TextureRef, srgb: bool, textures: &[Texture]) -> i32 {
         let t = &textures[r.texture as usize];
-        let flags = if srgb { texture_flags::SRGB } else { 0 }
+        let flags = if srgb && !r.linear { texture_flags::SRGB } else { 0 }
+            | if r.nearest { texture_flags::NEAREST } else { 0 }
             | r.wrap[0].bits() << texture_flags::WRAP_S_SHIFT
             | r.wrap[1].bits() << texture_flags::WRAP_T_SHIFT;
         self.infos.push(GpuTextureInfo {
@@ -223,5 +235,36 @@ mod tests {
         // Repeat wrapping: u + 1 is the same texel.
         let shifted = right.map(|p| [p[0] + 1.0, p[1]]);
         assert_eq!(r.mean_over_triangle(&black_white(), shifted, true), [1.0; 3]);
+    }
+
+    #[test]
+    fn nearest_and_linear_references_set_their_flags() {
+        let textures = black_white();
+        let mut packed = PackedTextures::new(&textures).unwrap();
+        let plain = TextureRef::new(0);
+        let nearest_linear = TextureRef {
+            nearest: true,
+            linear: true,
+            wrap: [Wrap::ClampToEdge, Wrap::MirroredRepeat],
+            ..plain
+        };
+        packed.add(&plain, true, &textures);
+        packed.add(&nearest_linear, true, &textures);
+        assert_eq!(packed.infos[0].flags, texture_flags::SRGB);
+        assert_eq!(
+            packed.infos[1].flags,
+            texture_flags::NEAREST
+                | texture_flags::WRAP_CLAMP << texture_flags::WRAP_S_SHIFT
+                | texture_flags::WRAP_MIRROR << texture_flags::WRAP_T_SHIFT
+        );
+        // A linear reference's texels are not decoded: a byte of 128 is 128 / 255.
+        let grey = vec![Texture {
+            texels: vec![0xff80_8080],
+            width: 1,
+            height: 1,
+            ..Default::default()
+        }];
+        let uv = [[0.1, 0.1], [0.9, 0.1], [0.1, 0.9]];
+        assert_eq!(nearest_linear.mean_over_triangle(&grey, uv, true), [128.0 / 255.0; 3]);
     }
 }

@@ -1,8 +1,9 @@
 // Material parameters at a surface point: the material's factors, scaled by its textures
 // (glTF metallic-roughness: base colour and alpha, roughness in G and metalness in B,
 // emission). Textures are packed into one texel buffer (`texels`, RGBA8) described by the
-// table `textures` (lavapipe has no binding arrays) and filtered bilinearly, sRGB-encoded
-// colour decoded before filtering. Needs the resources `materials`, `textures` and `texels`.
+// table `textures` (lavapipe has no binding arrays) and filtered bilinearly (or nearest, with
+// TEXTURE_NEAREST), sRGB-encoded colour decoded before filtering. Needs the resources
+// `materials`, `textures` and `texels`.
 
 #if TEXTURES
 // sRGB-encoded colour to linear.
@@ -33,18 +34,23 @@ fn texture_wrap(i: i32, n: i32, mode: u32) -> u32 {
 }
 
 // Texture `index` at texture coordinates `uv` (before the texture's transform), (0, 0) at the
-// top left of the image: bilinear between the four nearest texel centres.
+// top left of the image: bilinear between the four nearest texel centres, or the texel under
+// the point with TEXTURE_NEAREST.
 fn texture_sample(index: u32, uv: vec2<f32>) -> vec4<f32> {
     let t = textures[index];
     let st = vec2<f32>(dot(t.row0, vec3<f32>(uv, 1.0)), dot(t.row1, vec3<f32>(uv, 1.0)));
     let size = vec2<i32>(i32(t.width), i32(t.height));
+    let mode_s = (t.flags >> TEXTURE_WRAP_S_SHIFT) & 3u;
+    let mode_t = (t.flags >> TEXTURE_WRAP_T_SHIFT) & 3u;
+    // Coordinates far out stay within the range of i32 (any integer wraps to a texel).
+    if ((t.flags & TEXTURE_NEAREST) != 0u) {
+        let n = vec2<i32>(clamp(floor(st * vec2<f32>(size)), vec2<f32>(-1e9), vec2<f32>(1e9)));
+        return texture_texel(t, texture_wrap(n.x, size.x, mode_s), texture_wrap(n.y, size.y, mode_t));
+    }
     let p = st * vec2<f32>(size) - 0.5;
     let base = floor(p);
     let f = p - base;
-    // Coordinates far out stay within the range of i32 (any integer wraps to a texel).
     let b = vec2<i32>(clamp(base, vec2<f32>(-1e9), vec2<f32>(1e9)));
-    let mode_s = (t.flags >> TEXTURE_WRAP_S_SHIFT) & 3u;
-    let mode_t = (t.flags >> TEXTURE_WRAP_T_SHIFT) & 3u;
     let x0 = texture_wrap(b.x, size.x, mode_s);
     let x1 = texture_wrap(b.x + 1, size.x, mode_s);
     let y0 = texture_wrap(b.y, size.y, mode_t);

@@ -259,6 +259,74 @@ fn texture_lookups_match_a_cpu_evaluation() {
 }
 
 #[test]
+fn nearest_lookups_return_the_texel_under_the_point() {
+    // A 3x2 image of arbitrary bytes, read as linear even in the sRGB base colour slot.
+    let pattern: Vec<u32> = (0..6u32)
+        .map(|i| (i * 0x9E3779B9).rotate_left(11) ^ 0x3c3c3c3c)
+        .collect();
+    let image = Texture {
+        name: "pattern".into(),
+        width: 3,
+        height: 2,
+        texels: pattern.clone(),
+    };
+    let nearest = TextureRef {
+        wrap: [Wrap::Repeat, Wrap::MirroredRepeat],
+        transform: [[2.0, 0.5, 0.1], [-0.5, 3.0, 0.2]],
+        nearest: true,
+        linear: true,
+        ..TextureRef::new(0)
+    };
+    let textures = PbrTextures {
+        base_color: Some(nearest),
+        ..Default::default()
+    };
+    let s = scene(
+        vec![("m", pbr([1.0; 3], textures, None))],
+        vec![quad("m", [-1.0, 1.0, -1.0, 1.0, 0.0], None)],
+        vec![],
+        vec![image],
+        camera_looking_down(1.0, 40.0),
+    );
+    let compiled = CompiledScene::new(&s).unwrap();
+    assert_eq!(
+        compiled.textures[0].flags & (texture_flags::SRGB | texture_flags::NEAREST),
+        texture_flags::NEAREST
+    );
+    // Points off the texel edges: (s, t) = transform (u, v) in cells of 1/3 x 1/2.
+    let mut queries = Vec::new();
+    let mut want = Vec::new();
+    for i in 0..200u32 {
+        let (u, v) = (
+            (i as f32 * 0.618_034).fract() * 4.0 - 2.0,
+            (i as f32 * 0.754_878).fract() * 4.0 - 2.0,
+        );
+        let (x, y) = ((2.0 * u + 0.5 * v + 0.1) * 3.0, (-0.5 * u + 3.0 * v + 0.2) * 2.0);
+        if (x - x.round()).abs() < 1e-3 || (y - y.round()).abs() < 1e-3 {
+            continue;
+        }
+        let column = (x.floor() as i64).rem_euclid(3);
+        let row = (y.floor() as i64).rem_euclid(4);
+        let row = if row >= 2 { 3 - row } else { row };
+        let word = pattern[(row * 3 + column) as usize];
+        want.push([0, 8, 16, 24].map(|shift| ((word >> shift) & 0xff) as f32 / 255.0));
+        queries.push(([0.0, u, v], MISS.0, MISS.1));
+    }
+    let results = surface_queries(&compiled, &s, &queries);
+    for (i, want) in want.iter().enumerate() {
+        let got = results[4 * i];
+        for k in 0..4 {
+            assert!(
+                (got[k] - want[k]).abs() < 1e-6,
+                "uv ({}, {}): GPU {got:?}, texel {want:?}",
+                queries[i].0[1],
+                queries[i].0[2]
+            );
+        }
+    }
+}
+
+#[test]
 fn alpha_masks_let_rays_through_in_both_bvhs_and_surfaces_interpolate_attributes() {
     // The quad "a" below, with normals leaning outwards at its corners; the alpha-masked quad
     // above it over y < 0, whose alpha crosses the cutoff 0.5 at x = 0.

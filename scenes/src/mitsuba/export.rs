@@ -254,12 +254,13 @@ impl Writer {
                     ));
                 }
                 let file = format!("textures/t{}-{kind}.png", r.texture);
-                self.files.push((file.clone(), png_rgb(t, factor)?));
+                self.files.push((file.clone(), png_rgb(t, factor, r.linear)?));
                 self.images.insert(key, file.clone());
                 file
             }
         };
-        Ok(bitmap_element(slot, &file, wrap_mode(r, &t.name, &mut self.notes), raw))
+        let wrap = wrap_mode(r, &t.name, &mut self.notes);
+        Ok(bitmap_element(slot, &file, wrap, r.nearest, raw || r.linear))
     }
 
     /// The opacity of an alpha-masked material: the texels' alpha times `alpha` against
@@ -291,6 +292,7 @@ impl Writer {
             "opacity",
             &file,
             wrap_mode(r, &t.name, &mut self.notes),
+            r.nearest,
             true,
         ))
     }
@@ -422,8 +424,9 @@ fn has_alpha(r: &TextureRef, textures: &[Texture]) -> bool {
         .is_some_and(|t| t.texels.iter().any(|&c| c >> 24 != 255))
 }
 
-/// The texture's RGB as an sRGB PNG, scaled by `factor` (in linear) when it is not white.
-fn png_rgb(t: &Texture, factor: Rgb) -> Result<Vec<u8>, String> {
+/// The texture's RGB as a PNG (sRGB, or linear when `linear`), scaled by `factor` (in linear)
+/// when it is not white.
+fn png_rgb(t: &Texture, factor: Rgb, linear: bool) -> Result<Vec<u8>, String> {
     let rgb: Vec<u8> = t
         .texels
         .iter()
@@ -432,6 +435,8 @@ fn png_rgb(t: &Texture, factor: Rgb) -> Result<Vec<u8>, String> {
                 let byte = (c >> (8 * k)) as u8;
                 if factor[k] == 1.0 {
                     byte
+                } else if linear {
+                    (byte as f32 * factor[k]).round().clamp(0.0, 255.0) as u8
                 } else {
                     linear_to_srgb8(srgb_to_linear(byte as f32 / 255.0) * factor[k])
                 }
@@ -464,9 +469,11 @@ fn wrap_mode(r: &TextureRef, name: &str, notes: &mut Vec<String>) -> &'static st
     }
 }
 
-fn bitmap_element(slot: &str, file: &str, wrap: &str, raw: bool) -> String {
+/// A `bitmap` element named `slot` (nearest or bilinear, `raw`: linear colour).
+fn bitmap_element(slot: &str, file: &str, wrap: &str, nearest: bool, raw: bool) -> String {
+    let filter = if nearest { "nearest" } else { "bilinear" };
     format!(
-        "<texture type=\"bitmap\" name=\"{slot}\">\n        <string name=\"filename\" value=\"{file}\"/>\n        <string name=\"wrap_mode\" value=\"{wrap}\"/>\n        <string name=\"filter_type\" value=\"bilinear\"/>\n        <boolean name=\"raw\" value=\"{raw}\"/>\n      </texture>"
+        "<texture type=\"bitmap\" name=\"{slot}\">\n        <string name=\"filename\" value=\"{file}\"/>\n        <string name=\"wrap_mode\" value=\"{wrap}\"/>\n        <string name=\"filter_type\" value=\"{filter}\"/>\n        <boolean name=\"raw\" value=\"{raw}\"/>\n      </texture>"
     )
 }
 

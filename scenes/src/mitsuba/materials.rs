@@ -1,15 +1,14 @@
 //! Mitsuba BSDFs as lightgraph materials (the mapping is written down in docs/mitsuba.md):
 //! `diffuse` as the SmallVCM Lambertian lobe (the [`Pbr`] model with an index of refraction
 //! of 1, a bare Lambertian, when a bitmap gives the reflectance); dielectrics (`thindielectric`
-//! thin-walled), conductors and plastics as [`Pbr`] materials; `twosided`, `mask` and `bumpmap` as wrappers. `bitmap`
-//! textures become [`Texture`]s.
+//! thin-walled), conductors and plastics as [`Pbr`] materials; `twosided`, `mask` and `bumpmap` as wrappers.
+//! Textures (`bitmap`, `checkerboard`) are made in [`super::textures`].
 
+use super::textures::Images;
 use super::xml::{Color, Context, Props, Result};
 use crate::model::{Material, Microfacet, Pbr, Plastic};
-use crate::texture::{Texture, TextureRef, Wrap};
+use crate::texture::{Texture, TextureRef};
 use roxmltree::Node;
-use std::collections::HashMap;
-use std::path::PathBuf;
 
 /// Named indices of refraction Mitsuba knows (its table's common entries).
 const IORS: &[(&str, f32)] = &[
@@ -52,9 +51,8 @@ const CONDUCTORS: &[(&str, [f32; 3], [f32; 3])] = &[
 pub struct Materials {
     /// Materials by name: a bsdf's id, or `mitsuba:LINE:COLUMN` for an anonymous one.
     pub materials: std::collections::BTreeMap<String, Material>,
-    /// The textures [`TextureRef::texture`] indexes.
-    pub textures: Vec<Texture>,
-    by_path: HashMap<PathBuf, u32>,
+    /// The images of the textures materials use.
+    pub images: Images,
 }
 
 /// The name of a diffuse grey (reflectance 0.5) that shapes without a bsdf get.
@@ -115,15 +113,17 @@ impl Materials {
             }
             "conductor" | "roughconductor" => {
                 let f0 = conductor_f0(ctx, &props)?;
-                let tint = rgb_or_white(ctx, &props, "specular_reflectance", "specular reflectance")?;
+                let (tint, texture) = self.tint(ctx, &props, "specular_reflectance")?;
                 let (roughness, distribution) = roughness(ctx, &props, kind == "roughconductor")?;
-                pbr(Pbr {
+                let mut p = Pbr {
                     base_color: std::array::from_fn(|i| (f0[i] * tint[i]).clamp(0.0, 1.0)),
                     metallic: 1.0,
                     roughness,
                     distribution,
                     ..Default::default()
-                })
+                };
+                p.textures.base_color = texture;
+                pbr(p)
             }
             "plastic" | "roughplastic" => {
                 let ior = ratio_of_iors(ctx, &props, 1.49)?;
@@ -171,7 +171,7 @@ impl Materials {
                         p.alpha_cutoff = Some(0.5);
                     }
                     Some(Color::Texture(t)) => {
-                        if let Some(r) = self.texture(ctx, t, true)? {
+                        if let Some(r) = self.texture(ctx, t)? {
                             self.alpha_from(ctx, t, &mut m, r);
                         }
                     }
@@ -206,6 +206,24 @@ impl Materials {
         }
     }
 
+    /// The colour property `name` as a factor and a texture multiplying it: white when absent,
+    /// a constant 0.5 for an unsupported texture (warned).
+    fn tint<'a, 'i>(
+        &mut self,
+        ctx: &mut Context<'a, 'i>,
+        props: &Props<'a, 'i>,
+        name: &str,
+    ) -> Result<([f32; 3], Option<TextureRef>)> {
+        Ok(match props.color(ctx, name)? {
+            None => ([1.0; 3], None),
+            Some(Color::Rgb(c)) => (c, None),
+            Some(Color::Texture(t)) => match self.texture(ctx, t)? {
+                Some(r) => ([1.0; 3], Some(r)),
+                None => ([0.5; 3], None),
+            },
+        })
+    }
+
     /// A Lambertian of `reflectance` (Mitsuba's default 0.5): the SmallVCM lobe, or a
     /// [`Pbr`] material of index of refraction 1 (no specular layer) with a bitmap.
     fn diffuse<'a, 'i>(&mut self, ctx: &mut Context<'a, 'i>, reflectance: Option<Color<'a, 'i>>) -> Result<Material> {
@@ -223,7 +241,7 @@ impl Materials {
                     ior: 1.0,
                     ..Default::default()
                 };
-                match self.texture(ctx, t, false)? {
+                match self.texture(ctx, t)? {
                     Some(r) => p.textures.base_color = Some(r),
                     None => p.base_color = [0.5; 3],
                 }
@@ -238,10 +256,11 @@ impl Materials {
     /// surface opaque (warned).
     fn alpha_from(&mut self, ctx: &mut Context, node: Node, m: &mut Material, opacity: TextureRef) {
         let p = as_pbr(m);
-        let alpha = &self.textures[opacity.texture as usize];
+        let textures = &mut self.images.textures;
+        let alpha = &textures[opacity.texture as usize];
         let mut combined = match p.textures.base_color {
             Some(base) => {
-                let t = &self.textures[base.texture as usize];
+                let t = &textures[base.texture as usize];
                 if (t.width, t.height) != (alpha.width, alpha.height) || base.transform != opacity.transform {
                     ctx.warn(
                         node,
@@ -260,75 +279,29 @@ impl Materials {
             *c = (*c & 0x00ff_ffff) | (a & 0xff) << 24;
         }
         combined.name = format!("{} with the alpha of {}", combined.name, alpha.name);
-        self.textures.push(combined);
+        textures.push(combined);
         let mut r = p.textures.base_color.unwrap_or(opacity);
-        r.texture = self.textures.len() as u32 - 1;
+        r.texture = textures.len() as u32 - 1;
         p.textures.base_color = Some(r);
         p.alpha_cutoff = Some(0.5);
     }
 
-    /// The texture of a `<texture type="bitmap">`, each file loaded once; other texture types
-    /// are warned about (`None`: the caller uses a constant). An `alpha` (opacity) bitmap's
-    /// values are linear (`raw`); a colour bitmap is read as sRGB.
-    fn texture(&mut self, ctx: &mut Context, node: Node, alpha: bool) -> Result<Option<TextureRef>> {
+    /// The texture of a `<texture>` element: a `bitmap` or a `checkerboard` ([`Images`]);
+    /// other texture types are warned about (`None`: the caller uses a constant).
+    fn texture<'a, 'i>(&mut self, ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<Option<TextureRef>> {
         let kind = ctx.plugin_type(node)?;
         let props = Props::new(node);
-        if kind != "bitmap" {
-            ctx.warn(node, "unsupported texture: a constant 0.5 is used");
-            return Ok(None);
-        }
-        let path = props.file(ctx, "a bitmap")?;
-        if props.boolean(ctx, "raw")? == Some(true) && !alpha {
-            ctx.warn(node, "raw=true is not supported: the image is read as sRGB");
-        }
-        let mut r = TextureRef::new(0);
-        r.wrap = [wrap_mode(ctx, &props)?; 2];
-        if let Some(filter) = props.string(ctx, "filter_type")?
-            && filter != "bilinear"
-        {
-            ctx.warn(node, format!("filter_type {filter} is rendered bilinear"));
-        }
-        let scale = [props.float(ctx, "u_scale")?, props.float(ctx, "v_scale")?];
-        let uvscale = props.float(ctx, "uvscale")?;
-        let [su, sv] = scale.map(|s| s.or(uvscale).unwrap_or(1.0));
-        let [ou, ov] = [props.float(ctx, "u_offset")?, props.float(ctx, "v_offset")?].map(|o| o.unwrap_or(0.0));
-        r.transform = [[su, 0.0, ou], [0.0, sv, ov]];
-        r.texture = match self.by_path.get(&path) {
-            Some(&i) => i,
-            None => {
-                let image = image::open(&path)
-                    .map_err(|e| ctx.error(node, format!("{}: {e}", path.display())))?
-                    .to_rgba8();
-                let texels = image.pixels().map(|p| u32::from_le_bytes(p.0)).collect();
-                self.textures.push(Texture {
-                    name: path.display().to_string(),
-                    width: image.width(),
-                    height: image.height(),
-                    texels,
-                });
-                let i = self.textures.len() as u32 - 1;
-                self.by_path.insert(path, i);
-                i
+        let r = match kind.as_str() {
+            "bitmap" => self.images.bitmap(ctx, &props)?,
+            "checkerboard" => self.images.checkerboard(ctx, &props)?,
+            _ => {
+                ctx.warn(node, "unsupported texture: a constant 0.5 is used");
+                return Ok(None);
             }
         };
         props.finish(ctx);
         Ok(Some(r))
     }
-}
-
-/// A bitmap's `wrap_mode` (Mitsuba's default: repeat).
-fn wrap_mode(ctx: &Context, props: &Props) -> Result<Wrap> {
-    Ok(match props.string(ctx, "wrap_mode")?.as_deref() {
-        None | Some("repeat") => Wrap::Repeat,
-        Some("mirror") => Wrap::MirroredRepeat,
-        Some("clamp") => Wrap::ClampToEdge,
-        Some(other) => {
-            return Err(ctx.error(
-                props.node(),
-                format!("wrap_mode '{other}' is not repeat, mirror or clamp"),
-            ));
-        }
-    })
 }
 
 fn pbr(p: Pbr) -> Material {

@@ -1,7 +1,7 @@
 //! Mitsuba scene files (XML, format versions 0.5 to 3.x, as Bitterli's scene collection and
-//! Mitsuba 3 write them) imported into the scene model: shapes ([`shapes`]) with their
-//! `to_world` transforms ([`transform`]), `shapegroup`s placed by `instance`s, bsdfs
-//! ([`materials`]), emitters ([`emitters`]), the perspective sensor and its film
+//! Mitsuba 3 write them) imported into the scene model: shapes ([`shapes`], [`serialized`]
+//! meshes) with their `to_world` transforms ([`transform`]), `shapegroup`s placed by
+//! `instance`s, bsdfs ([`materials`]), emitters ([`emitters`]), the perspective sensor and its film
 //! ([`camera`]), the integrator's `max_depth`, `<default>` parameters and `$name`
 //! substitution, and `<ref>`s by id ([`xml`]).
 //!
@@ -13,7 +13,9 @@ pub mod camera;
 pub mod emitters;
 pub mod export;
 pub mod materials;
+pub mod serialized;
 pub mod shapes;
+pub mod textures;
 pub mod transform;
 pub mod xml;
 
@@ -123,7 +125,7 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         integrator,
         gltf: None,
         gltf_diffuse: false,
-        textures: builder.materials.textures,
+        textures: builder.materials.images.textures,
     };
     scene.materials = builder.materials.materials;
     match camera {
@@ -243,8 +245,6 @@ fn shape<'a, 'i>(
     let mut mesh = mesh;
     if face_normals {
         mesh.normals = None;
-    } else if mesh.normals.is_none() && matches!(kind.as_str(), "obj" | "ply") {
-        mesh.smooth_normals();
     }
     let mesh = mesh.placed(m, flip);
     if mesh.indices.is_empty() {
