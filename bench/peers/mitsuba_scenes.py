@@ -41,12 +41,11 @@ def prepared_xml(path, width, height, spp):
     sensor = root.find(".//sensor")
     if sensor is None:
         sys.exit(f"{path}: no sensor")
-    film = sensor.find("film")
-    if film is None:
-        film = ET.SubElement(sensor, "film", {"type": "hdrfilm"})
-    for child in list(film):
-        if child.tag == "rfilter" or child.get("name") in ("width", "height"):
-            film.remove(child)
+    # A fresh film: Mitsuba 0.5's film properties (high_quality_edges, banner, ...) are not
+    # Mitsuba 3's, and none changes the expected image.
+    for film in sensor.findall("film"):
+        sensor.remove(film)
+    film = ET.SubElement(sensor, "film", {"type": "hdrfilm"})
     ET.SubElement(film, "integer", {"name": "width", "value": str(width)})
     ET.SubElement(film, "integer", {"name": "height", "value": str(height)})
     ET.SubElement(film, "rfilter", {"type": "box"})

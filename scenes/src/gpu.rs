@@ -37,6 +37,9 @@ pub mod material_flags {
     pub const PLASTIC: u32 = 32;
     /// With `PLASTIC`: the internal scattering is nonlinear in the base colour.
     pub const PLASTIC_NONLINEAR: u32 = 64;
+    /// A PBR metal's Fresnel is a conductor's of complex index `mirror` + i `phong`, tinted by
+    /// the base colour (else Schlick's from the base colour).
+    pub const CONDUCTOR: u32 = 128;
 }
 
 /// Primitive kinds, as `Primitive::kind` stores them.

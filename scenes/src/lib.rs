@@ -624,9 +624,12 @@ fn gpu_material(
             } else {
                 0
             };
+            let (eta, k) = p.conductor.map_or(([0.0; 3], [0.0; 3]), |c| (c.eta, c.k));
             GpuMaterial {
                 diffuse: p.base_color,
                 ior: p.ior,
+                mirror: eta,
+                phong: k,
                 flags: two_sided | gpu::material_flags::PBR | mask | thin | pbr_model_flags(p),
                 emission: p.emission,
                 metallic: p.metallic,
@@ -656,7 +659,12 @@ fn pbr_model_flags(p: &model::Pbr) -> u32 {
             gpu::material_flags::PLASTIC | gpu::material_flags::PLASTIC_NONLINEAR
         }
     };
-    beckmann | plastic
+    let conductor = if p.conductor.is_some() {
+        gpu::material_flags::CONDUCTOR
+    } else {
+        0
+    };
+    beckmann | plastic | conductor
 }
 
 /// The largest coordinate (or sphere radius) a shape may have: as far as a ray travels

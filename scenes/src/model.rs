@@ -173,6 +173,10 @@ pub struct Pbr {
     /// Mitsuba's `plastic` and `roughplastic`: the diffuse base's internal scattering.
     #[serde(default)]
     pub plastic: Option<Plastic>,
+    /// A metal's complex index of refraction (Mitsuba's conductors): its Fresnel reflectance is
+    /// the conductor's, tinted by `base_color`, instead of Schlick's from `base_color`.
+    #[serde(default)]
+    pub conductor: Option<Conductor>,
     /// Transmission weight in [0, 1] (KHR_materials_transmission).
     #[serde(default)]
     pub transmission: f32,
@@ -223,6 +227,17 @@ pub struct Plastic {
     pub nonlinear: bool,
 }
 
+/// A conductor's complex index of refraction eta + i k per channel, relative to the outside;
+/// (0, 0) reflects everything (Mitsuba's `none`, a perfect mirror).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Conductor {
+    /// The real part.
+    pub eta: Rgb,
+    /// The imaginary part (absorption).
+    pub k: Rgb,
+}
+
 fn white() -> Rgb {
     [1.0; 3]
 }
@@ -242,6 +257,7 @@ impl Default for Pbr {
             thin_walled: false,
             distribution: Microfacet::Ggx,
             plastic: None,
+            conductor: None,
             emission: [0.0; 3],
             alpha: 1.0,
             alpha_cutoff: None,

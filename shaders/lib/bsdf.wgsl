@@ -516,6 +516,37 @@ fn pbr_fresnel(m: Material, cos_w: f32) -> vec2<f32> {
     return fresnel_dielectric(cos_w, m.ior);
 }
 
+// The metal's Fresnel reflectance at cosine `c` (> 0) to the normal: glTF's, Schlick's from
+// the base colour; or, for a conductor of complex index eta + i k (MATERIAL_CONDUCTOR: eta in
+// `mirror`, k in `phong`; Mitsuba's conductors), the exact unpolarised reflectance tinted by
+// the base colour (Mitsuba's specular_reflectance). (eta, k) = (0, 0) reflects everything
+// (Mitsuba's `none`).
+fn pbr_metal_fresnel(m: Material, c: f32) -> vec3<f32> {
+    if ((m.flags & MATERIAL_CONDUCTOR) != 0u) {
+        return m.diffuse * fresnel_conductor(c, m.mirror, m.phong);
+    }
+    return fresnel_schlick(m.diffuse, c);
+}
+
+// The unpolarised Fresnel reflectance of a conductor of complex index eta + i k (relative to
+// the outside) at cosine `c` of the incident direction.
+fn fresnel_conductor(c: f32, eta: vec3<f32>, k: vec3<f32>) -> vec3<f32> {
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let eta2 = eta * eta;
+    let k2 = k * k;
+    let t0 = eta2 - k2 - vec3<f32>(s2);
+    let a2b2 = sqrt(t0 * t0 + 4.0 * eta2 * k2);
+    let t1 = a2b2 + vec3<f32>(c2);
+    let a = sqrt(max(0.5 * (a2b2 + t0), vec3<f32>(0.0)));
+    let t2 = 2.0 * c * a;
+    let rs = (t1 - t2) / max(t1 + t2, vec3<f32>(1e-30));
+    let t3 = c2 * a2b2 + vec3<f32>(s2 * s2);
+    let t4 = t2 * s2;
+    let rp = rs * (t3 - t4) / max(t3 + t4, vec3<f32>(1e-30));
+    return 0.5 * (rp + rs);
+}
+
 // Whether the material's microfacets follow Beckmann's distribution (else GGX's).
 fn pbr_beckmann(m: Material) -> bool {
 #if BSDF_BECKMANN
@@ -636,7 +667,7 @@ fn pbr_glossy_albedo(b: Bsdf) -> vec3<f32> {
     let dielectric = (1.0 - m.metallic) * (b.fresnel + (1.0 - b.fresnel) * m.transmission * m.diffuse);
     var bound = select(vec3<f32>(0.0), dielectric, pbr_scatters(b, b.fix.z));
     if (b.fix.z > 0.0) {
-        bound += m.metallic * fresnel_schlick(m.diffuse, b.fix.z);
+        bound += m.metallic * pbr_metal_fresnel(m, b.fix.z);
     }
     return bound;
 }
@@ -649,7 +680,7 @@ fn pbr_continuation(b: Bsdf) -> f32 {
     let dielectric = (1.0 - m.metallic) * (b.fresnel + (1.0 - b.fresnel) * base);
     var bound = select(vec3<f32>(0.0), dielectric, pbr_scatters(b, b.fix.z));
     if (b.fix.z > 0.0) {
-        bound += m.metallic * fresnel_schlick(base, b.fix.z);
+        bound += m.metallic * pbr_metal_fresnel(m, b.fix.z);
     }
     return clamp(max_component(bound), 0.0, 1.0);
 }
@@ -697,7 +728,7 @@ fn pbr_spec_weights(b: Bsdf, outside: bool, cos_h: f32, f: f32) -> vec2<f32> {
     let m = b.m;
     var reflected = (1.0 - m.metallic) * f;
     if (outside) {
-        reflected += m.metallic * luminance(fresnel_schlick(m.diffuse, cos_h));
+        reflected += m.metallic * luminance(pbr_metal_fresnel(m, cos_h));
     }
     let refracted = (1.0 - m.metallic) * m.transmission * luminance(m.diffuse) * (1.0 - f);
     return vec2<f32>(reflected, refracted);
@@ -707,7 +738,7 @@ fn pbr_spec_weights(b: Bsdf, outside: bool, cos_h: f32, f: f32) -> vec2<f32> {
 fn pbr_spec_color(b: Bsdf, outside: bool, cos_h: f32, f: f32) -> vec3<f32> {
     var c = vec3<f32>((1.0 - b.m.metallic) * f);
     if (outside) {
-        c += b.m.metallic * fresnel_schlick(b.m.diffuse, cos_h);
+        c += b.m.metallic * pbr_metal_fresnel(b.m, cos_h);
     }
     return c;
 }

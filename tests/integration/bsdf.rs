@@ -588,6 +588,58 @@ fn white_furnace() {
     }
 }
 
+/// The unpolarised Fresnel reflectance of a conductor of index eta + i k at incidence cosine
+/// `c`, from the s- and p-polarised amplitudes of complex arithmetic (independent of the
+/// shader's real-valued form).
+fn conductor_reflectance(c: f64, eta: f64, k: f64) -> f64 {
+    // Complex numbers as (re, im).
+    let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
+    let div = |a: (f64, f64), b: (f64, f64)| {
+        let d = b.0 * b.0 + b.1 * b.1;
+        ((a.0 * b.0 + a.1 * b.1) / d, (a.1 * b.0 - a.0 * b.1) / d)
+    };
+    let sqrt = |a: (f64, f64)| {
+        let r = (a.0 * a.0 + a.1 * a.1).sqrt();
+        (((r + a.0) / 2.0).sqrt(), ((r - a.0) / 2.0).sqrt().copysign(a.1))
+    };
+    let n = (eta, k);
+    let n2 = mul(n, n);
+    // cos of the transmitted angle: sqrt(1 - sin^2 / n^2).
+    let s2 = div((1.0 - c * c, 0.0), n2);
+    let ct = sqrt((1.0 - s2.0, -s2.1));
+    let nct = mul(n, ct);
+    let nc = (n.0 * c, n.1 * c);
+    let rs = div((c - nct.0, -nct.1), (c + nct.0, nct.1));
+    let rp = div((nc.0 - ct.0, nc.1 - ct.1), (nc.0 + ct.0, nc.1 + ct.1));
+    0.5 * (rs.0 * rs.0 + rs.1 * rs.1 + rp.0 * rp.0 + rp.1 * rp.1)
+}
+
+#[test]
+fn smooth_conductors_reflect_their_exact_fresnel_times_their_tint() {
+    // Mitsuba's aluminium (VeachAjar's floor) tinted 0.8, 0.6, 0.4: the delta reflection's
+    // weight f cos / pdf is the tint times the conductor's reflectance at the angle, exactly.
+    let (eta, k) = ([1.65746, 0.880369, 0.521229], [9.22387, 6.26952, 4.837]);
+    let tint = [0.8, 0.6, 0.4];
+    let m = format!(
+        "(pbr: (base_color: {tint:?}, metallic: 1.0, roughness: 0.0, conductor: Some((eta: {eta:?}, k: {k:?}))))"
+    )
+    .replace('[', "(")
+    .replace(']', ")");
+    let s = material_scene(&m);
+    for cos in [1.0f64, 0.5, 0.1] {
+        let fix = [(1.0 - cos * cos).sqrt() as f32, 0.0, cos as f32];
+        let (mean, _) = mean_weight(&sample(&s, fix, false, Part::Whole, 1000));
+        for c in 0..3 {
+            let want = tint[c] * conductor_reflectance(cos, eta[c], k[c]);
+            assert!(
+                (mean[c] - want).abs() < 1e-4 * want,
+                "cos {cos} channel {c}: {} where the conductor reflects {want}",
+                mean[c]
+            );
+        }
+    }
+}
+
 #[test]
 fn white_plastic_reflects_everything() {
     // Mitsuba's smooth plastic with a white base (linear): the coating reflects F(cos_o), and

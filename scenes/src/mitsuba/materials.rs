@@ -6,7 +6,7 @@
 
 use super::textures::Images;
 use super::xml::{Color, Context, Props, Result};
-use crate::model::{Material, Microfacet, Pbr, Plastic};
+use crate::model::{Conductor, Material, Microfacet, Pbr, Plastic};
 use crate::texture::{Texture, TextureRef};
 use roxmltree::Node;
 
@@ -112,14 +112,15 @@ impl Materials {
                 })
             }
             "conductor" | "roughconductor" => {
-                let f0 = conductor_f0(ctx, &props)?;
+                let conductor = conductor_index(ctx, &props)?;
                 let (tint, texture) = self.tint(ctx, &props, "specular_reflectance")?;
                 let (roughness, distribution) = roughness(ctx, &props, kind == "roughconductor")?;
                 let mut p = Pbr {
-                    base_color: std::array::from_fn(|i| (f0[i] * tint[i]).clamp(0.0, 1.0)),
+                    base_color: tint.map(|t| t.clamp(0.0, 1.0)),
                     metallic: 1.0,
                     roughness,
                     distribution,
+                    conductor: Some(conductor),
                     ..Default::default()
                 };
                 p.textures.base_color = texture;
@@ -421,9 +422,13 @@ fn roughness(ctx: &mut Context, props: &Props, rough: bool) -> Result<(f32, Micr
     Ok((alpha.sqrt().min(1.0), distribution))
 }
 
-/// A conductor's reflectance at normal incidence, from `eta` and `k` or its `material`
-/// name (Mitsuba 3's default "none" is a perfect mirror).
-fn conductor_f0<'a, 'i>(ctx: &mut Context<'a, 'i>, props: &Props<'a, 'i>) -> Result<[f32; 3]> {
+/// A conductor's complex index of refraction, from `eta` and `k` (over `ext_eta`) or its
+/// `material` name (Mitsuba 3's default "none" is a perfect mirror: (0, 0)).
+fn conductor_index<'a, 'i>(ctx: &mut Context<'a, 'i>, props: &Props<'a, 'i>) -> Result<Conductor> {
+    const MIRROR: Conductor = Conductor {
+        eta: [0.0; 3],
+        k: [0.0; 3],
+    };
     let rgb = |ctx: &mut Context<'a, 'i>, name: &str| -> Result<Option<[f32; 3]>> {
         match props.color(ctx, name)? {
             Some(Color::Rgb(c)) => Ok(Some(c)),
@@ -436,7 +441,7 @@ fn conductor_f0<'a, 'i>(ctx: &mut Context<'a, 'i>, props: &Props<'a, 'i>) -> Res
         _ => {
             let name = props.string(ctx, "material")?.unwrap_or_else(|| "none".into());
             if name == "none" {
-                return Ok([1.0; 3]);
+                return Ok(MIRROR);
             }
             match CONDUCTORS.iter().find(|(n, ..)| n.eq_ignore_ascii_case(&name)) {
                 Some((_, eta, k)) => (*eta, *k),
@@ -445,15 +450,16 @@ fn conductor_f0<'a, 'i>(ctx: &mut Context<'a, 'i>, props: &Props<'a, 'i>) -> Res
                         props.node(),
                         format!("the conductor '{name}' is not known: rendered as a perfect mirror"),
                     );
-                    return Ok([1.0; 3]);
+                    return Ok(MIRROR);
                 }
             }
         }
     };
-    Ok(std::array::from_fn(|i| {
-        let (n, k) = (eta[i], k[i]);
-        ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k)
-    }))
+    let ext = ior(ctx, props, "ext_eta", 1.0)?;
+    Ok(Conductor {
+        eta: eta.map(|n| n / ext),
+        k: k.map(|k| k / ext),
+    })
 }
 
 #[cfg(test)]
@@ -510,14 +516,17 @@ mod tests {
         assert!((p.ior - 1.333 / 1.000277).abs() < 1e-5 && (p.roughness - 0.1f32.sqrt()).abs() < 1e-6);
         // Mitsuba's default distribution is Beckmann's.
         assert_eq!(p.distribution, Microfacet::Beckmann);
-        // VeachBidir's lamp: F0 from eta and k, Beckmann as the file says, without warning.
+        // VeachBidir's lamp: eta and k as the file gives them (the exact conductor Fresnel,
+        // white tint), Beckmann as the file says, without warning.
         let (m, w) = convert(
             "<bsdf type=\"roughconductor\"><float name=\"alpha\" value=\"0.25\"/><string name=\"distribution\" value=\"beckmann\"/>\
              <rgb name=\"eta\" value=\"2.8656, 2.11918, 1.94008\"/><rgb name=\"k\" value=\"3.03233, 2.05611, 1.61629\"/></bsdf>",
         );
         let p = m.unwrap().pbr.unwrap();
         assert_eq!((p.metallic, p.roughness), (1.0, 0.5));
-        assert!((p.base_color[0] - 0.52513).abs() < 1e-4, "{:?}", p.base_color);
+        assert_eq!(p.base_color, [1.0; 3]);
+        let c = p.conductor.unwrap();
+        assert_eq!((c.eta[0], c.k[2]), (2.8656, 1.61629));
         assert_eq!(p.distribution, Microfacet::Beckmann);
         assert!(w.is_empty(), "{w:?}");
         let (m, w) = convert("<bsdf type=\"roughconductor\"><string name=\"distribution\" value=\"ggx\"/></bsdf>");

@@ -233,7 +233,7 @@ mod tests {
     }
 
     #[test]
-    fn a_textured_conductor_reflectance_scales_f0() {
+    fn a_textured_conductor_reflectance_tints_its_fresnel() {
         // VeachAjar's door handle: aluminium times a checkerboard.
         let (p, textures, warnings) = convert(
             "<bsdf type=\"roughconductor\"><float name=\"alpha\" value=\"0.1\"/>\
@@ -243,18 +243,17 @@ mod tests {
              <rgb name=\"eta\" value=\"1.65746, 0.880369, 0.521229\"/><rgb name=\"k\" value=\"9.22387, 6.26952, 4.837\"/></bsdf>",
         );
         assert!(warnings.is_empty(), "{warnings:?}");
-        // F0 = ((eta - 1)^2 + k^2) / ((eta + 1)^2 + k^2) per channel, computed in f64.
-        let f0 = |n: f64, k: f64| ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
-        let want = [f0(1.65746, 9.22387), f0(0.880369, 6.26952), f0(0.521229, 4.837)];
-        for (got, want) in p.base_color.iter().zip(want) {
-            assert!((*got as f64 - want).abs() < 1e-5, "{:?} for {want:?}", p.base_color);
-        }
+        // The texture is the tint of the conductor's own Fresnel (Mitsuba multiplies the two):
+        // a white factor, the complex index kept.
+        assert_eq!(p.base_color, [1.0; 3]);
+        let c = p.conductor.unwrap();
+        assert_eq!((c.eta, c.k), ([1.65746, 0.880369, 0.521229], [9.22387, 6.26952, 4.837]));
         assert_eq!(p.metallic, 1.0);
         let r = p.textures.base_color.unwrap();
         assert_eq!(r.transform, [[20.0, 0.0, 0.0], [0.0, 80.0, 0.0]]);
         assert_eq!(textures[r.texture as usize].texels[..2], [0xffcc_cccc, 0xff33_3333]);
-        // A texture type the importer does not know: 0.5 times F0 (Mitsuba 3's default
-        // conductor is a perfect mirror, F0 = 1), warned.
+        // A texture type the importer does not know: a tint of 0.5 on Mitsuba 3's default
+        // conductor, a perfect mirror, warned.
         let (p, _, warnings) =
             convert("<bsdf type=\"conductor\"><texture name=\"specular_reflectance\" type=\"voronoi\"/></bsdf>");
         assert_eq!((p.base_color, p.textures.base_color), ([0.5; 3], None));
