@@ -40,6 +40,9 @@ pub mod material_flags {
     /// A PBR metal's Fresnel is a conductor's of complex index `mirror` + i `phong`, tinted by
     /// the base colour (else Schlick's from the base colour).
     pub const CONDUCTOR: u32 = 128;
+    /// The PBR microfacets' masking-shadowing is the product of the two directions' maskings
+    /// (Mitsuba's) instead of height-correlated (glTF's).
+    pub const SMITH_SEPARABLE: u32 = 256;
 }
 
 /// Primitive kinds, as `Primitive::kind` stores them.

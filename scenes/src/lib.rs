@@ -664,7 +664,11 @@ fn pbr_model_flags(p: &model::Pbr) -> u32 {
     } else {
         0
     };
-    beckmann | plastic | conductor
+    let separable = match p.masking {
+        model::Masking::HeightCorrelated => 0,
+        model::Masking::Separable => gpu::material_flags::SMITH_SEPARABLE,
+    };
+    beckmann | plastic | conductor | separable
 }
 
 /// The largest coordinate (or sphere radius) a shape may have: as far as a ray travels

@@ -170,6 +170,9 @@ pub struct Pbr {
     /// The microfacet distribution of the specular layer.
     #[serde(default)]
     pub distribution: Microfacet,
+    /// Smith's masking-shadowing of the microfacets.
+    #[serde(default)]
+    pub masking: Masking,
     /// Mitsuba's `plastic` and `roughplastic`: the diffuse base's internal scattering.
     #[serde(default)]
     pub plastic: Option<Plastic>,
@@ -211,6 +214,16 @@ pub enum Microfacet {
     Ggx,
     /// Beckmann-Spizzichino (Mitsuba's default).
     Beckmann,
+}
+
+/// How a microfacet surface masks and shadows a pair of directions.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+pub enum Masking {
+    /// 1 / (1 + Lambda(o) + Lambda(i)) (glTF's).
+    #[default]
+    HeightCorrelated,
+    /// G1(o) G1(i) (Mitsuba's).
+    Separable,
 }
 
 /// Mitsuba's plastic: a diffuse base of reflectance `base_color` under a smooth or rough
@@ -256,6 +269,7 @@ impl Default for Pbr {
             ior: default_ior(),
             thin_walled: false,
             distribution: Microfacet::Ggx,
+            masking: Masking::HeightCorrelated,
             plastic: None,
             conductor: None,
             emission: [0.0; 3],

@@ -581,8 +581,12 @@ fn pbr_g1(b: Bsdf, w: vec3<f32>) -> f32 {
     return 1.0 / (1.0 + pbr_lambda(b, w));
 }
 
-// Height-correlated masking-shadowing of the pair `o`, `i` (either side of the surface).
+// Masking-shadowing of the pair `o`, `i` (either side of the surface): height-correlated
+// (glTF's), or the product of the two maskings (MATERIAL_SMITH_SEPARABLE: Mitsuba's).
 fn pbr_g2(b: Bsdf, o: vec3<f32>, i: vec3<f32>) -> f32 {
+    if ((b.m.flags & MATERIAL_SMITH_SEPARABLE) != 0u) {
+        return pbr_g1(b, o) * pbr_g1(b, i);
+    }
     return 1.0 / (1.0 + pbr_lambda(b, o) + pbr_lambda(b, i));
 }
 

@@ -121,6 +121,7 @@ const MATERIAL_BECKMANN: u32 = 16u;     // PBR microfacets of Beckmann's distrib
 const MATERIAL_PLASTIC: u32 = 32u;      // Mitsuba's plastic: the diffuse base's internal scattering
 const MATERIAL_PLASTIC_NONLINEAR: u32 = 64u;
 const MATERIAL_CONDUCTOR: u32 = 128u;   // PBR metal of a complex index: eta in `mirror`, k in `phong`
+const MATERIAL_SMITH_SEPARABLE: u32 = 256u; // PBR masking-shadowing G1(o) G1(i) (Mitsuba's)
 
 // One material slot's texture: its image at texels[offset ..] (width x height, rows from the
 // top, RGBA8 with R in the low byte), sampled at uv' = (dot(row0, (u, v, 1)),

@@ -808,6 +808,7 @@ fn reflection_is_reciprocal_and_pdfs_are_consistent() {
         "(pbr: (base_color: (0.7, 0.8, 0.9), metallic: 0.3, roughness: 0.5, transmission: 0.5))",
         "(diffuse: (0.2, 0.3, 0.4), phong: (0.5, 0.5, 0.5), phong_exponent: 20.0)",
         "(pbr: (base_color: (0.9, 0.6, 0.3), metallic: 1.0, roughness: 0.3, distribution: Beckmann))",
+        "(pbr: (base_color: (0.9, 0.6, 0.3), metallic: 1.0, roughness: 0.3, masking: Separable))",
         "(pbr: (base_color: (0.2, 0.5, 0.8), roughness: 0.5, distribution: Beckmann, plastic: Some((nonlinear: true))))",
     ] {
         check_pairs(m, Part::Whole, 1.0, 1.0, 1.5);

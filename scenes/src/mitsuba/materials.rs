@@ -6,7 +6,7 @@
 
 use super::textures::Images;
 use super::xml::{Color, Context, Props, Result};
-use crate::model::{Conductor, Material, Microfacet, Pbr, Plastic};
+use crate::model::{Conductor, Masking, Material, Microfacet, Pbr, Plastic};
 use crate::texture::{Texture, TextureRef};
 use roxmltree::Node;
 
@@ -106,6 +106,7 @@ impl Materials {
                     transmission: 1.0,
                     roughness,
                     distribution,
+                    masking: Masking::Separable,
                     ior,
                     thin_walled: kind == "thindielectric",
                     ..Default::default()
@@ -120,6 +121,7 @@ impl Materials {
                     metallic: 1.0,
                     roughness,
                     distribution,
+                    masking: Masking::Separable,
                     conductor: Some(conductor),
                     ..Default::default()
                 };
@@ -137,6 +139,7 @@ impl Materials {
                 p.ior = ior;
                 p.roughness = roughness;
                 p.distribution = distribution;
+                p.masking = Masking::Separable;
                 p.plastic = Some(Plastic { nonlinear });
                 m
             }
