@@ -11,14 +11,21 @@ struct CameraRay {
     direction: vec3<f32>,
 }
 
-// Two uniform numbers for a point of the lens, drawn from `rng` only with THIN_LENS (a
-// pinhole draws none: its random streams stay as they were).
+// Two uniform numbers for a point of the lens, drawn from `rng` only for a lens (a pinhole
+// draws none, whatever the kernel's flags: its random streams stay as they were).
 fn camera_lens_sample(rng: ptr<function, u32>) -> vec2<f32> {
 #if THIN_LENS
-    return rng_vec2(rng);
-#else
-    return vec2<f32>(0.0);
+    if (camera_has_lens()) {
+        return rng_vec2(rng);
+    }
 #endif
+    return vec2<f32>(0.0);
+}
+
+// Whether the camera is a thin lens (kernels with every feature compiled in also render
+// pinholes).
+fn camera_has_lens() -> bool {
+    return camera.lens_radius > 0.0;
 }
 
 // The point of the lens for `lens` (uniform over the disk; the camera's position for a pinhole).
@@ -35,12 +42,13 @@ fn camera_lens_point(lens: vec2<f32>) -> vec3<f32> {
 fn camera_ray(x: f32, y: f32, lens: vec2<f32>) -> CameraRay {
     let d = camera_direction(x, y);
 #if THIN_LENS
-    let focus = camera.position + d * (camera.focus_distance / dot(d, camera.forward));
-    let origin = camera_lens_point(lens);
-    return CameraRay(origin, normalize(focus - origin));
-#else
-    return CameraRay(camera.position, d);
+    if (camera_has_lens()) {
+        let focus = camera.position + d * (camera.focus_distance / dot(d, camera.forward));
+        let origin = camera_lens_point(lens);
+        return CameraRay(origin, normalize(focus - origin));
+    }
 #endif
+    return CameraRay(camera.position, d);
 }
 
 // The unit direction through raster position (x, y): (0, 0) is the top-left corner.
@@ -84,11 +92,12 @@ fn camera_raster(p: vec3<f32>, lens_point: vec3<f32>) -> vec3<f32> {
     }
     // The pinhole's direction to where the ray crosses the plane in focus (d itself for a
     // pinhole), over its cosine to the view direction.
+    var through = d / cos_view;
 #if THIN_LENS
-    let focus = lens_point + d * (camera.focus_distance / cos_view) - camera.position;
-    let through = focus / dot(focus, camera.forward);
-#else
-    let through = d / cos_view;
+    if (camera_has_lens()) {
+        let focus = lens_point + d * (camera.focus_distance / cos_view) - camera.position;
+        through = focus / dot(focus, camera.forward);
+    }
 #endif
     let r2 = dot(camera.right, camera.right);
     let u2 = dot(camera.up, camera.up);
