@@ -17,6 +17,8 @@ use crate::common::{Rendered, largest_relative_difference, render};
 use crate::frames::{Frames, render_frames, render_frames_with};
 use lightgraph::render::{LoadedScene, load_scene};
 use lightgraph_engine::ConstValue;
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex, OnceLock};
 
 const FRAMES: u32 = 48;
 const SIZE: u32 = 32;
@@ -46,9 +48,16 @@ fn photon_frames(scene: &LoadedScene, graph: &str, layout: &str, r0: f32, alpha:
     render_frames_with(scene, graph, layout, (SIZE, 16, FRAMES, seed, BLOCKS), &constants)
 }
 
-/// Path tracing with 32 samples per pixel per frame: the reference.
-fn path_traced(scene: &LoadedScene) -> Frames {
-    render_frames(scene, "pt", "NaivePTsk", SIZE, 32, FRAMES, 17, BLOCKS)
+/// Path tracing with 32 samples per pixel per frame: the reference, rendered once per scene
+/// for the tests of all three estimators (the same seed gives the same frames).
+fn path_traced(scene: &LoadedScene) -> Arc<Frames> {
+    static REFERENCES: OnceLock<Mutex<BTreeMap<String, Arc<Frames>>>> = OnceLock::new();
+    let references = REFERENCES.get_or_init(Default::default);
+    // Held while rendering: a second test on the same scene waits for the first's reference.
+    let mut map = references.lock().unwrap_or_else(|e| e.into_inner());
+    map.entry(scene.name.clone())
+        .or_insert_with(|| Arc::new(render_frames(scene, "pt", "NaivePTsk", SIZE, 32, FRAMES, 17, BLOCKS)))
+        .clone()
 }
 
 /// Checks (1), (2) and (4) of the module comment for `graph` on `scene`, and (3) when
@@ -88,13 +97,18 @@ fn converges_on(scene_name: &str, graph: &str, layout: &str, unbiased_at_small_r
     );
 }
 
-/// The diffuse box, where the bias at radius 0.025 is within the noise, and the glossy box
-/// with a background, where light through the opening meets the walls' outer sides within
-/// the radius of their inner sides near the edges (a bias that shrinks with the radius, still
-/// some 10% in the top corners at 0.025), so only (1), (2) and (4) hold there.
+/// The diffuse box, where the bias at radius 0.025 is within the noise, and, for PPM, the
+/// glossy box with a background, where light through the opening meets the walls' outer sides
+/// within the radius of their inner sides near the edges (a bias that shrinks with the radius,
+/// still some 10% in the top corners at 0.025), so only (1), (2) and (4) hold there. SPPM and
+/// PBPM gather the same photons with the same radius rule, so the glossy box is PPM's alone
+/// (the CI's time; `lightgraph verify`'s tests compare SPPM and PBPM with the other estimators
+/// on the glossy boxes).
 fn converges_to_path_tracing(graph: &str, layout: &str) {
     converges_on("cornell-diffuse", graph, layout, true);
-    converges_on("cornell-glossy-background", graph, layout, false);
+    if graph == "ppm" {
+        converges_on("cornell-glossy-background", graph, layout, false);
+    }
 }
 
 #[test]

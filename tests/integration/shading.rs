@@ -62,7 +62,8 @@ fn through_a_thin_lens_every_estimator_sees_the_tilted_square_alike() {
 }
 
 /// Every estimator's mean over the tilted square of `scene` (seen through `camera`) against
-/// its analytic radiance.
+/// its analytic radiance; through a lens, the merging estimators but VCM are left out (their
+/// camera rays are VCM's, and they take no lens connections).
 fn check_tilted_square(scene: &LoadedScene, camera: &str) {
     // albedo / pi * E * (l . ns), see the scene file.
     let cosine = (30f64.to_radians().cos() - 30f64.to_radians().sin()) / 2f64.sqrt();
@@ -70,6 +71,9 @@ fn check_tilted_square(scene: &LoadedScene, camera: &str) {
     let size = 32;
     let merging = [("PM_RADIUS", ConstValue::F32(0.03))];
     for &(graph, layout, frames) in ESTIMATORS {
+        if camera != "pinhole" && matches!(graph, "ppm" | "sppm" | "pbpm") {
+            continue;
+        }
         let pm = matches!(graph, "ppm" | "sppm" | "pbpm" | "vcm");
         let constants: &[(&str, ConstValue)] = if pm { &merging } else { &[] };
         let r = render(scene, graph, layout, (size, size), 4, frames, 5, constants);
