@@ -4,29 +4,12 @@
 //! pixels); and it requires that standard error to be small (under 1.5% of the value), so
 //! the check has the power to catch a bias of a few percent.
 
-use crate::common::{data, region, render};
+use crate::common::{assert_analytic, data, region, render};
 use lightgraph::render::load_scene;
 
+/// The module's check: within 3 standard errors (see the module comment).
 fn check(what: &str, mean: [f64; 3], se: [f64; 3], expected: [f64; 3]) {
-    for c in 0..3 {
-        eprintln!(
-            "{what} channel {c}: {:.5} +- {:.5} (expected {:.5})",
-            mean[c], se[c], expected[c]
-        );
-        assert!(
-            se[c] < 0.015 * expected[c],
-            "{what}: standard error {} too large to test {}",
-            se[c],
-            expected[c]
-        );
-        assert!(
-            (mean[c] - expected[c]).abs() < 3.0 * se[c],
-            "{what} channel {c}: {} differs from {} by more than 3 standard errors ({})",
-            mean[c],
-            expected[c],
-            se[c]
-        );
-    }
+    assert_analytic(what, mean, se, expected, 3.0, 0.0);
 }
 
 /// The pixels whose whole footprint shows the sphere: all four corner rays hit it.

@@ -233,3 +233,30 @@ impl SplitMix64 {
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     }
 }
+
+/// Asserts that a region's per-channel `mean` (standard error `se`) is the analytic
+/// `expected` within `z` standard errors plus `rounding` of the value (float rounding, for
+/// renders with next to no noise), and that the standard error is under 1.5% of the value, so
+/// that the check has the power to see a bias of a few percent.
+pub fn assert_analytic(what: &str, mean: [f64; 3], se: [f64; 3], expected: [f64; 3], z: f64, rounding: f64) {
+    for c in 0..3 {
+        eprintln!(
+            "{what} channel {c}: {:.5} +- {:.5} (expected {:.5})",
+            mean[c], se[c], expected[c]
+        );
+        assert!(
+            se[c] < 0.015 * expected[c],
+            "{what}: standard error {} too large to test {}",
+            se[c],
+            expected[c]
+        );
+        let tolerance = z * se[c] + rounding * expected[c];
+        assert!(
+            (mean[c] - expected[c]).abs() < tolerance,
+            "{what} channel {c}: {} differs from {} by more than {z} standard errors ({}) and rounding",
+            mean[c],
+            expected[c],
+            se[c]
+        );
+    }
+}

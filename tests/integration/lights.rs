@@ -3,7 +3,7 @@
 //! KHR_lights_punctual import, environment maps and their errors.
 
 use crate::chi2::{SphereBins, goodness_of_fit, pearson, significance};
-use crate::common::{data, region, render};
+use crate::common::{assert_analytic, data, region, render};
 use crate::probe::{probe, scene};
 use lightgraph::render::LoadedScene;
 use lightgraph_engine::ConstValue;
@@ -252,25 +252,7 @@ fn assert_lambertian_radiance(what: &str, scene: &LoadedScene, expected: [f64; 3
     let r = render(scene, "pt", "NaivePTsk", (16, 16), 16, 16, 5, &[]);
     let (mean, se, n) = region(&r.image, |_, _| true);
     assert_eq!(n, 256);
-    for c in 0..3 {
-        eprintln!(
-            "{what} channel {c}: {:.5} +- {:.5} (expected {:.5})",
-            mean[c], se[c], expected[c]
-        );
-        assert!(
-            se[c] < 0.015 * expected[c],
-            "{what} channel {c}: standard error {} too large to test {}",
-            se[c],
-            expected[c]
-        );
-        assert!(
-            (mean[c] - expected[c]).abs() < 4.0 * se[c],
-            "{what} channel {c}: {} ± {}, expected {}",
-            mean[c],
-            se[c],
-            expected[c]
-        );
-    }
+    assert_analytic(what, mean, se, expected, 4.0, 0.0);
 }
 
 #[test]

@@ -5,7 +5,7 @@
 //! density estimation's), and a sphere made of triangles with the sphere's normals at its
 //! vertices renders as the analytic sphere does.
 
-use crate::common::{data, region, render};
+use crate::common::{assert_analytic, data, region, render};
 use lightgraph::render::{Image, LoadedScene, load_scene};
 use lightgraph_engine::ConstValue;
 use lightgraph_scenes::bvh::BvhKind;
@@ -80,28 +80,10 @@ fn check_tilted_square(scene: &LoadedScene, camera: &str) {
         // Merges reach a radius past the edges, where the density falls: keep away from them.
         let (mean, se, n) = region(&r.image, on_square(size, 0.1));
         assert!(n > 300, "{graph}: {n} pixels on the square");
-        for c in 0..3 {
-            eprintln!(
-                "{graph} ({camera}) channel {c}: {:.5} +- {:.5} (expected {:.5})",
-                mean[c], se[c], expected[c]
-            );
-            assert!(
-                se[c] < 0.015 * expected[c],
-                "{graph} ({camera}): standard error {} too large to test {}",
-                se[c],
-                expected[c]
-            );
-            // 4 standard errors (seven estimators, three channels: a false failure has odds
-            // of about 1 in 750), plus float rounding for PT, whose only noise is the jitter
-            // of a constant radiance.
-            let tolerance = 4.0 * se[c] + 1e-4 * expected[c];
-            assert!(
-                (mean[c] - expected[c]).abs() < tolerance,
-                "{graph} ({camera}) channel {c}: {} is not the tilted normal's {} (+- {tolerance})",
-                mean[c],
-                expected[c]
-            );
-        }
+        // 4 standard errors (seven estimators, three channels: a false failure has odds of
+        // about 1 in 750), plus float rounding for PT, whose only noise is the jitter of a
+        // constant radiance.
+        assert_analytic(&format!("{graph} ({camera})"), mean, se, expected, 4.0, 1e-4);
     }
 }
 
