@@ -31,7 +31,7 @@ fn camera_has_lens() -> bool {
 // The point of the lens for `lens` (uniform over the disk; the camera's position for a pinhole).
 fn camera_lens_point(lens: vec2<f32>) -> vec3<f32> {
 #if THIN_LENS
-    let disk = sample_concentric_disk(lens) * camera.lens_radius;
+    let disk = sample_unit_disk(lens) * camera.lens_radius;
     return camera.position + disk.x * normalize(camera.right) + disk.y * normalize(camera.up);
 #else
     return camera.position;

@@ -36,22 +36,3 @@ fn sample_uniform_triangle(u: vec2<f32>) -> vec2<f32> {
     let s = sqrt(u.x);
     return vec2<f32>(1.0 - s, u.y * s);
 }
-
-// A point uniform over the unit disk (Shirley and Chiu's concentric map: the square's
-// squares to the disk's rings, so that strata stay compact).
-fn sample_concentric_disk(u: vec2<f32>) -> vec2<f32> {
-    let o = 2.0 * u - vec2<f32>(1.0);
-    if (o.x == 0.0 && o.y == 0.0) {
-        return vec2<f32>(0.0);
-    }
-    var r: f32;
-    var theta: f32;
-    if (abs(o.x) > abs(o.y)) {
-        r = o.x;
-        theta = 0.25 * PI * (o.y / o.x);
-    } else {
-        r = o.y;
-        theta = 0.5 * PI - 0.25 * PI * (o.x / o.y);
-    }
-    return r * vec2<f32>(cos(theta), sin(theta));
-}
