@@ -13,6 +13,7 @@ pub mod cli;
 #[cfg(feature = "mpi")]
 pub mod cluster;
 pub mod compare;
+pub mod interrupt;
 pub mod metrics;
 pub mod multi;
 pub mod output;

@@ -15,11 +15,14 @@ fn main() -> ExitCode {
         // SAFETY: set before any thread starts; scene loading reads it.
         unsafe { std::env::set_var("LIGHTGRAPH_ASSETS", dir) };
     }
+    if let Err(e) = lightgraph::interrupt::install() {
+        eprintln!("warning: SIGINT and SIGTERM will end runs without keeping their work: {e}");
+    }
     match cli.run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            ExitCode::from(lightgraph::interrupt::exit_code(&e))
         }
     }
 }

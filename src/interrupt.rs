@@ -1,0 +1,84 @@
+//! Interruptions: SIGINT (Ctrl-C) and SIGTERM (what Slurm and Kubernetes send before they
+//! stop a job) ask a long run to stop at the end of the frame in flight, keep what it has
+//! done and exit non-zero. A second signal of either kind ends the process at once.
+
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, OnceLock};
+
+/// A signal that asked the run to stop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Signal {
+    /// SIGINT (Ctrl-C).
+    Interrupt,
+    /// SIGTERM.
+    Terminate,
+}
+
+impl Signal {
+    /// The signal's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Signal::Interrupt => "SIGINT",
+            Signal::Terminate => "SIGTERM",
+        }
+    }
+
+    /// The exit status of a process the signal stopped (128 + its number, as shells report).
+    pub fn exit_code(self) -> u8 {
+        match self {
+            Signal::Interrupt => 130,
+            Signal::Terminate => 143,
+        }
+    }
+}
+
+/// The error a run returns when a signal stopped it after it kept its work: `what` says what
+/// was written.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted by {}: {what}", signal.name())]
+pub struct Interrupted {
+    /// The signal.
+    pub signal: Signal,
+    /// What the run kept (the files written).
+    pub what: String,
+}
+
+/// Which signal arrived: 0 none, 1 SIGINT, 2 SIGTERM.
+fn received() -> &'static Arc<AtomicUsize> {
+    static RECEIVED: OnceLock<Arc<AtomicUsize>> = OnceLock::new();
+    RECEIVED.get_or_init(|| Arc::new(AtomicUsize::new(0)))
+}
+
+/// Installs the handlers (once; later calls do nothing). Until then signals keep their
+/// default action, which ends the process.
+pub fn install() -> std::io::Result<()> {
+    static INSTALLED: OnceLock<()> = OnceLock::new();
+    if INSTALLED.get().is_some() {
+        return Ok(());
+    }
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let any = Arc::new(AtomicBool::new(false));
+    for (signal, value, code) in [(SIGINT, 1, 130), (SIGTERM, 2, 143)] {
+        // Registered first, so that it sees the flag before this signal sets it: only a
+        // second signal ends the process.
+        signal_hook::flag::register_conditional_shutdown(signal, code, any.clone())?;
+        signal_hook::flag::register_usize(signal, received().clone(), value)?;
+        signal_hook::flag::register(signal, any.clone())?;
+    }
+    let _ = INSTALLED.set(());
+    Ok(())
+}
+
+/// The signal that asked the run to stop, if one did.
+pub fn requested() -> Option<Signal> {
+    match received().load(Ordering::SeqCst) {
+        1 => Some(Signal::Interrupt),
+        2 => Some(Signal::Terminate),
+        _ => None,
+    }
+}
+
+/// The exit status for an error: a signal's status for [`Interrupted`], 1 otherwise.
+pub fn exit_code(error: &anyhow::Error) -> u8 {
+    error.downcast_ref::<Interrupted>().map_or(1, |i| i.signal.exit_code())
+}
