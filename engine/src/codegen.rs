@@ -22,6 +22,9 @@ pub struct CodegenContext<'a> {
     /// Whether appends to queues and compaction boundaries take one atomic per subgroup
     /// (the target has subgroup operations) instead of one per item.
     pub subgroup_appends: bool,
+    /// Whether a persistent thread takes at most its share of the items, ceil(items /
+    /// threads), instead of items until none is left (see [`crate::Target`]).
+    pub fair_shares: bool,
 }
 
 /// The words of a stored item a kernel moves through its slot, by index in the item's
@@ -447,7 +450,11 @@ impl CodegenContext<'_> {
     fn run_wrapper(&self, k: KernelId) -> String {
         let w = Wrapper::new(self, k);
         let (kp, chain, c) = (w.kp, w.chain, w.kp.chain);
-        let mut s = String::from("fn lg_run(lg_i: u32) {\n    lg_slot = lg_i;\n");
+        let mut s = String::new();
+        if self.resolved.control.persistent.contains_key(&c) {
+            s.push_str("var<workgroup> lg_wg_threads: array<atomic<u32>, 2>;\n");
+        }
+        s.push_str("fn lg_run(lg_i: u32) {\n    lg_slot = lg_i;\n");
         match &kp.root {
             Root::Queue(q) => {
                 let _ = writeln!(s, "    var it = lg_load_queue_{q}(lg_i);");
@@ -487,7 +494,9 @@ impl CodegenContext<'_> {
         s
     }
 
-    /// Persistent threads: take the next item whenever the current one is done.
+    /// Persistent threads: take the next item whenever the current one is done. Each thread
+    /// counts itself in `lg_wg_threads` (flushed by the entry point) when it starts and when
+    /// its loop ends as it should, so that a thread the driver stops early is seen.
     fn persistent_threads(&self, w: &Wrapper) -> String {
         let g = self.graph();
         let (chain, c) = (w.chain, w.kp.chain);
@@ -499,12 +508,23 @@ impl CodegenContext<'_> {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "    var it: {};\n    var alive = false;\n    var lg_iterations = 0u;\n    loop {{\n        if (!alive) {{",
+            "    var it: {};\n    var alive = false;\n    var lg_iterations = 0u;\n    atomicAdd(&lg_wg_threads[0], 1u);",
             chain.item
         );
+        let ended = "atomicAdd(&lg_wg_threads[1], 1u); break;";
+        let take = if self.fair_shares {
+            let _ = writeln!(
+                s,
+                "    let lg_items = {};\n    let lg_share = lg_items / LG_POOL + select(0u, 1u, lg_items % LG_POOL != 0u);\n    var lg_taken = 0u;",
+                w.items
+            );
+            format!("            if (lg_taken >= lg_share) {{ {ended} }}\n            lg_taken += 1u;\n")
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             s,
-            "            let index = atomicAdd(&lg_control[{}], 1u);\n            if (index >= {}) {{ break; }}",
+            "    loop {{\n        if (!alive) {{\n{take}            let index = atomicAdd(&lg_control[{}], 1u);\n            if (index >= {}) {{ {ended} }}",
             self.resolved.control.next[&c], w.items
         );
         let _ = writeln!(s, "            alive = {}(&it, frame.base + index);", w.start);
@@ -624,6 +644,12 @@ impl CodegenContext<'_> {
             "@compute @workgroup_size({wg})\nfn {}(@builtin(workgroup_id) lg_wid: vec3<u32>, @builtin(num_workgroups) lg_nwg: vec3<u32>, @builtin(local_invocation_index) lg_lid: u32) {{\n{parameters}    let lg_i = (lg_wid.y * lg_nwg.x + lg_wid.x) * {wg}u + lg_lid;\n    if (lg_i < {limit}) {{ lg_run(lg_i); }}",
             kp.name
         );
+        if let Some((started, ended)) = self.resolved.control.persistent.get(&kp.chain) {
+            let _ = writeln!(
+                s,
+                "    workgroupBarrier();\n    if (lg_lid == 0u) {{\n        atomicAdd(&lg_control[{started}], atomicLoad(&lg_wg_threads[0]));\n        atomicAdd(&lg_control[{ended}], atomicLoad(&lg_wg_threads[1]));\n    }}"
+            );
+        }
         if !self.graph().counters.is_empty() {
             s.push_str("    lg_flush(lg_lid);\n");
         }

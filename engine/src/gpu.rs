@@ -177,8 +177,18 @@ impl Gpu {
             capabilities: self.capabilities(),
             max_binding_bytes: self.limits.max_storage_buffer_binding_size,
             max_workgroups_per_dimension: self.limits.max_compute_workgroups_per_dimension,
+            fair_shares: self.caps_invocation_loops(),
+            // Below llvmpipe's cap on an invocation's iterations (an item's loop and the
+            // loops inside it count against it), so the engine's own cap is met first.
+            max_loop_iterations: if self.caps_invocation_loops() { 1 << 14 } else { 1 << 16 },
             ..Default::default()
         }
+    }
+
+    /// Whether the driver caps the loop iterations of a shader invocation: llvmpipe (lavapipe)
+    /// gives each invocation 65535 iterations over all its loops and then ends every loop.
+    pub fn caps_invocation_loops(&self) -> bool {
+        self.info.driver == "llvmpipe" || self.info.name.starts_with("llvmpipe")
     }
 
     /// Waits until the queue is idle.

@@ -43,6 +43,12 @@ pub struct Target {
     pub alias_transients: bool,
     /// Elements each thread of a scan operator handles (a tile is 256 times as many).
     pub scan_items: u32,
+    /// Whether persistent threads take at most their share of the items, ceil(items /
+    /// threads), each: for drivers that cap the loop iterations of an invocation (llvmpipe:
+    /// 65535, shared by all its loops), where a thread taking items until none is left passes
+    /// the cap whenever the others start late (a loaded CPU). Off on GPUs, where threads that
+    /// take more items balance the load.
+    pub fair_shares: bool,
 }
 
 impl Default for Target {
@@ -56,6 +62,7 @@ impl Default for Target {
             max_loop_iterations: 1 << 16,
             alias_transients: true,
             scan_items: crate::collective::SCAN_ITEMS,
+            fair_shares: false,
         }
     }
 }
@@ -162,6 +169,7 @@ impl Program {
             resolved: &begun,
             max_loop_iterations: target.max_loop_iterations,
             subgroup_appends: target.subgroups(),
+            fair_shares: target.fair_shares,
         };
         let mut reflection = ModuleSource::default();
         reflection.push("<generated prelude>", &ctx.prelude());
@@ -235,6 +243,7 @@ fn pass_kernels(
         resolved,
         max_loop_iterations: target.max_loop_iterations,
         subgroup_appends: target.subgroups(),
+        fair_shares: target.fair_shares,
     };
     let prelude = ctx.prelude();
     let mut kernels = Vec::new();

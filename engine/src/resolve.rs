@@ -102,6 +102,10 @@ pub struct ControlMap {
     pub op_overflow: BTreeMap<OpId, u32>,
     /// In-kernel loops stopped by the iteration cap.
     pub loop_capped: u32,
+    /// Per chain run by persistent threads: the threads that started and the threads that
+    /// ended their loop as it ends (no item left, or their share taken). A thread the driver
+    /// stopped early (an iteration cap, a watchdog) starts and never ends.
+    pub persistent: BTreeMap<ChainId, (u32, u32)>,
     /// Number of words.
     pub len: u32,
 }
@@ -207,6 +211,10 @@ fn control_map(plan: &Plan) -> ControlMap {
     }
     for k in plan.kernels.iter().filter(|k| k.regenerates) {
         control.next.insert(k.chain, word());
+    }
+    for k in plan.kernels.iter().filter(|k| k.regenerates && k.loop_in_kernel) {
+        let started = word();
+        control.persistent.insert(k.chain, (started, word()));
     }
     if plan.layout.regenerate_at.is_some() {
         for k in plan

@@ -6,6 +6,8 @@
 
 use std::path::Path;
 use std::process::{Command, ExitCode};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 const INSTALL: &str = "apt-get install -y --no-install-recommends mesa-vulkan-drivers libvulkan1";
 
@@ -96,6 +98,49 @@ fn cargo(args: &[&str], extra: &[String]) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// The tests of persistent threads (threads that take items until none is left) again, with
+/// a busy thread on every core: on a loaded CPU some threads start late and the others take
+/// more items, which on a driver that caps an invocation's loop iterations (llvmpipe) must
+/// neither lose work nor go unreported. Runs the ignored
+/// `persistent_thread_layouts_match_at_gpu_sizes` too.
+fn loaded_test() -> ExitCode {
+    let stop = Arc::new(AtomicBool::new(false));
+    let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+    let hogs: Vec<_> = (0..cores)
+        .map(|_| {
+            let stop = stop.clone();
+            std::thread::spawn(move || {
+                let mut x = 1u64;
+                while !stop.load(Ordering::Relaxed) {
+                    x = std::hint::black_box(x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1));
+                }
+            })
+        })
+        .collect();
+    eprintln!("xtask: the persistent-thread tests again, with {cores} busy threads (a loaded CPU)");
+    let result = cargo(
+        &[
+            "test",
+            "--workspace",
+            "--exclude",
+            "lightgraph-python",
+            "--release",
+            "--test",
+            "integration",
+            "--",
+            "--include-ignored",
+            "persistent_thread",
+            "lost_work::",
+        ],
+        &[],
+    );
+    stop.store(true, Ordering::Relaxed);
+    for hog in hogs {
+        let _ = hog.join();
+    }
+    result
 }
 
 /// The MPI test (`render --mpi` across 2 and 3 ranks), built with the `mpi` feature, where
@@ -202,7 +247,17 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     match command.as_str() {
-        "render" => cargo(&["run", "--release", "--package", "lightgraph", "--", "render"], rest),
+        "render" => {
+            // The default film is replaced on a second run; a named --out is protected.
+            let force = !rest
+                .iter()
+                .any(|a| a == "--out" || a.starts_with("--out=") || a == "--resume");
+            let mut args = vec!["run", "--release", "--package", "lightgraph", "--", "render"];
+            if force {
+                args.push("--force");
+            }
+            cargo(&args, rest)
+        }
         "test" => {
             let rust = cargo(
                 &["test", "--workspace", "--exclude", "lightgraph-python", "--release"],
@@ -210,6 +265,13 @@ fn main() -> ExitCode {
             );
             if rust != ExitCode::SUCCESS {
                 return rust;
+            }
+            // Before the MPI test, whose feature rebuilds the crate.
+            if rest.is_empty() {
+                let loaded = loaded_test();
+                if loaded != ExitCode::SUCCESS {
+                    return loaded;
+                }
             }
             match mpi_test(rest) {
                 ExitCode::SUCCESS => python_test(),

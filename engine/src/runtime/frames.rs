@@ -794,6 +794,7 @@ impl Instance<'_> {
         let words: &[u32] = bytemuck::cast_slice(&data[..layout.control_bytes as usize]);
         self.check_overflows(words)?;
         self.check_bounded_loops(&p)?;
+        self.check_loops_ended(words)?;
         let mut stats = FrameStats {
             host_iterations: p.host_iterations,
             loops_capped: words[self.program.resolved.control.loop_capped as usize],
@@ -813,6 +814,37 @@ impl Instance<'_> {
             stats.kernel_seconds = kernel_seconds(&self.kernels.timed_names, &p.timed, ticks, period);
         }
         Ok(Some(stats))
+    }
+
+    /// Work cut short is an error, never a darker image: an item whose in-kernel loop hit
+    /// the engine's iteration cap, or persistent threads that started and never ended their
+    /// loop (the driver stopped them: their items were cut short or never taken).
+    fn check_loops_ended(&self, words: &[u32]) -> Result<()> {
+        let control = &self.program.resolved.control;
+        let layout = &self.program.plan.layout_name;
+        let capped = words[control.loop_capped as usize];
+        if capped > 0 {
+            return Err(Error::Runtime(format!(
+                "layout '{layout}': {capped} items stopped at the cap of {} iterations of an in-kernel loop: a loop pass never finishes its item",
+                self.program.target.max_loop_iterations
+            )));
+        }
+        for (&c, &(started, ended)) in &control.persistent {
+            let (started, ended) = (words[started as usize], words[ended as usize]);
+            if started != ended {
+                let item = &self.program.plan.graph.chains[c].item;
+                let driver = if self.gpu.caps_invocation_loops() {
+                    "llvmpipe ends every loop of an invocation after 65535 iterations in all"
+                } else {
+                    "the driver stopped them early (a watchdog or an iteration cap)"
+                };
+                return Err(Error::Runtime(format!(
+                    "layout '{layout}': {} of {started} persistent threads over '{item}' never ended their loop, so their items were cut short or never taken: {driver}; the frames are not kept (a layout of one item per thread, e.g. an 'mk' layout, avoids it)",
+                    started - ended
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// An overflowed queue or an operator that met a key out of range is an error.
