@@ -45,6 +45,9 @@ pub struct Outcome {
     pub last_reduction_seconds: f64,
     /// Bytes each rank sent in a reduction.
     pub reduction_bytes: usize,
+    /// Whether a signal (SIGINT, SIGTERM) on some rank ended the run early: every rank
+    /// stopped after its block in flight, and the film holds what they rendered.
+    pub interrupted: bool,
 }
 
 /// What rank 0 learns at each reduction.
@@ -204,6 +207,10 @@ pub fn render_across<C: Communicator>(
     };
     let mut failure: Option<anyhow::Error> = None;
     for round in 1u32.. {
+        let interrupted_here = crate::interrupt::requested().is_some();
+        if interrupted_here {
+            worker.done = true;
+        }
         let snapshot = match worker.snapshot(place) {
             Ok(v) => v,
             Err(e) => {
@@ -212,15 +219,17 @@ pub fn render_across<C: Communicator>(
             }
         };
         let mut sums = vec![0.0; snapshot.len()];
-        let done_here = u32::from(worker.done || failure.is_some());
-        let mut done_ranks = 0u32;
+        // Ranks done, and ranks a signal stopped (all stop once one did).
+        let done_here = [u32::from(worker.done || failure.is_some()), u32::from(interrupted_here)];
+        let mut done_ranks = [0u32; 2];
         mpi::request::scope(|scope| {
             let films = if place.rank == 0 {
                 root.immediate_reduce_into_root(scope, &snapshot[..], &mut sums[..], SystemOperation::sum())
             } else {
                 root.immediate_reduce_into(scope, &snapshot[..], SystemOperation::sum())
             };
-            let done = world.immediate_all_reduce_into(scope, &done_here, &mut done_ranks, SystemOperation::sum());
+            let done =
+                world.immediate_all_reduce_into(scope, &done_here[..], &mut done_ranks[..], SystemOperation::sum());
             // Render on while the reductions complete, until the next round.
             while failure.is_none() && !worker.done && start.elapsed() < INTERVAL * round {
                 if let Err(e) = worker.render_block(run, place, budget, start) {
@@ -241,7 +250,12 @@ pub fn render_across<C: Communicator>(
                 rays_by_rank: &outcome.rays_by_rank,
             });
         }
-        if done_ranks as usize == place.ranks {
+        if done_ranks[1] > 0 {
+            // A signal on some rank: every rank's next snapshot is its last.
+            outcome.interrupted = true;
+            worker.done = true;
+        }
+        if done_ranks[0] as usize == place.ranks {
             break;
         }
         if worker.done || failure.is_some() {

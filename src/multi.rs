@@ -111,9 +111,10 @@ impl Claims {
     }
 
     /// Up to `n` frames (offsets from the run's first frame), or None when the budget is
-    /// spent or a thread failed.
+    /// spent, a thread failed or a signal asked the run to stop (the batches claimed before
+    /// still finish, so the film's frames stay contiguous).
     fn claim(&self, n: u64) -> Option<(u64, u64)> {
-        if self.stop.load(Ordering::Relaxed) {
+        if self.stop.load(Ordering::Relaxed) || crate::interrupt::requested().is_some() {
             return None;
         }
         match self.budget {

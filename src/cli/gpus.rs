@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::metrics::image_error;
 use lightgraph::multi::{Budget, Merging, Run, Share, render_on_gpus};
-use lightgraph::reference::{Reference, film_settings};
+use lightgraph::reference::Reference;
 use lightgraph::render::{LoadedScene, SessionOptions, load_graph, load_scene_with};
 use lightgraph_engine::Graph;
 use lightgraph_engine::ir::LayoutDecl;
@@ -85,7 +85,7 @@ impl Setup {
         let graph = load_graph(args.graph.name())?;
         let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
         let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
-        let opts = options(c, &scene, &graph.constants, args.seed)?;
+        let opts = options(c, &scene, &graph.constants, args.seed())?;
         Ok(Setup {
             scene,
             graph,
@@ -106,10 +106,9 @@ impl Setup {
         }
     }
 
-    /// An empty film with the run's settings.
-    pub fn film(&self, args: &RenderArgs) -> Reference {
-        let size = (self.opts.width, self.opts.height);
-        Reference::new(size, film_settings(args.common.scene(), &self.graph, &self.opts))
+    /// The run's film: `resumed` (its settings checked) or an empty one.
+    pub fn film(&self, args: &RenderArgs, resumed: Option<Reference>) -> Result<Reference> {
+        args.start_film(&self.graph, &self.opts, resumed)
     }
 }
 
@@ -130,7 +129,7 @@ pub fn budget(args: &RenderArgs) -> Budget {
 
 /// `lightgraph render --gpus`: the frames of one render shared by several GPUs, each claiming
 /// batches sized to its speed, added into one film.
-pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
+pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Reference>) -> Result<()> {
     let c = &args.common;
     let selectors = gpu_selectors(spec)?;
     let mut setup = Setup::load(args, "--gpus")?;
@@ -153,14 +152,25 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
         c.scene(),
         graph.name
     );
-    let mut film = setup.film(args);
+    let mut film = setup.film(args, resumed)?;
+    let out = args.out();
     let bar = progress_bar(args);
     let run = setup.run(args);
     let start = Instant::now();
     let pixels = (w as f64) * (h as f64);
     let (mut error, mut error_at) = (String::new(), None::<Instant>);
-    let mut view = args.tev.view(&args.out.display().to_string(), (w, h));
+    let mut view = args.tev.view(&out.display().to_string(), (w, h));
+    let frames_before = film.frames;
+    let (mut saved_at, mut checkpoint_error) = (Instant::now(), None);
     let (shares, merging) = render_on_gpus(&run, &selectors, budget(args), &mut film, |shares, film| {
+        if let Some(every) = args.checkpoint
+            && saved_at.elapsed() >= every
+        {
+            if let Err(e) = super::render::write_film(film, &out, args.exposure) {
+                checkpoint_error.get_or_insert(e);
+            }
+            saved_at = Instant::now();
+        }
         if let Some(r) = &reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
@@ -174,10 +184,13 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
         bar.set_message(progress_line(shares, film, pixels, secs, &error));
         bar.set_position(match args.time {
             Some(_) => start.elapsed().as_millis() as u64,
-            None => film.frames,
+            None => film.frames - frames_before,
         });
     })?;
     bar.finish();
+    if let Some(e) = checkpoint_error {
+        return Err(e);
+    }
     if let Some(v) = &mut view {
         v.show(&film.mean());
     }
@@ -188,12 +201,11 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
     adapters.dedup();
     film.info.insert("layout".into(), layout.clone());
     film.info.insert("adapter".into(), adapters.join(", "));
-    film.info
-        .insert("rays".into(), shares.iter().map(|s| s.rays).sum::<u64>().to_string());
-    film.seconds = seconds;
-    film.write(&args.out, "render")?;
-    let png = args.out.with_extension("png");
-    lightgraph::output::write_png(&png, &film.image(), args.exposure)?;
+    let rays_before = film.info.get("rays").and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
+    let rays = rays_before + shares.iter().map(|s| s.rays).sum::<u64>();
+    film.info.insert("rays".into(), rays.to_string());
+    film.seconds += seconds;
+    let png = super::render::write_film(&film, &out, args.exposure)?;
     if let Some(r) = &reference {
         let e = image_error(&film.mean(), r);
         eprintln!(
@@ -202,8 +214,14 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str) -> Result<()> {
         );
     }
     report_shares(&film, &shares, &merging, pixels);
-    println!("wrote {} and {}", args.out.display(), png.display());
-    Ok(())
+    println!("wrote {} and {}", out.display(), png.display());
+    super::film::stopped_by_signal(format!(
+        "{} and {} hold {} frames; `lightgraph render --resume {} --gpus ...` goes on",
+        out.display(),
+        png.display(),
+        film.frames,
+        out.display()
+    ))
 }
 
 /// The rates of a render on several GPUs on stderr: samples/s wall-clock over `film`, each

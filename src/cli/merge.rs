@@ -12,15 +12,20 @@ pub struct MergeArgs {
     /// constants and resolution, disjoint frame ranges.
     #[arg(required = true, num_args = 1..)]
     pub films: Vec<PathBuf>,
-    /// Output EXR; a PNG preview is written beside it.
+    /// Output EXR (it must end in .exr; an existing file is refused unless --force); a PNG
+    /// preview is written beside it.
     #[arg(long)]
     pub out: PathBuf,
+    /// Replace an existing --out.
+    #[arg(long)]
+    pub force: bool,
     /// Exposure of the PNG preview in stops.
     #[arg(long, default_value_t = 0.0)]
     pub exposure: f32,
 }
 
 pub fn merge(args: MergeArgs) -> Result<()> {
+    super::film::check_out(&args.out, args.force, None)?;
     let mut merged = Reference::read(&args.films[0])?;
     for path in &args.films[1..] {
         merged.merge(&Reference::read(path)?, path)?;

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod compare;
 pub mod explain;
 pub mod export;
+pub mod film;
 pub mod gpus;
 pub mod list;
 pub mod merge;

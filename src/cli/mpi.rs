@@ -8,19 +8,25 @@ use super::render::RenderArgs;
 use anyhow::{Result, anyhow};
 use indicatif::ProgressBar;
 use lightgraph::cluster::{place, rank_adapter, render_across};
+use lightgraph::reference::Reference;
 use lightgraph_engine::ConstValue;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::time::Instant;
 
-pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
+pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<()> {
     let universe = mpi::initialize().ok_or_else(|| anyhow!("MPI is initialised already"))?;
     let world = universe.world();
     let root = place(&world).rank == 0;
     let mut setup = Setup::load(args, "--mpi")?;
     share_measured(&world, &mut setup, args.common.adapter.as_deref());
     let (w, h) = (setup.opts.width, setup.opts.height);
-    let mut film = setup.film(args);
+    // The ranks render into an empty film; a resumed one takes it in at the end.
+    let mut film = setup.film(args, None)?;
+    if let Some(r) = &resumed {
+        setup.film(args, Some(r.clone()))?;
+    }
+    let out = args.out();
     let run = setup.run(args);
     let bar = if root {
         progress_bar(args)
@@ -29,7 +35,7 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     };
     let pixels = w as f64 * h as f64;
     let mut view = root
-        .then(|| args.tev.view(&args.out.display().to_string(), (w, h)))
+        .then(|| args.tev.view(&out.display().to_string(), (w, h)))
         .flatten();
     let start = Instant::now();
     let outcome = render_across(
@@ -63,7 +69,10 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     )?;
     bar.finish();
     if !root {
-        return Ok(());
+        return match outcome.interrupted {
+            true => super::film::stopped_by_signal("rank 0 writes the film".into()),
+            false => Ok(()),
+        };
     }
     if let Some(v) = &mut view {
         v.show(&film.mean());
@@ -75,9 +84,11 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
     film.info
         .insert("rays".into(), outcome.rays_by_rank.iter().sum::<u64>().to_string());
     film.seconds = seconds;
-    film.write(&args.out, "render")?;
-    let png = args.out.with_extension("png");
-    lightgraph::output::write_png(&png, &film.image(), args.exposure)?;
+    if let (Some(mut whole), Some(path)) = (resumed, &args.resume) {
+        whole.merge(&film, path)?;
+        film = whole;
+    }
+    let png = super::render::write_film(&film, &out, args.exposure)?;
     eprintln!(
         "{} frames, {} spp in {seconds:.2} s on {} ranks: {}samples/s wall-clock; frames by rank: {:?}",
         film.frames,
@@ -91,7 +102,20 @@ pub fn render_with_mpi(args: &RenderArgs) -> Result<()> {
         outcome.reduction_bytes as f64 / 1e6,
         1e3 * outcome.last_reduction_seconds
     );
-    println!("wrote {} and {}", args.out.display(), png.display());
+    println!("wrote {} and {}", out.display(), png.display());
+    if outcome.interrupted {
+        return super::film::stopped_by_signal(format!(
+            "{} holds {} frames ({}); `render --mpi --resume {}` goes on after the last",
+            out.display(),
+            film.frames,
+            film.ranges
+                .iter()
+                .map(|r| format!("{}..{}", r.0, r.1))
+                .collect::<Vec<_>>()
+                .join(", "),
+            out.display()
+        ));
+    }
     Ok(())
 }
 

@@ -2,6 +2,7 @@
 //! written as a reference EXR and resumable.
 
 use super::args::*;
+use super::film::{check_out, settings_from_film, stopped_by_signal};
 use super::gpus::gpu_selectors;
 use anyhow::{Result, bail};
 use clap::Args;
@@ -47,6 +48,10 @@ pub struct ReferenceArgs {
     /// written beside it.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Replace an existing --out (without it, an existing file is refused unless --resume
+    /// names it).
+    #[arg(long)]
+    pub force: bool,
     /// Write the reference every this often while rendering, so a long run that is stopped
     /// keeps its samples.
     #[arg(long, value_parser = humantime::parse_duration, default_value = "5m")]
@@ -80,24 +85,6 @@ fn first_frame(given: Option<u32>, film: &Reference) -> Result<u32> {
 /// How often the GPU's f32 sums are moved into the host's f64 ones.
 const ABSORB_EVERY: Duration = Duration::from_secs(2);
 
-/// Fills the settings a resumed reference has and `args` does not give.
-fn settings_from_resumed(args: &mut ReferenceArgs, r: &Reference) {
-    let c = &mut args.common;
-    let info = |k: &str| r.info.get(k).cloned().unwrap_or_default();
-    c.scene.get_or_insert_with(|| info("scene"));
-    args.graph.graph.get_or_insert_with(|| info("graph"));
-    c.res.get_or_insert(r.size);
-    c.spp
-        .get_or_insert_with(|| info("samples_per_frame").parse().unwrap_or(1));
-    args.seed
-        .get_or_insert_with(|| info("seed").parse().unwrap_or(REFERENCE_SEED));
-    if c.set.is_empty() && c.max_path_length.is_none() {
-        // The measured constants too: the resumed run renders the film's estimator.
-        let words = format!("{} {}", info("constants"), info("measured"));
-        c.set = words.split_whitespace().map(String::from).collect();
-    }
-}
-
 /// Adds `value` to the comma-separated list `key` of `info` unless it is there.
 fn list_once(info: &mut BTreeMap<String, String>, key: &str, value: &str) {
     let list = info.remove(key).unwrap_or_default();
@@ -123,7 +110,8 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         None => None,
     };
     if let Some(r) = &resumed {
-        settings_from_resumed(&mut args, r);
+        let (common, graph, seed) = (&mut args.common, &mut args.graph, &mut args.seed);
+        settings_from_film(common, graph, seed, REFERENCE_SEED, r);
     }
     let c = &args.common;
     let out = match (&args.out, &args.resume) {
@@ -131,6 +119,7 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         (None, Some(r)) => r.clone(),
         (None, None) => PathBuf::from("out/reference.exr"),
     };
+    check_out(&out, args.force, args.resume.as_deref())?;
     let graph = load_graph(args.graph.name())?;
     let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
     let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
@@ -199,7 +188,12 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         film.seconds,
         film.noise_floor_mse().sqrt()
     );
-    Ok(())
+    stopped_by_signal(format!(
+        "{} holds {} spp; `lightgraph reference --resume {}` goes on",
+        out.display(),
+        film.samples_per_pixel(),
+        out.display()
+    ))
 }
 
 /// The progress message: samples per pixel in all and the run's samples per second.
@@ -228,7 +222,7 @@ fn on_one_gpu(args: &ReferenceArgs, run: &Run, target: &mut Target) -> Result<()
             (Some(t), _) => (Some(t.saturating_sub(start.elapsed())), u32::MAX),
             (None, frames) => (None, frames.unwrap_or(0).saturating_sub(session.frames)),
         };
-        if left.is_some_and(|l| l.is_zero()) || max == 0 {
+        if left.is_some_and(|l| l.is_zero()) || max == 0 || lightgraph::interrupt::requested().is_some() {
             break;
         }
         session.render_for(left, max)?;

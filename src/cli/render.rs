@@ -1,9 +1,11 @@
 //! `lightgraph render`: a progressive render to EXR and PNG.
 
 use super::args::*;
+use super::film::{check_out, frames_left, settings_from_film, stopped_by_signal};
 use anyhow::{Result, bail};
 use clap::Args;
 use lightgraph::aov::{Aov, AovRender};
+use lightgraph::interrupt;
 use lightgraph::metrics::image_error;
 use lightgraph::output;
 use lightgraph::reference::{Reference, film_settings};
@@ -11,7 +13,7 @@ use lightgraph::render::{LoadedScene, Session, SessionOptions, load_graph, load_
 use lightgraph::tev::LiveView;
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{Gpu, Graph};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 #[derive(Args)]
@@ -35,12 +37,27 @@ pub struct RenderArgs {
     /// Frames to render.
     #[arg(long, default_value_t = 64)]
     pub frames: u32,
-    /// Seed of the random streams.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u32,
-    /// Output EXR; a PNG preview is written beside it.
-    #[arg(long, default_value = "out/render.exr")]
-    pub out: PathBuf,
+    /// Seed of the random streams [default: 1, or the resumed film's].
+    #[arg(long)]
+    pub seed: Option<u32>,
+    /// Output EXR (the film; it must end in .exr) [default: the resumed film, else
+    /// out/render.exr]; a PNG preview is written beside it. An existing file is refused
+    /// unless --force or --resume names it.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Replace an existing --out.
+    #[arg(long)]
+    pub force: bool,
+    /// Continue this film (from `render`, e.g. one a signal stopped): scene, graph,
+    /// resolution, samples per frame, seed and constants default to its own and must match
+    /// when given; the frames follow its last one. --frames counts the run's frames in all
+    /// (the film's included), --time this invocation's time.
+    #[arg(long, value_name = "FILM.exr")]
+    pub resume: Option<PathBuf>,
+    /// Write the film (and the PNG) every this often while rendering (e.g. 10m), so a run
+    /// that is killed keeps its frames up to the last checkpoint.
+    #[arg(long, value_parser = humantime::parse_duration)]
+    pub checkpoint: Option<Duration>,
     /// Exposure of the PNG preview in stops.
     #[arg(long, default_value_t = 0.0)]
     pub exposure: f32,
@@ -55,7 +72,7 @@ pub struct RenderArgs {
     pub aov: Option<String>,
     /// Frame index of the first frame: renders frames FIRST .. FIRST + frames of the seed's
     /// random streams, a shard of a longer run (`lightgraph merge` adds the shards' films).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, conflicts_with = "resume")]
     pub first_frame: u32,
     /// Render on several GPUs at once: `all`, the first N adapters, or a comma-separated list
     /// of adapter indices, PCI bus ids or names (see `lightgraph list`; one may repeat). Each
@@ -70,18 +87,84 @@ pub struct RenderArgs {
     pub mpi: bool,
 }
 
+/// Where a render's film goes when --out and --resume are not given.
+const DEFAULT_OUT: &str = "out/render.exr";
+
+impl RenderArgs {
+    /// The film's path: --out, else the resumed film, else out/render.exr.
+    pub fn out(&self) -> PathBuf {
+        self.out
+            .clone()
+            .or_else(|| self.resume.clone())
+            .unwrap_or_else(|| PathBuf::from(DEFAULT_OUT))
+    }
+
+    /// The seed: --seed (or the resumed film's), else 1.
+    pub fn seed(&self) -> u32 {
+        self.seed.unwrap_or(1)
+    }
+
+    /// The film the run starts from: the resumed one (its settings checked against the
+    /// run's `graph` and `opts`, measured constants included) or an empty one.
+    pub fn start_film(&self, graph: &Graph, opts: &SessionOptions, resumed: Option<Reference>) -> Result<Reference> {
+        let info = film_settings(self.common.scene(), graph, opts);
+        let size = (opts.width, opts.height);
+        match (resumed, &self.resume) {
+            (Some(film), Some(path)) => {
+                film.check_settings(&info, path)?;
+                check_size(&film, path, size)?;
+                Ok(film)
+            }
+            _ => Ok(Reference::new(size, info)),
+        }
+    }
+}
+
+/// Checks the output path and reads the film `--resume` names: the settings the command line
+/// leaves out become the film's, the run's frames follow the film's last one, and `--frames`
+/// (the run's total) becomes the frames left to render.
+fn resume_film(args: &mut RenderArgs) -> Result<Option<Reference>> {
+    check_out(&args.out(), args.force, args.resume.as_deref())?;
+    let Some(path) = args.resume.clone() else {
+        return Ok(None);
+    };
+    if args.aov.is_some() {
+        bail!("--aov renders its buffers over one invocation's frames: leave it out with --resume");
+    }
+    if args.layout.as_deref() == Some("auto") {
+        bail!("--layout auto measures layouts before a run: name the film's layout with --resume");
+    }
+    let film = Reference::read(&path)?;
+    settings_from_film(&mut args.common, &mut args.graph, &mut args.seed, 1, &film);
+    if args.time.is_none() {
+        args.frames = frames_left(args.frames, film.frames, Some(&path))?;
+        if args.frames == 0 {
+            bail!(
+                "{}: the film holds {} frames already; give a larger --frames (the run's total) or --time",
+                path.display(),
+                film.frames
+            );
+        }
+    }
+    args.first_frame = u32::try_from(film.end_frame())
+        .map_err(|_| anyhow::anyhow!("{}: the film ends past frame 2^32", path.display()))?;
+    Ok(Some(film))
+}
+
 /// `lightgraph render`: sets the session up, renders progressively, writes the film and the
-/// PNG, and reports the rates.
-pub fn render(args: RenderArgs) -> Result<()> {
+/// PNG, and reports the rates. A signal (SIGINT, SIGTERM) ends the run after the frames in
+/// flight, with the film written.
+pub fn render(mut args: RenderArgs) -> Result<()> {
     if args.aov.is_some() && (args.gpus.is_some() || mpi_asked(&args)) {
         bail!("--aov renders its buffers on one GPU: leave out --gpus and --mpi");
     }
+    let resumed = resume_film(&mut args)?;
     #[cfg(feature = "mpi")]
     if args.mpi {
-        return super::mpi::render_with_mpi(&args);
+        return super::mpi::render_with_mpi(&args, resumed);
     }
     if let Some(spec) = &args.gpus {
-        return super::gpus::render_on_several_gpus(&args, spec);
+        return super::gpus::render_on_several_gpus(&args, spec, resumed);
     }
     let c = &args.common;
     let graph = load_graph(args.graph.name())?;
@@ -96,7 +179,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
     };
     let scene = load_scene_with(c.scene(), kind)?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
-    let mut opts = options(c, &scene, &graph.constants, args.seed)?;
+    let mut opts = options(c, &scene, &graph.constants, args.seed())?;
     let (layout, decl) = match named {
         Some(named) => named,
         None => tune_layout(&gpu, &graph, &scene, &opts, &args)?,
@@ -116,19 +199,29 @@ pub fn render(args: RenderArgs) -> Result<()> {
         layout
     );
     let reference = reference_mean(args.reference.as_ref(), (w, h))?;
-    let mut film = Reference::new((w, h), film_settings(c.scene(), &graph, &opts));
+    let mut film = args.start_film(&graph, &opts, resumed)?;
+    for (k, v) in [("layout", layout.clone()), ("adapter", gpu.info.name.clone())] {
+        film.info.insert(k.to_string(), v);
+    }
     let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
     session.first_frame = args.first_frame;
     // A frame count that splits a group of frames rendered at once is refused before rendering.
     session.check_frames(args.first_frame, if args.time.is_none() { args.frames } else { 0 })?;
-    let mut view = args.tev.view(&args.out.display().to_string(), (w, h));
-    let seconds = render_progressively(&mut session, &args, reference.as_deref(), &mut view)?;
-    let image = session.image()?;
+    let out = args.out();
+    let mut view = args.tev.view(&out.display().to_string(), (w, h));
+    let seconds_before = film.seconds;
+    let mut progress = Progress {
+        film: &mut film,
+        out: &out,
+        reference: reference.as_deref(),
+        view: &mut view,
+    };
+    render_progressively(&mut session, &args, &mut progress)?;
     if let Some(v) = &mut view {
-        v.show(&image.mean);
+        v.show(&film.mean());
     }
     if let Some(r) = &reference {
-        let e = image_error(&image.mean, r);
+        let e = image_error(&film.mean(), r);
         eprintln!(
             "error against {}: RMSE {:.4e}, relMSE {:.4e}",
             args.reference.as_ref().expect("a reference path").display(),
@@ -136,65 +229,113 @@ pub fn render(args: RenderArgs) -> Result<()> {
             e.rel_mse
         );
     }
-    let rejected = rejected_samples(&session);
-    for (k, v) in [
-        ("layout", layout.clone()),
-        ("adapter", gpu.info.name.clone()),
-        ("rays", session.rays().to_string()),
-        ("rejected_samples", rejected.to_string()),
-    ] {
-        film.info.insert(k.to_string(), v);
-    }
-    film.absorb(&session.accumulation()?)?;
-    film.seconds = seconds;
+    add_statistics(&mut film, &session);
     if let Some(list) = &args.aov {
         film.layers = feature_buffers(&gpu, &scene, &session, list, args.first_frame)?;
     }
-    film.write(&args.out, "render")?;
-    let png = args.out.with_extension("png");
-    output::write_png(&png, &image, args.exposure)?;
-    report_rates(&session, seconds);
-    println!("wrote {} and {}", args.out.display(), png.display());
-    Ok(())
+    let png = write_film(&film, &out, args.exposure)?;
+    report_rates(&session, film.seconds - seconds_before);
+    println!("wrote {} and {}", out.display(), png.display());
+    stopped_by_signal(format!(
+        "{} and {} hold {} frames; `lightgraph render --resume {}` goes on",
+        out.display(),
+        png.display(),
+        film.frames,
+        out.display()
+    ))
 }
 
-/// Renders `session` for `--time` or `--frames`, with a progress bar of samples/s, rays/s and,
-/// against `reference`, the RMSE (once a second), and the live view; returns the seconds taken.
-fn render_progressively(
-    session: &mut Session,
-    args: &RenderArgs,
-    reference: Option<&[[f32; 3]]>,
-    view: &mut Option<LiveView>,
-) -> Result<f64> {
+/// Adds the session's rays and rejected samples to the film's (a resumed film's count on).
+fn add_statistics(film: &mut Reference, session: &Session) {
+    for (key, value) in [
+        ("rays", session.rays()),
+        ("rejected_samples", rejected_samples(session)),
+    ] {
+        let before = film.info.get(key).and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
+        film.info.insert(key.to_string(), (before + value).to_string());
+    }
+}
+
+/// Writes `film` to `out` and its PNG preview beside it; returns the PNG's path.
+pub fn write_film(film: &Reference, out: &Path, exposure: f32) -> Result<PathBuf> {
+    film.write(out, "render")?;
+    let png = out.with_extension("png");
+    output::write_png(&png, &film.image(), exposure)?;
+    Ok(png)
+}
+
+/// Where a progressive render's results go while it runs: the film (on the host, in f64), its
+/// file (for checkpoints), the reference of the progress line's error and the live view.
+struct Progress<'a> {
+    film: &'a mut Reference,
+    out: &'a Path,
+    reference: Option<&'a [[f32; 3]]>,
+    view: &'a mut Option<LiveView>,
+}
+
+impl Progress<'_> {
+    /// The mean of every frame so far: the film's and the GPU's since the last checkpoint.
+    fn mean(&self, session: &Session) -> Result<Vec<[f32; 3]>> {
+        if self.film.frames == 0 {
+            return Ok(session.image()?.mean);
+        }
+        let mut all = self.film.clone();
+        all.absorb(&session.accumulation()?)?;
+        Ok(all.mean())
+    }
+
+    /// Moves the GPU's sums into the film and adds the seconds since `since`.
+    fn absorb(&mut self, session: &mut Session, since: Instant) -> Result<()> {
+        self.film.absorb(&session.take_accumulation()?)?;
+        self.film.seconds += since.elapsed().as_secs_f64();
+        Ok(())
+    }
+}
+
+/// Renders `session` for `--time` or `--frames` into the film, with a progress bar of
+/// samples/s, rays/s and, against a reference, the RMSE (once a second), and the live view;
+/// writes the film every `--checkpoint`. Stops early, after the frames in flight, when a
+/// signal arrives.
+fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut Progress) -> Result<()> {
     let (w, h) = (session.options.width as f64, session.options.height as f64);
     let mut error_text = String::new();
     let mut error_at: Option<Instant> = None;
     let bar = super::gpus::progress_bar(args);
     let start = Instant::now();
+    let (mut absorbed_at, mut saved_at) = (start, Instant::now());
     loop {
         let elapsed = start.elapsed();
         let done = match args.time {
             Some(t) => elapsed >= t,
             None => session.frames >= args.frames,
         };
-        if done {
+        if done || interrupt::requested().is_some() {
             break;
         }
         match args.time {
             Some(t) => session.render_for(Some(t.saturating_sub(elapsed)), u32::MAX)?,
             None => session.render_for(None, args.frames - session.frames)?,
         };
+        if let Some(every) = args.checkpoint
+            && saved_at.elapsed() >= every
+        {
+            progress.absorb(session, absorbed_at)?;
+            absorbed_at = Instant::now();
+            write_film(progress.film, progress.out, args.exposure)?;
+            saved_at = Instant::now();
+        }
         // Rates of the frames read back (one batch may still be running).
         let secs = start.elapsed().as_secs_f64();
         let samples = session.settled as f64 * session.options.samples_per_frame as f64 * w * h;
-        if let Some(r) = reference
+        if let Some(r) = progress.reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
-            error_text = format!(" | RMSE {:.4e}", image_error(&session.image()?.mean, r).rmse);
+            error_text = format!(" | RMSE {:.4e}", image_error(&progress.mean(session)?, r).rmse);
             error_at = Some(Instant::now());
         }
-        if let Some(v) = view.as_mut().filter(|v| v.due()) {
-            v.show(&session.image()?.mean);
+        if progress.view.as_ref().is_some_and(|v| v.due()) {
+            let mean = progress.mean(session)?;
+            progress.view.as_mut().expect("a view").show(&mean);
         }
         bar.set_message(format!(
             "frame {} | {} samples/s | {}rays/s{error_text}",
@@ -209,7 +350,14 @@ fn render_progressively(
     }
     session.settle()?;
     bar.finish();
-    Ok(start.elapsed().as_secs_f64())
+    if let Some(signal) = interrupt::requested() {
+        eprintln!(
+            "{} received: stopped after frame {}, writing the film",
+            signal.name(),
+            progress.film.frames + session.frames as u64
+        );
+    }
+    progress.absorb(session, absorbed_at)
 }
 
 /// The samples the session's kernels rejected (non-finite or negative).
@@ -273,7 +421,7 @@ fn tune_layout(
     })?;
     let table = lightgraph::tune::table(&trials);
     println!("{table}");
-    let report = args.out.with_extension("auto.md");
+    let report = args.out().with_extension("auto.md");
     if let Some(dir) = report.parent() {
         std::fs::create_dir_all(dir)?;
     }

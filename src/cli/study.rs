@@ -354,6 +354,7 @@ fn reference_args(
         resume: (!new).then(|| path.to_path_buf()),
         out: Some(path.to_path_buf()),
         checkpoint: REFERENCE_CHECKPOINT,
+        force: false,
         exposure: args.exposure,
         first_frame: None,
         gpus: args.gpus.clone(),

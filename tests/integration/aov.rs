@@ -222,6 +222,7 @@ fn render_writes_the_layers_asked_for() {
         "2",
         "--out",
         o,
+        "--force",
     ];
     let run = lightgraph(&[&base[..], &["--aov", "albedo,depth"]].concat());
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));

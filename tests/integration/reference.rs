@@ -181,6 +181,7 @@ fn render_reports_its_error_against_a_reference() {
                     path.to_str().unwrap(),
                     "--out",
                     dir.join("r.exr").to_str().unwrap(),
+                    "--force",
                 ],
             ]
             .concat(),

@@ -38,7 +38,7 @@ fn film_of(
 }
 
 /// The largest difference of two films' means relative to the larger (floored at 1e-3).
-fn largest_difference(a: &Reference, b: &Reference) -> f64 {
+pub(crate) fn largest_difference(a: &Reference, b: &Reference) -> f64 {
     let mut worst = 0f64;
     for (p, q) in a.mean().iter().zip(&b.mean()) {
         for c in 0..3 {

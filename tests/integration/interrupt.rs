@@ -1,0 +1,188 @@
+//! Nothing lost: a render or reference stopped by SIGINT or SIGTERM writes its film and exits
+//! with the signal's status; `--resume` goes on from the film to the image an uninterrupted
+//! run gives; outputs never overwrite a film unless asked.
+
+use crate::cli::{fails, lightgraph, temp_dir};
+use crate::shards::largest_difference;
+use lightgraph::reference::Reference;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Frames of the interrupted runs: more than a loaded lavapipe renders at 16×16 before the
+/// signal (sent once the first checkpoint is on disk), few enough for a short test.
+const FRAMES: &str = "1200";
+
+/// Starts `lightgraph ARGS` in the background.
+fn start(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_lightgraph"))
+        .args(args)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the binary starts")
+}
+
+/// Waits until `file` exists (the run's first checkpoint: frames are rendered), then sends
+/// `signal` (INT or TERM) and returns the exit code and stderr.
+fn interrupt_once_written(mut child: Child, file: &Path, signal: &str) -> (Option<i32>, String) {
+    let started = Instant::now();
+    while !file.exists() {
+        if let Ok(Some(status)) = child.try_wait() {
+            let out = child.wait_with_output().unwrap();
+            panic!(
+                "the run ended ({status}) before its first checkpoint: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        assert!(started.elapsed() < Duration::from_secs(300), "no checkpoint in 300 s");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let sent = Command::new("kill")
+        .args([&format!("-{signal}"), &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let out = child.wait_with_output().unwrap();
+    (out.status.code(), String::from_utf8_lossy(&out.stderr).to_string())
+}
+
+/// The render of the diffuse box at 16×16 these tests make, with `extra` arguments.
+fn box_render<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec!["render", "--scene", "cornell-diffuse", "--res", "16x16", "--seed", "7"];
+    args.extend_from_slice(extra);
+    args
+}
+
+/// Renders the diffuse box at 16×16 with `extra` arguments; panics on failure.
+fn render(extra: &[&str]) {
+    let run = lightgraph(&box_render(extra));
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+}
+
+#[test]
+fn sigint_keeps_the_frames_and_resume_equals_an_uninterrupted_run() {
+    let dir = temp_dir("sigint");
+    let (cut, whole) = (dir.join("cut.exr"), dir.join("whole.exr"));
+    let (cut_s, whole_s) = (cut.to_str().unwrap(), whole.to_str().unwrap());
+    let args = box_render(&["--frames", FRAMES, "--checkpoint", "100ms", "--out", cut_s]);
+    let (code, stderr) = interrupt_once_written(start(&args), &cut, "INT");
+    assert_eq!(code, Some(130), "{stderr}");
+    assert!(stderr.contains("SIGINT") && stderr.contains("--resume"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let kept = Reference::read(&cut).unwrap();
+    let total: u64 = FRAMES.parse().unwrap();
+    assert!(
+        kept.frames > 0 && kept.frames < total,
+        "the interrupted film holds {} of {total} frames",
+        kept.frames
+    );
+    assert!(dir.join("cut.png").is_file());
+    // Resumed with the run's total: the frames it lacked, then the whole run's image.
+    render(&["--frames", FRAMES, "--resume", cut_s]);
+    render(&["--frames", FRAMES, "--out", whole_s]);
+    let (resumed, whole) = (Reference::read(&cut).unwrap(), Reference::read(&whole).unwrap());
+    assert_eq!(resumed.ranges, vec![(0, total)]);
+    // The same frames summed in two parts instead of one: float rounding only (see
+    // shards::shards_merged_equal_one_run for the bound).
+    let worst = largest_difference(&resumed, &whole);
+    assert!(worst < 1e-5, "resumed differs from uninterrupted by {worst:.2e}");
+}
+
+#[test]
+fn sigterm_keeps_the_frames_of_a_render_on_gpus_and_of_a_reference() {
+    let dir = temp_dir("sigterm");
+    let (gpus, reference) = (dir.join("gpus.exr"), dir.join("reference.exr"));
+    let (gpus_s, reference_s) = (gpus.to_str().unwrap(), reference.to_str().unwrap());
+    let args = box_render(&[
+        "--frames",
+        FRAMES,
+        "--gpus",
+        "1",
+        "--checkpoint",
+        "100ms",
+        "--out",
+        gpus_s,
+    ]);
+    let (code, stderr) = interrupt_once_written(start(&args), &gpus, "TERM");
+    assert_eq!(code, Some(143), "{stderr}");
+    let kept = Reference::read(&gpus).unwrap();
+    assert!(kept.frames > 0 && kept.ranges.len() == 1, "{:?}", kept.ranges);
+    render(&["--frames", FRAMES, "--gpus", "1", "--resume", gpus_s]);
+    assert_eq!(
+        Reference::read(&gpus).unwrap().ranges,
+        vec![(0, FRAMES.parse().unwrap())]
+    );
+    let args = [
+        "reference",
+        "--scene",
+        "cornell-diffuse",
+        "--res",
+        "16x16",
+        "--time",
+        "10m",
+        "--checkpoint",
+        "100ms",
+        "--out",
+        reference_s,
+    ];
+    let (code, stderr) = interrupt_once_written(start(&args), &reference, "TERM");
+    assert_eq!(code, Some(143), "{stderr}");
+    assert!(
+        stderr.contains("SIGTERM") && stderr.contains("reference --resume"),
+        "{stderr}"
+    );
+    let kept = Reference::read(&reference).unwrap();
+    assert!(kept.frames > 0);
+    let run = lightgraph(&["reference", "--resume", reference_s, "--frames", "2"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert_eq!(Reference::read(&reference).unwrap().frames, kept.frames + 2);
+}
+
+#[test]
+fn outputs_never_overwrite_a_film_unless_asked() {
+    let dir = temp_dir("outputs");
+    let film = dir.join("film.exr");
+    let film_s = film.to_str().unwrap();
+    // A .png --out would have been overwritten by its own preview: refused.
+    let png = dir.join("film.png");
+    let err = fails(&[
+        "render",
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(err.contains("--out") && err.contains(".exr"), "{err}");
+    assert!(!png.exists());
+    render(&["--frames", "2", "--out", film_s]);
+    let written = std::fs::metadata(&film).unwrap().modified().unwrap();
+    let err = fails(&box_render(&["--frames", "2", "--out", film_s]));
+    assert!(
+        err.contains("exists") && err.contains("--force") && err.contains("--resume"),
+        "{err}"
+    );
+    assert_eq!(std::fs::metadata(&film).unwrap().modified().unwrap(), written);
+    render(&["--frames", "3", "--out", film_s, "--force"]);
+    assert_eq!(Reference::read(&film).unwrap().frames, 3);
+    // A resumed film's settings are checked as merge checks them, and --frames is the total.
+    let err = fails(&["render", "--resume", film_s, "--spp", "2", "--frames", "6"]);
+    assert!(err.contains("samples_per_frame is '1' there, '2' here"), "{err}");
+    let err = fails(&["render", "--resume", film_s, "--frames", "2"]);
+    assert!(err.contains("holds 3 frames"), "{err}");
+    let err = fails(&["merge", film_s, "--out", film_s]);
+    assert!(err.contains("exists"), "{err}");
+    let err = fails(&[
+        "reference",
+        "--scene",
+        "cornell-diffuse",
+        "--frames",
+        "1",
+        "--out",
+        film_s,
+    ]);
+    assert!(err.contains("exists"), "{err}");
+}
