@@ -1,4 +1,5 @@
-//! `lightgraph assets`: the catalog checks the shared assets; `fetch` downloads from a local HTTP server, verifies every byte and
+//! `lightgraph assets`: the catalog checks the shared assets; a clone without them is told the
+//! command that gets them; `fetch` downloads from a local HTTP server, verifies every byte and
 //! leaves nothing behind when a download differs or the server is unreachable.
 
 use crate::cli::{fails, lightgraph, temp_dir};
@@ -40,6 +41,27 @@ fn assets_check_finds_every_shared_asset_intact() {
     }
     let n = catalog.assets.len();
     assert!(text.contains(&format!("{n} of {n} assets intact")), "{text}");
+}
+
+#[test]
+fn a_clone_without_assets_is_told_the_command_that_gets_them() {
+    let empty = temp_dir("assets-empty");
+    let root = empty.to_str().unwrap();
+    let e = fails(&[
+        "render", "--scene", "sponza", "--frames", "1", "--res", "8x8", "--assets", root,
+    ]);
+    assert!(
+        e.contains("CrytekSponza/glTF/Sponza.gltf")
+            && e.contains(&format!("lightgraph assets fetch CrytekSponza --to {root}"))
+            && e.contains("LIGHTGRAPH_ASSETS")
+            && e.contains("../shared/scenes"),
+        "{e}"
+    );
+    let text = stdout(&["assets", "check", root]);
+    let n = Catalog::builtin().assets.len();
+    assert_eq!(text.lines().filter(|l| l.contains(" missing (")).count(), n, "{text}");
+    assert!(text.contains(&format!("0 of {n} assets intact")), "{text}");
+    assert!(stdout(&["assets", "list", "--root", root]).contains("CrytekSponza: "));
 }
 
 /// Serves `files` (URL path, bytes) over HTTP/1.1 on 127.0.0.1 from a thread (404 for other
