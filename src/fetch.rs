@@ -59,10 +59,10 @@ pub fn fetch_asset(asset: &Asset, root: &Path, progress: &mut dyn FnMut(&str, Fe
 
 /// Downloads `url` into `temporary`, then checks its size and SHA-256 against `file`.
 fn download_verified(agent: &ureq::Agent, url: &str, file: &AssetFile, temporary: &Path) -> Result<(), String> {
-    let mut response = agent
-        .get(url)
-        .call()
-        .map_err(|e| format!("could not download {url}: {e} (is the network reachable from here?)"))?;
+    let mut response = agent.get(url).call().map_err(|e| match e {
+        ureq::Error::StatusCode(code) => format!("could not download {url}: the server answered HTTP {code}"),
+        e => format!("could not download {url}: {e} (is the network reachable from here?)"),
+    })?;
     let out = std::fs::File::create(temporary).map_err(|e| format!("{}: {e}", temporary.display()))?;
     let mut hashing = HashingWriter::new(std::io::BufWriter::new(out));
     // One byte over the catalog's size is enough to tell that it differs.

@@ -24,14 +24,14 @@ pub enum AssetsAction {
     /// List every asset: what it is, its licence and source, whether it can be downloaded, and
     /// whether its files are under the asset root (by name and size; `check` reads them).
     List {
-        /// The asset root (default: --assets / LIGHTGRAPH_ASSETS, else ../shared/scenes).
+        /// The asset root (default: LIGHTGRAPH_ASSETS, else ../shared/scenes).
         #[arg(long)]
         root: Option<PathBuf>,
     },
     /// Check every asset's files under DIR against the catalog's sizes and SHA-256s: intact,
     /// missing, partial or damaged; fails when a file present differs.
     Check {
-        /// The asset root (default: --assets / LIGHTGRAPH_ASSETS, else ../shared/scenes).
+        /// The asset root (default: LIGHTGRAPH_ASSETS, else ../shared/scenes).
         dir: Option<PathBuf>,
     },
     /// Download an asset's files from their public sources into DIR/NAME, each verified
@@ -39,7 +39,7 @@ pub enum AssetsAction {
     Fetch {
         /// The asset (a folder name, as `lightgraph assets list` shows).
         name: String,
-        /// The asset root to write into (default: --assets / LIGHTGRAPH_ASSETS, else
+        /// The asset root to write into (default: LIGHTGRAPH_ASSETS, else
         /// ../shared/scenes).
         #[arg(long, value_name = "DIR")]
         to: Option<PathBuf>,
@@ -62,14 +62,14 @@ pub fn assets(args: AssetsArgs) -> Result<()> {
 /// The folder given, else the asset root, else an error saying where the root is looked for.
 fn root_or_error(given: Option<PathBuf>, option: &str) -> Result<PathBuf> {
     given.or_else(lightgraph::assets::asset_root).ok_or_else(|| {
-        anyhow!("no asset root: pass {option}, --assets DIR or LIGHTGRAPH_ASSETS (../shared/scenes, the default, does not exist)")
+        anyhow!("no asset root: pass {option} or set LIGHTGRAPH_ASSETS (../shared/scenes, the default, does not exist)")
     })
 }
 
 fn list(catalog: &Catalog, root: Option<&Path>) -> Result<()> {
     match root {
         Some(r) => println!("asset root: {}", r.display()),
-        None => println!("asset root: none (--assets DIR, LIGHTGRAPH_ASSETS, or ../shared/scenes)"),
+        None => println!("asset root: none (--root DIR, LIGHTGRAPH_ASSETS, or ../shared/scenes)"),
     }
     for asset in &catalog.assets {
         let present = root.map_or(0, |r| {

@@ -116,9 +116,9 @@ struct Setup {
     files: Vec<(String, Vec<u8>)>,
 }
 
-/// In a fresh folder `name`, a catalog of three assets served from a local server: `box` (two
-/// files, served as they are), `corrupt` (served with one byte changed) and `unreachable` (a
-/// port nobody listens on).
+/// In a fresh folder `name`, a catalog of four assets served from a local server: `box` (two
+/// files, served as they are), `corrupt` (served with one byte changed), `unreachable` (a port
+/// nobody listens on) and `gone` (the server answers 404).
 fn test_catalog(name: &str) -> Setup {
     let dir = temp_dir(name);
     let files: Vec<(String, Vec<u8>)> = ["CornellBox-Original.gltf", "CornellBox-Original.bin"]
@@ -150,6 +150,7 @@ fn test_catalog(name: &str) -> Setup {
             "unreachable",
             &[entry("data.bin", &files[1].1, &format!("http://127.0.0.1:{closed}/x"))],
         ),
+        asset("gone", &[entry("data.bin", &files[1].1, &url("gone.bin"))]),
     ]
     .join("\n");
     let catalog = dir.join("catalog.toml");
@@ -219,9 +220,12 @@ fn a_download_that_differs_or_fails_leaves_nothing_behind() {
     let e = fails(&["assets", "fetch", "unreachable", "--to", to, "--catalog", catalog]);
     assert!(e.contains("could not download http://127.0.0.1:"), "{e}");
     assert!(entries(&root).is_empty(), "left behind: {:?}", entries(&root));
+    let e = fails(&["assets", "fetch", "gone", "--to", to, "--catalog", catalog]);
+    assert!(e.contains("gone.bin: the server answered HTTP 404"), "{e}");
+    assert!(entries(&root).is_empty(), "left behind: {:?}", entries(&root));
     let e = fails(&["assets", "fetch", "nothing", "--to", to, "--catalog", catalog]);
     assert!(
-        e.contains("no asset 'nothing'") && e.contains("box, corrupt, unreachable"),
+        e.contains("no asset 'nothing'") && e.contains("box, corrupt, unreachable, gone"),
         "{e}"
     );
     let bad = root.with_file_name("bad.toml");
