@@ -7,12 +7,14 @@
 extern crate self as lightgraph;
 
 pub mod aov;
+pub mod asset_catalog;
 pub mod assets;
 pub mod bench;
 pub mod cli;
 #[cfg(feature = "mpi")]
 pub mod cluster;
 pub mod compare;
+pub mod fetch;
 pub mod interrupt;
 pub mod metrics;
 pub mod multi;

@@ -1,5 +1,5 @@
 //! The `lightgraph` command line: render, reference, merge, compare, study, stress, explain, export, bench,
-//! operators, list (the commands live in `lightgraph::cli`).
+//! operators, list, assets (the commands live in `lightgraph::cli`).
 
 use clap::Parser;
 use lightgraph::cli::Cli;

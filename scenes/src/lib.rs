@@ -139,13 +139,17 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
     };
     if let Some(asset) = scene.gltf.clone() {
         let root = asset_root.ok_or_else(|| {
-            err(format!("the scene needs the glTF asset '{asset}' but no asset root is set: pass --assets DIR or set LIGHTGRAPH_ASSETS (the assets are in shared/scenes beside the repository)"))
+            err(format!(
+                "the scene needs the glTF asset '{asset}' but there is no asset root: {}",
+                fetch_help(&asset, None)
+            ))
         })?;
         let path = root.join(&asset);
         if !path.is_file() {
             return Err(err(format!(
-                "glTF asset '{asset}' not found under the asset root {} (set --assets DIR or LIGHTGRAPH_ASSETS; the assets come from shared/scenes beside the repository, each folder's SOURCE.md says where it came from)",
-                root.display()
+                "glTF asset '{asset}' not found under the asset root {}: {}",
+                root.display(),
+                fetch_help(&asset, Some(root))
             )));
         }
         add_gltf(scene, &path).map_err(err)?;
@@ -158,13 +162,17 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
             && map.is_none()
         {
             let root = asset_root.ok_or_else(|| {
-                err(format!("the scene needs the environment map '{image}' but no asset root is set: pass --assets DIR or set LIGHTGRAPH_ASSETS (the maps are in shared/scenes/envmaps beside the repository)"))
+                err(format!(
+                    "the scene needs the environment map '{image}' but there is no asset root: {}",
+                    fetch_help(image, None)
+                ))
             })?;
             let path = root.join(&*image);
             if !path.is_file() {
                 return Err(err(format!(
-                    "environment map '{image}' not found under the asset root {} (set --assets DIR or LIGHTGRAPH_ASSETS; the maps come from shared/scenes/envmaps beside the repository, whose SOURCE.md says where they came from)",
-                    root.display()
+                    "environment map '{image}' not found under the asset root {}: {}",
+                    root.display(),
+                    fetch_help(image, Some(root))
                 )));
             }
             *map = Some(std::sync::Arc::new(
@@ -174,6 +182,21 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
     }
     check_lights(&scene.lights).map_err(|(_, message)| err(message))?;
     check_resolved(scene).map_err(err)
+}
+
+/// What to do about an asset file missing under the asset root `root` (None: no root): where
+/// the root is looked for, and the command that gets the asset (its first folder is the asset's
+/// name in `lightgraph assets`).
+fn fetch_help(asset: &str, root: Option<&std::path::Path>) -> String {
+    let to = root.map_or("DIR".to_string(), |r| r.display().to_string());
+    let name = asset.split(['/', '\\']).next().filter(|n| *n != asset);
+    let get = match name {
+        Some(name) => format!("`lightgraph assets fetch {name} --to {to}` downloads it where it has a public source"),
+        None => "put it below the asset root".to_string(),
+    };
+    format!(
+        "{get}, and `lightgraph assets list` says where each asset comes from (the asset root is --assets DIR, else LIGHTGRAPH_ASSETS, else ../shared/scenes beside the repository)"
+    )
 }
 
 /// Makes every glTF material of `scene` (named `gltf:...`) a pure Lambertian: no specular

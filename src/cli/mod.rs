@@ -2,6 +2,7 @@
 //! command line that chooses one (also run from the Python module).
 
 pub mod args;
+pub mod assets;
 pub mod bench;
 pub mod compare;
 pub mod explain;
@@ -19,6 +20,7 @@ pub mod stress;
 pub mod study;
 pub mod verify;
 
+use assets::AssetsArgs;
 use bench::BenchArgs;
 use clap::{Parser, Subcommand};
 use compare::CompareArgs;
@@ -78,6 +80,9 @@ pub enum Command {
     Operators(OperatorsArgs),
     /// List built-in graphs with their layouts, built-in scenes and GPU adapters.
     List,
+    /// The assets scenes use (scenes/assets.toml): where each comes from, whether an asset
+    /// root holds it intact, and downloading those with a public source.
+    Assets(AssetsArgs),
 }
 
 impl Cli {
@@ -101,7 +106,7 @@ impl Cli {
             Command::Explain(a) => a.common.assets.clone(),
             Command::Export(a) => a.assets.clone(),
             Command::Bench(a) => a.common.assets.clone(),
-            Command::List | Command::Stress(_) | Command::Operators(_) | Command::Merge(_) => None,
+            Command::List | Command::Assets(_) | Command::Stress(_) | Command::Operators(_) | Command::Merge(_) => None,
         }
     }
 
@@ -118,6 +123,7 @@ impl Cli {
             Command::Export(a) => export::export(a),
             Command::Bench(a) => bench::bench(a),
             Command::List => list::list(),
+            Command::Assets(a) => assets::assets(a),
             Command::Stress(a) => stress::stress(a),
             Command::Operators(a) => operators::operators(a),
         }

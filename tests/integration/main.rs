@@ -3,6 +3,7 @@
 
 mod analytic;
 mod aov;
+mod assets;
 mod bpt;
 mod bsdf;
 mod bvh;
