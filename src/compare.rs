@@ -1,8 +1,16 @@
 //! Error against time: estimators and layouts render one scene for the same wall-clock
 //! budget, their error against a reference is sampled at log-spaced times with the clock
 //! paused, and the curves, a log-log plot, the final images and a summary of
-//! time-to-target-error speed-ups (the paper's Figure 10 and Table III) are written.
+//! time-to-target-error speed-ups (the paper's Figure 10 and Table III) are written. A
+//! signal ends the run in flight at its next batch of frames and drops it; the finished
+//! runs are kept ([`resume`]).
 
+pub mod curve;
+pub mod resume;
+
+pub use curve::{convergence_slope, tail_noise, time_to_error};
+
+use crate::interrupt::Interrupted;
 use crate::metrics::{ImageError, image_error};
 use crate::plot::{Axes, Series, line_plot};
 use crate::reference::Reference;
@@ -69,7 +77,7 @@ impl std::fmt::Display for RunSpec {
 /// The error of a run at one moment.
 #[derive(Debug, Clone, Copy)]
 pub struct ErrorSample {
-    /// Seconds on the run's clock: set-up (planning, compiling, allocating) plus rendering,
+    /// Seconds on the run's clock: rendering (and the set-up when it is on the clock),
     /// without the error evaluations.
     pub seconds: f64,
     /// Frames rendered.
@@ -80,24 +88,31 @@ pub struct ErrorSample {
     pub error: ImageError,
 }
 
-/// One run's curve and final image.
+/// One run's curve.
 #[derive(Debug, Clone)]
-pub struct RunResult {
+pub struct RunCurve {
     /// `graph:layout`.
     pub label: String,
-    /// Seconds spent planning, compiling and instantiating before the first frame (on the
-    /// clock).
+    /// Seconds spent planning, compiling and instantiating, and, with the set-up off the
+    /// clock, rendering the warm-up frame ([`Session::warm_up`]).
     pub setup_seconds: f64,
     /// Error samples in time order; the last is at the end of the budget.
     pub samples: Vec<ErrorSample>,
     /// Camera samples (paths) per second over the run's clock (set-up on it or not, as its
     /// budget says).
     pub samples_per_second: f64,
+}
+
+/// One run's curve and final image.
+#[derive(Debug, Clone)]
+pub struct RunResult {
+    /// Its curve.
+    pub curve: RunCurve,
     /// The final image.
     pub image: Image,
 }
 
-impl RunResult {
+impl RunCurve {
     /// The last error sample.
     pub fn last(&self) -> &ErrorSample {
         self.samples.last().expect("a run has at least one error sample")
@@ -119,14 +134,15 @@ pub fn sample_times(first: f64, budget: f64, per_decade: u32) -> Vec<f64> {
 }
 
 /// A run's wall-clock budget, and whether its set-up (pipeline creation, the session's
-/// buffers) counts on it: `compare` counts it, `study` by default not (on a fresh GPU a
-/// large graph's pipelines take seconds to create, a budget of a few seconds then measures
-/// the driver, not the estimator).
+/// buffers, the first frame's shader compilation) counts on it: by default not (on a fresh
+/// GPU a large graph's pipelines take seconds to create, a budget of a few seconds then
+/// measures the driver, not the estimator).
 #[derive(Debug, Clone, Copy)]
 pub struct RunBudget {
     /// Seconds of rendering (and set-up, with `setup_on_clock`).
     pub time: Duration,
-    /// Whether the clock starts before the session's set-up.
+    /// Whether the clock starts before the session's set-up (then no warm-up frame: the
+    /// first frame's compilation, where a driver does it then, is on the clock as well).
     pub setup_on_clock: bool,
 }
 
@@ -141,7 +157,9 @@ impl RunBudget {
 /// Renders `graph` in `layout` (the run called `label`) for `budget` on its clock and samples
 /// its error against `reference` after the first frame, then at log-spaced times (see
 /// [`sample_times`]) and after the last frame; `progress` sees the clock, the latest error and
-/// the image it was measured on.
+/// the image it was measured on. With the set-up off the clock, a warm-up frame rendered and
+/// thrown away ([`Session::warm_up`]) is part of it. A signal ([`crate::interrupt`]) ends the
+/// run at its next batch of frames with [`Interrupted`]: a partial run is not comparable.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     gpu: &Gpu,
@@ -154,12 +172,13 @@ pub fn run(
     per_decade: u32,
     mut progress: impl FnMut(f64, Option<&ErrorSample>, &[[f32; 3]]),
 ) -> Result<RunResult> {
-    let mut clock = Stopwatch::started();
+    let started = Instant::now();
     let mut session = Session::new(gpu, graph, layout, scene, options)?;
-    let setup_seconds = clock.seconds();
     if !budget.setup_on_clock {
-        clock = Stopwatch::started();
+        session.warm_up()?;
     }
+    let setup_seconds = started.elapsed().as_secs_f64();
+    let mut clock = Stopwatch::started_at(if budget.setup_on_clock { started } else { Instant::now() });
     let budget = budget.time.as_secs_f64();
     let mut samples: Vec<ErrorSample> = Vec::new();
     // The error now, measured with the clock stopped.
@@ -185,6 +204,10 @@ pub fn run(
     let times = sample_times(clock.seconds(), budget, per_decade);
     let mut next = times.iter().copied().peekable();
     while clock.seconds() < budget {
+        if let Some(signal) = crate::interrupt::requested() {
+            let what = format!("run {label} dropped at {:.2} s of {budget} s", clock.seconds());
+            return Err(Interrupted { signal, what }.into());
+        }
         let until = next.peek().copied().unwrap_or(budget).min(budget);
         let left = (until - clock.seconds()).max(1e-3);
         session.render_for(Some(Duration::from_secs_f64(left)), u32::MAX)?;
@@ -194,17 +217,25 @@ pub fn run(
             measure(&mut session, &mut clock, &mut samples)?;
         }
     }
-    session.settle()?;
-    let seconds = clock.seconds();
+    if samples.last().is_some_and(|s| s.frames != session.frames) {
+        measure(&mut session, &mut clock, &mut samples)?;
+    }
     let image = session.image()?;
-    let paths = session.samples_per_pixel() as f64 * image.mean.len() as f64;
-    Ok(RunResult {
+    let curve = RunCurve {
+        samples_per_second: paths_per_second(&samples, image.mean.len()),
         label,
         setup_seconds,
         samples,
-        samples_per_second: paths / seconds,
-        image,
-    })
+    };
+    Ok(RunResult { curve, image })
+}
+
+/// Camera samples (paths) per second over a curve of an image of `pixels` pixels: its last
+/// sample's paths over its clock.
+pub fn paths_per_second(samples: &[ErrorSample], pixels: usize) -> f64 {
+    samples
+        .last()
+        .map_or(0.0, |s| s.samples_per_pixel as f64 * pixels as f64 / s.seconds)
 }
 
 /// A clock that can be paused.
@@ -214,9 +245,9 @@ struct Stopwatch {
 }
 
 impl Stopwatch {
-    fn started() -> Stopwatch {
+    fn started_at(start: Instant) -> Stopwatch {
         Stopwatch {
-            running_since: Some(Instant::now()),
+            running_since: Some(start),
             banked: Duration::ZERO,
         }
     }
@@ -231,52 +262,6 @@ impl Stopwatch {
     fn seconds(&self) -> f64 {
         (self.banked + self.running_since.map_or(Duration::ZERO, |t| t.elapsed())).as_secs_f64()
     }
-}
-
-/// When a curve first reaches RMSE `target`: interpolated log-log between the samples that
-/// bracket it, or, when it never does, extrapolated from the last sample at the Monte Carlo
-/// rate (time ∝ RMSE⁻²). Returns the time and whether it was extrapolated.
-pub fn time_to_error(samples: &[ErrorSample], target: f64) -> Option<(f64, bool)> {
-    let ok = |s: &&ErrorSample| s.error.rmse.is_finite() && s.error.rmse > 0.0 && s.seconds > 0.0;
-    let curve: Vec<&ErrorSample> = samples.iter().filter(ok).collect();
-    let i = curve.iter().position(|s| s.error.rmse <= target);
-    match i {
-        Some(0) => Some((curve[0].seconds, false)),
-        Some(i) => {
-            let (a, b) = (curve[i - 1], curve[i]);
-            let f = (target.ln() - a.error.rmse.ln()) / (b.error.rmse.ln() - a.error.rmse.ln());
-            Some(((a.seconds.ln() + f * (b.seconds.ln() - a.seconds.ln())).exp(), false))
-        }
-        None => curve
-            .last()
-            .map(|s| (s.seconds * (s.error.rmse / target).powi(2), true)),
-    }
-}
-
-/// The convergence rate of a curve: the least-squares slope of log RMSE against log of the
-/// time since its first error sample (so the set-up and first-frame cost, a constant offset,
-/// does not bend the line), over the last decade and a half of that time. −1/2 is the Monte
-/// Carlo rate. `None` with fewer than 3 samples there.
-pub fn convergence_slope(samples: &[ErrorSample]) -> Option<f64> {
-    let (first, last) = (samples.first()?.seconds, samples.last()?.seconds);
-    let from = (last - first) / 10f64.powf(1.5);
-    let pts: Vec<(f64, f64)> = samples
-        .iter()
-        .map(|s| (s.seconds - first, s.error.rmse))
-        .filter(|&(t, e)| t > 0.0 && t >= from && e > 0.0 && e.is_finite())
-        .map(|(t, e)| (t.ln(), e.ln()))
-        .collect();
-    if pts.len() < 3 {
-        return None;
-    }
-    let n = pts.len() as f64;
-    let (mx, my) = (
-        pts.iter().map(|p| p.0).sum::<f64>() / n,
-        pts.iter().map(|p| p.1).sum::<f64>() / n,
-    );
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    (sxx > 0.0).then(|| sxy / sxx)
 }
 
 /// A file-name-safe form of a run label.
@@ -307,13 +292,30 @@ pub struct ReportContext<'a> {
     pub reference_path: &'a Path,
     /// The reference.
     pub reference: &'a Reference,
-    /// Index of the baseline run.
-    pub baseline: usize,
+    /// Label of the baseline run (when it has not run yet, the first run that has stands in).
+    pub baseline: &'a str,
+    /// Runs of the comparison, finished or not (the report may hold fewer: those done).
+    pub run_count: usize,
 }
 
-/// Writes `curves.csv`, `rmse_vs_time.png`, each run's EXR and PNG, and `summary.md` into
-/// `dir`; returns the summary.
-pub fn write_report(dir: &Path, ctx: &ReportContext, runs: &[RunResult], exposure: f32) -> Result<String> {
+/// Writes a run's final image as `<label>.exr` and `<label>.png` into `dir`.
+pub fn write_run_images(dir: &Path, scene: &str, run: &RunResult, exposure: f32) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let (curve, last) = (&run.curve, run.curve.last());
+    let stem = dir.join(file_stem(&curve.label));
+    let meta = [
+        ("run", curve.label.clone()),
+        ("scene", scene.to_string()),
+        ("seconds", format!("{:.3}", last.seconds)),
+        ("samples_per_pixel", last.samples_per_pixel.to_string()),
+    ];
+    crate::output::write_exr(&stem.with_extension("exr"), &run.image, &meta)?;
+    crate::output::write_png(&stem.with_extension("png"), &run.image, exposure)
+}
+
+/// Writes `curves.csv`, `rmse_vs_time.png` and `summary.md` of the finished `runs` into `dir`
+/// (their images: [`write_run_images`]); returns the summary.
+pub fn write_report(dir: &Path, ctx: &ReportContext, runs: &[RunCurve]) -> Result<String> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut csv = String::from(
         "run,seconds,setup_seconds,frames,samples_per_pixel,mse,rmse,rel_mse,non_finite_pixels,reference_floor_mse\n",
@@ -335,15 +337,6 @@ pub fn write_report(dir: &Path, ctx: &ReportContext, runs: &[RunResult], exposur
                 s.error.non_finite
             )?;
         }
-        let stem = dir.join(file_stem(&r.label));
-        let meta = [
-            ("run", r.label.clone()),
-            ("scene", ctx.scene.to_string()),
-            ("seconds", format!("{:.3}", r.last().seconds)),
-            ("samples_per_pixel", r.last().samples_per_pixel.to_string()),
-        ];
-        crate::output::write_exr(&stem.with_extension("exr"), &r.image, &meta)?;
-        crate::output::write_png(&stem.with_extension("png"), &r.image, exposure)?;
     }
     let csv_path = dir.join("curves.csv");
     std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
@@ -376,14 +369,26 @@ pub fn write_report(dir: &Path, ctx: &ReportContext, runs: &[RunResult], exposur
     Ok(summary)
 }
 
-fn summary(ctx: &ReportContext, runs: &[RunResult]) -> Result<String> {
-    let base = &runs[ctx.baseline];
+/// The summary: what was compared, then per run its final errors, slope, noise and time to
+/// the baseline's final error.
+fn summary(ctx: &ReportContext, runs: &[RunCurve]) -> Result<String> {
+    let Some(base) = runs.iter().find(|r| r.label == ctx.baseline).or(runs.first()) else {
+        return Ok(format!(
+            "# Error against time: {}
+
+No run finished yet.
+",
+            ctx.scene
+        ));
+    };
     let target = base.last().error.rmse;
-    let (base_time, _) = time_to_error(&base.samples, target).unwrap_or((f64::NAN, false));
     let floor = ctx.reference.noise_floor_mse().sqrt();
     let info = |k: &str| ctx.reference.info.get(k).cloned().unwrap_or_default();
     let mut s = String::new();
     writeln!(s, "# Error against time: {}\n", ctx.scene)?;
+    if runs.len() < ctx.run_count {
+        writeln!(s, "**{} of {} runs done so far.**\n", runs.len(), ctx.run_count)?;
+    }
     writeln!(s, "- device: {}", ctx.device)?;
     writeln!(s, "- budget: {} per run", ctx.budget.describe())?;
     writeln!(
@@ -400,54 +405,18 @@ fn summary(ctx: &ReportContext, runs: &[RunResult]) -> Result<String> {
         ctx.reference.samples_per_pixel(),
         info("seed")
     )?;
+    let stand_in = if base.label == ctx.baseline {
+        String::new()
+    } else {
+        format!(" (standing in for the baseline {}, not run yet)", ctx.baseline)
+    };
     writeln!(
         s,
-        "- target: RMSE {target:.4e}, what the baseline **{}** reaches at the end of its budget\n",
+        "- target: RMSE {target:.4e}, what the baseline **{}**{stand_in} reaches at the end of its budget\n",
         base.label
     )?;
-    writeln!(
-        s,
-        "| run | set-up s | frames | spp | Msamples/s | final RMSE | final relMSE | slope | time to target s | speed-up |"
-    )?;
-    writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
-    let mut extrapolated = false;
-    for r in runs {
-        let last = r.last();
-        let slope = convergence_slope(&r.samples).map_or("n/a".to_string(), |v| format!("{v:.2}"));
-        let (time, speedup) = match time_to_error(&r.samples, target) {
-            Some((t, x)) => {
-                extrapolated |= x;
-                let mark = if x { " ‡" } else { "" };
-                (format!("{t:.3}{mark}"), format!("{:.2}×", base_time / t))
-            }
-            None => ("never".to_string(), "n/a".to_string()),
-        };
-        writeln!(
-            s,
-            "| {} | {:.2} | {} | {} | {:.2} | {:.4e} | {:.4e} | {slope} | {time} | {speedup} |",
-            r.label,
-            r.setup_seconds,
-            last.frames,
-            last.samples_per_pixel,
-            r.samples_per_second / 1e6,
-            last.error.rmse,
-            last.error.rel_mse
-        )?;
-    }
-    writeln!(
-        s,
-        "\nSpeed-up = the baseline's time to the target over the run's. Slope: least-squares slope \
-         of log RMSE against log time since the run's first error sample, over the last 1.5 decades \
-         (−0.5 is the Monte Carlo rate; flatter means bias, or that the error nears the reference's \
-         own noise; a few very noisy pixels, such as the edges of a visible light, make it wander)."
-    )?;
-    if extrapolated {
-        writeln!(
-            s,
-            "\n‡ The run did not reach the target within its budget: its time is extrapolated from \
-             its last sample at the Monte Carlo rate (time ∝ RMSE⁻²)."
-        )?;
-    }
+    let extrapolated = run_table(&mut s, runs, base, target)?;
+    legend(&mut s, extrapolated)?;
     if floor > 0.5 * target {
         writeln!(
             s,
@@ -464,6 +433,68 @@ fn summary(ctx: &ReportContext, runs: &[RunResult]) -> Result<String> {
         writeln!(s, "\n**Warning**: NaN or infinite pixels in {}.", bad.join(", "))?;
     }
     Ok(s)
+}
+
+/// The table of runs; returns whether a time to the target was extrapolated.
+fn run_table(s: &mut String, runs: &[RunCurve], base: &RunCurve, target: f64) -> Result<bool> {
+    let (base_time, _) = time_to_error(&base.samples, target).unwrap_or((f64::NAN, false));
+    writeln!(
+        s,
+        "| run | set-up s | frames | spp | Msamples/s | final RMSE | noise | final relMSE | slope | time to target s | speed-up |"
+    )?;
+    writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    let mut extrapolated = false;
+    for r in runs {
+        let last = r.last();
+        let slope = convergence_slope(&r.samples).map_or("n/a".to_string(), |v| format!("{v:.2}"));
+        let noise = tail_noise(&r.samples).map_or("n/a".to_string(), |v| format!("{:.1}%", 100.0 * v));
+        let (time, speedup) = match time_to_error(&r.samples, target) {
+            Some((t, x)) => {
+                extrapolated |= x;
+                let mark = if x { " ‡" } else { "" };
+                (format!("{t:.3}{mark}"), format!("{:.2}×", base_time / t))
+            }
+            None => ("never".to_string(), "n/a".to_string()),
+        };
+        writeln!(
+            s,
+            "| {} | {:.2} | {} | {} | {:.2} | {:.4e} | {noise} | {:.4e} | {slope} | {time} | {speedup} |",
+            r.label,
+            r.setup_seconds,
+            last.frames,
+            last.samples_per_pixel,
+            r.samples_per_second / 1e6,
+            last.error.rmse,
+            last.error.rel_mse
+        )?;
+    }
+    Ok(extrapolated)
+}
+
+/// What the table's columns mean.
+fn legend(s: &mut String, extrapolated: bool) -> Result<()> {
+    writeln!(
+        s,
+        "\nTime to target: when the run's curve reached the target **and stayed at or below it** to \
+         the end (interpolated log-log between its last sample above and the next; a dip below \
+         that comes back up does not count). Speed-up = the baseline's time to the target over \
+         the run's. Set-up: pipeline creation and instantiation, and with the set-up off the clock \
+         a warm-up frame rendered and thrown away (so the first frame's shader compilation, which \
+         some drivers do at the first dispatch, is not on the clock either). Noise: the relative \
+         scatter of the run's log RMSE from sample to sample over the last 1.5 decades (the median \
+         of its second differences), how uncertain its final RMSE is. Slope: least-squares slope \
+         of log RMSE against log time since the run's first error sample, over the last 1.5 decades \
+         (−0.5 is the Monte Carlo rate; flatter means bias, or that the error nears the reference's \
+         own noise; a few very noisy pixels, such as the edges of a visible light, make it wander)."
+    )?;
+    if extrapolated {
+        writeln!(
+            s,
+            "\n‡ The run ended above the target: its time is extrapolated from its last sample at the \
+             Monte Carlo rate (time ∝ RMSE⁻²)."
+        )?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -521,29 +552,8 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn time_to_error_interpolates_and_extrapolates() {
-        // RMSE = t^-1/2: 1 at t = 1, 0.5 at t = 4.
-        let c = curve(&[(1.0, 1.0), (4.0, 0.5), (16.0, 0.25)]);
-        let (t, x) = time_to_error(&c, 0.5f64.powf(1.5)).unwrap();
-        assert!(!x && (t - 8.0).abs() < 1e-9, "{t}");
-        let (t, x) = time_to_error(&c, 0.125).unwrap();
-        assert!(x && (t - 64.0).abs() < 1e-9, "{t}");
-        assert_eq!(time_to_error(&c, 2.0), Some((1.0, false)));
-    }
-
-    #[test]
-    fn slope_of_a_monte_carlo_curve_after_a_start_up_delay() {
-        // RMSE = (t - 2)^-1/2 from a first sample at t = 2 (when the first frame is done).
-        let mut points = vec![(2.0, 3.0)];
-        points.extend([1.0, 4.0, 16.0, 64.0].map(|dt: f64| (2.0 + dt, dt.powf(-0.5))));
-        let slope = convergence_slope(&curve(&points)).unwrap();
-        assert!((slope + 0.5).abs() < 1e-12, "{slope}");
-        assert_eq!(convergence_slope(&curve(&points[..3])), None);
-    }
-
-    #[test]
     fn a_paused_stopwatch_stands_still() {
-        let mut w = Stopwatch::started();
+        let mut w = Stopwatch::started_at(Instant::now());
         w.pause();
         let t = w.seconds();
         std::thread::sleep(Duration::from_millis(20));

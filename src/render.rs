@@ -542,6 +542,20 @@ impl<'g> Session<'g> {
         Ok(taken)
     }
 
+    /// Renders a frame and throws it away, leaving the session as new (frame 0 next, nothing
+    /// accumulated or counted) with every pipeline used once: a driver that compiles a
+    /// pipeline at its first dispatch (lavapipe) does it here, before a timed run's clock.
+    pub fn warm_up(&mut self) -> Result<()> {
+        self.render_frame()?;
+        self.take_accumulation()?;
+        self.frames = 0;
+        self.settled = 0;
+        self.counters.clear();
+        self.kernel_seconds.clear();
+        self.loops_capped = 0;
+        Ok(())
+    }
+
     /// The accumulated image (reads the GPU accumulation).
     pub fn image(&self) -> Result<Image> {
         let (w, h) = (self.options.width, self.options.height);

@@ -5,7 +5,9 @@ use super::gpus::gpu_selectors;
 use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
-use lightgraph::compare::{ReportContext, RunBudget, RunResult, RunSpec, run, write_report};
+use lightgraph::compare::resume::{check_settings, finished_runs, write_settings};
+use lightgraph::compare::{ReportContext, RunBudget, RunCurve, RunSpec, run, write_report, write_run_images};
+use lightgraph::interrupt::{Interrupted, Signal};
 use lightgraph::reference::{Reference, constants_text};
 use lightgraph::render::{SessionOptions, load_graph};
 use lightgraph_engine::{Gpu, Graph};
@@ -29,10 +31,15 @@ pub struct CompareArgs {
     /// Wall-clock budget of each run.
     #[arg(long, value_parser = humantime::parse_duration, default_value = "10s")]
     pub time: Duration,
-    /// Start each run's clock after its set-up (pipeline creation, buffers), which is then
-    /// reported beside it; by default the set-up counts on the budget.
+    /// Count each run's set-up (pipeline creation, buffers, the first frame's compilation)
+    /// on its budget; by default its clock starts after it and a warm-up frame (thrown away),
+    /// and the set-up is reported beside it.
     #[arg(long)]
-    pub setup_off_clock: bool,
+    pub setup_on_clock: bool,
+    /// Continue the comparison in --out (after a signal stopped it): the runs whose curves
+    /// are there are not rendered again; its settings must be these.
+    #[arg(long)]
+    pub resume: bool,
     /// The run the others are measured against [default: the first].
     #[arg(long)]
     pub baseline: Option<String>,
@@ -92,14 +99,15 @@ pub(super) fn open_gpus_or_adapter(gpus: Option<&str>, adapter: Option<&str>) ->
 }
 
 /// Checks the runs of `args` against `reference` (scene, seed, constants, size), renders them
-/// on `gpus` with the scene from `scenes` and writes the report into `--out`; returns the
-/// summary and the runs' results in the order of `--runs`.
+/// on `gpus` with the scene from `scenes` (with `--resume`, those not in `--out` yet) and
+/// writes the report into `--out` after every run; returns the summary and the runs' curves
+/// in the order of `--runs`. When a signal stopped it, [`Interrupted`] says what was kept.
 pub(super) fn compare_with(
     args: &CompareArgs,
     reference: &Reference,
     gpus: &[Gpu],
     scenes: &mut Scenes,
-) -> Result<(String, Vec<RunResult>)> {
+) -> Result<(String, Vec<RunCurve>)> {
     check_reference(args, reference)?;
     let c = &args.common;
     let runs = jobs(args, reference, scenes)?;
@@ -115,17 +123,30 @@ pub(super) fn compare_with(
         1 => gpus[0].info.name.clone(),
         n => format!("{} x{n}", gpus[0].info.name),
     };
+    let settings = settings(args, reference, &runs, &device);
+    let done = match args.resume {
+        true => {
+            check_settings(&args.out, &settings)?;
+            let pixels = reference.size.0 as usize * reference.size.1 as usize;
+            finished_runs(&args.out, pixels)?
+        }
+        false => Vec::new(),
+    };
+    write_settings(&args.out, &settings)?;
     eprintln!(
-        "{} | scene {} (loaded in {:.2} s) | {} runs of {:?} | reference {} spp",
+        "{} | scene {} (loaded in {:.2} s) | {} runs of {:?}{} | reference {} spp",
         gpus.iter().map(Gpu::describe).collect::<Vec<_>>().join("; "),
         c.scene(),
         scenes.load_seconds(),
         runs.len(),
         args.time,
+        match done.len() {
+            0 => String::new(),
+            n => format!(" ({n} done before)"),
+        },
         reference.samples_per_pixel()
     );
     let ref_mean = reference.mean();
-    let results = run_all(gpus, scenes, runs, args, &ref_mean)?;
     let ctx = ReportContext {
         scene: c.scene(),
         device: &device,
@@ -133,10 +154,44 @@ pub(super) fn compare_with(
         budget: budget(args),
         reference_path: &args.reference,
         reference,
-        baseline,
+        baseline: labels[baseline],
+        run_count: runs.len(),
     };
-    let summary = write_report(&args.out, &ctx, &results, args.exposure)?;
-    Ok((summary, results))
+    let report = |finished: &[RunCurve]| write_report(&args.out, &ctx, finished);
+    let (curves, signal) = run_all(gpus, scenes, &runs, args, &ref_mean, done, &report)?;
+    let summary = report(&curves)?;
+    match signal {
+        Some(signal) if curves.len() < runs.len() => Err(Interrupted {
+            signal,
+            what: format!(
+                "{} of {} runs kept in {} (curves.csv, rmse_vs_time.png, summary.md, their EXR and PNG), \
+                 the run in flight dropped; --resume continues",
+                curves.len(),
+                runs.len(),
+                args.out.display()
+            ),
+        }
+        .into()),
+        _ => Ok((summary, curves)),
+    }
+}
+
+/// What a resumed comparison must share with the one it continues: the scene, reference,
+/// budget, sampling of the error, device and each run with its options.
+fn settings(args: &CompareArgs, reference: &Reference, jobs: &[Job], device: &str) -> Vec<(String, String)> {
+    let mut settings = vec![
+        ("scene".to_string(), args.common.scene().to_string()),
+        ("reference".to_string(), args.reference.display().to_string()),
+        ("reference spp".to_string(), reference.samples_per_pixel().to_string()),
+        ("budget".to_string(), budget(args).describe()),
+        ("per decade".to_string(), args.per_decade.to_string()),
+        ("seed".to_string(), args.seed.to_string()),
+        ("device".to_string(), device.to_string()),
+    ];
+    for (label, _, layout, opts, kind) in jobs {
+        settings.push((format!("run {label}"), format!("{layout} {kind:?} {opts:?}")));
+    }
+    settings
 }
 
 /// Checks that the reference shows the scene of the runs and was rendered with other random
@@ -220,80 +275,127 @@ fn open_gpus(spec: &str) -> Result<Vec<Gpu>> {
 /// One run of the comparison: its label, graph, layout, options and BVH.
 type Job = (String, Graph, String, SessionOptions, BvhKind);
 
-/// Renders every run of `jobs`, each for `--time` on one of `gpus` (one thread per GPU, each
-/// taking the next run when its last one ends), with a progress bar per run; the results in
-/// the order of `jobs`. The first failure stops the GPUs from taking more runs.
+/// Renders the runs of `jobs` not in `done`, each for `--time` on one of `gpus` (one thread
+/// per GPU, each taking the next run when its last one ends), with a progress bar per run,
+/// writing each run's images and calling `report` with every finished run after each. The
+/// first failure, or a signal, stops the GPUs from taking more runs; a run a signal stopped
+/// is dropped. Returns the finished runs in the order of `jobs` and the signal, if one came.
 fn run_all(
     gpus: &[Gpu],
     scenes: &Scenes,
-    jobs: Vec<Job>,
+    jobs: &[Job],
     args: &CompareArgs,
     reference: &[[f32; 3]],
-) -> Result<Vec<RunResult>> {
+    done: Vec<RunCurve>,
+    report: &(dyn Fn(&[RunCurve]) -> Result<String> + Sync),
+) -> Result<(Vec<RunCurve>, Option<Signal>)> {
     let bars = MultiProgress::new();
     let style = ProgressStyle::with_template("{prefix:>24} {bar:30} {msg}").expect("valid template");
+    let mut finished: Vec<Option<RunCurve>> = jobs.iter().map(|_| None).collect();
+    for curve in done {
+        if let Some(i) = jobs.iter().position(|j| j.0 == curve.label) {
+            finished[i] = Some(curve);
+        }
+    }
     let progress: Vec<ProgressBar> = jobs
         .iter()
-        .map(|(label, ..)| {
+        .zip(&finished)
+        .map(|((label, ..), curve)| {
             let bar = bars.add(ProgressBar::new(args.time.as_millis() as u64));
             bar.set_style(style.clone());
             bar.set_prefix(label.clone());
+            if curve.is_some() {
+                bar.finish_with_message("done before");
+            }
             bar
         })
         .collect();
-    let next = Mutex::new(0usize);
-    let results: Mutex<Vec<Option<Result<RunResult>>>> = Mutex::new(jobs.iter().map(|_| None).collect());
+    let queue: Vec<usize> = (0..jobs.len()).filter(|&i| finished[i].is_none()).collect();
+    let next = Mutex::new(queue.into_iter());
+    let finished = Mutex::new(finished);
+    let failure: Mutex<Option<anyhow::Error>> = Mutex::new(None);
     let take = || {
-        let mut i = next.lock().expect("run queue");
-        let failed = results.lock().expect("results").iter().flatten().any(|r| r.is_err());
-        (*i < jobs.len() && !failed).then(|| {
-            *i += 1;
-            *i - 1
-        })
+        let stop = failure.lock().expect("failure").is_some() || lightgraph::interrupt::requested().is_some();
+        (!stop).then(|| next.lock().expect("run queue").next()).flatten()
     };
     std::thread::scope(|scope| {
         for gpu in gpus {
             scope.spawn(|| {
                 while let Some(i) = take() {
-                    let (label, graph, layout, opts, kind) = &jobs[i];
-                    let bar = &progress[i];
-                    let mut view = args.tev.view(label, (opts.width, opts.height));
-                    let result = run(
-                        gpu,
-                        scenes.get(*kind),
-                        graph,
-                        (layout, label.clone()),
-                        opts.clone(),
-                        budget(args),
-                        reference,
-                        args.per_decade,
-                        |t, e, image| {
-                            bar.set_position((t * 1e3) as u64);
-                            if let Some(e) = e {
-                                bar.set_message(format!("{} spp | RMSE {:.4e}", e.samples_per_pixel, e.error.rmse));
-                            }
-                            if let Some(v) = view.as_mut().filter(|v| v.due()) {
-                                v.show(image);
-                            }
-                        },
-                    );
-                    bar.finish();
-                    if let (Some(v), Ok(r)) = (&mut view, &result) {
-                        v.show(&r.image.mean);
+                    let outcome = run_one(gpu, scenes, &jobs[i], args, reference, &progress[i]).and_then(|curve| {
+                        let mut finished = finished.lock().expect("finished runs");
+                        finished[i] = Some(curve);
+                        report(&finished.iter().flatten().cloned().collect::<Vec<_>>())
+                    });
+                    match outcome {
+                        Err(e) if e.downcast_ref::<Interrupted>().is_some() => {}
+                        Err(e) => {
+                            failure.lock().expect("failure").get_or_insert(e);
+                        }
+                        Ok(_) => {}
                     }
-                    results.lock().expect("results")[i] = Some(result);
                 }
             });
         }
     });
-    // Runs are left untaken only after a failure, which `?` then returns.
-    results.into_inner().expect("results").into_iter().flatten().collect()
+    if let Some(e) = failure.into_inner().expect("failure") {
+        return Err(e);
+    }
+    let curves = finished
+        .into_inner()
+        .expect("finished runs")
+        .into_iter()
+        .flatten()
+        .collect();
+    Ok((curves, lightgraph::interrupt::requested()))
+}
+
+/// Renders one run on `gpu` with its progress on `bar` (and in tev when asked), writes its
+/// images into `--out` and returns its curve.
+fn run_one(
+    gpu: &Gpu,
+    scenes: &Scenes,
+    (label, graph, layout, opts, kind): &Job,
+    args: &CompareArgs,
+    reference: &[[f32; 3]],
+    bar: &ProgressBar,
+) -> Result<RunCurve> {
+    let mut view = args.tev.view(label, (opts.width, opts.height));
+    let result = run(
+        gpu,
+        scenes.get(*kind),
+        graph,
+        (layout, label.clone()),
+        opts.clone(),
+        budget(args),
+        reference,
+        args.per_decade,
+        |t, e, image| {
+            bar.set_position((t * 1e3) as u64);
+            if let Some(e) = e {
+                bar.set_message(format!("{} spp | RMSE {:.4e}", e.samples_per_pixel, e.error.rmse));
+            }
+            if let Some(v) = view.as_mut().filter(|v| v.due()) {
+                v.show(image);
+            }
+        },
+    );
+    match &result {
+        Ok(_) => bar.finish(),
+        Err(_) => bar.abandon_with_message("stopped"),
+    }
+    let result = result?;
+    if let Some(v) = &mut view {
+        v.show(&result.image.mean);
+    }
+    write_run_images(&args.out, args.common.scene(), &result, args.exposure)?;
+    Ok(result.curve)
 }
 
 /// Each run's budget.
 fn budget(args: &CompareArgs) -> RunBudget {
     RunBudget {
         time: args.time,
-        setup_on_clock: !args.setup_off_clock,
+        setup_on_clock: args.setup_on_clock,
     }
 }

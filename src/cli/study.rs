@@ -8,11 +8,14 @@ use super::reference::ReferenceArgs;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use lightgraph::compare::RunBudget;
-use lightgraph::compare::RunSpec;
+use lightgraph::compare::resume::{check_settings, resumable, write_settings};
+use lightgraph::compare::{RunBudget, RunSpec};
+use lightgraph::interrupt::Interrupted;
 use lightgraph::reference::Reference;
 use lightgraph::render::load_graph;
-use lightgraph::study::layouts::{Candidate, LayoutChoice, fastest, measure_layouts};
+use lightgraph::study::layouts::{
+    Candidate, Choices, LayoutChoice, choices_text, fastest, measure_layouts, parse_choices,
+};
 use lightgraph::study::summary::{
     EstimatorRun, ReferenceNote, ReferenceSource, SceneRuns, StudyContext, write_summary,
 };
@@ -38,9 +41,15 @@ pub struct StudyArgs {
     /// Wall-clock budget of each estimator on each scene (rendering: its set-up is off the clock unless `--setup-on-clock`).
     #[arg(long, value_parser = humantime::parse_duration, default_value = "20s")]
     pub time: Duration,
-    /// Count each run's set-up (pipeline creation, buffers) on its budget, as `compare` does.
+    /// Count each run's set-up (pipeline creation, buffers, the first frame's compilation)
+    /// on its budget.
     #[arg(long)]
     pub setup_on_clock: bool,
+    /// Continue the study in --out (after a signal stopped it): scenes and runs whose results
+    /// are there are not rendered again, layouts not measured again; its settings must be
+    /// these.
+    #[arg(long)]
+    pub resume: bool,
     /// Time each layout renders when the study measures a graph's layouts (after a warm-up
     /// frame, so pipeline creation is not measured).
     #[arg(long, value_parser = humantime::parse_duration, default_value = "500ms")]
@@ -124,11 +133,17 @@ pub fn study(args: StudyArgs) -> Result<()> {
         estimators: &names,
         scene_count: args.scenes.len(),
     };
+    let settings = settings(&args, &names);
+    if args.resume {
+        check_settings(&args.out, &settings)?;
+    }
+    write_settings(&args.out, &settings)?;
     let mut done = Vec::new();
     let mut summary = String::new();
     for (i, (scene, folder)) in args.scenes.iter().zip(&folders).enumerate() {
         eprintln!("study: scene {}/{}: {scene}", i + 1, args.scenes.len());
-        let runs = study_scene(&args, (scene, folder), &estimators, &gpus).with_context(|| format!("scene {scene}"))?;
+        let runs = study_scene(&args, (scene, folder), &estimators, &gpus);
+        let runs = runs.map_err(|e| stopped(e, &args, done.len(), scene))?;
         done.push(runs);
         // After every scene, so that a study stopped early keeps what it measured.
         summary = write_summary(&args.out, &ctx, &done)?;
@@ -138,6 +153,41 @@ pub fn study(args: StudyArgs) -> Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+/// What a resumed study must share with the one it continues (each scene's comparison
+/// checks the rest: reference, size, constants, layouts).
+fn settings(args: &StudyArgs, estimators: &[String]) -> Vec<(String, String)> {
+    let budget = RunBudget {
+        time: args.time,
+        setup_on_clock: args.setup_on_clock,
+    };
+    [
+        ("scenes", args.scenes.join(",")),
+        ("estimators", estimators.join(",")),
+        ("budget", budget.describe()),
+        ("layout time", format!("{:?}", args.layout_time)),
+        ("per decade", args.per_decade.to_string()),
+        ("seed", args.seed.to_string()),
+    ]
+    .map(|(k, v)| (k.to_string(), v))
+    .to_vec()
+}
+
+/// The error of a scene that failed; when a signal stopped it, [`Interrupted`] saying what
+/// the study kept (`scenes_done` scenes before it, and what the scene kept).
+fn stopped(error: anyhow::Error, args: &StudyArgs, scenes_done: usize, scene: &str) -> anyhow::Error {
+    let Some(i) = error.downcast_ref::<Interrupted>() else {
+        return error.context(format!("scene {scene}"));
+    };
+    let what = format!(
+        "{scenes_done} of {} scenes done (summary.md, summary.csv and layouts.csv in {}); scene {scene}: {}; \
+         study --resume continues",
+        args.scenes.len(),
+        args.out.display(),
+        i.what
+    );
+    Interrupted { signal: i.signal, what }.into()
 }
 
 /// `--references`, or `<out>/references`.
@@ -168,17 +218,20 @@ fn study_scene(
         check_size(&reference, &path, size)?;
     }
     let mut scenes = Scenes::new(scene);
-    let mut runs = Vec::new();
-    let mut choices = Vec::new();
-    for spec in estimators {
-        let (layout, choice) = choose_layout(args, spec, &compare.common, &mut scenes, &gpus[0])?;
-        runs.push(RunSpec {
-            layout: Some(layout),
-            ..spec.clone()
-        });
-        choices.push(choice);
-    }
+    let chosen = choose_layouts(args, estimators, &compare, &mut scenes, &gpus[0])?;
+    let (runs, choices): (Vec<RunSpec>, Vec<LayoutChoice>) = estimators
+        .iter()
+        .zip(chosen)
+        .map(|(spec, (_, layout, choice))| {
+            let run = RunSpec {
+                layout: Some(layout),
+                ..spec.clone()
+            };
+            (run, choice)
+        })
+        .unzip();
     compare.runs = runs.iter().map(RunSpec::to_string).collect::<Vec<_>>().join(",");
+    compare.resume = args.resume && resumable(&compare.out);
     let (_, results) = compare_with(&compare, &reference, gpus, &mut scenes)?;
     let runs = estimators
         .iter()
@@ -211,7 +264,8 @@ fn compare_args(args: &StudyArgs, (scene, folder): (&str, &str), path: &Path) ->
         runs: String::new(),
         reference: path.to_path_buf(),
         time: args.time,
-        setup_off_clock: !args.setup_on_clock,
+        setup_on_clock: args.setup_on_clock,
+        resume: false,
         baseline: None,
         per_decade: args.per_decade,
         seed: args.seed,
@@ -232,6 +286,42 @@ fn reference_note(reference: &Reference, path: &Path, source: ReferenceSource) -
         noise_rmse: reference.noise_floor_mse().sqrt(),
         source,
     }
+}
+
+/// The layouts file of a scene's folder: each estimator's layout and how it was chosen.
+const CHOICES_FILE: &str = "layouts.tsv";
+
+/// Each estimator's layout on the scene of `compare` and how it was chosen: with `--resume`,
+/// as the scene's folder recorded them, else by [`choose_layout`]; recorded there.
+fn choose_layouts(
+    args: &StudyArgs,
+    estimators: &[RunSpec],
+    compare: &CompareArgs,
+    scenes: &mut Scenes,
+    gpu: &Gpu,
+) -> Result<Choices> {
+    let path = compare.out.join(CHOICES_FILE);
+    let before = match (args.resume, std::fs::read_to_string(&path)) {
+        (true, Ok(text)) => parse_choices(&text).with_context(|| format!("reading {}", path.display()))?,
+        _ => Vec::new(),
+    };
+    let mut chosen = Vec::new();
+    for spec in estimators {
+        let name = spec.to_string();
+        if let Some(earlier) = before.iter().find(|c| c.0 == name) {
+            chosen.push(earlier.clone());
+            continue;
+        }
+        if let Some(signal) = lightgraph::interrupt::requested() {
+            let what = "stopped measuring its layouts".to_string();
+            return Err(Interrupted { signal, what }.into());
+        }
+        let (layout, choice) = choose_layout(args, spec, &compare.common, scenes, gpu)?;
+        chosen.push((name, layout, choice));
+    }
+    std::fs::create_dir_all(&compare.out).with_context(|| format!("creating {}", compare.out.display()))?;
+    std::fs::write(&path, choices_text(&chosen)).with_context(|| format!("writing {}", path.display()))?;
+    Ok(chosen)
 }
 
 /// The layout `spec` runs in on this scene: the one it names, else the one of its graph's

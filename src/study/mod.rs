@@ -1,10 +1,12 @@
 //! Studies: the best layout of each estimator on a list of scenes, each given the same
 //! wall-clock budget against a reference per scene (`lightgraph study`). Per scene the runs
 //! are a comparison ([`crate::compare`]); this module chooses the layouts by measurement
-//! ([`layouts`]), names the scenes' folders, and sums the comparisons up ([`summary`]).
+//! ([`layouts`]), names the scenes' folders, calls the winner or the tie of each scene
+//! ([`verdict`]) and sums the comparisons up ([`summary`]).
 
 pub mod layouts;
 pub mod summary;
+pub mod verdict;
 
 use anyhow::{Result, bail};
 use std::path::{Component, Path};

@@ -1,9 +1,10 @@
 //! A study's summary: per scene, each estimator's time to the best final error of the set
-//! (the smallest RMSE any of them reached at the end of its budget) and the winner, the one
-//! that reached it first; written as `summary.md`, `summary.csv` and `layouts.csv`.
+//! (the smallest RMSE any of them reached at the end of its budget) and the winner or the
+//! tie ([`super::verdict`]); written as `summary.md`, `summary.csv` and `layouts.csv`.
 
 use super::layouts::LayoutChoice;
-use crate::compare::{ErrorSample, RunBudget, time_to_error};
+use super::verdict::{Outcome, TIE_STANDARD_ERRORS, Verdict, verdict};
+use crate::compare::{ErrorSample, RunBudget};
 use anyhow::{Context, Result};
 use std::fmt::Write;
 use std::path::Path;
@@ -63,46 +64,6 @@ pub struct SceneRuns {
     pub runs: Vec<EstimatorRun>,
 }
 
-/// What a scene's runs show.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Verdict {
-    /// The best final RMSE of the set (the smallest of the runs' last errors); `None` when no
-    /// run ended with a finite, positive one.
-    pub best_final_rmse: Option<f64>,
-    /// Per run, when it first reached that error (seconds on its clock, interpolated log-log
-    /// between error samples); `None` when it did not within its budget.
-    pub time_to_best: Vec<Option<f64>>,
-    /// The run that reached it first (the first of equals).
-    pub winner: Option<usize>,
-}
-
-/// The verdict on runs with the error curves `curves` (each in time order).
-pub fn verdict(curves: &[&[ErrorSample]]) -> Verdict {
-    let best = curves
-        .iter()
-        .filter_map(|c| c.last().map(|s| s.error.rmse))
-        .filter(|e| e.is_finite() && *e > 0.0)
-        .min_by(f64::total_cmp);
-    let time_to_best: Vec<Option<f64>> = curves
-        .iter()
-        .map(|c| {
-            let (time, extrapolated) = time_to_error(c, best?)?;
-            (!extrapolated).then_some(time)
-        })
-        .collect();
-    let winner = time_to_best
-        .iter()
-        .enumerate()
-        .filter_map(|(i, t)| t.map(|t| (i, t)))
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(i, _)| i);
-    Verdict {
-        best_final_rmse: best,
-        time_to_best,
-        winner,
-    }
-}
-
 impl SceneRuns {
     /// The verdict on this scene's runs.
     pub fn verdict(&self) -> Verdict {
@@ -138,6 +99,18 @@ pub fn write_summary(dir: &Path, ctx: &StudyContext, scenes: &[SceneRuns]) -> Re
         std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(md)
+}
+
+/// The winner or the tie as the Markdown table writes it (`—` for neither).
+fn outcome_text(scene: &SceneRuns, outcome: &Outcome) -> String {
+    match outcome {
+        Outcome::Nobody => "—".to_string(),
+        Outcome::Winner(i) => format!("**{}**", scene.runs[*i].estimator),
+        Outcome::Tie(runs) => {
+            let names: Vec<&str> = runs.iter().map(|&i| scene.runs[i].estimator.as_str()).collect();
+            format!("tie: {}", names.join(", "))
+        }
+    }
 }
 
 /// RMSE as the tables write it.
@@ -177,8 +150,17 @@ fn markdown(ctx: &StudyContext, scenes: &[SceneRuns]) -> Result<String> {
     writeln!(
         s,
         "- target per scene: the best final RMSE of the set, the smallest any estimator reached at \
-         the end of its budget; each estimator's time is when it first reached it (interpolated \
-         log-log between error samples), — where it did not; the winner reached it first\n"
+         the end of its budget; each estimator's time is when its curve reached it **and stayed at \
+         or below it** to the end (interpolated log-log between error samples; a dip below it that \
+         comes back up does not count), — where its curve ended above it"
+    )?;
+    writeln!(
+        s,
+        "- winner: the first to reach the target, so it has the best final RMSE; a **tie** where \
+         other estimators' times (extrapolated at the Monte Carlo rate, time ∝ RMSE⁻², for those \
+         that ended above the target) are within {TIE_STANDARD_ERRORS} standard errors of the \
+         first's, from each run's noise: the relative scatter of its log RMSE from sample to sample \
+         over the last 1.5 decades of its curve (the ± of the final RMSE table), doubled in log time\n"
     )?;
     time_table(&mut s, ctx, scenes)?;
     final_table(&mut s, ctx, scenes)?;
@@ -204,9 +186,7 @@ fn time_table(s: &mut String, ctx: &StudyContext, scenes: &[SceneRuns]) -> Resul
             .iter()
             .map(|e| time_text(run_of(scene, e).and_then(|(i, _)| v.time_to_best[i])))
             .collect();
-        let winner = v
-            .winner
-            .map_or("—".to_string(), |i| format!("**{}**", scene.runs[i].estimator));
+        let winner = outcome_text(scene, &v.outcome);
         writeln!(
             s,
             "| [{}]({}/summary.md) | {} | {} | {winner} |",
@@ -221,19 +201,20 @@ fn time_table(s: &mut String, ctx: &StudyContext, scenes: &[SceneRuns]) -> Resul
 
 /// Per scene, each estimator's RMSE at the end of its budget.
 fn final_table(s: &mut String, ctx: &StudyContext, scenes: &[SceneRuns]) -> Result<()> {
-    writeln!(s, "\n## Final RMSE\n")?;
+    writeln!(s, "\n## Final RMSE (± its noise)\n")?;
     writeln!(s, "| scene | {} |", ctx.estimators.join(" | "))?;
     writeln!(s, "|---|{}", "---:|".repeat(ctx.estimators.len()))?;
     for scene in scenes {
+        let v = scene.verdict();
         let finals: Vec<String> = ctx
             .estimators
             .iter()
             .map(|e| {
-                rmse_text(
-                    run_of(scene, e)
-                        .and_then(|(_, r)| r.samples.last())
-                        .map(|l| l.error.rmse),
-                )
+                let Some((i, run)) = run_of(scene, e) else {
+                    return rmse_text(None);
+                };
+                let noise = v.noise[i].map_or(String::new(), |n| format!(" ± {:.1}%", 100.0 * n));
+                format!("{}{noise}", rmse_text(run.samples.last().map(|l| l.error.rmse)))
             })
             .collect();
         writeln!(s, "| {} | {} |", scene.scene, finals.join(" | "))?;
@@ -305,16 +286,23 @@ fn reference_list(s: &mut String, scenes: &[SceneRuns]) -> Result<()> {
     Ok(())
 }
 
-/// One row per scene and estimator: its layout, final error and time to the best final error
-/// of the set, and the scene's winner.
+/// One row per scene and estimator: its layout, final error and its noise, time to the best
+/// final error of the set, and the scene's winner (or `tie: a; b`).
 fn summary_csv(scenes: &[SceneRuns]) -> Result<String> {
     let mut csv = String::from(
-        "scene,estimator,layout,layout_chosen_by,final_seconds,final_spp,final_rmse,best_final_rmse,time_to_best_s,winner\n",
+        "scene,estimator,layout,layout_chosen_by,final_seconds,final_spp,final_rmse,final_rmse_noise,best_final_rmse,time_to_best_s,winner\n",
     );
     for scene in scenes {
         let v = scene.verdict();
-        let winner = v.winner.map_or("", |i| scene.runs[i].estimator.as_str());
-        for (run, time) in scene.runs.iter().zip(&v.time_to_best) {
+        let winner = match &v.outcome {
+            Outcome::Nobody => String::new(),
+            Outcome::Winner(i) => scene.runs[*i].estimator.clone(),
+            Outcome::Tie(runs) => {
+                let names: Vec<&str> = runs.iter().map(|&i| scene.runs[i].estimator.as_str()).collect();
+                format!("tie: {}", names.join("; "))
+            }
+        };
+        for ((run, time), noise) in scene.runs.iter().zip(&v.time_to_best).zip(&v.noise) {
             let last = run.samples.last();
             let how = match run.choice {
                 LayoutChoice::Named => "named",
@@ -322,13 +310,14 @@ fn summary_csv(scenes: &[SceneRuns]) -> Result<String> {
             };
             writeln!(
                 csv,
-                "{},{},{},{how},{},{},{},{},{},{winner}",
+                "{},{},{},{how},{},{},{},{},{},{},{winner}",
                 scene.scene,
                 run.estimator,
                 run.layout,
                 last.map_or(String::new(), |l| format!("{:.6}", l.seconds)),
                 last.map_or(String::new(), |l| l.samples_per_pixel.to_string()),
                 last.map_or(String::new(), |l| format!("{:e}", l.error.rmse)),
+                noise.map_or(String::new(), |n| format!("{n:e}")),
                 v.best_final_rmse.map_or(String::new(), |b| format!("{b:e}")),
                 time.map_or(String::new(), |t| format!("{t:.6}")),
             )?;
@@ -370,39 +359,6 @@ mod tests {
     use super::*;
     use crate::compare::tests::curve;
     use crate::study::layouts::LayoutRate;
-
-    #[test]
-    fn the_winner_reaches_the_best_final_error_first() {
-        // A and C end lowest (0.1); A reaches it at its end, C on its way down at t = 2
-        // (log-log between its first two samples, then a bias takes it back up); B ends at
-        // 0.12 and never reaches it.
-        let a = curve(&[(1.0, 1.0), (10.0, 0.1)]);
-        let b = curve(&[(1.0, 0.5), (10.0, 0.12)]);
-        let c = curve(&[(1.0, 0.4), (4.0, 0.025), (10.0, 0.1)]);
-        let v = verdict(&[&a, &b, &c]);
-        assert_eq!(v.best_final_rmse, Some(0.1));
-        assert!((v.time_to_best[0].unwrap() - 10.0).abs() < 1e-9);
-        assert_eq!(v.time_to_best[1], None, "B never reached it: no extrapolated time");
-        let t = v.time_to_best[2].unwrap();
-        // log t = log 1 + (log 0.1 - log 0.4) / (log 0.025 - log 0.4) · log 4 = log 2.
-        assert!((t - 2.0).abs() < 1e-9, "{t}");
-        assert_eq!(v.winner, Some(2));
-    }
-
-    #[test]
-    fn ties_go_to_the_first_and_broken_curves_win_nothing() {
-        let a = curve(&[(1.0, 0.5), (2.0, 0.2)]);
-        let v = verdict(&[&a, &a.clone()]);
-        assert_eq!(
-            (v.winner, v.time_to_best.clone()),
-            (Some(0), vec![Some(2.0), Some(2.0)])
-        );
-        let nan = curve(&[(1.0, f64::NAN)]);
-        let v = verdict(&[&nan, &[]]);
-        assert_eq!(v.best_final_rmse, None);
-        assert_eq!(v.time_to_best, vec![None, None]);
-        assert_eq!(v.winner, None);
-    }
 
     fn scene(name: &str, runs: Vec<EstimatorRun>) -> SceneRuns {
         SceneRuns {
@@ -456,6 +412,14 @@ mod tests {
                     run("ppm:X", "X", LayoutChoice::Named, &[(1.0, 0.3), (10.0, 0.1)]),
                 ],
             ),
+            // Equal curves: a tie.
+            scene(
+                "s3",
+                vec![
+                    run("pt", "A", LayoutChoice::Named, &[(1.0, 0.3), (10.0, 0.1)]),
+                    run("ppm:X", "X", LayoutChoice::Named, &[(1.0, 0.3), (10.0, 0.1)]),
+                ],
+            ),
         ];
         let estimators = ["pt".to_string(), "ppm:X".into()];
         let ctx = StudyContext {
@@ -466,14 +430,14 @@ mod tests {
             },
             layout_time: Duration::from_millis(500),
             estimators: &estimators,
-            scene_count: 3,
+            scene_count: 4,
         };
         let dir = std::env::temp_dir().join(format!("lightgraph-study-summary-{}", std::process::id()));
         let md = write_summary(&dir, &ctx, &scenes).unwrap();
         let csv = std::fs::read_to_string(dir.join("summary.csv")).unwrap();
         let layouts = std::fs::read_to_string(dir.join("layouts.csv")).unwrap();
         std::fs::remove_dir_all(&dir).ok();
-        assert!(md.contains("**2 of 3 scenes done so far.**"), "{md}");
+        assert!(md.contains("**3 of 4 scenes done so far.**"), "{md}");
         assert!(md.contains("| scene | best final RMSE | pt | ppm:X | winner |"), "{md}");
         assert!(
             md.contains("| [s1](s1/summary.md) | 1.0000e-1 | 10.000 | — | **pt** |"),
@@ -483,14 +447,20 @@ mod tests {
             md.contains("| [s2](s2/summary.md) | 1.0000e-1 | — | 10.000 | **ppm:X** |"),
             "{md}"
         );
+        assert!(
+            md.contains("| [s3](s3/summary.md) | 1.0000e-1 | 10.000 | 10.000 | tie: pt, ppm:X |"),
+            "{md}"
+        );
         assert!(md.contains("| s1 | pt | A | measurement | A 2.000, B failed |"), "{md}");
-        // The references' noise (0.09) is more than half the best error (0.1) in both scenes.
-        assert_eq!(md.matches("**Warning**").count(), 2, "{md}");
+        // The references' noise (0.09) is more than half the best error (0.1) in every scene.
+        assert_eq!(md.matches("**Warning**").count(), 3, "{md}");
         let rows: Vec<&str> = csv.lines().collect();
-        assert_eq!(rows.len(), 5, "{csv}");
-        assert_eq!(rows[1], "s1,pt,A,measurement,10.000000,1,1e-1,1e-1,10.000000,pt");
-        assert_eq!(rows[2], "s1,ppm:X,X,named,10.000000,1,2e-1,1e-1,,pt");
+        assert_eq!(rows.len(), 7, "{csv}");
+        // Two samples a curve: too few to tell their noise.
+        assert_eq!(rows[1], "s1,pt,A,measurement,10.000000,1,1e-1,,1e-1,10.000000,pt");
+        assert_eq!(rows[2], "s1,ppm:X,X,named,10.000000,1,2e-1,,1e-1,,pt");
         assert!(rows[4].ends_with(",ppm:X"), "{csv}");
+        assert!(rows[6].ends_with(",tie: pt; ppm:X"), "{csv}");
         let layout_rows: Vec<&str> = layouts.lines().collect();
         assert_eq!(layout_rows[1], "s1,pt,A,2e6,true,");
         assert_eq!(layout_rows[2], "s1,pt,B,,false,\"no 'memory' at all\"");
