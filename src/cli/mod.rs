@@ -3,6 +3,7 @@
 
 pub mod args;
 pub mod bench;
+pub mod checks;
 pub mod compare;
 pub mod explain;
 pub mod export;

@@ -27,13 +27,13 @@ pub struct RenderArgs {
     #[arg(long)]
     pub layout: Option<String>,
     /// Time each layout gets when --layout auto measures it.
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "500ms")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "500ms")]
     pub tune_time: Duration,
     /// Render for this long (e.g. 10s, 2m); overrides --frames.
-    #[arg(long, value_parser = humantime::parse_duration)]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true)]
     pub time: Option<Duration>,
     /// Frames to render.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub frames: u32,
     /// Seed of the random streams.
     #[arg(long, default_value_t = 1)]
@@ -96,7 +96,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
     };
     let scene = load_scene_with(c.scene(), kind)?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
-    let mut opts = options(c, &scene, &graph.constants, args.seed)?;
+    let mut opts = options(c, &scene, &graph, args.seed)?;
     let (layout, decl) = match named {
         Some(named) => named,
         None => tune_layout(&gpu, &graph, &scene, &opts, &args)?,

@@ -16,6 +16,7 @@ mod gltf;
 mod layouts;
 mod lights;
 mod mitsuba;
+mod options;
 mod photon_query;
 mod pm;
 mod probe;
