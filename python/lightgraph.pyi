@@ -2,8 +2,10 @@
 
 Images are float32 numpy arrays of shape (height, width, 3) holding mean radiance. Keyword
 arguments are the CLI's flags (``max_path_length=8`` is ``--max-path-length 8``,
-``constants={"PM_RADIUS": 0.01}`` is ``--set PM_RADIUS=0.01``) and are checked as the CLI
-checks them. Errors raise :class:`Error` with the CLI's message.
+``constants={"PM_RADIUS": 0.01}`` is ``--set PM_RADIUS=0.01``). A bad argument raises
+``ValueError`` naming it (``frames=0: it must be at least 1``, ``constants['NO_SUCH']: graph
+pt has no constant NO_SUCH; ...``) before any work; other errors raise :class:`Error` with
+the CLI's message.
 """
 
 from os import PathLike
@@ -38,9 +40,29 @@ class Session:
         max_path_length: Optional[int] = None,
         bvh: str = "auto",
         adapter: Optional[str] = None,
-    ) -> None: ...
+    ) -> None:
+        """Plans, compiles and instantiates ``graph`` in ``layout`` for ``scene``.
+
+        Args:
+            scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
+            graph: a built-in graph name or a .ron graph file.
+            layout: one of the graph's layouts (None: its default).
+            spp: samples per pixel in each frame, at least 1.
+            res: (width, height), each at least 1 (None: the scene's).
+            seed: the seed of the random streams, 0 to 4294967295.
+            constants: graph constants to values, e.g. {"MAX_PATH_LENGTH": 8}; each must be a
+                constant of the graph, of its type (u32, i32, f32 or bool).
+            max_path_length: the longest path in segments, at least 1 (None: the scene's).
+            bvh: "auto", "cwbvh" or "bvh2".
+            adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+        """
     def render(self, frames: int = 1, time: Optional[float] = None) -> None:
-        """Renders ``frames`` more frames, or as many as fit in ``time`` seconds."""
+        """Renders ``frames`` more frames, or as many as fit in ``time`` seconds.
+
+        Args:
+            frames: frames to add, at least 1.
+            time: seconds to render for, above zero (None: render ``frames``).
+        """
     def image(self) -> npt.NDArray[np.float32]:
         """The mean image so far, shape (height, width, 3)."""
     @property
@@ -65,7 +87,23 @@ def render(
 ) -> Tuple[npt.NDArray[np.float32], dict[str, Any]]:
     """Renders ``frames`` frames (or for ``time`` seconds) and returns the mean image and
     the statistics (frames, samples, rays, seconds, adapter), as ``lightgraph render`` with
-    the same options and seed renders it."""
+    the same options and seed renders it.
+
+    Args:
+        scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
+        graph: a built-in graph name or a .ron graph file.
+        layout: one of the graph's layouts (None: its default).
+        spp: samples per pixel in each frame, at least 1.
+        res: (width, height), each at least 1 (None: the scene's).
+        seed: the seed of the random streams, 0 to 4294967295.
+        frames: frames to render, at least 1.
+        time: seconds to render for, above zero (None: render ``frames``).
+        constants: graph constants to values, e.g. {"MAX_PATH_LENGTH": 8}; each must be a
+            constant of the graph, of its type (u32, i32, f32 or bool).
+        max_path_length: the longest path in segments, at least 1 (None: the scene's).
+        bvh: "auto", "cwbvh" or "bvh2".
+        adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+    """
 
 def reference(
     scene: str = "cornell-mitsuba",
@@ -83,9 +121,26 @@ def reference(
     adapter: Optional[str] = None,
     resume: Optional[Path] = None,
 ) -> npt.NDArray[np.float32]:
-    """Renders a reference film (f64 sums, variance, settings; seed 1000003 by default) for
-    ``frames`` frames (64 when neither frames nor time is given) or ``time`` seconds, writes
-    it to ``out`` and returns its mean image."""
+    """Renders a reference film (f64 sums, variance, settings) for ``frames`` frames or
+    ``time`` seconds, writes it to ``out`` and returns its mean image.
+
+    Args:
+        out: the film's path (an EXR; the PNG preview goes beside it).
+        scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
+        graph: a built-in graph name or a .ron graph file.
+        layout: one of the graph's layouts (None: its default).
+        spp: samples per pixel in each frame, at least 1.
+        res: (width, height), each at least 1 (None: the scene's).
+        seed: the seed of the random streams, 0 to 4294967295 (None: 1000003).
+        frames: frames to render, at least 1 (64 when neither frames nor time is given).
+        time: seconds to render for, above zero.
+        constants: graph constants to values, e.g. {"MAX_PATH_LENGTH": 8}; each must be a
+            constant of the graph, of its type (u32, i32, f32 or bool).
+        max_path_length: the longest path in segments, at least 1 (None: the scene's).
+        bvh: "auto", "cwbvh" or "bvh2".
+        adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+        resume: a film to continue with more frames of the same random streams.
+    """
 
 def compare(
     reference: Path,
@@ -97,9 +152,20 @@ def compare(
     baseline: Optional[str] = None,
     adapter: Optional[str] = None,
 ) -> str:
-    """Runs each of ``runs`` (``graph[:layout][@NAME=VALUE...]``, comma-separated) for
-    ``time`` seconds against the reference film, writes curves.csv, rmse_vs_time.png,
-    summary.md and each run's image into ``out``, and returns the summary (Markdown)."""
+    """Runs each of ``runs`` for ``time`` seconds against the reference film, writes
+    curves.csv, rmse_vs_time.png, summary.md and each run's image into ``out``, and returns
+    the summary (Markdown).
+
+    Args:
+        reference: the reference film (from ``reference``).
+        runs: ``graph[:layout][@NAME=VALUE...]``, comma-separated.
+        time: seconds each run renders for, above zero.
+        seed: the seed of the random streams, 0 to 4294967295.
+        out: the folder of the comparison.
+        per_decade: error samples per decade of time, at least 1.
+        baseline: the run the others' speed-ups are against (None: the first).
+        adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+    """
 
 def study(
     scenes: Sequence[str],
@@ -112,12 +178,23 @@ def study(
     out: Path = "out/study",
     adapter: Optional[str] = None,
 ) -> str:
-    """Runs each of ``estimators`` (a graph for its fastest layout on each scene, or
-    ``graph:Layout``; default PT, LVC-BPT, PPM, SPPM, PBPM and VCM) for ``time`` seconds of
-    rendering on each of ``scenes`` against a reference per scene (found in, resumed into or
-    rendered into ``out/references`` with ``reference_graph`` for ``reference_time``
-    seconds), writes each scene's comparison and summary.md, summary.csv and layouts.csv
-    into ``out``, and returns the summary (Markdown)."""
+    """Runs each estimator on each scene against a reference per scene, writes each scene's
+    comparison and summary.md, summary.csv and layouts.csv into ``out``, and returns the
+    summary (Markdown).
+
+    Args:
+        scenes: the scenes, as ``scene`` of ``render`` takes them.
+        estimators: ``graph`` (its fastest layout on each scene) or ``graph:Layout``
+            entries (None: PT, LVC-BPT, PPM, SPPM, PBPM and VCM).
+        time: seconds of rendering per estimator and scene, above zero.
+        reference_time: seconds of each missing reference, above zero (found in, resumed
+            into or rendered into ``out/references``).
+        reference_graph: the graph that renders the references.
+        res: (width, height), each at least 1 (None: each scene's).
+        seed: the seed of the random streams, 0 to 4294967295.
+        out: the folder of the study.
+        adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+    """
 
 def explain(
     graph: str = "pt",
@@ -129,15 +206,35 @@ def explain(
     all_features: bool = False,
     adapter: Optional[str] = None,
 ) -> str:
-    """The kernels, schedule and memory of the graph's layouts (all, or ``layout``)."""
+    """The kernels, schedule and memory of the graph's layouts (all, or ``layout``).
+
+    Args:
+        graph: a built-in graph name or a .ron graph file.
+        layout: one of the graph's layouts (None: all of them).
+        scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
+        res: (width, height), each at least 1 (None: the scene's).
+        spp: samples per pixel in each frame, at least 1.
+        constants: graph constants to values; each must be a constant of the graph, of its
+            type.
+        all_features: compile every scene feature into the kernels, not only the scene's.
+        adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+    """
 
 def list() -> dict[str, Any]:
     """Built-in ``scenes`` (name to file), ``graphs`` and GPU ``adapters``."""
 
 def read(path: Path) -> Tuple[npt.NDArray[np.float32], dict[str, Any]]:
     """Reads a film (EXR from render, reference or merge): its mean image and its settings
-    and statistics (its attributes as text, and samples per pixel, frames, seconds)."""
+    and statistics (its attributes as text, and samples per pixel, frames, seconds).
+
+    Args:
+        path: the film's path.
+    """
 
 def cli(args: Sequence[str]) -> None:
     """Runs a ``lightgraph`` command line without the program name, e.g.
-    ``cli(["merge", "a.exr", "b.exr", "--out", "m.exr"])``."""
+    ``cli(["merge", "a.exr", "b.exr", "--out", "m.exr"])``; its errors raise :class:`Error`.
+
+    Args:
+        args: the command and its options, as strings.
+    """

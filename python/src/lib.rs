@@ -1,10 +1,13 @@
 //! `import lightgraph`: the renderer from Python. Images come back as float32 numpy arrays of
-//! shape (height, width, 3); errors are `lightgraph.Error` exceptions carrying the CLI's
-//! messages (file:line:column for bad scene and graph files). Keyword arguments are the CLI's
-//! flags (`max_path_length=8` is `--max-path-length 8`) and are checked as the CLI checks
-//! them. The GPU work runs with the interpreter released, so other Python threads go on
-//! meanwhile. Every call on one adapter shares one device, opened on first use and kept for
-//! the process's life.
+//! shape (height, width, 3); a bad keyword argument raises `ValueError` naming it
+//! (`frames=0: it must be at least 1`), before any work; other errors are `lightgraph.Error`
+//! exceptions carrying the CLI's messages (file:line:column for bad scene and graph files).
+//! Keyword arguments are the CLI's flags (`max_path_length=8` is `--max-path-length 8`). The
+//! GPU work runs with the interpreter released, so other Python threads go on meanwhile.
+//! Every call on one adapter shares one device, opened on first use and kept for the
+//! process's life.
+
+mod checks;
 
 use ::lightgraph::cli::gpus::Setup;
 use ::lightgraph::cli::{Cli, Command};
@@ -15,7 +18,7 @@ use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyList};
+use pyo3::types::{PyDict, PyList};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Mutex, OnceLock};
@@ -29,7 +32,7 @@ create_exception!(
 );
 
 /// The error as a `lightgraph.Error` with the whole chain of causes, as the CLI prints it.
-fn err(e: impl Into<anyhow::Error>) -> PyErr {
+pub(crate) fn err(e: impl Into<anyhow::Error>) -> PyErr {
     Error::new_err(format!("{:#}", e.into()))
 }
 
@@ -79,10 +82,7 @@ impl Argv {
     /// Adds `--set NAME=VALUE` for each entry of `constants` (booleans as true/false).
     fn constants(mut self, constants: Option<&Bound<'_, PyDict>>) -> PyResult<Argv> {
         for (k, v) in constants.into_iter().flat_map(|d| d.iter()) {
-            let value = match v.cast::<PyBool>() {
-                Ok(b) => b.is_true().to_string(),
-                Err(_) => v.str()?.to_string(),
-            };
+            let value = checks::constant_text(&v)?;
             self.0.push("--set".into());
             self.0.push(format!("{}={value}", k.str()?));
         }
@@ -120,8 +120,9 @@ struct SceneArgs<'a> {
 }
 
 impl SceneArgs<'_> {
-    /// `lightgraph COMMAND` with these options and `constants`.
-    fn argv(&self, command: &str, constants: Option<&Bound<'_, PyDict>>) -> PyResult<Argv> {
+    /// `lightgraph COMMAND` with these options and `constants`, each checked first.
+    fn argv(&self, py: Python<'_>, command: &str, constants: Option<&Bound<'_, PyDict>>) -> PyResult<Argv> {
+        checks::constants(py, self.graph, constants)?;
         Argv::new(command)
             .opt("scene", Some(self.scene))
             .opt("graph", Some(self.graph))
@@ -137,6 +138,21 @@ impl SceneArgs<'_> {
 
 /// A progressive render: frames accumulate into one image; `render` renders more of them
 /// with the interpreter released, `image` reads the mean so far.
+///
+/// `Session(...)` plans, compiles and instantiates `graph` in `layout` for `scene`; no frame
+/// is rendered yet. A bad argument raises ValueError naming it.
+///
+/// - scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
+/// - graph: a built-in graph name or a .ron graph file.
+/// - layout: one of the graph's layouts (None: its default).
+/// - spp: samples per pixel in each frame, at least 1.
+/// - res: (width, height), each at least 1 (None: the scene's).
+/// - seed: the seed of the random streams, 0 to 4294967295.
+/// - constants: graph constants to values, e.g. {"MAX_PATH_LENGTH": 8}; each must be a
+///   constant of the graph, of its type (u32, i32, f32 or bool).
+/// - max_path_length: the longest path in segments, at least 1 (None: the scene's).
+/// - bvh: "auto", "cwbvh" or "bvh2".
+/// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
 #[pyclass(module = "lightgraph")]
 struct Session {
     session: RenderSession<'static>,
@@ -172,7 +188,7 @@ impl Session {
         let session = &mut self.session;
         py.detach(|| match time {
             Some(t) => {
-                let budget = Duration::from_secs_f64(t.max(0.0));
+                let budget = Duration::from_secs_f64(t);
                 while started.elapsed() < budget {
                     session.render_for(Some(budget - started.elapsed()), u32::MAX)?;
                 }
@@ -195,9 +211,7 @@ impl Session {
 
 #[pymethods]
 impl Session {
-    /// Plans, compiles and instantiates `graph` in `layout` (its default when None) for
-    /// `scene` (a built-in name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file).
-    /// `constants` maps graph constants to values (`--set`); `res` is (width, height).
+    /// The session of the arguments the class documents.
     #[new]
     #[pyo3(signature = (scene = "cornell-mitsuba", graph = "pt", layout = None, spp = 1, res = None, seed = 1,
         constants = None, max_path_length = None, bvh = "auto", adapter = None))]
@@ -207,14 +221,18 @@ impl Session {
         scene: &str,
         graph: &str,
         layout: Option<&str>,
-        spp: u32,
-        res: Option<(u32, u32)>,
-        seed: u32,
+        spp: i64,
+        res: Option<(i64, i64)>,
+        seed: i64,
         constants: Option<&Bound<'_, PyDict>>,
-        max_path_length: Option<u32>,
+        max_path_length: Option<i64>,
         bvh: &str,
         adapter: Option<&str>,
     ) -> PyResult<Session> {
+        let spp = checks::count("spp", spp)?;
+        let res = checks::image(res, spp)?;
+        let max_path_length = checks::count_opt("max_path_length", max_path_length)?;
+        let seed = checks::seed("seed", seed)?;
         let s = SceneArgs {
             scene,
             graph,
@@ -225,14 +243,19 @@ impl Session {
             bvh,
             adapter,
         };
-        let command = s.argv("render", constants)?.opt("seed", Some(seed)).parse()?;
+        let command = s.argv(py, "render", constants)?.opt("seed", Some(seed)).parse()?;
         Session::open(py, command)
     }
 
     /// Renders `frames` more frames, or as many as fit in `time` seconds when given (the GPU
     /// works with the interpreter released).
+    ///
+    /// - frames: frames to add, at least 1.
+    /// - time: seconds to render for, above zero (None: render `frames`).
     #[pyo3(signature = (frames = 1, time = None))]
-    fn render(&mut self, py: Python<'_>, frames: u32, time: Option<f64>) -> PyResult<()> {
+    fn render(&mut self, py: Python<'_>, frames: i64, time: Option<f64>) -> PyResult<()> {
+        let frames = checks::count("frames", frames)?;
+        let time = checks::seconds_opt("time", time)?;
         let target = self.session.frames.saturating_add(frames);
         self.advance(py, target, time)
     }
@@ -263,8 +286,23 @@ impl Session {
 }
 
 /// Renders `scene` with `graph` for `frames` frames (or for `time` seconds) and returns the
-/// mean image (float32, (height, width, 3)) and the statistics, as `lightgraph render` with
-/// the same options and seed renders it.
+/// mean image (float32, (height, width, 3)) and the statistics (frames, samples, rays,
+/// seconds, adapter), as `lightgraph render` with the same options and seed renders it. A
+/// bad argument raises ValueError naming it, before any work.
+///
+/// - scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
+/// - graph: a built-in graph name or a .ron graph file.
+/// - layout: one of the graph's layouts (None: its default).
+/// - spp: samples per pixel in each frame, at least 1.
+/// - res: (width, height), each at least 1 (None: the scene's).
+/// - seed: the seed of the random streams, 0 to 4294967295.
+/// - frames: frames to render, at least 1.
+/// - time: seconds to render for, above zero (None: render `frames`).
+/// - constants: graph constants to values, e.g. {"MAX_PATH_LENGTH": 8}; each must be a
+///   constant of the graph, of its type (u32, i32, f32 or bool).
+/// - max_path_length: the longest path in segments, at least 1 (None: the scene's).
+/// - bvh: "auto", "cwbvh" or "bvh2".
+/// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
 #[pyfunction]
 #[pyo3(signature = (scene = "cornell-mitsuba", graph = "pt", layout = None, spp = 1, res = None, seed = 1,
     frames = 64, time = None, constants = None, max_path_length = None, bvh = "auto", adapter = None))]
@@ -274,16 +312,18 @@ fn render<'py>(
     scene: &str,
     graph: &str,
     layout: Option<&str>,
-    spp: u32,
-    res: Option<(u32, u32)>,
-    seed: u32,
-    frames: u32,
+    spp: i64,
+    res: Option<(i64, i64)>,
+    seed: i64,
+    frames: i64,
     time: Option<f64>,
     constants: Option<&Bound<'_, PyDict>>,
-    max_path_length: Option<u32>,
+    max_path_length: Option<i64>,
     bvh: &str,
     adapter: Option<&str>,
 ) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyDict>)> {
+    let frames = checks::count("frames", frames)?;
+    let time = checks::seconds_opt("time", time)?;
     let mut s = Session::new(
         py,
         scene,
@@ -302,8 +342,24 @@ fn render<'py>(
 }
 
 /// Renders a reference film as `lightgraph reference` does (f64 sums and variance, the
-/// settings, a PNG preview; seed 1000003 by default, resumable with `resume`) for `frames`
-/// frames or `time` seconds, writes it to `out`, and returns its mean image.
+/// settings, a PNG preview) for `frames` frames or `time` seconds, writes it to `out`, and
+/// returns its mean image. A bad argument raises ValueError naming it, before any work.
+///
+/// - out: the film's path (an EXR; the PNG preview goes beside it).
+/// - scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
+/// - graph: a built-in graph name or a .ron graph file.
+/// - layout: one of the graph's layouts (None: its default).
+/// - spp: samples per pixel in each frame, at least 1.
+/// - res: (width, height), each at least 1 (None: the scene's).
+/// - seed: the seed of the random streams, 0 to 4294967295 (None: 1000003).
+/// - frames: frames to render, at least 1 (64 when neither frames nor time is given).
+/// - time: seconds to render for, above zero.
+/// - constants: graph constants to values, e.g. {"MAX_PATH_LENGTH": 8}; each must be a
+///   constant of the graph, of its type (u32, i32, f32 or bool).
+/// - max_path_length: the longest path in segments, at least 1 (None: the scene's).
+/// - bvh: "auto", "cwbvh" or "bvh2".
+/// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+/// - resume: a film to continue with more frames of the same random streams.
 #[pyfunction]
 #[pyo3(signature = (scene = "cornell-mitsuba", out = PathBuf::from("out/reference.exr"), graph = "pt", layout = None,
     spp = 1, res = None, seed = None, frames = None, time = None, constants = None, max_path_length = None,
@@ -315,17 +371,22 @@ fn reference<'py>(
     out: PathBuf,
     graph: &str,
     layout: Option<&str>,
-    spp: u32,
-    res: Option<(u32, u32)>,
-    seed: Option<u32>,
-    frames: Option<u32>,
+    spp: i64,
+    res: Option<(i64, i64)>,
+    seed: Option<i64>,
+    frames: Option<i64>,
     time: Option<f64>,
     constants: Option<&Bound<'_, PyDict>>,
-    max_path_length: Option<u32>,
+    max_path_length: Option<i64>,
     bvh: &str,
     adapter: Option<&str>,
     resume: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let spp = checks::count("spp", spp)?;
+    let res = checks::image(res, spp)?;
+    let (seed, frames) = (checks::seed_opt("seed", seed)?, checks::count_opt("frames", frames)?);
+    let time = checks::seconds_opt("time", time)?;
+    let max_path_length = checks::count_opt("max_path_length", max_path_length)?;
     let s = SceneArgs {
         scene,
         graph,
@@ -338,7 +399,7 @@ fn reference<'py>(
     };
     let frames = frames.or(time.is_none().then_some(64));
     let cli = s
-        .argv("reference", constants)?
+        .argv(py, "reference", constants)?
         .opt("out", Some(out.display()))
         .opt("seed", seed)
         .opt("frames", frames)
@@ -349,10 +410,18 @@ fn reference<'py>(
     array(py, &film.mean(), film.size)
 }
 
-/// Runs each of `runs` (`graph[:layout][@NAME=VALUE...]`, comma-separated) for `time`
-/// seconds against the reference film `reference`, as `lightgraph compare` does, writes the
-/// comparison into `out` (curves.csv, rmse_vs_time.png, summary.md, each run's EXR and PNG)
-/// and returns the summary (Markdown).
+/// Runs each of `runs` for `time` seconds against the reference film `reference`, as
+/// `lightgraph compare` does, writes the comparison into `out` (curves.csv,
+/// rmse_vs_time.png, summary.md, each run's EXR and PNG) and returns the summary (Markdown).
+///
+/// - reference: the reference film (from `reference`).
+/// - runs: `graph[:layout][@NAME=VALUE...]`, comma-separated.
+/// - time: seconds each run renders for, above zero.
+/// - seed: the seed of the random streams, 0 to 4294967295.
+/// - out: the folder of the comparison.
+/// - per_decade: error samples per decade of time, at least 1.
+/// - baseline: the run the others' speed-ups are against (None: the first).
+/// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
 #[pyfunction]
 #[pyo3(signature = (reference, runs, time = 10.0, seed = 1, out = PathBuf::from("out/compare"), per_decade = 6,
     baseline = None, adapter = None))]
@@ -362,12 +431,14 @@ fn compare(
     reference: PathBuf,
     runs: &str,
     time: f64,
-    seed: u32,
+    seed: i64,
     out: PathBuf,
-    per_decade: u32,
+    per_decade: i64,
     baseline: Option<&str>,
     adapter: Option<&str>,
 ) -> PyResult<String> {
+    let time = checks::seconds("time", time)?;
+    let (seed, per_decade) = (checks::seed("seed", seed)?, checks::count("per_decade", per_decade)?);
     let cli = Argv::new("compare")
         .opt("reference", Some(reference.display()))
         .opt("runs", Some(runs))
@@ -382,11 +453,21 @@ fn compare(
     std::fs::read_to_string(&summary).map_err(|e| Error::new_err(format!("{}: {e}", summary.display())))
 }
 
-/// Runs `lightgraph study`: each of `estimators` (`graph` for its fastest layout on each
-/// scene, or `graph:Layout`) for `time` seconds of rendering on each of `scenes` against a
-/// reference per scene (found in, resumed into or rendered into `out/references` with
-/// `reference_graph` for `reference_time` seconds), writes each scene's comparison and the
-/// summary files into `out`, and returns the summary (Markdown).
+/// Runs `lightgraph study`: each estimator on each scene against a reference per scene,
+/// writes each scene's comparison and the summary files into `out`, and returns the summary
+/// (Markdown).
+///
+/// - scenes: the scenes, as `scene` of `render` takes them.
+/// - estimators: `graph` (its fastest layout on each scene) or `graph:Layout` entries
+///   (None: PT, LVC-BPT, PPM, SPPM, PBPM and VCM).
+/// - time: seconds of rendering per estimator and scene, above zero.
+/// - reference_time: seconds of each missing reference, above zero (found in, resumed into
+///   or rendered into `out/references`).
+/// - reference_graph: the graph that renders the references.
+/// - res: (width, height), each at least 1 (None: each scene's).
+/// - seed: the seed of the random streams, 0 to 4294967295.
+/// - out: the folder of the study.
+/// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
 #[pyfunction]
 #[pyo3(signature = (scenes, estimators = None, time = 20.0, reference_time = 120.0, reference_graph = "vcm",
     res = None, seed = 1, out = PathBuf::from("out/study"), adapter = None))]
@@ -398,11 +479,14 @@ fn study(
     time: f64,
     reference_time: f64,
     reference_graph: &str,
-    res: Option<(u32, u32)>,
-    seed: u32,
+    res: Option<(i64, i64)>,
+    seed: i64,
     out: PathBuf,
     adapter: Option<&str>,
 ) -> PyResult<String> {
+    let time = checks::seconds("time", time)?;
+    let reference_time = checks::seconds("reference_time", reference_time)?;
+    let (res, seed) = (checks::image(res, 1)?, checks::seed("seed", seed)?);
     let millis = |t: f64| format!("{}ms", (t * 1e3).round() as u64);
     let cli = Argv::new("study")
         .opt("scenes", Some(scenes.join(",")))
@@ -421,6 +505,15 @@ fn study(
 
 /// The kernels, schedule and resources of `graph`'s layouts (all of them, or `layout`) for
 /// `scene`, as `lightgraph explain` prints them.
+///
+/// - graph: a built-in graph name or a .ron graph file.
+/// - layout: one of the graph's layouts (None: all of them).
+/// - scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
+/// - res: (width, height), each at least 1 (None: the scene's).
+/// - spp: samples per pixel in each frame, at least 1.
+/// - constants: graph constants to values; each must be a constant of the graph, of its type.
+/// - all_features: compile every scene feature into the kernels, not only the scene's.
+/// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
 #[pyfunction]
 #[pyo3(signature = (graph = "pt", layout = None, scene = "cornell-mitsuba", res = None, spp = 1, constants = None,
     all_features = false, adapter = None))]
@@ -430,12 +523,14 @@ fn explain(
     graph: &str,
     layout: Option<&str>,
     scene: &str,
-    res: Option<(u32, u32)>,
-    spp: u32,
+    res: Option<(i64, i64)>,
+    spp: i64,
     constants: Option<&Bound<'_, PyDict>>,
     all_features: bool,
     adapter: Option<&str>,
 ) -> PyResult<String> {
+    let spp = checks::count("spp", spp)?;
+    let res = checks::image(res, spp)?;
     let s = SceneArgs {
         scene,
         graph,
@@ -447,7 +542,7 @@ fn explain(
         adapter,
     };
     let Command::Explain(args) = s
-        .argv("explain", constants)?
+        .argv(py, "explain", constants)?
         .flag("all-features", all_features)
         .parse()?
     else {
@@ -479,6 +574,8 @@ fn list_all(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 /// Reads a film (an EXR from `render`, `reference` or `merge`): its mean image and a dict of
 /// its settings and statistics (the EXR's attributes, as text) with `samples` (per pixel),
 /// `frames` and `seconds`.
+///
+/// - path: the film's path.
 #[pyfunction]
 fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyDict>)> {
     let film = Reference::read(&path).map_err(err)?;
@@ -494,7 +591,9 @@ fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'py, PyArray3<f3
 
 /// Runs a `lightgraph` command line (without the program name), e.g.
 /// `cli(["merge", "a.exr", "b.exr", "--out", "m.exr"])`; its output goes to the process's
-/// stdout and stderr.
+/// stdout and stderr, its errors raise lightgraph.Error with the CLI's message.
+///
+/// - args: the command and its options, as strings.
 #[pyfunction]
 fn cli(py: Python<'_>, args: Vec<String>) -> PyResult<()> {
     run(
@@ -512,6 +611,11 @@ fn run(py: Python<'_>, argv: Argv) -> PyResult<()> {
 /// The module `lightgraph`.
 #[pymodule(name = "lightgraph")]
 fn lightgraph_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // SAFETY: set on import, before this module starts a thread or opens Vulkan; the
+        // Vulkan loader reads it, and warns twice a call when it is unset.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
     m.add("Error", m.py().get_type::<Error>())?;
     m.add_class::<Session>()?;
     m.add_function(wrap_pyfunction!(render, m)?)?;

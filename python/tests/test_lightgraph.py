@@ -5,9 +5,11 @@ builds the module and runs this suite with LIGHTGRAPH_BIN naming the CLI binary 
 build; without it the CLI's commands run in-process through `lightgraph.cli`.
 """
 
+import inspect
 import os
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -74,8 +76,81 @@ def test_a_bad_scene_raises_the_clis_message_with_file_line_and_column(tmp_path)
 def test_bad_options_raise_errors_not_crashes():
     with pytest.raises(lightgraph.Error, match="no-such-graph"):
         lightgraph.render(graph="no-such-graph", res=RES, frames=1)
-    with pytest.raises(lightgraph.Error, match="NOT_A_CONSTANT|not a valid value"):
-        lightgraph.render(res=RES, frames=1, constants={"MAX_PATH_LENGTH": "many"})
+
+
+def refused(call, message):
+    """`call` raises ValueError matching `message`, in Python's words, not the CLI's."""
+    with pytest.raises(ValueError, match=message) as e:
+        call()
+    text = str(e.value)
+    assert "--" not in text and "try '--help'" not in text and "\n" not in text, text
+
+
+def test_bad_values_raise_value_errors_naming_the_keyword(tmp_path):
+    cases = [
+        (lambda: lightgraph.render(frames=-1), r"^frames=-1: it must be at least 1"),
+        (lambda: lightgraph.render(frames=0), r"^frames=0: "),
+        (lambda: lightgraph.render(res=(0, 0)), r"^res=\(0, 0\): width and height: "),
+        (lambda: lightgraph.render(res=RES, time=-1.0), r"^time=-1.0: .*above zero"),
+        (lambda: lightgraph.render(res=RES, time=0.0), r"^time=0.0: "),
+        (lambda: lightgraph.render(spp=0), r"^spp=0: "),
+        (lambda: lightgraph.render(seed=-1), r"^seed=-1: it must be from 0 to 4294967295"),
+        (lambda: lightgraph.render(max_path_length=0), r"^max_path_length=0: "),
+        (lambda: lightgraph.Session(res=(-3, 4)), r"^res=\(-3, 4\): "),
+        (lambda: lightgraph.reference(out=tmp_path / "r.exr", frames=0), r"^frames=0: "),
+        (lambda: lightgraph.compare(tmp_path / "r.exr", "pt", time=0.0), r"^time=0.0: "),
+        (lambda: lightgraph.compare(tmp_path / "r.exr", "pt", per_decade=0), r"^per_decade=0: "),
+        (lambda: lightgraph.study(["cornell-diffuse"], reference_time=-2.0), r"^reference_time=-2.0: "),
+        (lambda: lightgraph.explain(spp=0), r"^spp=0: "),
+    ]
+    for call, message in cases:
+        refused(call, message)
+    assert not (tmp_path / "r.exr").exists()
+    session = lightgraph.Session(res=RES)
+    refused(lambda: session.render(frames=0), r"^frames=0: ")
+    refused(lambda: session.render(time=float("nan")), r"^time=nan: ")
+    assert session.frames == 0
+
+
+def test_sizes_that_cannot_fit_are_refused_before_any_work():
+    refused(lambda: lightgraph.render(res=(100000, 100000)), r"^res=\(100000, 100000\) with spp=1: 10000000000 paths")
+    refused(lambda: lightgraph.render(res=(256, 256), spp=100000), r"with spp=100000: 6553600000 paths")
+
+
+def test_unknown_constants_and_values_of_the_wrong_type_are_refused():
+    refused(
+        lambda: lightgraph.render(res=RES, constants={"NO_SUCH": 1}),
+        r"^constants\['NO_SUCH'\]: graph pt has no constant NO_SUCH; its constants: .*MAX_PATH_LENGTH",
+    )
+    refused(
+        lambda: lightgraph.render(graph="ppm", res=RES, constants={"PM_RADUIS": 0.5}),
+        r"graph ppm has no constant PM_RADUIS; close names: PM_RADIUS",
+    )
+    refused(
+        lambda: lightgraph.render(res=RES, constants={"MAX_PATH_LENGTH": "many"}),
+        r"^constants\['MAX_PATH_LENGTH'\]: MAX_PATH_LENGTH is a u32 .*'many'",
+    )
+    refused(
+        lambda: lightgraph.explain(graph="vcm", constants={"VCM_MERGE": 2}),
+        r"VCM_MERGE is a bool",
+    )
+
+
+def test_every_parameter_is_documented():
+    for function in [lightgraph.Session, lightgraph.Session.render, lightgraph.render, lightgraph.reference,
+                     lightgraph.compare, lightgraph.study, lightgraph.explain, lightgraph.read, lightgraph.cli]:
+        doc = function.__doc__ or ""
+        names = [n for n in inspect.signature(function).parameters if n != "self"]
+        assert names, function
+        for name in names:
+            assert f"- {name}:" in doc, f"{function.__name__} does not document {name}: {doc}"
+
+
+def test_importing_and_listing_print_nothing():
+    env = {k: v for k, v in os.environ.items() if k != "XDG_RUNTIME_DIR"}
+    code = "import lightgraph; lightgraph.list()"
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert done.stderr == "" and done.stdout == "", done.stderr
 
 
 def rmse(a, b):

@@ -1,5 +1,6 @@
 //! Options shared by the commands: scene, graph, resolution, constants, layout overrides.
 
+use super::checks::{self, count};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
 use lightgraph::compare::RunSpec;
@@ -61,13 +62,13 @@ pub struct Common {
     #[arg(long)]
     pub scene: Option<String>,
     /// Image size WxH (default: the scene's).
-    #[arg(long, value_parser = parse_resolution)]
+    #[arg(long, value_parser = parse_resolution, allow_hyphen_values = true)]
     pub res: Option<(u32, u32)>,
     /// Samples per pixel in each frame [default: 1].
-    #[arg(long)]
+    #[arg(long, value_parser = count::<u32>, allow_negative_numbers = true)]
     pub spp: Option<u32>,
     /// Maximum path length in segments (default: the scene's).
-    #[arg(long)]
+    #[arg(long, value_parser = count::<u32>, allow_negative_numbers = true)]
     pub max_path_length: Option<u32>,
     /// Override a graph constant, NAME=VALUE (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE")]
@@ -81,10 +82,10 @@ pub struct Common {
     #[arg(long, env = "LIGHTGRAPH_ADAPTER")]
     pub adapter: Option<String>,
     /// Thread pool of regeneration and compaction layouts (overrides the layout's).
-    #[arg(long)]
+    #[arg(long, value_parser = count::<u64>, allow_negative_numbers = true)]
     pub threads: Option<u64>,
     /// Threads per workgroup (overrides the layout's).
-    #[arg(long)]
+    #[arg(long, value_parser = count::<u32>, allow_negative_numbers = true)]
     pub workgroup: Option<u32>,
     /// Item state between split kernels: soa or aos (overrides the layout's).
     #[arg(long, value_parser = parse_state)]
@@ -223,49 +224,38 @@ pub fn parse_state(s: &str) -> Result<StateStorage, String> {
     }
 }
 
-/// Parses `--res WxH`.
+/// Parses `--res WxH`: both sides at least 1.
 pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("'{s}' is not WxH"))?;
-    let w: u32 = w.parse().map_err(|_| format!("bad width in '{s}'"))?;
-    let h: u32 = h.parse().map_err(|_| format!("bad height in '{s}'"))?;
-    if w == 0 || h == 0 {
-        return Err(format!("'{s}' has a zero side"));
-    }
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| "it is not WxH, e.g. 640x480".to_string())?;
+    let w = count(w).map_err(|e| format!("the width: {e}"))?;
+    let h = count(h).map_err(|e| format!("the height: {e}"))?;
     Ok((w, h))
 }
 
-/// Parses `--set` values with the type of the graph's default (u32 when it has none).
-pub fn parse_sets(sets: &[String], defaults: &BTreeMap<String, ConstValue>) -> Result<BTreeMap<String, ConstValue>> {
+/// Parses `NAME=VALUE` entries as constants of `graph`, each of its type; an error starts
+/// with `flag` and the entry (`flag` is `--set ` for `--set`, `--runs @` for a run's own).
+pub fn parse_sets(sets: &[String], graph: &Graph, flag: &str) -> Result<BTreeMap<String, ConstValue>> {
     let mut out = BTreeMap::new();
     for s in sets {
         let (name, value) = s
             .split_once('=')
-            .ok_or_else(|| anyhow!("--set {s}: expected NAME=VALUE"))?;
-        let bad = || anyhow!("--set {s}: '{value}' is not a valid value for {name}");
-        let v = match defaults.get(name) {
-            Some(ConstValue::F32(_)) => ConstValue::F32(value.parse().map_err(|_| bad())?),
-            Some(ConstValue::I32(_)) => ConstValue::I32(value.parse().map_err(|_| bad())?),
-            Some(ConstValue::Bool(_)) => ConstValue::Bool(value.parse().map_err(|_| bad())?),
-            _ => ConstValue::U32(value.parse().map_err(|_| bad())?),
-        };
-        out.insert(name.to_string(), v);
+            .ok_or_else(|| anyhow!("{flag}{s}: expected NAME=VALUE"))?;
+        let v = checks::constant(graph, name.trim(), value).map_err(|e| anyhow!("{flag}{s}: {e}"))?;
+        out.insert(name.trim().to_string(), v);
     }
     Ok(out)
 }
 
-/// The session options the shared flags give for `scene`, with the seed of the command.
-pub fn options(
-    common: &Common,
-    scene: &LoadedScene,
-    defaults: &BTreeMap<String, ConstValue>,
-    seed: u32,
-) -> Result<SessionOptions> {
+/// The session options the shared flags give for `scene` rendered by `graph`, with the seed
+/// of the command; the image size is checked to fit before anything is allocated.
+pub fn options(common: &Common, scene: &LoadedScene, graph: &Graph, seed: u32) -> Result<SessionOptions> {
     let (width, height) = common.res.unwrap_or(scene.scene.resolution);
-    let mut constants = parse_sets(&common.set, defaults)?;
+    let spp = common.spp.unwrap_or(1);
+    checks::image_fits(width, height, spp).map_err(|e| anyhow!("--res {width}x{height} with --spp {spp}: {e}"))?;
+    let mut constants = parse_sets(&common.set, graph, "--set ")?;
     if let Some(n) = common.max_path_length {
-        if n == 0 {
-            bail!("--max-path-length must be at least 1");
-        }
         constants.insert("MAX_PATH_LENGTH".into(), ConstValue::U32(n));
     }
     let layout = LayoutOverrides {
@@ -280,7 +270,7 @@ pub fn options(
     Ok(SessionOptions {
         width,
         height,
-        samples_per_frame: common.spp.unwrap_or(1),
+        samples_per_frame: spp,
         seed,
         constants,
         layout,
@@ -362,7 +352,7 @@ pub fn find_scene(scene: &str, flag: &str) -> Result<()> {
 }
 
 /// The estimators a list of `graph[:Layout][@NAME=VALUE...]` names (option `flag`), each
-/// graph and named layout checked, none named twice.
+/// graph, named layout and constant checked, none named twice.
 pub fn estimator_specs(list: &str, flag: &str) -> Result<Vec<RunSpec>> {
     if list.split(',').all(|s| s.trim().is_empty()) {
         bail!("{flag} names no estimator; give graphs or graph:Layout pairs, e.g. pt,bpt-lvc:LVC-BPTmk");
@@ -376,6 +366,7 @@ pub fn estimator_specs(list: &str, flag: &str) -> Result<Vec<RunSpec>> {
         if let Some(layout) = &spec.layout {
             named_layout(&graph, Some(layout)).with_context(|| format!("{flag} {spec}"))?;
         }
+        parse_sets(&spec.sets, &graph, &format!("{flag} @"))?;
     }
     Ok(specs)
 }

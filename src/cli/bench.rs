@@ -1,7 +1,8 @@
 //! `lightgraph bench`: layouts over a sweep of frame sizes.
 
 use super::args::*;
-use anyhow::{Result, anyhow};
+use super::checks::count;
+use anyhow::Result;
 use clap::Args;
 use lightgraph::render::load_graph;
 use lightgraph_engine::{Gpu, Plan};
@@ -20,32 +21,36 @@ pub struct BenchArgs {
     #[arg(long, default_value = "all")]
     pub layouts: String,
     /// Frame sizes as WxHxSPP, comma-separated (default: 3.3e5 to 1e8 paths per frame).
-    #[arg(long)]
-    pub points: Option<String>,
+    #[arg(long, value_parser = parse_point, value_delimiter = ',', allow_hyphen_values = true)]
+    pub points: Vec<(u32, u32, u32)>,
     /// Time each layout renders at each frame size (after a warm-up frame).
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "2s")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "2s")]
     pub time: Duration,
     /// Output folder for bench.md, bench.csv and rays_per_second.png.
     #[arg(long, default_value = "out/bench")]
     pub out: PathBuf,
 }
 
+/// Parses a `--points` entry `WxHxSPP`: each at least 1, the frame within the engine's
+/// counts and the host's memory.
+fn parse_point(s: &str) -> Result<(u32, u32, u32), String> {
+    let parts: Vec<&str> = s.split(['x', 'X']).collect();
+    let [w, h, spp] = parts[..] else {
+        return Err("it is not WxHxSPP, e.g. 1280x720x4".into());
+    };
+    let (w, h, spp) = (count(w)?, count(h)?, count(spp)?);
+    super::checks::image_fits(w, h, spp)?;
+    Ok((w, h, spp))
+}
+
+/// `lightgraph bench`: every layout at every frame size, reported as tables and a plot.
 pub fn bench(args: BenchArgs) -> Result<()> {
     let c = &args.common;
     let graph = load_graph(args.graph.name())?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
-    let points: Vec<(u32, u32, u32)> = match &args.points {
-        None => lightgraph::bench::DEFAULT_POINTS.to_vec(),
-        Some(list) => list
-            .split(',')
-            .map(|p| {
-                let v: Vec<u32> = p.split(['x', 'X']).filter_map(|n| n.trim().parse().ok()).collect();
-                match v.as_slice() {
-                    [w, h, s] if *w > 0 && *h > 0 && *s > 0 => Ok((*w, *h, *s)),
-                    _ => Err(anyhow!("--points: '{p}' is not WxHxSPP")),
-                }
-            })
-            .collect::<Result<_>>()?,
+    let points = match args.points.is_empty() {
+        true => lightgraph::bench::DEFAULT_POINTS.to_vec(),
+        false => args.points.clone(),
     };
     let layouts: Vec<(String, lightgraph_engine::ir::LayoutDecl)> = match args.layouts.as_str() {
         "all" => graph.layouts.iter().map(|(n, d)| (n.clone(), d.clone())).collect(),
@@ -73,7 +78,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     for (w, h, spp) in points {
         for ((name, decl), &kind) in layouts.iter().zip(&kinds) {
             let scene = scenes.get(kind);
-            let mut opts = options(c, scene, &graph.constants, 1)?;
+            let mut opts = options(c, scene, &graph, 1)?;
             (opts.width, opts.height, opts.samples_per_frame) = (w, h, spp);
             match lightgraph::bench::measure(&gpu, &graph, name, decl.clone(), scene, opts, args.time) {
                 Ok(m) => {

@@ -29,7 +29,7 @@ pub struct CompareArgs {
     #[arg(long)]
     pub reference: PathBuf,
     /// Wall-clock budget of each run.
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "10s")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "10s")]
     pub time: Duration,
     /// Count each run's set-up (pipeline creation, buffers, the first frame's compilation)
     /// on its budget; by default its clock starts after it and a warm-up frame (thrown away),
@@ -45,7 +45,7 @@ pub struct CompareArgs {
     pub baseline: Option<String>,
     /// Error samples per decade of time (log-spaced from the first frame to the end, at
     /// least 12).
-    #[arg(long, default_value_t = 6)]
+    #[arg(long, default_value_t = 6, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub per_decade: u32,
     /// Seed of the runs' random streams (must differ from the reference's).
     #[arg(long, default_value_t = 1)]
@@ -215,9 +215,6 @@ pub(super) fn check_reference(args: &CompareArgs, reference: &Reference) -> Resu
             args.seed
         );
     }
-    if args.per_decade == 0 {
-        bail!("--per-decade must be at least 1");
-    }
     Ok(())
 }
 
@@ -232,7 +229,7 @@ fn jobs(args: &CompareArgs, reference: &Reference, scenes: &mut Scenes) -> Resul
         let graph = load_graph(&spec.graph)?;
         let (layout, decl) = named_layout(&graph, spec.layout.as_deref())?;
         let kind = scenes.load_for(c.bvh, &layout, &decl)?;
-        let opts = options(c, scenes.get(kind), &graph.constants, args.seed)?;
+        let opts = options(c, scenes.get(kind), &graph, args.seed)?;
         if constants_text(&opts.constants) != info("constants") {
             bail!(
                 "{}: the reference was made with constants '{}', run {} would use '{}'",
@@ -245,7 +242,7 @@ fn jobs(args: &CompareArgs, reference: &Reference, scenes: &mut Scenes) -> Resul
         check_size(reference, &args.reference, (opts.width, opts.height))?;
         // The run's own settings come after the check: they choose the estimator, not the image.
         let mut opts = opts;
-        opts.constants.extend(parse_sets(&spec.sets, &graph.constants)?);
+        opts.constants.extend(parse_sets(&spec.sets, &graph, "--runs @")?);
         let label = std::iter::once(format!("{}:{layout}", graph.name))
             .chain(spec.sets.iter().cloned())
             .collect::<Vec<_>>()

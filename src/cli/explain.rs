@@ -56,7 +56,7 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
         target = target.without_subgroups();
     }
     let first = scenes.get(kinds[0]);
-    let opts = options(c, first, &graph.constants, 1)?;
+    let opts = options(c, first, &graph, 1)?;
     features(
         &mut out,
         &lightgraph::render::kernel_flags(device.clone(), first, c.all_features),

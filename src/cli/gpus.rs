@@ -85,7 +85,7 @@ impl Setup {
         let graph = load_graph(args.graph.name())?;
         let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
         let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
-        let opts = options(c, &scene, &graph.constants, args.seed())?;
+        let opts = options(c, &scene, &graph, args.seed())?;
         Ok(Setup {
             scene,
             graph,

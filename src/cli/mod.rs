@@ -4,6 +4,7 @@
 pub mod args;
 pub mod assets;
 pub mod bench;
+pub mod checks;
 pub mod compare;
 pub mod explain;
 pub mod export;

@@ -29,7 +29,7 @@ pub struct OperatorsArgs {
     #[arg(long, default_value_t = 32)]
     pub bits: u32,
     /// Runs per size; the times are the median.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub runs: u32,
     /// Use no subgroup operations even where the adapter has them.
     #[arg(long)]

@@ -32,10 +32,10 @@ pub struct ReferenceArgs {
     #[arg(long)]
     pub layout: Option<String>,
     /// Render for this long (added to what a resumed reference has).
-    #[arg(long, value_parser = humantime::parse_duration, required_unless_present = "frames")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, required_unless_present = "frames")]
     pub time: Option<Duration>,
     /// Render this many frames instead (for reproducible references and tests).
-    #[arg(long, conflicts_with = "time")]
+    #[arg(long, conflicts_with = "time", value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub frames: Option<u32>,
     /// Seed of the random streams [default: 1000003, or the resumed reference's].
     #[arg(long)]
@@ -54,7 +54,7 @@ pub struct ReferenceArgs {
     pub force: bool,
     /// Write the reference every this often while rendering, so a long run that is stopped
     /// keeps its samples.
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "5m")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "5m")]
     pub checkpoint: Duration,
     /// Exposure of the PNG preview in stops.
     #[arg(long, default_value_t = 0.0)]
@@ -124,7 +124,7 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
     let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
     let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
     let seed = args.seed.unwrap_or(REFERENCE_SEED);
-    let mut opts = options(c, &scene, &graph.constants, seed)?;
+    let mut opts = options(c, &scene, &graph, seed)?;
     // One measurement for every GPU and for the film (a resumed film brings its own).
     let first_gpu = match &args.gpus {
         Some(spec) => gpu_selectors(spec)?.into_iter().next(),

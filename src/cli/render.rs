@@ -29,13 +29,13 @@ pub struct RenderArgs {
     #[arg(long)]
     pub layout: Option<String>,
     /// Time each layout gets when --layout auto measures it.
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "500ms")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "500ms")]
     pub tune_time: Duration,
     /// Render for this long (e.g. 10s, 2m); overrides --frames.
-    #[arg(long, value_parser = humantime::parse_duration)]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true)]
     pub time: Option<Duration>,
     /// Frames to render.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub frames: u32,
     /// Seed of the random streams [default: 1, or the resumed film's].
     #[arg(long)]
@@ -56,7 +56,7 @@ pub struct RenderArgs {
     pub resume: Option<PathBuf>,
     /// Write the film (and the PNG) every this often while rendering (e.g. 10m), so a run
     /// that is killed keeps its frames up to the last checkpoint.
-    #[arg(long, value_parser = humantime::parse_duration)]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true)]
     pub checkpoint: Option<Duration>,
     /// Exposure of the PNG preview in stops.
     #[arg(long, default_value_t = 0.0)]
@@ -178,8 +178,9 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
         None => c.bvh.or_default(),
     };
     let scene = load_scene_with(c.scene(), kind)?;
+    // Options are checked before the device opens.
+    let mut opts = options(c, &scene, &graph, args.seed())?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
-    let mut opts = options(c, &scene, &graph.constants, args.seed())?;
     let (layout, decl) = match named {
         Some(named) => named,
         None => tune_layout(&gpu, &graph, &scene, &opts, &args)?,

@@ -15,13 +15,13 @@ pub struct StressArgs {
     #[arg(long)]
     pub only: Option<String>,
     /// Multiply each scene's resolution (8x8 to 32x32 at 1) by this.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub scale: u32,
     /// Samples per pixel per frame.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub spp: u32,
     /// Frames per render (at least 32, for the statistics).
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 32, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub frames: u32,
     /// Seed of the random streams.
     #[arg(long, default_value_t = 1)]

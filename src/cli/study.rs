@@ -39,7 +39,7 @@ pub struct StudyArgs {
     #[arg(long, default_value = DEFAULT_ESTIMATORS)]
     pub estimators: String,
     /// Wall-clock budget of each estimator on each scene (rendering: its set-up is off the clock unless `--setup-on-clock`).
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "20s")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "20s")]
     pub time: Duration,
     /// Count each run's set-up (pipeline creation, buffers, the first frame's compilation)
     /// on its budget.
@@ -52,7 +52,7 @@ pub struct StudyArgs {
     pub resume: bool,
     /// Time each layout renders when the study measures a graph's layouts (after a warm-up
     /// frame, so pipeline creation is not measured).
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "500ms")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "500ms")]
     pub layout_time: Duration,
     /// Folder of the references, one per scene (`<folder>.exr`, the folder the scene's
     /// outputs get): used when there with enough samples, resumed when there with fewer,
@@ -66,17 +66,17 @@ pub struct StudyArgs {
     #[arg(long)]
     pub reference_layout: Option<String>,
     /// Render seconds each reference must hold; one with fewer is resumed for the rest.
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "2m")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "2m")]
     pub reference_time: Duration,
     /// Frames each reference must hold instead (for reproducible references and tests).
-    #[arg(long, conflicts_with = "reference_time", value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, conflicts_with = "reference_time", value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub reference_frames: Option<u32>,
     /// Samples per pixel in each frame of references the study renders [default: --spp].
-    #[arg(long)]
+    #[arg(long, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub reference_spp: Option<u32>,
     /// Error samples per decade of time (log-spaced from the first frame to the end, at
     /// least 12).
-    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 6, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub per_decade: u32,
     /// Seed of the runs' random streams (must differ from the references').
     #[arg(long, default_value_t = 1)]
@@ -349,8 +349,8 @@ fn choose_layout(
         .map(|((name, decl), kind)| (name.as_str(), decl, scenes.get(kind)))
         .collect();
     let scene = candidates.first().map(|c| c.2).context("the graph has no layout")?;
-    let mut opts = options(common, scene, &graph.constants, args.seed)?;
-    opts.constants.extend(parse_sets(&spec.sets, &graph.constants)?);
+    let mut opts = options(common, scene, &graph, args.seed)?;
+    opts.constants.extend(parse_sets(&spec.sets, &graph, "--estimators @")?);
     let bar = ProgressBar::new(candidates.len() as u64);
     bar.set_style(ProgressStyle::with_template("{prefix:>24} {bar:30} {msg}").expect("valid template"));
     bar.set_prefix(format!("{spec}: layouts"));

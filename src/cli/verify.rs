@@ -3,6 +3,7 @@
 //! the budget cannot decide (src/verify, docs/verify.md).
 
 use super::args::*;
+use super::checks::constant_names;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -38,16 +39,16 @@ pub struct VerifyArgs {
     #[arg(long)]
     pub add: Option<String>,
     /// Rendering time of each estimator on each scene (set-up off the clock).
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "10s", conflicts_with = "frames")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "10s", conflicts_with = "frames")]
     pub time: Duration,
     /// Frames of each estimator on each scene instead of a time (reproducible).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub frames: Option<u32>,
     /// Batches each run is split into: the samples of the standard errors.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..))]
     pub batches: u32,
     /// Side of the blocks compared, in pixels.
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 16, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub block: u32,
     /// Family-wise error of the run: the chance that any pair of estimators that agree is
     /// called different (each pair is tested at alpha over the number of pairs).
@@ -225,7 +226,6 @@ fn estimators(args: &VerifyArgs) -> Result<Vec<Estimator>> {
     for spec in estimator_specs(&list, "--graphs")? {
         let graph = load_graph(&spec.graph)?;
         let (layout, _) = named_layout(&graph, spec.layout.as_deref())?;
-        parse_sets(&spec.sets, &graph.constants).with_context(|| format!("--graphs {spec}"))?;
         // The claims are checked now, so that a malformed one costs no rendering.
         claims(&graph, &Default::default())?;
         let mut label = graph.name.clone();
@@ -247,11 +247,15 @@ fn estimators(args: &VerifyArgs) -> Result<Vec<Estimator>> {
 }
 
 /// Checks that every `--set NAME=VALUE` names a constant of at least one estimator's graph
-/// (each takes its own, `own_sets`): a mistyped name is an error, not a setting no graph reads.
+/// (each takes its own, `own_sets`), with a value of its type: a mistyped name is an error,
+/// not a setting no graph reads.
 fn check_sets(sets: &[String], estimators: &[Estimator]) -> Result<()> {
+    for e in estimators {
+        parse_sets(&own_sets(sets, &e.graph), &e.graph, "--set ")?;
+    }
     for set in sets {
-        let name = set.split_once('=').map_or(set.as_str(), |(name, _)| name);
-        if !estimators.iter().any(|e| e.graph.constants.contains_key(name)) {
+        let name = set.split_once('=').map_or(set.as_str(), |(name, _)| name.trim());
+        if !estimators.iter().any(|e| constant_names(&e.graph).contains(&name)) {
             let graphs: Vec<&str> = estimators.iter().map(|e| e.graph.name.as_str()).collect();
             bail!(
                 "--set {set}: no graph of the run ({}) has a constant {name}",
@@ -359,8 +363,8 @@ fn render_run(args: &VerifyArgs, gpu: &Gpu, scene: &LoadedScene, e: &Estimator, 
     let seed = args.seed.wrapping_mul(1000).wrapping_add(index);
     let mut common = args.common.clone();
     common.set = own_sets(&args.common.set, &e.graph);
-    let mut opts = options(&common, scene, &e.graph.constants, seed)?;
-    opts.constants.extend(parse_sets(&e.spec.sets, &e.graph.constants)?);
+    let mut opts = options(&common, scene, &e.graph, seed)?;
+    opts.constants.extend(parse_sets(&e.spec.sets, &e.graph, "--graphs @")?);
     let claims = claims(&e.graph, &opts.constants)?;
     let bar = ProgressBar::new(args.batches as u64);
     bar.set_style(
@@ -400,7 +404,7 @@ fn own_sets(sets: &[String], graph: &Graph) -> Vec<String> {
     sets.iter()
         .filter(|s| {
             s.split_once('=')
-                .is_none_or(|(name, _)| graph.constants.contains_key(name))
+                .is_none_or(|(name, _)| constant_names(graph).contains(&name.trim()))
         })
         .cloned()
         .collect()

@@ -19,6 +19,7 @@ mod layouts;
 mod lights;
 mod lost_work;
 mod mitsuba;
+mod options;
 mod photon_query;
 mod pm;
 mod probe;
