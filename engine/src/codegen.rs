@@ -450,11 +450,7 @@ impl CodegenContext<'_> {
     fn run_wrapper(&self, k: KernelId) -> String {
         let w = Wrapper::new(self, k);
         let (kp, chain, c) = (w.kp, w.chain, w.kp.chain);
-        let mut s = String::new();
-        if self.resolved.control.persistent.contains_key(&c) {
-            s.push_str("var<workgroup> lg_wg_threads: array<atomic<u32>, 2>;\n");
-        }
-        s.push_str("fn lg_run(lg_i: u32) {\n    lg_slot = lg_i;\n");
+        let mut s = String::from("fn lg_run(lg_i: u32) {\n    lg_slot = lg_i;\n");
         match &kp.root {
             Root::Queue(q) => {
                 let _ = writeln!(s, "    var it = lg_load_queue_{q}(lg_i);");
@@ -495,8 +491,8 @@ impl CodegenContext<'_> {
     }
 
     /// Persistent threads: take the next item whenever the current one is done. Each thread
-    /// counts itself in `lg_wg_threads` (flushed by the entry point) when it starts and when
-    /// its loop ends as it should, so that a thread the driver stops early is seen.
+    /// is counted when it starts and, after its loop, whether the loop ended as it should (no
+    /// item left, or its share taken), so that a thread the driver stopped early is seen.
     fn persistent_threads(&self, w: &Wrapper) -> String {
         let g = self.graph();
         let (chain, c) = (w.chain, w.kp.chain);
@@ -508,10 +504,12 @@ impl CodegenContext<'_> {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "    var it: {};\n    var alive = false;\n    var lg_iterations = 0u;\n    atomicAdd(&lg_wg_threads[0], 1u);",
+            "    var it: {};\n    var alive = false;\n    var lg_iterations = 0u;\n    var lg_ended = 0u;",
             chain.item
         );
-        let ended = "atomicAdd(&lg_wg_threads[1], 1u); break;";
+        let (started, finished) = self.resolved.control.persistent[&c];
+        s.push_str(&self.count_threads(started, "1u"));
+        let ended = "lg_ended = 1u; break;";
         let take = if self.fair_shares {
             let _ = writeln!(
                 s,
@@ -542,7 +540,23 @@ impl CodegenContext<'_> {
             self.resolved.control.loop_capped,
             body.join(" && ")
         );
+        // After the loop every thread of a subgroup is there again (one atomic a subgroup).
+        s.push_str(&self.count_threads(finished, "lg_ended"));
         s
+    }
+
+    /// WGSL statements that add `value` (a u32 expression) over the threads to control word
+    /// `word`: summed over the subgroup and added by its first thread where the target has
+    /// subgroup operations, one atomic a thread otherwise, and always on a driver that caps an
+    /// invocation's loops (`fair_shares`): llvmpipe's subgroup sums are loops, which a thread
+    /// past the cap runs once, so they would miscount exactly the threads to be found.
+    fn count_threads(&self, word: u32, value: &str) -> String {
+        if !self.subgroup_appends || self.fair_shares {
+            return format!("    atomicAdd(&lg_control[{word}], {value});\n");
+        }
+        format!(
+            "    {{\n        let lg_sum = subgroupAdd({value});\n        if (subgroupExclusiveAdd(1u) == 0u) {{ atomicAdd(&lg_control[{word}], lg_sum); }}\n    }}\n"
+        )
     }
 
     /// Regenerate into an idle slot or a compaction boundary, then run one iteration of the
@@ -644,12 +658,6 @@ impl CodegenContext<'_> {
             "@compute @workgroup_size({wg})\nfn {}(@builtin(workgroup_id) lg_wid: vec3<u32>, @builtin(num_workgroups) lg_nwg: vec3<u32>, @builtin(local_invocation_index) lg_lid: u32) {{\n{parameters}    let lg_i = (lg_wid.y * lg_nwg.x + lg_wid.x) * {wg}u + lg_lid;\n    if (lg_i < {limit}) {{ lg_run(lg_i); }}",
             kp.name
         );
-        if let Some((started, ended)) = self.resolved.control.persistent.get(&kp.chain) {
-            let _ = writeln!(
-                s,
-                "    workgroupBarrier();\n    if (lg_lid == 0u) {{\n        atomicAdd(&lg_control[{started}], atomicLoad(&lg_wg_threads[0]));\n        atomicAdd(&lg_control[{ended}], atomicLoad(&lg_wg_threads[1]));\n    }}"
-            );
-        }
         if !self.graph().counters.is_empty() {
             s.push_str("    lg_flush(lg_lid);\n");
         }

@@ -86,6 +86,7 @@ impl Setup {
         let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
         let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
         let opts = options(c, &scene, &graph, args.seed())?;
+        args.check_out()?;
         Ok(Setup {
             scene,
             graph,

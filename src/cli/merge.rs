@@ -25,11 +25,11 @@ pub struct MergeArgs {
 }
 
 pub fn merge(args: MergeArgs) -> Result<()> {
-    super::film::check_out(&args.out, args.force, None)?;
     let mut merged = Reference::read(&args.films[0])?;
     for path in &args.films[1..] {
         merged.merge(&Reference::read(path)?, path)?;
     }
+    super::film::check_out(&args.out, args.force, None)?;
     merged.write(&args.out, "merge")?;
     let png = args.out.with_extension("png");
     lightgraph::output::write_png(&png, &merged.image(), args.exposure)?;

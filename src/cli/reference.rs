@@ -119,12 +119,13 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         (None, Some(r)) => r.clone(),
         (None, None) => PathBuf::from("out/reference.exr"),
     };
-    check_out(&out, args.force, args.resume.as_deref())?;
     let graph = load_graph(args.graph.name())?;
     let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
     let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
     let seed = args.seed.unwrap_or(REFERENCE_SEED);
     let mut opts = options(c, &scene, &graph, seed)?;
+    // After the inputs' checks (their errors first), before any GPU work.
+    check_out(&out, args.force, args.resume.as_deref())?;
     // One measurement for every GPU and for the film (a resumed film brings its own).
     let first_gpu = match &args.gpus {
         Some(spec) => gpu_selectors(spec)?.into_iter().next(),

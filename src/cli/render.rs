@@ -99,6 +99,11 @@ impl RenderArgs {
             .unwrap_or_else(|| PathBuf::from(DEFAULT_OUT))
     }
 
+    /// Checks the film's path (see [`check_out`]).
+    pub fn check_out(&self) -> Result<()> {
+        check_out(&self.out(), self.force, self.resume.as_deref())
+    }
+
     /// The seed: --seed (or the resumed film's), else 1.
     pub fn seed(&self) -> u32 {
         self.seed.unwrap_or(1)
@@ -120,11 +125,10 @@ impl RenderArgs {
     }
 }
 
-/// Checks the output path and reads the film `--resume` names: the settings the command line
-/// leaves out become the film's, the run's frames follow the film's last one, and `--frames`
-/// (the run's total) becomes the frames left to render.
+/// Reads the film `--resume` names: the settings the command line leaves out become the
+/// film's, the run's frames follow the film's last one, and `--frames` (the run's total)
+/// becomes the frames left to render.
 fn resume_film(args: &mut RenderArgs) -> Result<Option<Reference>> {
-    check_out(&args.out(), args.force, args.resume.as_deref())?;
     let Some(path) = args.resume.clone() else {
         return Ok(None);
     };
@@ -178,8 +182,10 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
         None => c.bvh.or_default(),
     };
     let scene = load_scene_with(c.scene(), kind)?;
-    // Options are checked before the device opens.
+    // Options and the output are checked (after the inputs, whose errors come first) before
+    // the device opens.
     let mut opts = options(c, &scene, &graph, args.seed())?;
+    args.check_out()?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
     let (layout, decl) = match named {
         Some(named) => named,

@@ -274,6 +274,7 @@ fn unknown_layout_lists_the_available_ones() {
 #[test]
 fn a_constant_out_of_its_range_is_refused_at_its_check() {
     // Without the check, PM_STRUCTURE 4 culled every structure and with them the photons.
+    let out = temp_dir("range").join("range.exr");
     let err = fails(&[
         "render",
         "--graph",
@@ -284,6 +285,8 @@ fn a_constant_out_of_its_range_is_refused_at_its_check() {
         "8x8",
         "--frames",
         "1",
+        "--out",
+        out.to_str().unwrap(),
     ]);
     let catalog = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/passes/pm.ron")).unwrap();
     let at = format!("passes/pm.ron:{}:", line_of(&catalog, "\"PM_STRUCTURE <= 3\""));

@@ -8,9 +8,10 @@ use crate::common::{data, gpu};
 use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization};
 use std::collections::BTreeMap;
 
-/// Runs one frame of the test graph spin.ron in `layout` with `constants`: the items that
-/// finished, or the frame's error.
-fn spin(layout: &str, constants: &[(&str, u32)]) -> Result<u32, String> {
+/// Runs one frame of the test graph spin.ron in `layout` with `constants`, with subgroup
+/// operations where the adapter has them or without (`portable`): the items that finished, or
+/// the frame's error.
+fn spin_on(layout: &str, constants: &[(&str, u32)], portable: bool) -> Result<u32, String> {
     let vfs = lightgraph::assets::builtin().with_front(Layer::Dir(data("")));
     let graph = Graph::load(&vfs, "graphs/spin.ron").unwrap();
     let plan = Plan::new(&graph, layout).unwrap();
@@ -21,11 +22,20 @@ fn spin(layout: &str, constants: &[(&str, u32)]) -> Result<u32, String> {
             .collect(),
         flags: Default::default(),
     };
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let target = match portable {
+        true => gpu().target().without_subgroups(),
+        false => gpu().target(),
+    };
+    let program = Program::compile(&plan, &spec, &target).unwrap();
     let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
     instance.run_frame(0, 1).map_err(|e| e.to_string())?;
     let done = instance.read("done").unwrap();
     Ok(u32::from_le_bytes(done[..4].try_into().unwrap()))
+}
+
+/// [`spin_on`] with the adapter's subgroup operations.
+fn spin(layout: &str, constants: &[(&str, u32)]) -> Result<u32, String> {
+    spin_on(layout, constants, false)
 }
 
 #[test]
@@ -42,20 +52,27 @@ fn a_loop_that_never_ends_its_item_fails_the_frame() {
 
 #[test]
 fn persistent_threads_take_every_item_or_report_the_driver_cap() {
-    // 64 threads over 250 items: shares of 4, the last thread's 2 (fair shares on llvmpipe,
-    // any split elsewhere); every item is counted once.
-    assert_eq!(spin("persistent", &[("ITEMS", 250), ("SPIN", 100)]), Ok(250));
-    // 4 items of 30,000 inner iterations each a thread: past llvmpipe's 65,535 iterations an
-    // invocation, whose loops then end early. There the frame fails naming the layout and
-    // the cap; a driver without the cap counts every item.
-    let result = spin("persistent", &[("ITEMS", 256), ("SPIN", 30_000)]);
-    if gpu().caps_invocation_loops() {
-        let err = result.unwrap_err();
-        assert!(
-            err.contains("layout 'persistent'") && err.contains("persistent threads") && err.contains("65535"),
-            "{err}"
+    // The threads are counted with subgroup sums where the adapter has them, one atomic a
+    // thread without: both ways.
+    for portable in [false, true] {
+        // 64 threads over 250 items: shares of 4, the last thread's 2 (fair shares on
+        // llvmpipe, any split elsewhere); every item is counted once.
+        assert_eq!(
+            spin_on("persistent", &[("ITEMS", 250), ("SPIN", 100)], portable),
+            Ok(250)
         );
-    } else {
-        assert_eq!(result, Ok(256));
+        // 4 items of 30,000 inner iterations each a thread: past llvmpipe's 65,535 iterations
+        // an invocation, whose loops then end early. There the frame fails naming the layout
+        // and the cap; a driver without the cap counts every item.
+        let result = spin_on("persistent", &[("ITEMS", 256), ("SPIN", 30_000)], portable);
+        if gpu().caps_invocation_loops() {
+            let err = result.unwrap_err();
+            assert!(
+                err.contains("layout 'persistent'") && err.contains("persistent threads") && err.contains("65535"),
+                "{err}"
+            );
+        } else {
+            assert_eq!(result, Ok(256));
+        }
     }
 }
