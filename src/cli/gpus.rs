@@ -86,7 +86,6 @@ impl Setup {
         let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
         let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
         let opts = options(c, &scene, &graph, args.seed())?;
-        args.check_out()?;
         Ok(Setup {
             scene,
             graph,
@@ -134,6 +133,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
     let c = &args.common;
     let selectors = gpu_selectors(spec)?;
     let mut setup = Setup::load(args, "--gpus")?;
+    args.check_out()?;
     // One measurement shared by every GPU (each measuring its own could differ).
     let first = selectors.first().map(String::as_str);
     measure_into(

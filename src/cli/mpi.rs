@@ -19,6 +19,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
     let world = universe.world();
     let root = place(&world).rank == 0;
     let mut setup = Setup::load(args, "--mpi")?;
+    args.check_out()?;
     share_measured(&world, &mut setup, args.common.adapter.as_deref());
     let (w, h) = (setup.opts.width, setup.opts.height);
     // The ranks render into an empty film; a resumed one takes it in at the end.
