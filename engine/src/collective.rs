@@ -1,13 +1,15 @@
 //! The kernels of the collective operators, written once and generated for each use: fill,
-//! exclusive scan (reduce-then-scan: tile sums, a scan of the sums, tiles rescanned with
-//! their offsets, as many levels as the length needs), the count and scatter steps of a
-//! counting sort, and the radix sort ([`crate::radix`]). Reduce-then-scan needs no forward-progress guarantee between workgroups, so
-//! it runs on any adapter. Where the adapter has subgroups the tile scans use subgroup
+//! exclusive scan of `u32` or `f32` elements, one generator for both (reduce-then-scan: tile
+//! sums, a scan of the sums, tiles rescanned with their offsets, as many levels as the length
+//! needs), the count and scatter steps of a counting sort, and the radix sort
+//! ([`crate::radix`]). Reduce-then-scan needs no forward-progress guarantee between
+//! workgroups, so it runs on any adapter. Where the adapter has subgroups the tile scans use subgroup
 //! operations, of whatever size the adapter runs, when every subgroup of the workgroup is full
 //! (checked in the kernel); otherwise, and without subgroups, a scan in workgroup memory.
 
+use crate::graph::Graph;
 use crate::ids::OpId;
-use crate::operator::{OpKind, Operator};
+use crate::operator::{OpKind, summed_type};
 use crate::resolve::{BufferRef, Resolved};
 use std::fmt::Write;
 
@@ -161,9 +163,10 @@ pub(crate) fn element_entry(name: &str) -> String {
     )
 }
 
-/// The kernels of operator `o`, in the order they run: `subgroups` where the adapter has them,
-/// scans in tiles of `WORKGROUP * items` elements.
-pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, items: u32) -> Vec<OpKernel> {
+/// The kernels of operator `o` of `graph`, in the order they run: `subgroups` where the adapter
+/// has them, scans in tiles of `WORKGROUP * items` elements.
+pub fn op_kernels(graph: &Graph, o: OpId, resolved: &Resolved, subgroups: bool, items: u32) -> Vec<OpKernel> {
+    let op = &graph.ops[o.0];
     let counted = op.domain.as_ref().and_then(|d| d.counted.as_deref());
     let words = |r: &str| resolved.sizes[r].element_bytes / 4;
     let resource = |r: &String| BufferRef::Resource(r.clone());
@@ -225,6 +228,7 @@ pub fn op_kernels(op: &Operator, o: OpId, resolved: &Resolved, subgroups: bool, 
         OpKind::Scan { input, output } => {
             let scan = Scan {
                 o,
+                element: summed_type(&graph.resources[input].ty).expect("the load checks a scan's elements"),
                 input: resource(input),
                 output: resource(output),
                 partials: 0,
@@ -332,6 +336,8 @@ fn gather_kernel(prefix: &str, buffers: [BufferRef; 3], counted: Option<&str>, w
 pub(crate) struct Scan<'a> {
     /// The operator it belongs to (whose scratch holds the partial sums).
     pub o: OpId,
+    /// The WGSL type of the elements and their sums: `u32` (wrapping) or `f32`.
+    pub element: &'static str,
     /// The elements summed (level 0).
     pub input: BufferRef,
     /// Where their sums go (may be `input`).
@@ -383,8 +389,12 @@ impl Scan<'_> {
         let mut out = Vec::new();
         for l in 0..levels {
             let mut m = self.module(l);
-            m.bind("lg_src", "array<u32>", self.level_buffer(l));
-            m.bind("lg_dst", "array<u32>", BufferRef::Scratch(self.o, self.partials + l));
+            m.bind("lg_src", "array<LgElement>", self.level_buffer(l));
+            m.bind(
+                "lg_dst",
+                "array<LgElement>",
+                BufferRef::Scratch(self.o, self.partials + l),
+            );
             let name = format!("{prefix}_reduce{l}");
             m.text.push_str(&scan_reduce_entry(&name, self.subgroups));
             out.push(m.finish(name, self.groups(l)));
@@ -397,9 +407,9 @@ impl Scan<'_> {
                 self.level_buffer(l)
             };
             let in_place = dst == self.level_buffer(l);
-            m.bind("lg_src", "array<u32>", self.level_buffer(l));
+            m.bind("lg_src", "array<LgElement>", self.level_buffer(l));
             if !in_place {
-                m.bind("lg_dst", "array<u32>", dst);
+                m.bind("lg_dst", "array<LgElement>", dst);
             }
             let offsets = match l + 1 {
                 top if top == levels => Offsets::Sums,
@@ -409,7 +419,7 @@ impl Scan<'_> {
             if offsets != Offsets::Zero {
                 m.bind(
                     "lg_offsets",
-                    "array<u32>",
+                    "array<LgElement>",
                     BufferRef::Scratch(self.o, self.partials + l),
                 );
             }
@@ -421,20 +431,21 @@ impl Scan<'_> {
         out
     }
 
-    /// A scan module's shared part: sizes, workgroup memory, the level's element count and
-    /// the workgroup-wide sums.
+    /// A scan module's shared part: the element type (`LgElement`), sizes, workgroup memory,
+    /// the level's element count and the workgroup-wide sums.
     fn module(&self, level: usize) -> Module {
         let mut m = Module::new(false);
         m.element_count(self.counted);
         let tile = self.tile();
         let _ = write!(
             m.text,
-            "const LG_WG: u32 = {WORKGROUP}u;\nconst LG_ITEMS: u32 = {}u;\nconst LG_TILE: u32 = {tile}u;\n\
+            "alias LgElement = {};\nconst LG_WG: u32 = {WORKGROUP}u;\nconst LG_ITEMS: u32 = {}u;\nconst LG_TILE: u32 = {tile}u;\n\
              // The tile in workgroup memory, one padding word per 32 so that threads reading their\n\
              // own consecutive elements hit distinct banks.\n\
-             var<workgroup> lg_tile: array<u32, {}>;\n\
+             var<workgroup> lg_tile: array<LgElement, {}>;\n\
              // Elements at this level: each level above holds one sum per tile of the one below.\n\
              fn lg_level_n() -> u32 {{\n    var n = {};\n    for (var l = 0u; l < {level}u; l += 1u) {{ n = (n + LG_TILE - 1u) / LG_TILE; }}\n    return n;\n}}\n",
+            self.element,
             self.items,
             tile + tile / 32 + 1,
             self.length
@@ -447,16 +458,17 @@ impl Scan<'_> {
     }
 }
 
-/// Workgroup memory and the subgroup-free workgroup sums of the scan kernels. Barriers stand
-/// only in control flow uniform over the workgroup (naga checks it).
+/// Workgroup memory and the subgroup-free workgroup sums of the scan kernels, of `LgElement`s.
+/// Barriers stand only in control flow uniform over the workgroup (naga checks it). Every sum
+/// adds in an order fixed by the kernel, the same for every thread and every run, so that `f32`
+/// sums are reproducible and every thread of a workgroup holds the same one.
 const SCAN_SHARED: &str = "
-var<workgroup> lg_sums: array<u32, 256>;
-var<workgroup> lg_total: atomic<u32>;
+var<workgroup> lg_sums: array<LgElement, 256>;
 var<workgroup> lg_full: u32;
 fn lg_pad(i: u32) -> u32 { return i + (i >> 5u); }
 
 // Sum of `v` over the workgroup, in workgroup memory.
-fn lg_tree_sum(v: u32, lid: u32) -> u32 {
+fn lg_tree_sum(v: LgElement, lid: u32) -> LgElement {
     lg_sums[lid] = v;
     for (var off = LG_WG / 2u; off > 0u; off >>= 1u) {
         workgroupBarrier();
@@ -467,39 +479,44 @@ fn lg_tree_sum(v: u32, lid: u32) -> u32 {
 }
 
 // Sum of the values before `v` (in the order of `rank`) over the workgroup, in workgroup
-// memory.
-fn lg_tree_exclusive(v: u32, rank: u32) -> u32 {
+// memory: the inclusive sum of the thread before (an f32 inclusive sum minus `v` would lose
+// what stands before a large `v` to rounding).
+fn lg_tree_exclusive(v: LgElement, rank: u32) -> LgElement {
     lg_sums[rank] = v;
     workgroupBarrier();
     for (var off = 1u; off < LG_WG; off <<= 1u) {
-        var before = 0u;
+        var before = LgElement(0);
         if (rank >= off) { before = lg_sums[rank - off]; }
         workgroupBarrier();
         lg_sums[rank] += before;
         workgroupBarrier();
     }
-    return lg_sums[rank] - v;
+    if (rank == 0u) { return LgElement(0); }
+    return lg_sums[rank - 1u];
 }
 ";
 
 /// Workgroup sums with subgroup operations, for workgroups of full subgroups (`rank` is then
 /// `subgroup * size + lane`, which numbers the threads 0 .. LG_WG in subgroup order).
 const SCAN_SUBGROUP: &str = "
-// Sum of `v` over the workgroup (lg_total starts at 0).
-fn lg_sg_sum(v: u32, lane: u32) -> u32 {
+// Sum of `v` over the workgroup: the sums of the `count` subgroups, added in subgroup order by
+// every thread (no atomic: WGSL has no f32 atomics, and their order would vary).
+fn lg_sg_sum(v: LgElement, sg: u32, count: u32, lane: u32) -> LgElement {
     let s = subgroupAdd(v);
-    if (lane == 0u) { atomicAdd(&lg_total, s); }
+    if (lane == 0u) { lg_sums[sg] = s; }
     workgroupBarrier();
-    return atomicLoad(&lg_total);
+    var total = LgElement(0);
+    for (var k = 0u; k < count; k += 1u) { total += lg_sums[k]; }
+    return total;
 }
 
 // Sum of the values before `v` in the order of `rank`.
-fn lg_sg_exclusive(v: u32, rank: u32, sg: u32, count: u32, size: u32, lane: u32) -> u32 {
+fn lg_sg_exclusive(v: LgElement, rank: u32, sg: u32, count: u32, size: u32, lane: u32) -> LgElement {
     let x = subgroupExclusiveAdd(v);
     if (lane == size - 1u) { lg_sums[sg] = x + v; }
     workgroupBarrier();
     if (rank == 0u) {
-        var run = 0u;
+        var run = LgElement(0);
         for (var s = 0u; s < count; s += 1u) {
             let t = lg_sums[s];
             lg_sums[s] = run;
@@ -519,7 +536,6 @@ fn scan_entry_head(name: &str, subgroups: bool) -> String {
             ", @builtin(subgroup_id) sg: u32, @builtin(num_subgroups) sg_count: u32, @builtin(subgroup_size) sg_size: u32, @builtin(subgroup_invocation_id) lane: u32",
             "    if (lid == 0u) {
         lg_full = select(0u, 1u, sg_count * sg_size == LG_WG);
-        atomicStore(&lg_total, 0u);
     }
     let full = workgroupUniformLoad(&lg_full) != 0u;
     let rank = select(lid, sg * sg_size + lane, full);
@@ -536,12 +552,12 @@ fn scan_entry_head(name: &str, subgroups: bool) -> String {
 /// Sums of each tile of the level into the level above.
 fn scan_reduce_entry(name: &str, subgroups: bool) -> String {
     let total = if subgroups {
-        "    var total: u32;\n    if (full) { total = lg_sg_sum(s, lane); } else { total = lg_tree_sum(s, lid); }\n"
+        "    var total: LgElement;\n    if (full) { total = lg_sg_sum(s, sg, sg_count, lane); } else { total = lg_tree_sum(s, lid); }\n"
     } else {
         "    let total = lg_tree_sum(s, lid);\n"
     };
     format!(
-        "{}    var s = 0u;
+        "{}    var s = LgElement(0);
     if (base + LG_TILE <= n) {{
         for (var j = 0u; j < LG_ITEMS; j += 1u) {{ s += lg_src[base + j * LG_WG + lid]; }}
     }} else {{
@@ -572,19 +588,21 @@ enum Offsets {
 fn scan_down_entry(name: &str, in_place: bool, offsets: Offsets, subgroups: bool) -> String {
     let dst = if in_place { "lg_src" } else { "lg_dst" };
     let sum = if subgroups {
-        "    if (full) { offset = lg_sg_sum(before, lane); } else { offset = lg_tree_sum(before, lid); }\n"
+        "    if (full) { offset = lg_sg_sum(before, sg, sg_count, lane); } else { offset = lg_tree_sum(before, lid); }\n"
     } else {
         "    offset = lg_tree_sum(before, lid);\n"
     };
     let offset = match offsets {
-        Offsets::Zero => "    let offset = 0u;\n".to_string(),
-        Offsets::Scanned => "    var offset = 0u;\n    if (base < n) { offset = lg_offsets[tile]; }\n".to_string(),
+        Offsets::Zero => "    let offset = LgElement(0);\n".to_string(),
+        Offsets::Scanned => {
+            "    var offset = LgElement(0);\n    if (base < n) { offset = lg_offsets[tile]; }\n".to_string()
+        }
         Offsets::Sums => format!(
-            "    // The sum of the tiles before this one.\n    var before = 0u;\n    for (var j = lid; j < tile; j += LG_WG) {{ before += lg_offsets[j]; }}\n    var offset: u32;\n{sum}    workgroupBarrier();\n"
+            "    // The sum of the tiles before this one.\n    var before = LgElement(0);\n    for (var j = lid; j < tile; j += LG_WG) {{ before += lg_offsets[j]; }}\n    var offset: LgElement;\n{sum}    workgroupBarrier();\n"
         ),
     };
     let exclusive = if subgroups {
-        "    var run: u32;\n    if (full) { run = lg_sg_exclusive(t, rank, sg, sg_count, sg_size, lane); } else { run = lg_tree_exclusive(t, rank); }\n"
+        "    var run: LgElement;\n    if (full) { run = lg_sg_exclusive(t, rank, sg, sg_count, sg_size, lane); } else { run = lg_tree_exclusive(t, rank); }\n"
     } else {
         "    var run = lg_tree_exclusive(t, rank);\n"
     };
@@ -595,14 +613,14 @@ fn scan_down_entry(name: &str, in_place: bool, offsets: Offsets, subgroups: bool
     }} else {{
         for (var j = 0u; j < LG_ITEMS; j += 1u) {{
             let i = base + j * LG_WG + lid;
-            var v = 0u;
+            var v = LgElement(0);
             if (i < n) {{ v = lg_src[i]; }}
             lg_tile[lg_pad(j * LG_WG + lid)] = v;
         }}
     }}
     workgroupBarrier();
     let first = rank * LG_ITEMS;
-    var t = 0u;
+    var t = LgElement(0);
     for (var k = 0u; k < LG_ITEMS; k += 1u) {{ t += lg_tile[lg_pad(first + k)]; }}
 {exclusive}    run += offset;
     for (var k = 0u; k < LG_ITEMS; k += 1u) {{

@@ -6,7 +6,7 @@ use crate::error::{Error, Location, Result};
 use crate::expr::Expr;
 use crate::graph::Pass;
 use crate::ir::{CatalogFile, ConstValue, GraphFile, PassDecl, PassEntry, PerCall, ResourceDecl, Role, Scope};
-use crate::operator::{Operator, is_u32_word};
+use crate::operator::{OpKind, Operator, is_u32_word, summed_type};
 use crate::vfs::Vfs;
 use std::collections::BTreeMap;
 
@@ -580,13 +580,14 @@ impl Declared {
                         format!("operator '{}' uses unknown resource '{buffer}'", op.name),
                     )
                 })?;
-                if want.is_some() && !is_u32_word(&r.ty) {
+                if !want.accepts(&r.ty) {
                     return Err(here(
                         buffer,
                         format!(
-                            "operator '{}' ({}) needs u32 elements in '{buffer}', which holds '{}'",
+                            "operator '{}' ({}) needs {} elements in '{buffer}', which holds '{}'",
                             op.name,
                             op.describe(),
+                            want.describe(),
                             r.ty
                         ),
                     ));
@@ -601,37 +602,58 @@ impl Declared {
                     ));
                 }
             }
-            if let crate::operator::OpKind::Sort { keys, values, .. } = &op.kind
-                && keys == values
-            {
+            self.check_op_pairs(op)?;
+        }
+        Ok(())
+    }
+
+    /// The checks of an operator between two of its resources: a sort's keys and values are
+    /// different resources, a scan sums into elements of its input's type, a scatter or
+    /// gather moves elements into a resource of their type.
+    fn check_op_pairs(&self, op: &Operator) -> Result<()> {
+        let here = |name: &str, message: String| self.sources.at_name(&op.origin, name, message);
+        if let OpKind::Sort { keys, values, .. } = &op.kind
+            && keys == values
+        {
+            return Err(here(
+                values,
+                format!(
+                    "operator '{}' sorts '{keys}' with itself as its values; keys and values must be different resources",
+                    op.name
+                ),
+            ));
+        }
+        if let OpKind::Scan { input, output } = &op.kind {
+            let (a, b) = (&self.resources[input].ty, &self.resources[output].ty);
+            if summed_type(a) != summed_type(b) {
                 return Err(here(
-                    values,
+                    output,
                     format!(
-                        "operator '{}' sorts '{keys}' with itself as its values; keys and values must be different resources",
+                        "operator '{}' sums '{input}' ({a}) into '{output}' ({b}); both must hold u32 (or atomic<u32>) or both f32",
                         op.name
                     ),
                 ));
             }
-            let moved = match &op.kind {
-                crate::operator::OpKind::Scatter {
-                    input: Some(input),
+        }
+        let moved = match &op.kind {
+            OpKind::Scatter {
+                input: Some(input),
+                output,
+                ..
+            }
+            | OpKind::Gather { input, output, .. } => Some((input, output)),
+            _ => None,
+        };
+        if let Some((input, output)) = moved {
+            let (a, b) = (&self.resources[input].ty, &self.resources[output].ty);
+            if a != b {
+                return Err(here(
                     output,
-                    ..
-                }
-                | crate::operator::OpKind::Gather { input, output, .. } => Some((input, output)),
-                _ => None,
-            };
-            if let Some((input, output)) = moved {
-                let (a, b) = (&self.resources[input].ty, &self.resources[output].ty);
-                if a != b {
-                    return Err(here(
-                        output,
-                        format!(
-                            "operator '{}' moves '{input}' ({a}) into '{output}' ({b}); both must hold the same type",
-                            op.name
-                        ),
-                    ));
-                }
+                    format!(
+                        "operator '{}' moves '{input}' ({a}) into '{output}' ({b}); both must hold the same type",
+                        op.name
+                    ),
+                ));
             }
         }
         Ok(())

@@ -29,11 +29,11 @@ pub enum OpKind {
         /// First element.
         first: Option<Expr>,
     },
-    /// `output[i] = input[0] + ... + input[i - 1]`.
+    /// `output[i] = input[0] + ... + input[i - 1]`, of `u32` words or of `f32`s.
     Scan {
-        /// The summed `u32`s.
+        /// The summed elements.
         input: String,
-        /// The sums (may be `input`).
+        /// The sums, of the input's type (may be `input`).
         output: String,
     },
     /// `slots[i] = counts[keys[i]]++`.
@@ -226,14 +226,15 @@ impl Operator {
         }
     }
 
-    /// Every resource it touches, with what the element type must be: `Some("u32")` for the
-    /// `u32` words of scans, keys, slots, counts and sorted values, `None` for any type.
-    pub fn buffers(&self) -> Vec<(&str, Option<&'static str>)> {
-        let mut out: Vec<(&str, Option<&'static str>)> = match &self.kind {
-            OpKind::Clear { buffer, .. } => vec![(buffer, None)],
-            OpKind::Scan { input, output } => vec![(input, Some("u32")), (output, Some("u32"))],
+    /// Every resource it touches, with what its elements must be: `u32` words for keys,
+    /// slots, counts and sorted values, `u32` words or `f32` for scans (input and output
+    /// alike, which the load checks apart).
+    pub fn buffers(&self) -> Vec<(&str, Elements)> {
+        let mut out: Vec<(&str, Elements)> = match &self.kind {
+            OpKind::Clear { buffer, .. } => vec![(buffer, Elements::Any)],
+            OpKind::Scan { input, output } => vec![(input, Elements::Summed), (output, Elements::Summed)],
             OpKind::Count { keys, counts, slots } => {
-                vec![(keys, Some("u32")), (counts, Some("u32")), (slots, Some("u32"))]
+                vec![(keys, Elements::U32), (counts, Elements::U32), (slots, Elements::U32)]
             }
             OpKind::Scatter {
                 keys,
@@ -243,25 +244,60 @@ impl Operator {
                 output,
             } => {
                 let mut out = vec![
-                    (keys.as_str(), Some("u32")),
-                    (slots, Some("u32")),
-                    (offsets, Some("u32")),
+                    (keys.as_str(), Elements::U32),
+                    (slots, Elements::U32),
+                    (offsets, Elements::U32),
                 ];
                 match input {
-                    Some(input) => out.extend([(input.as_str(), None), (output, None)]),
-                    None => out.push((output, Some("u32"))),
+                    Some(input) => out.extend([(input.as_str(), Elements::Any), (output, Elements::Any)]),
+                    None => out.push((output, Elements::U32)),
                 }
                 out
             }
             OpKind::Gather { indices, input, output } => {
-                vec![(indices, Some("u32")), (input, None), (output, None)]
+                vec![
+                    (indices, Elements::U32),
+                    (input, Elements::Any),
+                    (output, Elements::Any),
+                ]
             }
-            OpKind::Sort { keys, values, .. } => vec![(keys, Some("u32")), (values, Some("u32"))],
+            OpKind::Sort { keys, values, .. } => vec![(keys, Elements::U32), (values, Elements::U32)],
         };
         if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
-            out.push((c, Some("u32")));
+            out.push((c, Elements::U32));
         }
         out
+    }
+}
+
+/// What an operator needs of the elements of a resource it touches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Elements {
+    /// Any type.
+    Any,
+    /// 32-bit unsigned words (`u32` or `atomic<u32>`).
+    U32,
+    /// What a scan sums: `u32` words or `f32`.
+    Summed,
+}
+
+impl Elements {
+    /// Whether a resource of element type `ty` meets the need.
+    pub fn accepts(self, ty: &str) -> bool {
+        match self {
+            Elements::Any => true,
+            Elements::U32 => is_u32_word(ty),
+            Elements::Summed => summed_type(ty).is_some(),
+        }
+    }
+
+    /// The need in words, as in "needs u32 elements".
+    pub fn describe(self) -> &'static str {
+        match self {
+            Elements::Any => "any",
+            Elements::U32 => "u32",
+            Elements::Summed => "u32 or f32",
+        }
     }
 }
 
@@ -269,4 +305,14 @@ impl Operator {
 pub fn is_u32_word(ty: &str) -> bool {
     let t: String = ty.chars().filter(|c| !c.is_whitespace()).collect();
     t == "u32" || t == "atomic<u32>"
+}
+
+/// The WGSL type a scan sums elements of type `ty` as: `u32` for `u32` words, `f32` for
+/// `f32`, `None` for any other type.
+pub fn summed_type(ty: &str) -> Option<&'static str> {
+    match ty.trim() {
+        _ if is_u32_word(ty) => Some("u32"),
+        "f32" => Some("f32"),
+        _ => None,
+    }
 }

@@ -408,7 +408,7 @@ impl Internal<'_> {
         for (o, op) in g.ops.iter().enumerate() {
             let mut kernels = Vec::new();
             for k in op_kernels(
-                op,
+                g,
                 OpId(o),
                 self.resolved,
                 self.target.subgroups(),

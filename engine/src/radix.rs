@@ -121,6 +121,7 @@ impl Sort<'_> {
         let histograms = BufferRef::Scratch(self.o, HISTOGRAMS);
         Scan {
             o: self.o,
+            element: "u32",
             input: histograms.clone(),
             output: histograms,
             partials: PARTIALS,

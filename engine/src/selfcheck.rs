@@ -1,11 +1,11 @@
 //! The engine's collective operators checked against the CPU and timed: an exclusive scan of
-//! `n` words, and a counting sort (clear, count, scan of the bucket counts, scatter) of `n`
-//! 12-byte elements into `buckets` buckets, whose 48-byte elements (a cache vertex's size,
-//! moved as 16-byte vectors) a second scatter places likewise, and a third scatter places the
-//! elements' indices (the sorting permutation), through which a gather reads the 48-byte
-//! elements into place again, all from one graph run on any adapter; the
-//! radix sort in [`sort`]. The tests run them at the sizes lavapipe allows; `lightgraph
-//! operators` runs them on a GPU.
+//! `n` words and one of `n` `f32` weights (against an `f64` sum), and a counting sort (clear,
+//! count, scan of the bucket counts, scatter) of `n` 12-byte elements into `buckets` buckets,
+//! whose 48-byte elements (a cache vertex's size, moved as 16-byte vectors) a second scatter
+//! places likewise, and a third scatter places the elements' indices (the sorting
+//! permutation), through which a gather reads the 48-byte elements into place again, all from
+//! one graph run on any adapter; the radix sort in [`sort`]. The tests run them at the sizes
+//! lavapipe allows; `lightgraph operators` runs them on a GPU.
 
 pub mod sort;
 
@@ -19,10 +19,10 @@ use crate::{Graph, Plan};
 use std::collections::BTreeMap;
 
 /// The graph: every step an operator, the data written by the host.
-const GRAPH: &str = r#"// Exclusive scan and counting sort of host-written data (the engine's self-check).
+const GRAPH: &str = r#"// Exclusive scans (u32, f32) and counting sort of host-written data (the engine's self-check).
 (
     name: "operators",
-    description: "exclusive scan of `values`; counting sort of `payload` by `keys` into `sorted`",
+    description: "exclusive scans of `values` and `weights`; counting sort of `payload` by `keys` into `sorted`",
     library: ["operators.wgsl"],
     passes: [
         Scan(name: "scan", input: "values", output: "sums", over: "N"),
@@ -33,6 +33,7 @@ const GRAPH: &str = r#"// Exclusive scan and counting sort of host-written data 
         Scatter(name: "scatter_wide", keys: "keys", slots: "slots", offsets: "starts", input: "wide", output: "wide_sorted", over: "N"),
         Scatter(name: "scatter_index", keys: "keys", slots: "slots", offsets: "starts", output: "order", over: "N"),
         Gather(name: "gather_wide", indices: "order", input: "wide", output: "wide_gathered", over: "N"),
+        Scan(name: "scan_f32", input: "weights", output: "weight_sums", over: "N"),
     ],
     resources: {
         "values": (ty: "u32", count: "max(N, 1)"),
@@ -47,9 +48,11 @@ const GRAPH: &str = r#"// Exclusive scan and counting sort of host-written data 
         "wide_sorted": (ty: "Wide", count: "max(N, 1)"),
         "order": (ty: "u32", count: "max(N, 1)"),
         "wide_gathered": (ty: "Wide", count: "max(N, 1)"),
+        "weights": (ty: "f32", count: "max(N, 1)"),
+        "weight_sums": (ty: "f32", count: "max(N, 1)"),
     },
     constants: { "N": U32(1), "BUCKETS": U32(1) },
-    outputs: ["sums", "slots", "starts", "sorted", "wide_sorted", "order", "wide_gathered"],
+    outputs: ["sums", "slots", "starts", "sorted", "wide_sorted", "order", "wide_gathered", "weight_sums"],
     layouts: { "operators": (kernels: []) },
     default_layout: "operators",
 )
@@ -66,11 +69,13 @@ const FILES: &[(&str, &str)] = &[
 /// How the inputs are drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pattern {
-    /// Random values; random keys.
+    /// Random values; random keys; random weights in [0, 4), one in about a thousand in
+    /// [2^16, 2^17).
     Random,
-    /// Every value 1; every key the same (one bucket holds every element).
+    /// Every value and weight 1; every key the same (one bucket holds every element).
     Equal,
-    /// One value holds the whole sum; every key the last bucket.
+    /// One value holds the whole sum; every key the last bucket; every weight 0.25 but one of
+    /// 2^100 (which rounds away everything added to it after).
     Concentrated,
 }
 
@@ -92,6 +97,8 @@ pub struct Report {
     pub mismatch: Option<String>,
     /// GPU seconds of the scan, per run (median of the runs).
     pub scan_seconds: Option<f64>,
+    /// GPU seconds of the `f32` scan, per run (median of the runs).
+    pub f32_scan_seconds: Option<f64>,
     /// GPU seconds of the counting sort (clear, count, scan, scatter), per run (median).
     pub sort_seconds: Option<f64>,
     /// GPU seconds of each kernel (median of the runs), in the order they run.
@@ -111,8 +118,28 @@ impl Numbers {
     }
 }
 
+/// The inputs of a check.
+#[derive(Debug, Clone)]
+pub struct Inputs {
+    /// The scan's words.
+    pub values: Vec<u32>,
+    /// The sort's keys.
+    pub keys: Vec<u32>,
+    /// The `f32` scan's weights.
+    pub weights: Vec<f32>,
+}
+
+impl Inputs {
+    /// `n` elements of `pattern`, keys below `buckets`.
+    pub fn draw(n: usize, buckets: u64, pattern: Pattern, seed: u64) -> Inputs {
+        let (values, keys) = words(n, buckets, pattern, seed);
+        let weights = weights(n, pattern, seed ^ 0xf32);
+        Inputs { values, keys, weights }
+    }
+}
+
 /// The scan's input and the sort's keys for `pattern`.
-fn inputs(n: usize, buckets: u64, pattern: Pattern, seed: u64) -> (Vec<u32>, Vec<u32>) {
+fn words(n: usize, buckets: u64, pattern: Pattern, seed: u64) -> (Vec<u32>, Vec<u32>) {
     let mut rng = Numbers(seed);
     match pattern {
         Pattern::Random => (
@@ -130,9 +157,64 @@ fn inputs(n: usize, buckets: u64, pattern: Pattern, seed: u64) -> (Vec<u32>, Vec
     }
 }
 
-/// Checks the GPU's outputs against the CPU: the scan's sums, the bucket starts, each
+/// The `f32` scan's weights for `pattern`: non-negative (see [`F32_SCAN_RELATIVE`]).
+fn weights(n: usize, pattern: Pattern, seed: u64) -> Vec<f32> {
+    let mut rng = Numbers(seed);
+    // 24 random bits: a uniform f32 in [0, 1), exactly.
+    let mut unit = move || (rng.next() >> 40) as f32 / (1u32 << 24) as f32;
+    match pattern {
+        Pattern::Random => (0..n)
+            .map(|_| match unit() < 1e-3 {
+                true => 65536.0 * (1.0 + unit()),
+                false => 4.0 * unit(),
+            })
+            .collect(),
+        Pattern::Equal => vec![1.0; n],
+        Pattern::Concentrated => {
+            let mut w = vec![0.25; n];
+            if n > 0 {
+                w[n / 2] = 2f32.powi(100);
+            }
+            w
+        }
+    }
+}
+
+/// The tolerance of the `f32` scan relative to the exact sum, for non-negative weights. The
+/// engine adds in its tree's order, so every weight reaches an output through a chain of
+/// roundings: per level, a thread's run (at most 16), a workgroup tree (8) or a subgroup sum
+/// and the loop over the subgroups' sums, the tile's offset; the checks take at most three
+/// levels, fewer than 256 roundings in all. Each rounding of a sum of non-negative values
+/// errs by at most 2^-24 of it, so an output errs by at most 256 * 2^-24 (1.5e-5) of the
+/// exact sum (in practice far less: the errors partly cancel). No absolute term is needed:
+/// the sum of a zero prefix of non-negative weights is exactly 0.
+pub const F32_SCAN_RELATIVE: f64 = 256.0 / (1u32 << 24) as f64;
+
+/// Checks the `f32` scan's `sums` of `weights` against an `f64` sum, to [`F32_SCAN_RELATIVE`].
+fn compare_weights(weights: &[f32], sums: &[f32]) -> Option<String> {
+    let mut exact = 0f64;
+    for (i, (&w, &s)) in weights.iter().zip(sums).enumerate() {
+        let tolerance = F32_SCAN_RELATIVE * exact;
+        let error = (s as f64 - exact).abs();
+        if error > tolerance || error.is_nan() {
+            return Some(format!(
+                "f32 scan: sum before element {i} is {s}, the CPU (f64) says {exact}, beyond {tolerance:e}"
+            ));
+        }
+        exact += w as f64;
+    }
+    None
+}
+
+/// Checks the GPU's outputs against the CPU: the scans' sums, the bucket starts, each
 /// element at its bucket's start plus its slot, and each bucket's slots all different.
-fn compare(values: &[u32], keys: &[u32], buckets: u64, out: &Outputs) -> Option<String> {
+fn compare(inputs: &Inputs, buckets: u64, out: &Outputs) -> Option<String> {
+    compare_words(&inputs.values, &inputs.keys, buckets, out)
+        .or_else(|| compare_weights(&inputs.weights, &out.weight_sums))
+}
+
+/// [`compare`] of the `u32` scan and the counting sort.
+fn compare_words(values: &[u32], keys: &[u32], buckets: u64, out: &Outputs) -> Option<String> {
     let (sums, slots, starts, sorted) = (&out.sums, &out.slots, &out.starts, &out.sorted);
     let mut run = 0u32;
     for (i, (&v, &s)) in values.iter().zip(sums).enumerate() {
@@ -217,20 +299,26 @@ pub struct Outputs {
     pub order: Vec<u32>,
     /// The 48-byte elements gathered through `order`.
     pub wide_gathered: Vec<[u32; 12]>,
+    /// The `f32` scan's sums.
+    pub weight_sums: Vec<f32>,
     /// GPU seconds of the scan (median of the runs; `None` without timestamps).
     pub scan_seconds: Option<f64>,
+    /// GPU seconds of the `f32` scan (median of the runs).
+    pub f32_scan_seconds: Option<f64>,
     /// GPU seconds of the counting sort: clear, count, scan, scatter (median of the runs).
     pub sort_seconds: Option<f64>,
     /// GPU seconds of each kernel (median of the runs), in the order they run.
     pub kernels: Vec<(String, f64)>,
 }
 
-/// Runs the scan of `values` and the counting sort of the elements with `keys` into
-/// `buckets` buckets on `gpu` (with subgroup kernels when `target` has subgroups), `runs`
-/// times.
-pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u64, runs: u32) -> Result<Outputs> {
+/// Runs the scans of the values and weights of `inputs` and the counting sort of its elements
+/// by their keys into `buckets` buckets on `gpu` (with subgroup kernels when `target` has
+/// subgroups), `runs` times.
+pub fn run(gpu: &Gpu, target: &Target, inputs: &Inputs, buckets: u64, runs: u32) -> Result<Outputs> {
+    let Inputs { values, keys, weights } = inputs;
     let n = values.len();
-    if buckets == 0 || keys.len() != n || n as u64 > u32::MAX as u64 || buckets > u32::MAX as u64 {
+    let lengths_differ = keys.len() != n || weights.len() != n;
+    if buckets == 0 || lengths_differ || n as u64 > u32::MAX as u64 || buckets > u32::MAX as u64 {
         return Err(Error::Runtime(format!(
             "cannot sort {n} elements into {buckets} buckets"
         )));
@@ -259,8 +347,9 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         instance.write("keys", bytemuck::cast_slice(keys))?;
         instance.write("payload", bytemuck::cast_slice(&payload))?;
         instance.write("wide", bytemuck::cast_slice(&wide))?;
+        instance.write("weights", bytemuck::cast_slice(weights))?;
     }
-    let (mut scan, mut sort) = (Vec::new(), Vec::new());
+    let (mut scan, mut sort, mut f32_scan) = (Vec::new(), Vec::new(), Vec::new());
     let mut per_kernel: Vec<Vec<f64>> = vec![Vec::new(); op_kernels.iter().flatten().count()];
     for run in 0..runs.max(1) {
         let stats = instance.run_frame(run, 0)?;
@@ -278,6 +367,7 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         };
         scan.extend(seconds(&op_kernels[..1]));
         sort.extend(seconds(&op_kernels[1..5]));
+        f32_scan.extend(seconds(&op_kernels[8..]));
     }
     let starts: Vec<u32> = bytemuck::pod_collect_to_vec(&instance.read("starts")?);
     let kernels = op_kernels
@@ -294,7 +384,9 @@ pub fn run(gpu: &Gpu, target: &Target, values: &[u32], keys: &[u32], buckets: u6
         wide_sorted: first_elements(&instance, "wide_sorted", n)?,
         order: first_elements(&instance, "order", n)?,
         wide_gathered: first_elements(&instance, "wide_gathered", n)?,
+        weight_sums: first_elements(&instance, "weight_sums", n)?,
         scan_seconds: median(scan),
+        f32_scan_seconds: median(f32_scan),
         sort_seconds: median(sort),
         kernels,
     })
@@ -320,15 +412,16 @@ fn wide_element(i: usize, k: u32) -> [u32; 12] {
 /// Runs the scan and the counting sort of `n` elements drawn by `pattern` into `buckets`
 /// buckets, `runs` times, and checks the last run against the CPU.
 pub fn check(gpu: &Gpu, target: &Target, n: u64, buckets: u64, pattern: Pattern, runs: u32) -> Result<Report> {
-    let (values, keys) = inputs(n as usize, buckets.max(1), pattern, n ^ 0x5eed);
-    let out = run(gpu, target, &values, &keys, buckets, runs)?;
-    let mismatch = compare(&values, &keys, buckets, &out);
+    let inputs = Inputs::draw(n as usize, buckets.max(1), pattern, n ^ 0x5eed);
+    let out = run(gpu, target, &inputs, buckets, runs)?;
+    let mismatch = compare(&inputs, buckets, &out);
     Ok(Report {
         n,
         buckets,
         pattern,
         mismatch,
         scan_seconds: out.scan_seconds,
+        f32_scan_seconds: out.f32_scan_seconds,
         sort_seconds: out.sort_seconds,
         kernels: out.kernels,
     })

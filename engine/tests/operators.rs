@@ -1,4 +1,5 @@
-//! The collective operators against the CPU: an exclusive scan and a counting sort (clear,
+//! The collective operators against the CPU: an exclusive scan of `u32`s and one of `f32`s
+//! (against an `f64` sum, to a tolerance from float rounding), a counting sort (clear,
 //! count, scan of the counts, scatter) at the lengths around every boundary of the kernels
 //! (0, 1, 2, a subgroup of 32 and a workgroup of 256 plus or minus one, a scan tile plus or
 //! minus one, and 2^20 + 7), with random inputs, all-equal ones (one bucket holding every
@@ -13,8 +14,9 @@ use lightgraph_engine::ids::OpId;
 use lightgraph_engine::radix::SORT_TILE;
 use lightgraph_engine::resolve::BufferRef;
 use lightgraph_engine::selfcheck::sort::{Keys, Sorter, compare};
-use lightgraph_engine::selfcheck::{Pattern, check, run};
-use lightgraph_engine::{Graph, Plan, Program, Target, Vfs};
+use lightgraph_engine::selfcheck::{Inputs, Pattern, check, run};
+use lightgraph_engine::{Graph, Instance, Plan, Program, Target, Vfs};
+use std::collections::BTreeMap;
 
 #[path = "common/gpu.rs"]
 mod gpu_common;
@@ -74,11 +76,34 @@ fn scans_of_two_and_three_levels_equal_the_cpu() {
 }
 
 #[test]
+fn f32_scans_equal_an_f64_sum_to_float_rounding() {
+    // One tile (1, 1000), two (4097), several (70000); with tiles of 256, 4097 and 70000 take
+    // one and two levels of partial sums. `check` compares every sum with an f64 one to
+    // `F32_SCAN_RELATIVE` (its doc derives it from float rounding); random weights in [0, 4)
+    // with a few large ones, all 1 (exact in f32), and 0.25 with one 2^100 among them.
+    for (what, mut target) in targets() {
+        for items in [16, 1] {
+            target.scan_items = items;
+            for n in [1, 1000, 4097, 70_000] {
+                for pattern in Pattern::ALL {
+                    let r = check(gpu(), &target, n, 7, pattern, 1).unwrap();
+                    assert!(
+                        r.mismatch.is_none(),
+                        "{what}, tiles of {}: n {n}, {pattern:?}: {}",
+                        256 * items,
+                        r.mismatch.unwrap()
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn a_key_beyond_the_buckets_is_an_error_not_a_lost_element() {
-    let values = vec![1u32; 40];
-    let mut keys: Vec<u32> = (0..40).map(|i| i % 7).collect();
-    keys[13] = 7;
-    let err = run(gpu(), &gpu().target(), &values, &keys, 7, 1)
+    let mut inputs = Inputs::draw(40, 7, Pattern::Random, 1);
+    inputs.keys[13] = 7;
+    let err = run(gpu(), &gpu().target(), &inputs, 7, 1)
         .err()
         .expect("the frame fails");
     let msg = err.to_string();
@@ -194,11 +219,32 @@ fn sort_graph(entries: &str) -> String {
     )
 }
 
-/// The program of `sort_graph(entries)` for a default target (no GPU needed).
-fn compile(entries: &str) -> lightgraph_engine::Result<Program> {
+/// The program of `sort_graph(entries)` for `target`.
+fn compile_for(entries: &str, target: &Target) -> lightgraph_engine::Result<Program> {
     let graph = Graph::from_text(&Vfs::default(), "sorting.ron", &sort_graph(entries))?;
     let plan = Plan::new(&graph, "sort")?;
-    Program::compile(&plan, &Default::default(), &Target::default())
+    Program::compile(&plan, &Default::default(), target)
+}
+
+/// The program of `sort_graph(entries)` for a default target (no GPU needed).
+fn compile(entries: &str) -> lightgraph_engine::Result<Program> {
+    compile_for(entries, &Target::default())
+}
+
+#[test]
+fn an_f32_scan_in_place_leaves_the_exclusive_sums() {
+    // Weights i + 0.5: every partial sum is a multiple of 0.5 below 2^23, exact in f32 in any
+    // order, and the sum before element i is i^2 / 2.
+    let weights: Vec<f32> = (0..100).map(|i| i as f32 + 0.5).collect();
+    let want: Vec<f32> = (0..100).map(|i| (i * i) as f32 / 2.0).collect();
+    for (what, target) in targets() {
+        let program = compile_for(r#"Scan(name: "cdf", input: "floats", over: "100")"#, &target).unwrap();
+        let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
+        instance.write("floats", bytemuck::cast_slice(&weights)).unwrap();
+        instance.run_frame(0, 0).unwrap();
+        let sums: Vec<f32> = bytemuck::pod_collect_to_vec(&instance.read("floats").unwrap());
+        assert_eq!(sums, want, "{what}");
+    }
 }
 
 #[test]

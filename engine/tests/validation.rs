@@ -195,9 +195,22 @@ fn operators_are_checked() {
             "Gather(name: \"fetch\", indices: \"floats\", input: \"steps\", output: \"scratch\", over: \"N\"),",
             "needs u32 elements in 'floats', which holds 'f32'",
         ),
+        ("Scan(name: \"sums\", input: \"floats\", over: \"N\"),", ""),
         (
-            "Scan(name: \"sums\", input: \"floats\", over: \"N\"),",
-            "operator 'sums' (exclusive scan) needs u32 elements in 'floats', which holds 'f32'",
+            "Scan(name: \"sums\", input: \"floats\", output: \"weights\", over: \"N\"),",
+            "",
+        ),
+        (
+            "Scan(name: \"sums\", input: \"floats\", output: \"steps\", over: \"N\"),",
+            "operator 'sums' sums 'floats' (f32) into 'steps' (u32); both must hold u32 (or atomic<u32>) or both f32",
+        ),
+        (
+            "Scan(name: \"sums\", input: \"histogram\", output: \"floats\", over: \"BINS\"),",
+            "operator 'sums' sums 'histogram' (atomic<u32>) into 'floats' (f32); both must hold",
+        ),
+        (
+            "Scan(name: \"sums\", input: \"points\", over: \"N\"),",
+            "operator 'sums' (exclusive scan) needs u32 or f32 elements in 'points', which holds 'vec2<f32>'",
         ),
         (
             "Clear(name: \"wipe\", buffer: \"steps\"), Clear(name: \"wipe\", buffer: \"steps\"),",
@@ -211,7 +224,7 @@ fn operators_are_checked() {
     for (entry, want) in cases {
         let text = with_passes(entry).replace(
             "\"scratch\": (ty: \"u32\", count: \"BINS\"),",
-            "\"scratch\": (ty: \"u32\", count: \"BINS\"), \"floats\": (ty: \"f32\", count: \"N\"),",
+            "\"scratch\": (ty: \"u32\", count: \"BINS\"), \"floats\": (ty: \"f32\", count: \"N\"), \"weights\": (ty: \"f32\", count: \"N\"), \"points\": (ty: \"vec2<f32>\", count: \"N\"),",
         );
         match Graph::from_text(&vfs(), "bad.ron", &text) {
             Ok(_) => assert!(want.is_empty(), "{entry}: accepted, expected '{want}'"),

@@ -1,5 +1,5 @@
-//! `lightgraph operators`: the engine's collective operators (exclusive scan, counting sort,
-//! radix sort) checked against the CPU and timed on a GPU.
+//! `lightgraph operators`: the engine's collective operators (exclusive scans of `u32`s and
+//! `f32`s, counting sort, radix sort) checked against the CPU and timed on a GPU.
 
 use anyhow::{Result, bail};
 use clap::Args;
@@ -80,15 +80,15 @@ pub fn operators(args: OperatorsArgs) -> Result<()> {
     Ok(())
 }
 
-/// The table of scans and counting sorts; the runs that differ from the CPU.
+/// The table of scans (`u32` and `f32`) and counting sorts; the runs that differ from the CPU.
 fn scans(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize> {
     let patterns = if args.patterns.is_empty() {
         Pattern::ALL.to_vec()
     } else {
         args.patterns.iter().map(|p| parse_pattern(p)).collect::<Result<_>>()?
     };
-    println!("\n| elements | buckets | inputs | scan (ms) | counting sort (ms) | against the CPU |");
-    println!("|---:|---:|---|---:|---:|---|");
+    println!("\n| elements | buckets | inputs | scan (ms) | f32 scan (ms) | counting sort (ms) | against the CPU |");
+    println!("|---:|---:|---|---:|---:|---:|---|");
     let mut failed = 0;
     let mut kernel_lines = Vec::new();
     for &n in &args.sizes {
@@ -100,8 +100,9 @@ fn scans(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize> {
             let r = check(gpu, target, n, buckets, pattern, args.runs)?;
             failed += r.mismatch.is_some() as usize;
             println!(
-                "| {n} | {buckets} | {pattern:?} | {} | {} | {} |",
+                "| {n} | {buckets} | {pattern:?} | {} | {} | {} | {} |",
                 ms(r.scan_seconds),
+                ms(r.f32_scan_seconds),
                 ms(r.sort_seconds),
                 verdict(&r.mismatch)
             );
@@ -110,7 +111,7 @@ fn scans(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize> {
     }
     if args.kernels {
         println!(
-            "\nkernels (ms): lg_op0 is the scan; lg_op1..4 the clear, count, scan of the counts and scatter; lg_op5 the scatter of 48-byte elements"
+            "\nkernels (ms): lg_op0 is the scan; lg_op1..4 the clear, count, scan of the counts and scatter; lg_op5 the scatter of 48-byte elements; lg_op8 the f32 scan"
         );
         for line in kernel_lines {
             println!("  {line}");
