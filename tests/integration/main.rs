@@ -19,6 +19,7 @@ mod layouts;
 mod lights;
 mod lost_work;
 mod mitsuba;
+mod mlt;
 mod options;
 mod photon_query;
 mod pm;

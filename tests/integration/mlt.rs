@@ -1,0 +1,67 @@
+//! Markov chain estimators (graphs/pssmlt.ron, docs/mlt.md) on lavapipe: both
+//! layouts of each render the same image for a seed, every chain runs every step of every
+//! frame, and the chains' proposals are accepted at a rate between the extremes. Agreement with
+//! the other estimators is `verify`'s (tests/integration/verify.rs).
+
+use crate::common::{Rendered, assert_same_render, render};
+use lightgraph::render::load_scene;
+
+/// The image size, samples per pixel and frames of the runs below: 1152 paths a frame, so
+/// 144 bootstrap paths and chains (PATHS / 8) of 8 steps each.
+const SIZE: (u32, u32) = (24, 24);
+const SPP: u32 = 2;
+const FRAMES: u32 = 3;
+
+/// The Markov chain graphs with their two layouts.
+const GRAPHS: [(&str, &str, &str); 1] = [("pssmlt", "PSSMLTsk", "PSSMLTmk")];
+
+#[test]
+fn markov_chain_layouts_render_the_same_image() {
+    for name in ["cornell-glossy-point", "cornell-mitsuba"] {
+        let scene = load_scene(name).unwrap();
+        for (graph, fused, split) in GRAPHS {
+            let a = render(&scene, graph, fused, SIZE, SPP, FRAMES, 7, &[]);
+            let b = render(&scene, graph, split, SIZE, SPP, FRAMES, 7, &[]);
+            assert_same_render(&a, &b, &format!("{name}, {split} against {fused}"));
+        }
+    }
+}
+
+/// The counter `name` of `r`.
+fn counter(r: &Rendered, name: &str) -> u64 {
+    r.counters.get(name).copied().unwrap_or(0)
+}
+
+#[test]
+fn every_chain_runs_every_step_and_some_are_accepted() {
+    let scene = load_scene("cornell-glossy-point").unwrap();
+    let paths = (SIZE.0 * SIZE.1 * SPP) as u64;
+    let chains = paths.div_ceil(8);
+    let steps = chains * paths.div_ceil(chains);
+    for (graph, layout, _) in GRAPHS {
+        let r = render(&scene, graph, layout, SIZE, SPP, FRAMES, 7, &[]);
+        assert_eq!(
+            counter(&r, "mlt_steps"),
+            FRAMES as u64 * steps,
+            "{graph}: {:?}",
+            r.counters
+        );
+        // Large steps are drawn with probability 0.3: 3456 steps give 1037 +- 27 of them, so
+        // the bounds below are 7 standard deviations off.
+        let large = counter(&r, "mlt_large_steps") as f64 / counter(&r, "mlt_steps") as f64;
+        assert!((0.245..0.355).contains(&large), "{graph}: large steps {large}");
+        // A chain that accepted everything or nothing is broken.
+        let accepted = counter(&r, "mlt_accepted") as f64 / counter(&r, "mlt_steps") as f64;
+        eprintln!("{graph}: acceptance {accepted:.3}, large steps {large:.3}");
+        assert!((0.05..0.95).contains(&accepted), "{graph}: acceptance {accepted}");
+    }
+    // PSSMLT traces one camera path (one primary ray) for each bootstrap path, each chain's
+    // seed (once) and each step.
+    let r = render(&scene, "pssmlt", "PSSMLTsk", SIZE, SPP, FRAMES, 7, &[]);
+    assert_eq!(
+        counter(&r, "rays_primary"),
+        FRAMES as u64 * (chains + steps) + chains,
+        "{:?}",
+        r.counters
+    );
+}
