@@ -1,7 +1,7 @@
 // Path tracing as a function of primary samples: the contribution and the pixel of the path
 // that the numbers of `src` make, the same estimator as the graph `pt` (next-event estimation
 // and BSDF sampling combined by MIS, Russian roulette) through the same functions
-// (shaders/pt/found.wgsl, shaders/pt/bounce.wgsl). The numbers are used in a fixed order:
+// (shaders/pt/trace.wgsl, found.wgsl, bounce.wgsl). The numbers are used in a fixed order:
 // the raster position (2), the lens (2), then at each vertex that goes on the light pick (1),
 // the point on the light (2), the BSDF sample (3) and the roulette (1): 4 + 7 per bounce.
 
@@ -21,12 +21,7 @@ fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
     path.last_specular = 1u;
     var radiance = vec3<f32>(0.0);
     loop {
-        count(select(COUNTER_RAYS_EXTENSION, COUNTER_RAYS_PRIMARY, path.length == 0u), 1u);
-        let hit = trace_closest(path.origin, path.direction, INFINITE_DISTANCE);
-        path.hit_t = select(-1.0, hit.t, hit.found);
-        path.hit_primitive = hit.primitive;
-        path.hit_uv = hit.uv;
-        path.length += 1u;
+        trace(&path);
         if (path.hit_t < 0.0) {
             radiance += path_background_found(path);
             break;
