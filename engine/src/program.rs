@@ -161,7 +161,7 @@ impl Program {
         constants.extend(spec.constants.iter().map(|(k, v)| (k.clone(), *v)));
         let graph = plan.graph.specialize(&constants)?;
         let plan = Plan::with_decl(&graph, &plan.layout_name, plan.layout.clone())?;
-        let shared = shared_sources(&plan, &spec.flags)?;
+        let shared = shared_sources(&plan, &flags_with_constants(&spec.flags, &plan.graph.constants))?;
         // Reflect: every source compiled together, with emits that do nothing.
         let begun = Resolved::for_reflection(&plan);
         let ctx = CodegenContext {
@@ -210,6 +210,13 @@ impl Program {
     pub fn constants(&self) -> &BTreeMap<String, ConstValue> {
         &self.resolved.constants
     }
+}
+
+/// The flags of `#if` lines: the host's, and every `Bool` constant that is true (a graph
+/// switches code in its library files with its own constants).
+fn flags_with_constants(flags: &BTreeSet<String>, constants: &BTreeMap<String, ConstValue>) -> BTreeSet<String> {
+    let on = constants.iter().filter(|(_, v)| matches!(v, ConstValue::Bool(true)));
+    flags.iter().cloned().chain(on.map(|(k, _)| k.clone())).collect()
 }
 
 /// The library and the pass sources of every declared pass (a live pass may call functions

@@ -30,42 +30,17 @@ struct BptPath {
     light: array<LightVertex, LIGHT_VERTEX_SLOTS>,
 }
 
-// What a light sub-path of NaiveBPT or StreamingBPT did at a vertex (`bpt_light_visit`).
-struct LightVisit {
-    vertex: LightVertex,
-    store: bool,                // whether a connection can use the vertex
-    go_on: bool,                // whether the sub-path continues
-}
-
-// Light sub-path `lp` of NaiveBPT or StreamingBPT at the vertex it arrived at: the t = 1
-// splat (through the `shadow` stream, into the film slot from `film_base` on), the vertex to
-// store, and the next direction.
-fn bpt_light_visit(lp: ptr<function, LightPath>, a: Arrival, film_base: u32) -> LightVisit {
-    var r: LightVisit;
-    r.store = false;
-    if (!a.bsdf.is_delta) {
-        r.vertex = light_vertex_at(*lp, a.s);
-        var rng = (*lp).rng;
-        let lens = camera_lens_sample(&rng);
-        (*lp).rng = rng;
-        var ray = light_vertex_to_camera(r.vertex, a.bsdf, mis_counts(1.0), lens);
-        ray.pixel += film_base;
-        if (!is_black(ray.contribution)) {
-            emit_shadow(ray);
-        }
-        r.store = (*lp).length + 2u <= MAX_PATH_LENGTH;
-    }
-    r.go_on = (*lp).length + 2u <= MAX_PATH_LENGTH && light_path_scatter(lp, a.s, a.bsdf, mis_counts(1.0));
-    return r;
-}
-
 // A camera ray through `pixel` with its MIS quantity; `rng` goes on in the sub-path. Sample
 // `index` takes pixel index % PIXELS in NaiveBPT and StreamingBPT, and that pixel in tile
 // order in LVC-BPT and VCM (as in photon mapping, so that a workgroup's vertices are close).
 fn camera_subpath_start(pixel: u32, rng: ptr<function, u32>) -> CameraSubpath {
-    let ray = camera_jittered_ray(pixel, rng);
+    return camera_subpath_along(camera_jittered_ray(pixel, rng), pixel, *rng);
+}
+
+// A camera sub-path along `ray`, a ray through `pixel`, that goes on with the random stream `rng`.
+fn camera_subpath_along(ray: CameraRay, pixel: u32, rng: u32) -> CameraSubpath {
     let d_vcm = mis_clamp(mis_pow(f32(PIXELS) / camera_pdf_w(dot(ray.direction, camera.forward))));
-    return CameraSubpath(ray.origin, pixel, ray.direction, 0u, vec3<f32>(1.0), *rng, d_vcm, 0.0, 0.0, 0u, vec2<f32>(0.0));
+    return CameraSubpath(ray.origin, pixel, ray.direction, 0u, vec3<f32>(1.0), rng, d_vcm, 0.0, 0.0, 0u, vec2<f32>(0.0));
 }
 
 // The trace passes of camera sub-paths: the closest hit of the sub-path's ray.
@@ -83,38 +58,55 @@ fn camera_subpath_trace(c: ptr<function, CameraSubpath>) {
 // strategies counted as `counts`, to the film, and at a surface brings the MIS quantities
 // to the new vertex.
 fn camera_arrive(c: ptr<function, CameraSubpath>, counts: MisCounts) -> Arrival {
-    var a: Arrival;
-    a.alive = false;
+    let found = camera_land(c, counts);
+    if (!is_black(found.emission)) {
+        film_add((*c).pixel, found.emission);
+    }
+    return found.a;
+}
+
+// Where a camera sub-path arrived (`camera_land`), and the MIS-weighted emission it found there
+// (s = 0).
+struct CameraLanding {
+    a: Arrival,
+    emission: vec3<f32>,
+}
+
+// `camera_arrive` without the film: the arrival and the emission found, for the caller to add.
+fn camera_land(c: ptr<function, CameraSubpath>, counts: MisCounts) -> CameraLanding {
+    var r: CameraLanding;
+    r.a.alive = false;
+    r.emission = vec3<f32>(0.0);
     let direction = (*c).direction;
     if ((*c).hit_t < 0.0) {
         let bg = background_radiance(direction);
         if (bg.w > 0.0) {
             let pmf = light_pmf(u32(scene.background));
             let w = bpt_hit_weight(*c, bg.w * pmf, bg.w * disk_pdf(scene.radius) * pmf, counts);
-            film_add((*c).pixel, (*c).throughput * w * bg.xyz);
+            r.emission = (*c).throughput * w * bg.xyz;
         }
-        return a;
+        return r;
     }
     let t = (*c).hit_t;
-    a.s = surface_at(Hit(t, (*c).hit_primitive, (*c).hit_uv, true), (*c).origin, direction);
-    a.bsdf = surface_bsdf(a.s, -direction);
-    if (!a.bsdf.valid) {
-        return a;
+    r.a.s = surface_at(Hit(t, (*c).hit_primitive, (*c).hit_uv, true), (*c).origin, direction);
+    r.a.bsdf = surface_bsdf(r.a.s, -direction);
+    if (!r.a.bsdf.valid) {
+        return r;
     }
-    let cos_fix = mis_pow(abs(a.bsdf.fix.z));
+    let cos_fix = mis_pow(abs(r.a.bsdf.fix.z));
     (*c).d_vcm = mis_clamp((*c).d_vcm * mis_pow(t * t) / cos_fix);
     (*c).d_vc = mis_clamp((*c).d_vc / cos_fix);
-    if (a.s.light >= 0) {
-        let le = area_light_radiance(u32(a.s.light), direction);
+    if (r.a.s.light >= 0) {
+        let le = area_light_radiance(u32(r.a.s.light), direction);
         if (le.w > 0.0) {
-            let pmf = light_pmf(u32(a.s.light));
-            let cos_light = dot(lights[u32(a.s.light)].normal, -direction);
+            let pmf = light_pmf(u32(r.a.s.light));
+            let cos_light = dot(lights[u32(r.a.s.light)].normal, -direction);
             let w = bpt_hit_weight(*c, le.w * pmf, le.w * cos_light * INV_PI * pmf, counts);
-            film_add((*c).pixel, (*c).throughput * w * le.xyz);
+            r.emission = (*c).throughput * w * le.xyz;
         }
     }
-    a.alive = true;
-    return a;
+    r.a.alive = true;
+    return r;
 }
 
 // What a camera sub-path found at the vertex it arrived at (`camera_visit`).
@@ -157,13 +149,6 @@ fn camera_visit(c: ptr<function, CameraSubpath>, counts: MisCounts) -> CameraVis
     }
     v.alive = true;
     return v;
-}
-
-// Emits the visit's s = 1 shadow ray through the `shadow` stream, if it has one.
-fn camera_emit_direct(v: CameraVisit) {
-    if (!is_black(v.direct.contribution)) {
-        emit_shadow(v.direct);
-    }
 }
 
 // Continues camera sub-path `c` from where it arrived (strategies counted as `counts`, see

@@ -38,16 +38,26 @@ struct MltState {
     seeded: u32,
 }
 
-// Pass `mlt_bootstrap` (Start over MLT_BOOTSTRAP_PATHS): the weight of bootstrap path `index`.
+// Pass `mlt_bootstrap` (Start over MLT_BOOTSTRAP_PATHS): the weight of bootstrap path `index`;
+// with MLT_INDEPENDENT the path is also a sample of the film, scaled to PATHS paths a frame.
 fn mlt_bootstrap(item: ptr<function, MltBootstrap>, index: u32) -> bool {
     var src = PrimarySamples(PRIMARY_STREAM, 0u, primary_key(1u, frame.index, index), 0u, 0u);
-    mlt_weights[index] = mlt_weight(mlt_path(&src).radiance);
+    let p = mlt_path(&src);
+    let weight = mlt_weight(p.radiance);
+    mlt_weights[index] = weight;
+    if (MLT_INDEPENDENT && weight > 0.0) {
+        film_add(p.pixel, p.radiance * (f32(PATHS) / f32(MLT_BOOTSTRAP_PATHS)));
+    }
     return false;
 }
 
 // Pass `mlt_start` (Start over MLT_CHAINS): chain `index` resumes, or is seeded; no item in a
-// frame whose bootstrap found no light (b = 0: the frame's estimate is 0).
+// frame whose bootstrap found no light (b = 0: the frame's estimate is 0), nor with
+// MLT_INDEPENDENT.
 fn mlt_start(c: ptr<function, MltChain>, index: u32) -> bool {
+    if (MLT_INDEPENDENT) {
+        return false;
+    }
     let last = MLT_BOOTSTRAP_PATHS - 1u;
     let total = mlt_cdf[last] + mlt_weights[last];
     if (!(total > 0.0)) {

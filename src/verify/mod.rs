@@ -26,7 +26,7 @@ pub const DEFAULT_SCENES: &str = "cornell-diffuse,cornell-glossy-sun,cornell-glo
 /// its default layout, and VCM in both of its halves' other modes (connections alone,
 /// LVC-BPT; merges alone, PBPM).
 pub const DEFAULT_ESTIMATORS: &str =
-    "pt,lt,bpt-naive,bpt-streaming,bpt-lvc,ppm,sppm,pbpm,vcm,vcm@VCM_MERGE=false,vcm@VCM_CONNECT=false,pssmlt";
+    "pt,lt,bpt-naive,bpt-streaming,bpt-lvc,ppm,sppm,pbpm,vcm,vcm@VCM_MERGE=false,vcm@VCM_CONNECT=false,pssmlt,mmlt";
 
 /// The quantity a graph estimates when its `coverage` names none.
 pub const DEFAULT_QUANTITY: &str = "radiance";
