@@ -25,6 +25,7 @@ pub mod ir;
 pub mod load;
 pub mod memory;
 pub mod operator;
+pub mod outline;
 pub mod plan;
 pub mod program;
 pub mod radix;

@@ -25,12 +25,30 @@ pub struct ExplainArgs {
     /// Also write each kernel's generated WGSL into this folder.
     #[arg(long)]
     pub wgsl: Option<PathBuf>,
+    /// Print only the graph's outline: its frame as loops over its items, each step the WGSL
+    /// function and file that does it and what it reads and writes (no layout, no GPU).
+    #[arg(long, conflicts_with_all = ["layout", "dot", "wgsl"])]
+    pub outline: bool,
 }
 
-/// Prints [`report`].
+/// Prints [`report`], or with `--outline` [`outline`].
 pub fn explain(args: ExplainArgs) -> Result<()> {
-    print!("{}", report(&args)?);
+    let text = if args.outline { outline(&args)? } else { report(&args)? };
+    print!("{text}");
     Ok(())
+}
+
+/// The outline of the graph `args` names, specialised for its scene, size and constants
+/// (passes a constant switches off are listed as left out).
+pub fn outline(args: &ExplainArgs) -> Result<String> {
+    let c = &args.common;
+    let graph = load_graph(args.graph.name())?;
+    let mut scenes = Scenes::new(c.scene());
+    let kind = scenes.load_for(c.bvh, &graph.default_layout, &graph.layouts[&graph.default_layout])?;
+    let scene = scenes.get(kind);
+    let opts = options(c, scene, &graph, 1)?;
+    let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, Default::default());
+    Ok(lightgraph_engine::outline::outline(&graph.specialize(&spec.constants)?))
 }
 
 /// The explanation of the layouts `args` names: features, measured constants, each layout's

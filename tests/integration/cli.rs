@@ -131,6 +131,52 @@ fn each_layout_gets_the_bvh_measured_fastest_in_it_unless_one_is_named() {
 }
 
 #[test]
+fn explain_outline_prints_the_frame_as_loops_with_each_steps_function_and_resources() {
+    let outline = |extra: &[&str]| {
+        let out = lightgraph(&[&["explain", "--graph", "vcm", "--res", "16x16", "--outline"], extra].concat());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    let text = outline(&[]);
+    // Light sub-paths with their loop, the cache and grid built by operators, then the camera
+    // sub-paths that connect and merge, each step with its function and file.
+    let order = [
+        " 1. for each of LVC_LIGHT_STARTS LightPath:",
+        "vcm_light_generate       fn vcm_light_generate (shaders/vcm/vcm.wgsl)",
+        "      repeat while the item goes on:",
+        "light_trace              fn light_trace (shaders/lt/trace.wgsl)",
+        "for each ShadowRay emitted into 'splat':",
+        "exclusive scan 'grid_starts'  < grid_counts  > grid_first",
+        "for each of PATHS VcmPath:",
+        "vcm_gather               fn vcm_gather (shaders/vcm/vcm.wgsl)",
+        "for each of PIXELS Pixel:",
+    ];
+    let mut at = 0;
+    for line in order {
+        let found = text[at..]
+            .find(line)
+            .unwrap_or_else(|| panic!("{line:?} after byte {at}:\n{text}"));
+        at += found + line.len();
+    }
+    // The scene's resources are left out; the graph's own are listed.
+    assert!(text.contains("> film") && !text.contains("primitives"), "{text}");
+    // A constant that switches the merges off leaves the grid out, and says why.
+    let connections = outline(&["--set", "VCM_MERGE=false"]);
+    assert!(!connections.contains("exclusive scan 'grid_starts'"), "{connections}");
+    assert!(
+        connections.contains("left out:\n") && connections.contains("  vcm_gather: disabled:"),
+        "{connections}"
+    );
+    // --outline shows no layout, so it takes none (a usage error of the argument parser).
+    let out = lightgraph(&["explain", "--graph", "vcm", "--outline", "--layout", "VCMsk"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("'--outline' cannot be used with '--layout"),
+        "{err}"
+    );
+}
+
+#[test]
 fn explain_prints_kernels_and_resources_of_each_layout() {
     let out = lightgraph(&["explain", "--graph", "pt", "--res", "32x32"]);
     let text = String::from_utf8_lossy(&out.stdout);
