@@ -115,7 +115,27 @@ impl LoadedScene {
 /// Loads a graph by built-in name or `.ron` path.
 pub fn load_graph(name: &str) -> Result<Graph> {
     let (vfs, path) = crate::assets::graph_source(name).map_err(|e| anyhow!(e))?;
-    Ok(Graph::load(&vfs, &path)?)
+    let graph = Graph::load(&vfs, &path)?;
+    check_constant_names(&graph)?;
+    Ok(graph)
+}
+
+/// Every true `Bool` constant of a graph is a preprocessor flag too (docs/graphs.md): one named
+/// like a flag the host sets (a scene feature, the BVH's, the device's) would switch that code
+/// on or off behind the host's back, so it is an error at its declaration.
+fn check_constant_names(graph: &Graph) -> Result<()> {
+    let mut host = lightgraph_scenes::features::all();
+    host.extend(lightgraph_scenes::bvh::BvhKind::Cwbvh.flag().map(String::from));
+    host.insert(FLOAT32_ATOMIC_FLAG.to_string());
+    match graph.declared.constants.keys().find(|k| host.contains(*k)) {
+        Some(name) => Err(graph
+            .error_at_decl(
+                name,
+                format!("constant '{name}' has the name of a flag the host sets for the kernels (a scene feature, the BVH's or the device's): rename it"),
+            )
+            .into()),
+        None => Ok(()),
+    }
 }
 
 /// Image size, sampling and seed of a session.
@@ -207,11 +227,14 @@ pub fn scene_constants(scene: &Scene) -> BTreeMap<String, ConstValue> {
     c
 }
 
+/// The flag of kernels on a device with float atomics.
+const FLOAT32_ATOMIC_FLAG: &str = "FLOAT32_ATOMIC";
+
 /// Preprocessor flags for the device's optional features.
 pub fn device_flags(gpu: &Gpu) -> BTreeSet<String> {
     let mut flags = BTreeSet::new();
     if gpu.features.contains(wgpu::Features::SHADER_FLOAT32_ATOMIC) {
-        flags.insert("FLOAT32_ATOMIC".to_string());
+        flags.insert(FLOAT32_ATOMIC_FLAG.to_string());
     }
     flags
 }

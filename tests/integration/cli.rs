@@ -240,6 +240,34 @@ fn malformed_ron_graph() {
 }
 
 #[test]
+fn a_constant_named_like_a_host_flag_is_an_error_at_its_line() {
+    // A true Bool constant is a preprocessor flag too: named like a scene feature it would
+    // compile that feature's code into kernels of a scene without it.
+    let (text, path) = pt_variant(
+        "flag-constant",
+        "constants: { \"FRAME_SLOTS\": Bool(true) }",
+        "constants: { \"FRAME_SLOTS\": Bool(true), \"TEXTURES\": Bool(true) }",
+    );
+    let err = fails(&[
+        "render",
+        "--graph",
+        path.to_str().unwrap(),
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ]);
+    assert!(
+        err.contains("constant 'TEXTURES' has the name of a flag the host sets"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("flag-constant.ron:{}:", line_of(&text, "\"TEXTURES\""))),
+        "{err}"
+    );
+}
+
+#[test]
 fn unknown_pass() {
     let (text, path) = pt_variant("unknown-pass", "Use(\"shadow\")", "Use(\"shadowz\")");
     let err = fails(&[
