@@ -165,6 +165,9 @@ impl MeasuredDecl {
 pub enum PassEntry {
     /// A pass from one of the graph's catalogs.
     Use(String),
+    /// A pass from one of the graph's catalogs that also reads or writes what this graph's
+    /// library functions, which it calls, use (a Markov chain's path evaluator, say).
+    UseWith(UseWithDecl),
     /// A pass declared in the graph itself.
     Pass(PassDecl),
     /// Fills a buffer (or a range of it) with a value.
@@ -180,6 +183,25 @@ pub enum PassEntry {
     Gather(GatherDecl),
     /// Stable radix sort of `u32` keys, with `u32` values permuted alongside.
     Sort(SortDecl),
+}
+
+/// `UseWith(name: "pass", reads: [...], writes: [...], enabled: "...")`: catalog pass `name`
+/// with more resources read and written than its catalog declares, and a condition of the
+/// graph's that it runs under.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UseWithDecl {
+    /// The catalog pass.
+    pub name: String,
+    /// Resources read besides the catalog's `reads`.
+    #[serde(default)]
+    pub reads: Vec<String>,
+    /// Resources written besides the catalog's `writes`.
+    #[serde(default)]
+    pub writes: Vec<String>,
+    /// Constant condition under which the pass runs, besides the catalog's own `enabled`.
+    #[serde(default)]
+    pub enabled: Option<String>,
 }
 
 /// A pass catalog file (`passes/*.ron`), also the format of included declaration files.

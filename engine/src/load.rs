@@ -272,21 +272,32 @@ fn graph_entries(
             ops.push(op);
             continue;
         }
+        let catalog_pass = |name: &String| -> Result<Pass> {
+            let (decl, origin) = offered.get(name).cloned().ok_or_else(|| {
+                let known: Vec<&str> = offered.keys().map(|s| s.as_str()).collect();
+                sources.at_name(
+                    file,
+                    name,
+                    format!(
+                        "unknown pass '{name}' (the catalogs {:?} offer: {})",
+                        g.catalogs,
+                        known.join(", ")
+                    ),
+                )
+            })?;
+            Ok(Pass { decl, origin })
+        };
         let pass = match entry {
-            PassEntry::Use(name) => {
-                let (decl, origin) = offered.get(name).cloned().ok_or_else(|| {
-                    let known: Vec<&str> = offered.keys().map(|s| s.as_str()).collect();
-                    sources.at_name(
-                        file,
-                        name,
-                        format!(
-                            "unknown pass '{name}' (the catalogs {:?} offer: {})",
-                            g.catalogs,
-                            known.join(", ")
-                        ),
-                    )
-                })?;
-                Pass { decl, origin }
+            PassEntry::Use(name) => catalog_pass(name)?,
+            PassEntry::UseWith(with) => {
+                let mut pass = catalog_pass(&with.name)?;
+                add_missing(&mut pass.decl.reads, &with.reads);
+                add_missing(&mut pass.decl.writes, &with.writes);
+                pass.decl.enabled = match (&pass.decl.enabled, &with.enabled) {
+                    (Some(a), Some(b)) => Some(format!("({a}) && ({b})")),
+                    (a, b) => a.clone().or_else(|| b.clone()),
+                };
+                pass
             }
             PassEntry::Pass(decl) => Pass {
                 decl: decl.clone(),
@@ -305,6 +316,15 @@ fn graph_entries(
         }
     }
     Ok((passes, ops, entries))
+}
+
+/// Appends the names of `more` that `list` lacks, in order.
+fn add_missing(list: &mut Vec<String>, more: &[String]) {
+    for name in more {
+        if !list.contains(name) {
+            list.push(name.clone());
+        }
+    }
 }
 
 /// What the files of a graph bring, merged: WGSL library files and counters in order without

@@ -97,7 +97,7 @@ impl Operator {
     /// The operator of a graph entry, or `None` for a pass entry. An error gives the text
     /// that does not parse and why.
     pub fn from_entry(entry: &PassEntry, origin: &str) -> Option<Result<Operator, (String, String)>> {
-        if matches!(entry, PassEntry::Use(_) | PassEntry::Pass(_)) {
+        if matches!(entry, PassEntry::Use(_) | PassEntry::UseWith(_) | PassEntry::Pass(_)) {
             return None;
         }
         Some(Self::build(entry, origin))
@@ -112,7 +112,7 @@ impl Operator {
             })
         };
         let (name, kind, domain, enabled) = match entry {
-            PassEntry::Use(_) | PassEntry::Pass(_) => unreachable!("operators only"),
+            PassEntry::Use(_) | PassEntry::UseWith(_) | PassEntry::Pass(_) => unreachable!("operators only"),
             PassEntry::Clear(d) => {
                 let kind = OpKind::Clear {
                     buffer: d.buffer.clone(),

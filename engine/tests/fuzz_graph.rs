@@ -272,6 +272,7 @@ fn layout() -> impl Strategy<Value = (usize, LayoutDecl)> {
                 .iter()
                 .filter_map(|p| match p {
                     PassEntry::Use(name) => Some(name.clone()),
+                    PassEntry::UseWith(with) => Some(with.name.clone()),
                     PassEntry::Pass(decl) => Some(decl.name.clone()),
                     _ => None,
                 })

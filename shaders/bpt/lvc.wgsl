@@ -1,7 +1,7 @@
 // Light Vertex Cache BPT (Davidovic et al. 2014): phase 1 traces PATHS light sub-paths,
 // splats t = 1 and stores every vertex a connection can use in one global cache; phase 2
-// traces camera sub-paths, each non-delta vertex connecting to LVC_CONNECTIONS cache
-// vertices picked uniformly. A cache of M vertices from PATHS light sub-paths, sampled
+// traces camera sub-paths (shaders/bpt/lvc_camera.wgsl), each non-delta vertex connecting to
+// LVC_CONNECTIONS cache vertices picked uniformly (`lvc_connection`, here). A cache of M vertices from PATHS light sub-paths, sampled
 // n times, estimates one light sub-path's connections with weight M / (n PATHS); in the MIS
 // the connections count n / LVC_AVERAGE_LENGTH (the measured M / PATHS) against the other
 // strategies. With LVC_MEASURING the light phase only counts the vertices it would store.
@@ -102,63 +102,26 @@ fn lvc_store(p: ptr<function, LightPath>, v: LightVertex) -> u32 {
     return LVC_NOT_STORED;
 }
 
-// Pass `lvc_camera` (Start over PATHS): the camera ray of sample `index` (culled from the
-// measuring frame).
-fn lvc_camera(p: ptr<function, CameraSubpath>, index: u32) -> bool {
-    var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
-    *p = camera_subpath_start(camera_tiled_pixel(index % PIXELS), &rng);
-    return true;
+// The connections camera vertex `visit` makes: `lvc_connections()` at a non-delta vertex with
+// `connect`, else none.
+fn lvc_connections_at(visit: CameraVisit, connect: bool) -> u32 {
+    return select(0u, lvc_connections(), connect && !visit.a.bsdf.is_delta);
 }
 
-// Pass `lvc_trace` (Loop): finds the closest hit of the camera sub-path's ray.
-fn lvc_trace(p: ptr<function, CameraSubpath>) -> bool {
-    camera_subpath_trace(p);
-    return true;
-}
-
-// Pass `lvc_vertex` (Loop): at the camera sub-path's new vertex, emission found (s = 0), a
-// light sampled directly (s = 1) and LVC_CONNECTIONS connections to cache vertices (s >= 2),
-// each MIS-weighted; then the next direction.
-fn lvc_vertex(p: ptr<function, CameraSubpath>) -> bool {
-    let counts = mis_counts(lvc_eta());
-    let visit = camera_visit(p, counts);
-    if (!visit.alive) {
-        return false;
-    }
-    var rng = visit.rng;
-    lvc_shadow_rays(*p, visit, counts, true, &rng);
-    let alive = camera_scatter(p, visit.a, counts, &rng);
-    (*p).rng = rng;
-    return alive;
-}
-
-// The shadow rays of camera vertex `visit` of sub-path `p`, emitted through the `shadow`
-// stream at one place (a fused `shadow` then inlines one traversal): with `connect`, at a
-// non-delta vertex, connections to `lvc_connections()` cache vertices picked uniformly (one
-// random number each, drawn even when the cache is empty), then the s = 1 ray, if any. A
+// The connection of camera vertex `visit` of sub-path `p` to the cache vertex that `u` picks
+// uniformly (a black contribution where there is none, or the path would be too long). A
 // cache of M vertices from PATHS light sub-paths, sampled n times, estimates one light
 // sub-path's connections with weight M / (n PATHS).
-fn lvc_shadow_rays(p: CameraSubpath, visit: CameraVisit, counts: MisCounts, connect: bool, rng: ptr<function, u32>) {
+fn lvc_connection(p: CameraSubpath, visit: CameraVisit, counts: MisCounts, u: f32) -> ShadowRay {
     let m = min(atomicLoad(&lvc_count), arrayLength(&lvc_cache));
-    let picks = lvc_connections();
-    let n = select(0u, picks, connect && !visit.a.bsdf.is_delta);
-    let scale = f32(m) / (f32(picks) * f32(PATHS));
-    for (var k = 0u; k <= n; k += 1u) {
-        var ray = visit.direct;
-        if (k < n) {
-            let u = rng_f32(rng);
-            if (m == 0u) {
-                continue;
-            }
-            let v = lvc_cache[min(u32(u * f32(m)), m - 1u)];
-            if (light_vertex_length(v) + 1u + p.length > MAX_PATH_LENGTH) {
-                continue;
-            }
-            ray = bpt_connect(p, visit.a.s, visit.a.bsdf, v, counts);
-            ray.contribution *= scale;
-        }
-        if (!is_black(ray.contribution)) {
-            emit_shadow(ray);
-        }
+    if (m == 0u) {
+        return ShadowRay();
     }
+    let v = lvc_cache[min(u32(u * f32(m)), m - 1u)];
+    if (light_vertex_length(v) + 1u + p.length > MAX_PATH_LENGTH) {
+        return ShadowRay();
+    }
+    var ray = bpt_connect(p, visit.a.s, visit.a.bsdf, v, counts);
+    ray.contribution *= f32(m) / (f32(lvc_connections()) * f32(PATHS));
+    return ray;
 }

@@ -127,8 +127,14 @@ struct CameraVisit {
 // consumes the same numbers per vertex; none without light sampling (`counts.vc` false:
 // photon mapping's numbers).
 fn camera_visit(c: ptr<function, CameraSubpath>, counts: MisCounts) -> CameraVisit {
+    return camera_visit_at(c, camera_arrive(c, counts), counts);
+}
+
+// `camera_visit` at arrival `a` of camera sub-path `c`, the emission found there taken care of
+// (`camera_arrive` adds it to the film; a chain's evaluator adds it to its path, `camera_land`).
+fn camera_visit_at(c: ptr<function, CameraSubpath>, a: Arrival, counts: MisCounts) -> CameraVisit {
     var v: CameraVisit;
-    v.a = camera_arrive(c, counts);
+    v.a = a;
     v.alive = false;
     if (!v.a.alive) {
         return v;

@@ -13,15 +13,16 @@ fn rng_seed(seed: u32, frame_index: u32, path: u32) -> u32 {
 
 fn rng_u32(state: ptr<function, u32>) -> u32 {
 #if PRIMARY_SAMPLE_STREAMS
-    // A Markov chain's graph: the numbers come from the chain's primary samples, `*state`
-    // naming the stream and its next dimension (shaders/mlt/streams.wgsl).
-    return primary_stream_u32(state);
-#else
+    // A Markov chain's graph: in an evaluator the numbers come from the chain's primary
+    // samples, `*state` naming the stream and its next dimension (shaders/mlt/streams.wgsl).
+    if (streams_on) {
+        return primary_stream_u32(state);
+    }
+#endif
     let s = *state;
     *state = s * 747796405u + 2891336453u;
     let word = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
     return (word >> 22u) ^ word;
-#endif
 }
 
 // Uniform in [0, 1).

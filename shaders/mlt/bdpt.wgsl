@@ -17,7 +17,7 @@ fn mmlt_techniques(k: u32) -> u32 {
 
 // The path the samples of `src` make.
 fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
-    stream_source = *src;
+    streams_read(*src);
     var camera_rng = stream_start(0u);
     var light_rng = stream_start(1u);
     let k = 1u + min(u32(rng_f32(&camera_rng) * f32(MAX_PATH_LENGTH)), MAX_PATH_LENGTH - 1u);

@@ -2,8 +2,8 @@
 // 2014 map it: LVC-BPT's light phase stores every non-delta light vertex in the Light Vertex
 // Cache (shaders/bpt/lvc.wgsl), the engine puts the cache in sub-path order for the
 // connections and builds the full hash grid over the same vertices for the merges
-// (graphs/vcm.ron), then each camera vertex makes LVC-BPT's connections and merges with the
-// vertices within this frame's radius (photon mapping's r_i, shaders/pm/camera.wgsl), all
+// (graphs/vcm.ron), then each camera vertex (shaders/vcm/camera.wgsl) makes LVC-BPT's
+// connections and merges with the vertices within this frame's radius (photon mapping's r_i, shaders/pm/camera.wgsl), all
 // weighted by one recursive MIS in which a merge counts pi r^2 N_light (`vcm_counts`).
 //
 // VCM_CONNECT and VCM_MERGE switch the two halves off. Without merging the passes do exactly
@@ -18,20 +18,6 @@
 // sub-paths (each iteration has its own buckets of the grid) and counts N_light as one
 // iteration's. Connections pick from the whole cache, as LVC-BPT's do at several samples per
 // pixel.
-
-const VCM_PENDING: u32 = 1u;    // a merge waits at the vertex below (`merge`)
-const VCM_ALIVE: u32 = 2u;      // the sub-path goes on after this vertex
-
-// A camera sub-path of VCM between passes, with the merge pending at its last vertex (its
-// PendingMerge carries d_vc there, and `merge_d_vcm` d_vcm), and the frame's iteration it
-// belongs to (`vcm_iteration`).
-struct VcmPath {
-    camera: CameraSubpath,
-    merge: PendingMerge,
-    merge_d_vcm: f32,
-    flags: u32,
-    iteration: u32,
-}
 
 // The strategies' counts: connections as LVC-BPT's, a merge pi r^2 N_light times a vertex
 // connection (0 without merging), N_light the light sub-paths of one iteration.
@@ -100,71 +86,14 @@ fn vcm_grid_key(v: LvcStored, owner: u32) {
     vcm_points[v.index] = GridPoint(v.position, v.index);
 }
 
-// Pass `vcm_camera` (Start over PATHS): LVC-BPT's camera ray of sample `index`.
-fn vcm_camera(p: ptr<function, VcmPath>, index: u32) -> bool {
-    var rng = rng_seed(frame.seed ^ 0x9e3779b9u, frame.index, index);
-    (*p).camera = camera_subpath_start(camera_tiled_pixel(index % PIXELS), &rng);
-    (*p).flags = 0u;
-    (*p).iteration = vcm_iteration(index);
-    return true;
-}
-
-// Pass `vcm_trace` (Loop): the closest hit of the camera sub-path's ray.
-fn vcm_trace(p: ptr<function, VcmPath>) -> bool {
-    var c = (*p).camera;
-    camera_subpath_trace(&c);
-    (*p).camera = c;
-    return true;
-}
-
-// Pass `vcm_vertex` (Loop): at the camera sub-path's new vertex, emission found (s = 0), a
-// light sampled (s = 1), LVC-BPT's connections, the merge left pending for `vcm_gather`, and
-// the next direction. Always true; `vcm_continue` ends the sub-path.
-fn vcm_vertex(p: ptr<function, VcmPath>) -> bool {
-    (*p).flags = 0u;
-    let counts = vcm_counts();
-    var c = (*p).camera;
-    let visit = camera_visit(&c, counts);
-    if (visit.alive) {
-        var rng = visit.rng;
-        lvc_shadow_rays(c, visit, counts, VCM_CONNECT, &rng);
-        if (!visit.a.bsdf.is_delta) {
-            if (VCM_MERGE) {
-                let pending = pending_merge_at(visit.a.s, -c.direction, c.throughput, c.d_vc, c.length);
-                if (VCM_MERGE_AT_VERTEX) {
-                    vcm_merge(pending, c.d_vcm, visit.a.bsdf, (*p).iteration, c.pixel, counts);
-                } else {
-                    (*p).merge = pending;
-                    (*p).merge_d_vcm = c.d_vcm;
-                    (*p).flags = VCM_PENDING;
-                }
-            }
-        }
-        if (camera_scatter(&c, visit.a, counts, &rng)) {
-            (*p).flags |= VCM_ALIVE;
-        }
-        c.rng = rng;
-    }
-    (*p).camera = c;
-    return true;
-}
-
-// Pass `vcm_gather` (Loop; culled where VCM_MERGE_AT_VERTEX): the pending merge.
-fn vcm_gather(p: ptr<function, VcmPath>) -> bool {
-    if (((*p).flags & VCM_PENDING) != 0u) {
-        vcm_merge((*p).merge, (*p).merge_d_vcm, Bsdf(), (*p).iteration, (*p).camera.pixel, vcm_counts());
-    }
-    return true;
-}
-
 // The merge at camera vertex `v` (dVCM `d_vcm`) of `iteration`: every cached vertex within the
 // radius (the full hash grid's NaiveQuery over `vcm_grid`, shaders/pm/grid.wgsl) over
-// pi r^2 N_light, into `pixel`. With VCM_MERGE_AT_VERTEX `bsdf` is the vertex's; otherwise it
-// is set up from `v` at the first vertex found (most queries find none where the radius is
-// small against the scene: Sponza's 1.6 M queries a frame find 27 k). The walk only finds
+// pi r^2 N_light, as radiance for the vertex's pixel. With VCM_MERGE_AT_VERTEX `bsdf` is the
+// vertex's; otherwise it is set up from `v` at the first vertex found (most queries find none
+// where the radius is small against the scene: Sponza's 1.6 M queries a frame find 27 k). The walk only finds
 // vertices, up to VCM_FOUND_BATCH at a time (`vcm_find`), and they are weighed after it, so
 // the walk's loop holds no BSDF code; it resumes where it stopped.
-fn vcm_merge(v: PendingMerge, d_vcm: f32, bsdf: Bsdf, iteration: u32, pixel: u32, counts: MisCounts) {
+fn vcm_merged(v: PendingMerge, d_vcm: f32, bsdf: Bsdf, iteration: u32, counts: MisCounts) -> vec3<f32> {
     var m = merge_query_at(v.position, v.d_vm, v.length);
     m.bsdf = bsdf;
     var cursor = VcmCursor(cell_box(m.position, m.radius).lo, 0u, false);
@@ -183,9 +112,7 @@ fn vcm_merge(v: PendingMerge, d_vcm: f32, bsdf: Bsdf, iteration: u32, pixel: u32
             break;
         }
     }
-    if (any(m.sum != vec3<f32>(0.0))) {
-        film_add(pixel, v.throughput * m.sum * merge_kernel(m.radius));
-    }
+    return v.throughput * m.sum * merge_kernel(m.radius);
 }
 
 // Cached vertices a walk finds before their weighing (2: on an H100 1.6% faster on the 256x256
@@ -230,11 +157,6 @@ fn vcm_find(position: vec3<f32>, radius: f32, iteration: u32, cursor: ptr<functi
     }
     (*cursor).done = true;
     return n;
-}
-
-// Pass `vcm_continue` (Loop, last): ends the sub-path when `vcm_vertex` said so.
-fn vcm_continue(p: ptr<function, VcmPath>) -> bool {
-    return ((*p).flags & VCM_ALIVE) != 0u;
 }
 
 // The points in `vcm_grid` of the bucket of `cell` in the grid of `iteration`, or none when

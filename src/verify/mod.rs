@@ -24,9 +24,9 @@ pub const DEFAULT_SCENES: &str = "cornell-diffuse,cornell-glossy-sun,cornell-glo
 
 /// The estimators `verify` checks when none are named: every built-in graph of radiance in
 /// its default layout, and VCM in both of its halves' other modes (connections alone,
-/// LVC-BPT; merges alone, PBPM).
-pub const DEFAULT_ESTIMATORS: &str =
-    "pt,lt,bpt-naive,bpt-streaming,bpt-lvc,ppm,sppm,pbpm,vcm,vcm@VCM_MERGE=false,vcm@VCM_CONNECT=false,pssmlt,mmlt";
+/// LVC-BPT; merges alone, PBPM), and Metropolised VCM also without merges (Metropolised
+/// LVC-BPT).
+pub const DEFAULT_ESTIMATORS: &str = "pt,lt,bpt-naive,bpt-streaming,bpt-lvc,ppm,sppm,pbpm,vcm,vcm@VCM_MERGE=false,vcm@VCM_CONNECT=false,pssmlt,mmlt,mvcm,mvcm@VCM_MERGE=false";
 
 /// The quantity a graph estimates when its `coverage` names none.
 pub const DEFAULT_QUANTITY: &str = "radiance";

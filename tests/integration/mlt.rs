@@ -1,4 +1,4 @@
-//! Markov chain estimators (graphs/pssmlt.ron, graphs/mmlt.ron, docs/mlt.md) on lavapipe: both
+//! Markov chain estimators (graphs/pssmlt.ron, mmlt.ron, mvcm.ron, docs/mlt.md) on lavapipe: both
 //! layouts of each render the same image for a seed, every chain runs every step of every
 //! frame, and the chains' proposals are accepted at a rate between the extremes. Agreement with
 //! the other estimators is `verify`'s (tests/integration/verify.rs).
@@ -13,7 +13,11 @@ const SPP: u32 = 2;
 const FRAMES: u32 = 3;
 
 /// The Markov chain graphs with their two layouts.
-const GRAPHS: [(&str, &str, &str); 2] = [("pssmlt", "PSSMLTsk", "PSSMLTmk"), ("mmlt", "MMLTsk", "MMLTmk")];
+const GRAPHS: [(&str, &str, &str); 3] = [
+    ("pssmlt", "PSSMLTsk", "PSSMLTmk"),
+    ("mmlt", "MMLTsk", "MMLTmk"),
+    ("mvcm", "MVCMsk", "MVCMmk"),
+];
 
 #[test]
 fn markov_chain_layouts_render_the_same_image() {

@@ -1,0 +1,57 @@
+// Metropolised VCM and LVC-BPT (after Šik, Otsu, Hachisuka and Křivánek 2016): the chains run
+// over camera sub-paths, and a camera sub-path's value is everything VCM's camera phase adds
+// for it (shaders/vcm/vcm.wgsl), MIS-weighted as there: the emission it finds (s = 0), a light
+// sampled at each vertex (s = 1), LVC-BPT's connections to the frame's Light Vertex Cache
+// (s >= 2) and, with VCM_MERGE, the merges with the cached vertices in this frame's radius.
+// The light phase (the cache, the grid, light tracing's t = 1 splats) runs as in VCM, apart
+// from the chains. The camera sub-path draws from stream 0, the connections' picks of cache
+// vertices from a stream drawn anew for each proposal (`stream_fresh`): the cache is new each
+// frame, so a stored pick would name a different vertex anyway (docs/mlt.md says why the
+// chains stay correct while the cache changes under them).
+
+// The camera sub-path the samples of `src` make, and what it adds to its pixel.
+fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
+    streams_read(*src);
+    var rng = stream_start(0u);
+    var picks = stream_fresh();
+    // The raster position as two continuous samples, so that a small step moves the ray a little.
+    let x = rng_f32(&rng) * f32(WIDTH);
+    let y = rng_f32(&rng) * f32(HEIGHT);
+    let lens = camera_lens_sample(&rng);
+    let pixel = min(u32(y), HEIGHT - 1u) * WIDTH + min(u32(x), WIDTH - 1u);
+    var c = camera_subpath_along(camera_ray(x, y, lens), pixel, rng);
+    let counts = vcm_counts();
+    var radiance = vec3<f32>(0.0);
+    loop {
+        camera_subpath_trace(&c);
+        let found = camera_land(&c, counts);
+        radiance += found.emission;
+        let visit = camera_visit_at(&c, found.a, counts);
+        if (!visit.alive) {
+            break;
+        }
+        radiance += mvcm_vertex(c, visit, counts, &picks);
+        var scatter_rng = visit.rng;
+        if (!camera_scatter(&c, visit.a, counts, &scatter_rng)) {
+            break;
+        }
+        c.rng = scatter_rng;
+    }
+    return MltPath(radiance, pixel);
+}
+
+// What camera vertex `visit` of sub-path `c` gathers, as `vcm_vertex` does: the light sample's
+// shadow ray, the connections (their picks from `picks`) and the merges, each unblocked one
+// MIS-weighted.
+fn mvcm_vertex(c: CameraSubpath, visit: CameraVisit, counts: MisCounts, picks: ptr<function, u32>) -> vec3<f32> {
+    var r = mlt_unblocked(visit.direct);
+    let n = lvc_connections_at(visit, VCM_CONNECT);
+    for (var k = 0u; k < n; k += 1u) {
+        r += mlt_unblocked(lvc_connection(c, visit, counts, rng_f32(picks)));
+    }
+    if (VCM_MERGE && !visit.a.bsdf.is_delta) {
+        let pending = pending_merge_at(visit.a.s, -c.direction, c.throughput, c.d_vc, c.length);
+        r += vcm_merged(pending, c.d_vcm, visit.a.bsdf, 0u, counts);
+    }
+    return r;
+}
