@@ -5,11 +5,15 @@
 #                                           CrytekSponza --scene VeachAjar), the verify of the
 #                                           boxes and of VeachAjar at 128x128 with 8 s an
 #                                           estimator, acceptance on VeachAjar
-#   bash bench/mlt/mvcm.sh ajar OUT_DIR [REFS]    the study on VeachAjar (PT, LVC-BPT, VCM,
-#                                           PSSMLT, Metropolised LVC-BPT and VCM) against a VCM
-#                                           reference of 200 s (rendered, or taken from REFS)
-#   bash bench/mlt/mvcm.sh caustics OUT_DIR [REFS]  the same on LivingRoom's reflected caustic
-#                                           (bundle: --scene VeachAjar --scene LivingRoom)
+#   bash bench/mlt/mvcm.sh ajar OUT_DIR [REFS]    rates by MLT_CHAIN_STEPS and the study on
+#                                           VeachAjar (PT, LVC-BPT, VCM, PSSMLT, Metropolised
+#                                           LVC-BPT and VCM, the latter also with a chain a
+#                                           sample) against a VCM reference of 200 s
+#                                           (rendered, or taken from REFS)
+#   bash bench/mlt/mvcm.sh caustics OUT_DIR [REFS]  PT, VCM, PSSMLT and Metropolised VCM on
+#                                           LivingRoom's reflected caustic, 15 s each against a
+#                                           VCM reference of 120 s (bundle: --scene VeachAjar
+#                                           --scene LivingRoom)
 set -euo pipefail
 source "$(dirname "$0")/../common.sh"
 OUT=${2:?OUT_DIR}
@@ -23,13 +27,16 @@ rates)
     --graphs vcm,mvcm,mvcm@MLT_INDEPENDENT=true,vcm@VCM_MERGE=false,mvcm@VCM_MERGE=false --out "$OUT/verify" || true
   ;;
 ajar)
+  for steps in 8 2 1; do
+    lg render --graph mvcm --scene $AJAR --res 640x360 --time 5s --set MLT_CHAIN_STEPS=$steps --out "$OUT/ajar-steps$steps.exr"
+  done
   lg study --scenes $AJAR --res 640x360 \
-    --estimators pt:NaivePTsk,bpt-lvc:LVC-BPTsk,vcm:VCMsk,pssmlt:PSSMLTsk,mvcm:MVCMsk,mvcm:MVCMsk@VCM_MERGE=false \
+    --estimators pt:NaivePTsk,bpt-lvc:LVC-BPTsk,vcm:VCMsk,pssmlt:PSSMLTsk,mvcm:MVCMsk,mvcm:MVCMsk@MLT_CHAIN_STEPS=1,mvcm:MVCMsk@VCM_MERGE=false \
     --time 20s --reference-time 200s ${3:+--references "$3"} --out "$OUT/study-ajar"
   ;;
 caustics)
   lg study --scenes $CAUSTICS --res 640x360 \
-    --estimators pt:NaivePTsk,bpt-lvc:LVC-BPTsk,vcm:VCMsk,pssmlt:PSSMLTsk,mvcm:MVCMsk \
-    --time 20s --reference-time 200s ${3:+--references "$3"} --out "$OUT/study-caustics"
+    --estimators pt:NaivePTsk,vcm:VCMsk,pssmlt:PSSMLTsk,mvcm:MVCMsk \
+    --time 15s --reference-time 120s ${3:+--references "$3"} --out "$OUT/study-caustics"
   ;;
 esac

@@ -191,8 +191,9 @@ const MVCM_PATHS: &str = "mvcm@MLT_INDEPENDENT=true@MLT_BOOTSTRAP_EVERY=1";
 /// differences measured 1.3-2.5% (the chains' the larger) and every pair agreed with |t| at
 /// most 2.2. On the diffuse box the chains' detectable difference was 11-13% at 128 frames,
 /// past the test's 7% (that box's light reaches the camera through every sub-path, where
-/// chains add correlation and find nothing harder to find); the GPU checks it at long budgets
-/// (docs/performance.md, "Markov chains: Metropolised VCM").
+/// chains add correlation and find nothing harder to find); on the GPU at 128 x 128 for 8 s
+/// they were 0.19% from VCM, undecided at a detectable 1.1% (docs/performance.md, "Markov
+/// chains: Metropolised VCM").
 #[test]
 fn mvcm_agrees_with_vcm() {
     let graphs = format!("vcm,mvcm,{MVCM_PATHS},vcm@VCM_MERGE=false,mvcm@VCM_MERGE=false");
