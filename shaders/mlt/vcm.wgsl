@@ -1,6 +1,6 @@
 // Metropolised VCM and LVC-BPT (after Šik, Otsu, Hachisuka and Křivánek 2016): the chains run
 // over camera sub-paths, and a camera sub-path's value is everything VCM's camera phase adds
-// for it (shaders/vcm/vcm.wgsl), MIS-weighted as there: the emission it finds (s = 0), a light
+// for it (shaders/vcm/camera.wgsl), MIS-weighted as there: the emission it finds (s = 0), a light
 // sampled at each vertex (s = 1), LVC-BPT's connections to the frame's Light Vertex Cache
 // (s >= 2) and, with VCM_MERGE, the merges with the cached vertices in this frame's radius.
 // The light phase (the cache, the grid, light tracing's t = 1 splats) runs as in VCM, apart
