@@ -11,6 +11,7 @@ pub mod gltf;
 pub mod gpu;
 pub mod mitsuba;
 pub mod model;
+pub mod placement;
 pub mod texture;
 
 use bvh::BvhKind;
@@ -86,6 +87,13 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
         ));
     }
     check_lights(&scene.lights).map_err(|(needle, message)| err(needle, message))?;
+    if !scene.gltf_instances.is_empty() && scene.gltf.is_none() {
+        return Err(err(
+            "gltf_instances",
+            "gltf_instances places copies of a glTF asset, but the scene has none (gltf: \"...\")".into(),
+        ));
+    }
+    placement::check(&scene.gltf_instances).map_err(|(needle, message)| err(needle, message))?;
     let (w, h) = scene.resolution;
     if w == 0 || h == 0 {
         return Err(err("resolution", "resolution must be at least 1x1".into()));
@@ -267,7 +275,9 @@ fn add_gltf(scene: &mut Scene, path: &std::path::Path) -> Result<Vec<gltf::Impor
         scene.camera = Some(found.camera.clone());
     }
     scene.materials.extend(imported.materials);
-    scene.shapes.extend(imported.shapes);
+    scene
+        .shapes
+        .extend(placement::place(imported.shapes, &scene.gltf_instances));
     scene.lights.extend(imported.lights);
     Ok(imported.cameras)
 }
@@ -294,6 +304,7 @@ pub fn scene_from_gltf(path: &std::path::Path) -> Result<(Scene, Vec<String>), S
         integrator: Default::default(),
         gltf: Some(file.clone()),
         gltf_diffuse: false,
+        gltf_instances: Vec::new(),
         textures: Vec::new(),
     };
     let cameras = add_gltf(&mut scene, path).map_err(err)?;

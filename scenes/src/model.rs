@@ -50,6 +50,11 @@ pub struct Scene {
     /// Mitsuba's `diffuse` (the scene files compared with Mitsuba set it).
     #[serde(default)]
     pub gltf_diffuse: bool,
+    /// Copies of the glTF asset's meshes, each placed by a transform (`At(...)`, `Grid(...)`,
+    /// [`crate::placement::Placement`]); none: the asset once, as it places itself. Its
+    /// emissive meshes are copied with the rest; its punctual lights and cameras are not.
+    #[serde(default)]
+    pub gltf_instances: Vec<crate::placement::Placement>,
     /// Images the materials' textures refer to (filled by the glTF import).
     #[serde(skip)]
     pub textures: Vec<Texture>,

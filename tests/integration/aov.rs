@@ -71,6 +71,7 @@ fn textured_plane() -> LoadedScene {
         integrator: Integrator::default(),
         gltf: None,
         gltf_diffuse: false,
+        gltf_instances: Vec::new(),
         textures: vec![texture],
     };
     LoadedScene {

@@ -166,6 +166,7 @@ fn scene_of(shapes: Vec<Shape>) -> Scene {
         integrator: Integrator::default(),
         gltf: None,
         gltf_diffuse: false,
+        gltf_instances: Vec::new(),
         textures: Vec::new(),
     }
 }

@@ -53,6 +53,77 @@ fn the_gltf_cornell_box_loads_and_renders() {
     assert!(centre > 0.05, "the box is dark: {centre}");
 }
 
+/// The glTF Cornell box placed four times: once by a turn and a move, once as the asset puts
+/// it and twice by a grid.
+const PLACED: &str = r#"Scene(
+    gltf: "gltf/cornell_box/CornellBox-Original.gltf",
+    gltf_instances: [
+        At(translate: (3.0, 0.0, 0.0), rotate_y_degrees: 180.0),
+        Grid(counts: (1, 1, 2), spacing: (0.0, 0.0, -4.0)),
+        At(scale: 0.5),
+    ],
+    camera: (position: (0.0, 1.0, 8.0), look: Target((0.0, 1.0, 0.0)), up: (0.0, 1.0, 0.0), fov_degrees: 60.0),
+    resolution: (16, 16),
+)"#;
+
+#[test]
+fn gltf_instances_place_copies_of_the_asset() {
+    let scene = load("placed.ron", PLACED, &data("")).unwrap();
+    assert_eq!(
+        scene.compiled.primitives.len(),
+        4 * 36,
+        "four copies of the box's triangles"
+    );
+    let area = scene
+        .compiled
+        .lights
+        .iter()
+        .filter(|l| l.kind == light_kind::AREA)
+        .count();
+    assert_eq!(area, 4 * 2, "each copy's emissive quad is two area lights");
+    // The box spans x and z in about [-1, 1]: the moved copy reaches x 3 + 1, the grid's
+    // second copy z -4 - 1, the half-size copy y 1 at most.
+    let points: Vec<[f32; 3]> = scene
+        .scene
+        .shapes
+        .iter()
+        .flat_map(|s| match s {
+            lightgraph_scenes::model::Shape::Mesh { positions, .. } => positions.clone(),
+            _ => Vec::new(),
+        })
+        .collect();
+    let max_x = points.iter().map(|p| p[0]).fold(f32::MIN, f32::max);
+    let min_z = points.iter().map(|p| p[2]).fold(f32::MAX, f32::min);
+    assert!((3.9..4.1).contains(&max_x), "max x {max_x}");
+    assert!((-5.1..-4.9).contains(&min_z), "min z {min_z}");
+    let r = render(&scene, "pt", "NaivePTsk", (16, 16), 1, 1, 3, &[]);
+    assert_finite(&r.image, "placed Cornell boxes");
+}
+
+/// The error of loading `text` as `file`, with the test data as asset root.
+fn load_error(file: &str, text: &str) -> String {
+    match load(file, text, &data("")) {
+        Ok(_) => panic!("{file} loaded"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn bad_gltf_instances_are_errors_at_their_line() {
+    let zero = PLACED.replace("At(scale: 0.5)", "At(scale: 0.0)");
+    let e = load_error("placed.ron", &zero);
+    assert!(
+        e.contains("placed.ron:6:") && e.contains("scale 0 is not positive"),
+        "{e}"
+    );
+    let none = PLACED.replace("counts: (1, 1, 2)", "counts: (1, 0, 2)");
+    let e = load_error("placed.ron", &none);
+    assert!(e.contains("placed.ron:5:") && e.contains("place no copy"), "{e}");
+    let without = PLACED.replace("gltf: \"gltf/cornell_box/CornellBox-Original.gltf\",", "shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, material: \"m\")], materials: {\"m\": (diffuse: (0.5, 0.5, 0.5))}, lights: [Point(position: (0.0, 3.0, 0.0), intensity: (1.0, 1.0, 1.0))],");
+    let e = load_error("placed.ron", &without);
+    assert!(e.contains("the scene has none"), "{e}");
+}
+
 fn scratch(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("lightgraph-gltf-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

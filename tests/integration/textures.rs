@@ -33,6 +33,7 @@ fn scene(
         integrator: Integrator::default(),
         gltf: None,
         gltf_diffuse: false,
+        gltf_instances: Vec::new(),
         textures,
     }
 }

@@ -125,6 +125,7 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         integrator,
         gltf: None,
         gltf_diffuse: false,
+        gltf_instances: Vec::new(),
         textures: builder.materials.images.textures,
     };
     scene.materials = builder.materials.materials;
