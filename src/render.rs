@@ -648,7 +648,39 @@ fn prepare(
             .get(name)
             .is_some_and(|r| r.scope == lightgraph_engine::ir::Scope::External)
     });
+    check_scene_fits(gpu, scene, &externals)?;
     Ok(Prepared { plan, spec, externals })
+}
+
+/// An error naming the scene's size where one of its buffers is larger than `gpu` binds or
+/// holds in one buffer (its triangles, BVH nodes, textures...), before any is made.
+fn check_scene_fits(gpu: &Gpu, scene: &LoadedScene, externals: &BTreeMap<String, Vec<u8>>) -> Result<()> {
+    let limit = gpu
+        .limits
+        .max_storage_buffer_binding_size
+        .min(gpu.limits.max_buffer_size);
+    let mib = |bytes: u64| bytes as f64 / 1048576.0;
+    if let Some((name, size)) = largest_over(externals, limit) {
+        bail!(
+            "the scene is too large for this GPU: its '{name}' buffer takes {:.1} MiB ({} primitives, a BVH of {:.1} MiB), more than the {:.1} MiB the adapter binds in one storage buffer (max_storage_buffer_binding_size {}, max_buffer_size {})",
+            mib(size),
+            scene.compiled.primitives.len(),
+            mib(scene.compiled.bvh.len() as u64),
+            mib(limit),
+            gpu.limits.max_storage_buffer_binding_size,
+            gpu.limits.max_buffer_size,
+        );
+    }
+    Ok(())
+}
+
+/// The largest of `buffers` (name and bytes) over `limit` bytes, if any.
+fn largest_over(buffers: &BTreeMap<String, Vec<u8>>, limit: u64) -> Option<(&str, u64)> {
+    buffers
+        .iter()
+        .map(|(name, bytes)| (name.as_str(), bytes.len() as u64))
+        .filter(|&(_, size)| size > limit)
+        .max_by_key(|&(_, size)| size)
 }
 
 /// Measures the graph's measured constants that `options` does not give (LVC-BPT's average
@@ -702,4 +734,19 @@ fn measure_prepared(
         measured.insert(name.clone(), ConstValue::F32(value as f32));
     }
     Ok(measured)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_largest_buffer_over_the_limit_is_named() {
+        let buffers: BTreeMap<String, Vec<u8>> = [("bvh", 300), ("primitives", 500), ("lights", 10)]
+            .into_iter()
+            .map(|(n, size)| (n.to_string(), vec![0u8; size]))
+            .collect();
+        assert_eq!(largest_over(&buffers, 200), Some(("primitives", 500)));
+        assert_eq!(largest_over(&buffers, 500), None);
+    }
 }
