@@ -418,6 +418,13 @@ fn v3(a: [f32; 3]) -> Vec3 {
 }
 
 impl CompiledScene {
+    /// Bytes of the geometry the GPU holds: primitives, BVH nodes and vertex attributes.
+    pub fn geometry_bytes(&self) -> u64 {
+        (std::mem::size_of_val(self.primitives.as_slice())
+            + self.bvh.len()
+            + std::mem::size_of_val(self.attributes.as_slice())) as u64
+    }
+
     /// Flattens shapes into primitives, collects lights and builds a BVH2.
     pub fn new(scene: &Scene) -> Result<CompiledScene, String> {
         Self::with_bvh(scene, BvhKind::Bvh2)

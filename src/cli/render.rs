@@ -196,12 +196,10 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     opts.constants.extend(measured);
     let (w, h) = (opts.width, opts.height);
     eprintln!(
-        "{} | scene {} ({} primitives, {} lights, loaded in {:.2} s) | graph {} layout {} | {w}x{h}",
+        "{} | scene {} ({}) | graph {} layout {} | {w}x{h}",
         gpu.describe(),
         c.scene(),
-        scene.compiled.primitives.len(),
-        scene.compiled.lights.len(),
-        scene.load_seconds,
+        scene_size(&scene),
         graph.name,
         layout
     );
@@ -476,4 +474,22 @@ fn mpi_asked(args: &RenderArgs) -> bool {
 #[cfg(not(feature = "mpi"))]
 fn mpi_asked(_: &RenderArgs) -> bool {
     false
+}
+
+/// The scene's size and load time: primitives, lights, seconds to load, the BVH's build time
+/// and rate, and the geometry's bytes on the GPU, in all and a primitive.
+fn scene_size(scene: &lightgraph::render::LoadedScene) -> String {
+    let c = &scene.compiled;
+    let n = c.primitives.len().max(1) as f64;
+    let build = c.bvh_time.as_secs_f64();
+    format!(
+        "{} primitives, {} lights, loaded in {:.2} s, BVH built in {:.2} s ({:.2} M primitives/s), geometry {:.1} MiB ({:.0} bytes a primitive)",
+        c.primitives.len(),
+        c.lights.len(),
+        scene.load_seconds,
+        build,
+        n / build.max(1e-9) / 1e6,
+        c.geometry_bytes() as f64 / 1048576.0,
+        c.geometry_bytes() as f64 / n,
+    )
 }
