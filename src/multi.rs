@@ -205,8 +205,9 @@ pub fn render_on_gpus(
 
 /// One GPU's thread: opens the adapter and a session, then renders claimed batches, each
 /// sized to take about [`BATCH_TIME`] at the GPU's own measured frame time, and hands its sums
-/// to the host every [`SEND_EVERY`] and at the end (the GPU keeps accumulating between: a
-/// read-back per batch cost 8% of the rate on an H200).
+/// to the host after its first batch (so that a checkpoint, a preview and an interrupted run
+/// hold frames early), then every [`SEND_EVERY`] and at the end (the GPU keeps accumulating
+/// between: a read-back per batch cost 8% of the rate on an H200).
 fn gpu_thread(i: usize, selector: &str, run: &Run, claims: &Claims, tx: &mpsc::Sender<Message>) -> Result<()> {
     let gpu = Gpu::new(Some(selector)).map_err(anyhow::Error::from);
     let session = gpu.as_ref().map_err(|e| anyhow!("{e}")).and_then(|gpu| {
@@ -217,7 +218,7 @@ fn gpu_thread(i: usize, selector: &str, run: &Run, claims: &Claims, tx: &mpsc::S
     claims.wait_ready();
     let mut session = session?;
     let mut frame_seconds: Option<f64> = None;
-    let (mut rays, mut busy, mut sent_at) = (0u64, 0.0, Instant::now());
+    let (mut rays, mut busy, mut sent_at, mut sent) = (0u64, 0.0, Instant::now(), false);
     loop {
         // Claims come in whole groups of the frames the GPU renders as one.
         let at_once = session.frames_at_once() as u64;
@@ -245,14 +246,14 @@ fn gpu_thread(i: usize, selector: &str, run: &Run, claims: &Claims, tx: &mpsc::S
                 .map(|(_, v)| v)
                 .sum::<u64>();
         }
-        if claimed.is_none() || sent_at.elapsed() >= SEND_EVERY {
+        if claimed.is_none() || !sent || sent_at.elapsed() >= SEND_EVERY {
             let started = Instant::now();
             let taken = session.take_accumulation()?;
             busy += started.elapsed().as_secs_f64();
             if tx.send(Message::Batch(i, taken, rays, busy)).is_err() {
                 return Ok(());
             }
-            (rays, busy, sent_at) = (0, 0.0, Instant::now());
+            (rays, busy, sent_at, sent) = (0, 0.0, Instant::now(), true);
         }
         if claimed.is_none() {
             return Ok(());

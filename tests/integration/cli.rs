@@ -148,7 +148,7 @@ fn explain_outline_prints_the_frame_as_loops_with_each_steps_function_and_resour
         "for each ShadowRay emitted into 'splat':",
         "exclusive scan 'grid_starts'  < grid_counts  > grid_first",
         "for each of PATHS VcmPath:",
-        "vcm_gather               fn vcm_gather (shaders/vcm/vcm.wgsl)",
+        "vcm_gather               fn vcm_gather (shaders/vcm/camera.wgsl)",
         "for each of PIXELS Pixel:",
     ];
     let mut at = 0;
