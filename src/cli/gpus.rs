@@ -162,15 +162,17 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
     let (mut error, mut error_at) = (String::new(), None::<Instant>);
     let mut view = args.tev.view(&out.display().to_string(), (w, h));
     let frames_before = film.frames;
-    let (mut saved_at, mut checkpoint_error) = (Instant::now(), None);
+    // The first checkpoint as soon as the first frames arrive, then one every `--checkpoint`.
+    let (mut saved_at, mut checkpoint_error) = (None::<Instant>, None);
     let (shares, merging) = render_on_gpus(&run, &selectors, budget(args), &mut film, |shares, film| {
         if let Some(every) = args.checkpoint
-            && saved_at.elapsed() >= every
+            && film.frames > frames_before
+            && saved_at.is_none_or(|t| t.elapsed() >= every)
         {
             if let Err(e) = super::render::write_film(film, &out, args.exposure) {
                 checkpoint_error.get_or_insert(e);
             }
-            saved_at = Instant::now();
+            saved_at = Some(Instant::now());
         }
         if let Some(r) = &reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
