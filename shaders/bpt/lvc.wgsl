@@ -108,12 +108,17 @@ fn lvc_connections_at(visit: CameraVisit, connect: bool) -> u32 {
     return select(0u, lvc_connections(), connect && !visit.a.bsdf.is_delta);
 }
 
-// The connection of camera vertex `visit` of sub-path `p` to the cache vertex that `u` picks
-// uniformly (a black contribution where there is none, or the path would be too long). A
-// cache of M vertices from PATHS light sub-paths, sampled n times, estimates one light
-// sub-path's connections with weight M / (n PATHS).
-fn lvc_connection(p: CameraSubpath, visit: CameraVisit, counts: MisCounts, u: f32) -> ShadowRay {
-    let m = min(atomicLoad(&lvc_count), arrayLength(&lvc_cache));
+// The vertices in the cache this frame.
+fn lvc_cached() -> u32 {
+    return min(atomicLoad(&lvc_count), arrayLength(&lvc_cache));
+}
+
+// The connection of camera vertex `visit` of sub-path `p` to the vertex that `u` picks
+// uniformly among the cache's `m` (`lvc_cached()`, loaded once a vertex): a black
+// contribution where there is none, or the path would be too long. A cache of M vertices from
+// PATHS light sub-paths, sampled n times, estimates one light sub-path's connections with
+// weight M / (n PATHS).
+fn lvc_connection(p: CameraSubpath, visit: CameraVisit, counts: MisCounts, m: u32, u: f32) -> ShadowRay {
     if (m == 0u) {
         return ShadowRay();
     }

@@ -38,10 +38,11 @@ fn lvc_vertex(p: ptr<function, CameraSubpath>) -> bool {
 // each, drawn even when the cache is empty), then the s = 1 ray, if any.
 fn lvc_shadow_rays(p: CameraSubpath, visit: CameraVisit, counts: MisCounts, connect: bool, rng: ptr<function, u32>) {
     let n = lvc_connections_at(visit, connect);
+    let m = lvc_cached();
     for (var k = 0u; k <= n; k += 1u) {
         var ray = visit.direct;
         if (k < n) {
-            ray = lvc_connection(p, visit, counts, rng_f32(rng));
+            ray = lvc_connection(p, visit, counts, m, rng_f32(rng));
         }
         if (!is_black(ray.contribution)) {
             emit_shadow(ray);

@@ -43,6 +43,17 @@ fn camera_subpath_along(ray: CameraRay, pixel: u32, rng: u32) -> CameraSubpath {
     return CameraSubpath(ray.origin, pixel, ray.direction, 0u, vec3<f32>(1.0), rng, d_vcm, 0.0, 0.0, 0u, vec2<f32>(0.0));
 }
 
+// A camera sub-path through a raster position drawn as two continuous numbers of `rng`, then
+// its lens sample (a Markov chain's camera stream: a small step of the numbers moves the ray a
+// little, where a pixel index would jump along the row); `rng` goes on in the sub-path.
+fn camera_subpath_at_raster(rng: ptr<function, u32>) -> CameraSubpath {
+    let x = rng_f32(rng) * f32(WIDTH);
+    let y = rng_f32(rng) * f32(HEIGHT);
+    let lens = camera_lens_sample(rng);
+    let pixel = min(u32(y), HEIGHT - 1u) * WIDTH + min(u32(x), WIDTH - 1u);
+    return camera_subpath_along(camera_ray(x, y, lens), pixel, *rng);
+}
+
 // The trace passes of camera sub-paths: the closest hit of the sub-path's ray.
 fn camera_subpath_trace(c: ptr<function, CameraSubpath>) {
     count(select(COUNTER_RAYS_EXTENSION, COUNTER_RAYS_PRIMARY, (*c).length == 0u), 1u);

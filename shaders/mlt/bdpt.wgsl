@@ -23,18 +23,12 @@ fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
     let k = 1u + min(u32(rng_f32(&camera_rng) * f32(MAX_PATH_LENGTH)), MAX_PATH_LENGTH - 1u);
     let n = mmlt_techniques(k);
     let s = min(u32(rng_f32(&camera_rng) * f32(n)), n - 1u);
-    // The raster position, not a pixel index and a jitter, so that a small step of the
-    // chain moves the camera ray a little.
-    let x = rng_f32(&camera_rng) * f32(WIDTH);
-    let y = rng_f32(&camera_rng) * f32(HEIGHT);
-    let lens = camera_lens_sample(&camera_rng);
-    let pixel = min(u32(y), HEIGHT - 1u) * WIDTH + min(u32(x), WIDTH - 1u);
-    var c = camera_subpath_along(camera_ray(x, y, lens), pixel, camera_rng);
+    var c = camera_subpath_at_raster(&camera_rng);
     var r: MltPath;
     if (s == k) {
         r = mmlt_light_tracing(k, &camera_rng, &light_rng);
     } else {
-        r = MltPath(mmlt_camera_technique(&c, k, s, &camera_rng, &light_rng), pixel);
+        r = MltPath(mmlt_camera_technique(&c, k, s, &camera_rng, &light_rng), c.pixel);
     }
     r.radiance *= f32(MAX_PATH_LENGTH) * f32(n);
     return r;

@@ -14,12 +14,7 @@ fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
     streams_read(*src);
     var rng = stream_start(0u);
     var picks = stream_fresh();
-    // The raster position as two continuous samples, so that a small step moves the ray a little.
-    let x = rng_f32(&rng) * f32(WIDTH);
-    let y = rng_f32(&rng) * f32(HEIGHT);
-    let lens = camera_lens_sample(&rng);
-    let pixel = min(u32(y), HEIGHT - 1u) * WIDTH + min(u32(x), WIDTH - 1u);
-    var c = camera_subpath_along(camera_ray(x, y, lens), pixel, rng);
+    var c = camera_subpath_at_raster(&rng);
     let counts = vcm_counts();
     var radiance = vec3<f32>(0.0);
     loop {
@@ -37,7 +32,7 @@ fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
         }
         c.rng = scatter_rng;
     }
-    return MltPath(radiance, pixel);
+    return MltPath(radiance, c.pixel);
 }
 
 // What camera vertex `visit` of sub-path `c` gathers, as `vcm_vertex` does: the light sample's
@@ -46,8 +41,9 @@ fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
 fn mvcm_vertex(c: CameraSubpath, visit: CameraVisit, counts: MisCounts, picks: ptr<function, u32>) -> vec3<f32> {
     var r = mlt_unblocked(visit.direct);
     let n = lvc_connections_at(visit, VCM_CONNECT);
+    let m = lvc_cached();
     for (var k = 0u; k < n; k += 1u) {
-        r += mlt_unblocked(lvc_connection(c, visit, counts, rng_f32(picks)));
+        r += mlt_unblocked(lvc_connection(c, visit, counts, m, rng_f32(picks)));
     }
     if (VCM_MERGE && !visit.a.bsdf.is_delta) {
         let pending = pending_merge_at(visit.a.s, -c.direction, c.throughput, c.d_vc, c.length);

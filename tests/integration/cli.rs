@@ -40,6 +40,19 @@ fn pt_variant(name: &str, from: &str, to: &str) -> (String, PathBuf) {
     (changed, path)
 }
 
+/// The error of rendering the graph file `path` (8 x 8, one frame), which must fail cleanly.
+fn render_graph_fails(path: &std::path::Path) -> String {
+    fails(&[
+        "render",
+        "--graph",
+        path.to_str().unwrap(),
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+    ])
+}
+
 fn line_of(text: &str, needle: &str) -> usize {
     text[..text.find(needle).expect("needle")].matches('\n').count() + 1
 }
@@ -227,15 +240,7 @@ fn explain_shows_the_layout_with_its_overrides() {
 fn malformed_ron_graph() {
     let path = temp_dir("malformed").join("malformed.ron");
     std::fs::write(&path, "(\n    name: \"broken\",\n    passes: [Use(\"generate\"\n)").unwrap();
-    let err = fails(&[
-        "render",
-        "--graph",
-        path.to_str().unwrap(),
-        "--res",
-        "8x8",
-        "--frames",
-        "1",
-    ]);
+    let err = render_graph_fails(&path);
     assert!(err.contains("malformed.ron:4:"), "{err}");
 }
 
@@ -248,15 +253,7 @@ fn a_constant_named_like_a_host_flag_is_an_error_at_its_line() {
         "constants: { \"FRAME_SLOTS\": Bool(true) }",
         "constants: { \"FRAME_SLOTS\": Bool(true), \"TEXTURES\": Bool(true) }",
     );
-    let err = fails(&[
-        "render",
-        "--graph",
-        path.to_str().unwrap(),
-        "--res",
-        "8x8",
-        "--frames",
-        "1",
-    ]);
+    let err = render_graph_fails(&path);
     assert!(
         err.contains("constant 'TEXTURES' has the name of a flag the host sets"),
         "{err}"
@@ -270,20 +267,35 @@ fn a_constant_named_like_a_host_flag_is_an_error_at_its_line() {
 #[test]
 fn unknown_pass() {
     let (text, path) = pt_variant("unknown-pass", "Use(\"shadow\")", "Use(\"shadowz\")");
-    let err = fails(&[
-        "render",
-        "--graph",
-        path.to_str().unwrap(),
-        "--res",
-        "8x8",
-        "--frames",
-        "1",
-    ]);
+    let err = render_graph_fails(&path);
     assert!(err.contains("unknown pass 'shadowz'"), "{err}");
     assert!(
         err.contains(&format!("unknown-pass.ron:{}:", line_of(&text, "\"shadowz\""))),
         "{err}"
     );
+}
+
+#[test]
+fn use_with_an_unknown_pass_or_resource_is_an_error_at_its_line() {
+    let (text, path) = pt_variant(
+        "use-with-pass",
+        "Use(\"shadow\")",
+        "UseWith(name: \"shadowz\", reads: [\"film\"])",
+    );
+    let err = render_graph_fails(&path);
+    assert!(err.contains("unknown pass 'shadowz'"), "{err}");
+    assert!(
+        err.contains(&format!("use-with-pass.ron:{}:", line_of(&text, "\"shadowz\""))),
+        "{err}"
+    );
+    // Reads it adds are checked as a catalog's are: a resource no file declares is an error.
+    let (_, path) = pt_variant(
+        "use-with-resource",
+        "Use(\"shadow\")",
+        "UseWith(name: \"shadow\", reads: [\"no_such_buffer\"])",
+    );
+    let err = render_graph_fails(&path);
+    assert!(err.contains("no_such_buffer"), "{err}");
 }
 
 #[test]
@@ -294,15 +306,7 @@ fn unknown_resource() {
         "catalogs: [\"passes/pt.ron\", \"passes/film.ron\"],\n    passes: [Use(\"generate\"), Use(\"trace\"), Use(\"logic\"), Use(\"material\"), Use(\"shadow\"), Use(\"accumulate\")],",
         "catalogs: [\"passes/pt.ron\"],\n    passes: [Use(\"generate\"), Use(\"trace\"), Use(\"logic\"), Use(\"material\"), Use(\"shadow\")],",
     );
-    let err = fails(&[
-        "render",
-        "--graph",
-        path.to_str().unwrap(),
-        "--res",
-        "8x8",
-        "--frames",
-        "1",
-    ]);
+    let err = render_graph_fails(&path);
     assert!(err.contains("unknown resource 'film'"), "{err}");
     assert!(
         err.contains("passes/pt.ron:"),
@@ -317,15 +321,7 @@ fn stream_type_mismatch() {
         "\"shadow\": (item: \"ShadowRay\"",
         "\"shadow\": (item: \"CameraPath\"",
     );
-    let err = fails(&[
-        "render",
-        "--graph",
-        path.to_str().unwrap(),
-        "--res",
-        "8x8",
-        "--frames",
-        "1",
-    ]);
+    let err = render_graph_fails(&path);
     assert!(
         err.contains("stream type mismatch") && err.contains("'CameraPath'") && err.contains("'ShadowRay'"),
         "{err}"
@@ -467,15 +463,7 @@ fn a_layout_naming_an_unknown_pass_or_option_is_refused() {
         "            loops: Host,\n            policy: Compaction,",
         "            loops: Host,\n            polcy: Compaction,",
     );
-    let err = fails(&[
-        "render",
-        "--graph",
-        path.to_str().unwrap(),
-        "--res",
-        "8x8",
-        "--frames",
-        "1",
-    ]);
+    let err = render_graph_fails(&path);
     assert!(
         err.contains("polcy") && err.contains(&format!("layout-option.ron:{}:", line_of(&text, "polcy"))),
         "{err}"
