@@ -2,10 +2,12 @@
 //! node-local index picking its adapter. The run's frames are cut into blocks of [`BLOCK`];
 //! rank r renders blocks r, r + ranks, r + 2 ranks, ... (so every rank's share is known
 //! without messages, and the union is one run's frames), keeping its own sums in f64. Every
-//! [`INTERVAL`] each rank posts a non-blocking reduce of its sums to rank 0 and a
-//! non-blocking all-reduce of whether it is done, and renders on while they complete; rank 0
-//! rebuilds the run's film from each reduce (progress, and the output at the end). The loop
-//! ends after the reduce in which every rank was done.
+//! [`INTERVAL`] each rank posts a non-blocking all-reduce of a few numbers (blocks and rays
+//! per rank, whether it is done), rendering on while it completes; rank 0 shows the progress
+//! from it. The sums stay on the GPUs (compensated f32 sums, as in a one-GPU render) and
+//! travel once: each rank reads its own back and one reduce adds them on rank 0 after the
+//! round in which every rank was done (and every round where a live view wants the film),
+//! so a run pays for one read-back and one film reduction, not one every round.
 
 use crate::multi::{Budget, Run};
 use crate::reference::Reference;
@@ -40,11 +42,17 @@ pub struct Outcome {
     pub frames_by_rank: Vec<u64>,
     /// Rays each rank traced.
     pub rays_by_rank: Vec<u64>,
-    /// Seconds the last reduction took to complete (no rendering beside it): the time of one
-    /// film reduction.
+    /// Seconds the last film reduction took (the ranks' sums to rank 0, nothing rendering
+    /// beside it).
     pub last_reduction_seconds: f64,
-    /// Bytes each rank sent in a reduction.
+    /// Bytes each rank sent in a film reduction.
     pub reduction_bytes: usize,
+    /// Seconds from the moment every rank had its session (the budget's clock) to the film
+    /// on rank 0: the run's time with its set-up off the clock.
+    pub render_seconds: f64,
+    /// Seconds rank 0 waited for the rounds' small all-reduces: the ranks' imbalance at the
+    /// round ends, plus the messages.
+    pub waiting_seconds: f64,
     /// Whether a signal (SIGINT, SIGTERM) on some rank ended the run early: every rank
     /// stopped after its block in flight, and the film holds what they rendered.
     pub interrupted: bool,
@@ -75,73 +83,86 @@ struct Worker<'g> {
     session: Session<'g>,
     film: Reference,
     blocks: u64,
-    rays: u64,
     done: bool,
 }
 
 impl Worker<'_> {
-    /// Renders this rank's next block; done when the budget has no more for it.
+    /// Submits this rank's next block, reading back the one before it (the GPU keeps a block
+    /// queued while the host records the next); done when the budget has no more for it.
     fn render_block(&mut self, run: &Run, place: Place, budget: Budget, start: Instant) -> Result<()> {
-        let j = self.blocks * place.ranks as u64 + place.rank as u64;
-        let frames = match (budget, block_frames(j, budget)) {
-            (Budget::Time(t), _) if start.elapsed() >= t => None,
-            (_, f) => f,
-        };
-        let Some((a, b)) = frames else {
-            self.done = true;
+        self.check_budget(place, budget, start);
+        if self.done {
             return Ok(());
-        };
+        }
+        let j = self.blocks * place.ranks as u64 + place.rank as u64;
+        let (a, b) = block_frames(j, budget).expect("a block within the budget");
         let first = u32::try_from(run.first_frame + a).map_err(|_| anyhow!("frame index past 2^32"))?;
         self.session.jump_to(first)?;
-        let stats = self.session.render_frames((b - a) as u32)?;
-        self.rays += stats
-            .counters
-            .iter()
-            .filter(|(k, _)| k.starts_with("rays_"))
-            .map(|(_, v)| v)
-            .sum::<u64>();
+        self.session.render_frames_behind((b - a) as u32)?;
         self.blocks += 1;
         Ok(())
     }
 
-    /// The rank's contribution to a reduction: its sums (the GPU's taken over first), then its
-    /// blocks and rays in its own slots of a vector per rank (zeros elsewhere).
-    fn snapshot(&mut self, place: Place) -> Result<Vec<f64>> {
-        self.film.absorb(&self.session.take_accumulation()?)?;
-        let mut v: Vec<f64> = self.film.sum.iter().chain(&self.film.sum_sq).flat_map(|p| *p).collect();
-        let mut slots = vec![0.0; 2 * place.ranks];
-        slots[place.rank] = self.blocks as f64;
-        slots[place.ranks + place.rank] = self.rays as f64;
-        v.extend(slots);
-        Ok(v)
+    /// Marks the rank done when its budget has no block left for it: before a round's
+    /// message, so that a rank whose time ran out says so at once.
+    fn check_budget(&mut self, place: Place, budget: Budget, start: Instant) {
+        let j = self.blocks * place.ranks as u64 + place.rank as u64;
+        let left = match budget {
+            Budget::Time(t) => start.elapsed() < t,
+            Budget::Frames(_) => block_frames(j, budget).is_some(),
+        };
+        self.done |= !left;
+    }
+
+    /// Adds the GPU's sums so far into the rank's f64 film.
+    fn absorb(&mut self) -> Result<()> {
+        self.film.absorb(&self.session.take_accumulation()?)
+    }
+
+    /// The rank's round message (the rays read back so far): its blocks and rays in its own slots of a vector per rank
+    /// (zeros elsewhere), then whether it is done and whether a signal stopped it.
+    fn state(&self, place: Place, done: bool, interrupted: bool) -> Vec<f64> {
+        let mut v = vec![0.0; 2 * place.ranks + 2];
+        v[place.rank] = self.blocks as f64;
+        v[place.ranks + place.rank] = self.session.rays() as f64;
+        v[2 * place.ranks] = f64::from(u8::from(done));
+        v[2 * place.ranks + 1] = f64::from(u8::from(interrupted));
+        v
+    }
+
+    /// The rank's sums and squared sums, flat.
+    fn sums(&self) -> Vec<f64> {
+        self.film.sum.iter().chain(&self.film.sum_sq).flat_map(|p| *p).collect()
     }
 }
 
-/// Rebuilds the run's film on rank 0 from a reduction (`sums`) into `film`; returns the frames
-/// and rays of each rank.
-fn rebuild(
+/// Puts a film reduction's sums (`sums`: sums, then squared sums, flat) into rank 0's film.
+fn set_sums(film: &mut Reference, sums: &[f64]) {
+    for (i, p) in film.sum.iter_mut().chain(film.sum_sq.iter_mut()).enumerate() {
+        *p = [sums[3 * i], sums[3 * i + 1], sums[3 * i + 2]];
+    }
+}
+
+/// Sets rank 0's film's frame ranges from a round's all-reduced state (blocks per rank); returns
+/// the frames and rays of each rank.
+fn set_ranges(
     film: &mut Reference,
-    sums: &[f64],
+    state: &[f64],
     run: &Run,
     place: Place,
     budget: Budget,
 ) -> Result<(Vec<u64>, Vec<u64>)> {
-    let n = film.sum.len();
-    for (i, p) in film.sum.iter_mut().chain(film.sum_sq.iter_mut()).enumerate() {
-        *p = [sums[3 * i], sums[3 * i + 1], sums[3 * i + 2]];
-    }
-    let slots = &sums[6 * n..];
     let mut ranges = Vec::new();
     let mut frames_by_rank = vec![0; place.ranks];
     for (r, frames) in frames_by_rank.iter_mut().enumerate() {
-        for k in 0..slots[r] as u64 {
+        for k in 0..state[r] as u64 {
             let (a, b) = block_frames(k * place.ranks as u64 + r as u64, budget).expect("a rendered block");
             ranges.push((run.first_frame + a, run.first_frame + b));
             *frames += b - a;
         }
     }
     film.set_ranges(ranges)?;
-    let rays = slots[place.ranks..].iter().map(|&x| x as u64).collect();
+    let rays = state[place.ranks..2 * place.ranks].iter().map(|&x| x as u64).collect();
     Ok((frames_by_rank, rays))
 }
 
@@ -162,42 +183,50 @@ pub fn rank_adapter(place: &Place, adapter: Option<&str>) -> String {
     adapter.map_or_else(|| (place.local % adapters).to_string(), String::from)
 }
 
+/// Opens this rank's session for `run` on `gpu` (the rank's GPU, or why it did not open); a
+/// rank that cannot ends the whole job (the other ranks would wait in collectives), with its
+/// error.
+fn open_worker<'g, C: Communicator>(
+    world: &C,
+    gpu: Result<&'g Gpu>,
+    run: &Run,
+    place: Place,
+    film: &Reference,
+) -> Worker<'g> {
+    let (layout, decl) = run.layout;
+    let session =
+        gpu.and_then(|gpu| Session::with_layout(gpu, run.graph, layout, decl.clone(), run.scene, run.options.clone()));
+    match session {
+        Ok(session) => Worker {
+            session,
+            film: Reference::new(film.size, film.info.clone()),
+            blocks: 0,
+            done: false,
+        },
+        Err(e) => {
+            eprintln!("error: rank {}: {e:#}", place.rank);
+            world.abort(1)
+        }
+    }
+}
+
 /// Renders `run` within `budget` on every rank of `world`, each on its adapter (`adapter`, or
-/// the rank's node-local index). Rank 0 gets the run's film in `film` and `progress` after
-/// every reduction; the other ranks leave `film` empty. Returns what the ranks did (on rank
-/// 0; zeros elsewhere).
+/// the rank's node-local index). Rank 0 gets `progress` after every round and the run's film
+/// in `film` at the end, and after every round too where `live` (the same on every rank:
+/// a live view wants the film); the other ranks leave `film` empty. Returns what the ranks
+/// did (on rank 0; zeros elsewhere but the times).
 pub fn render_across<C: Communicator>(
     world: &C,
     run: &Run,
     adapter: Option<&str>,
     budget: Budget,
+    live: bool,
     film: &mut Reference,
     mut progress: impl FnMut(&Progress),
 ) -> Result<Outcome> {
     let place = place(world);
-    let selector = rank_adapter(&place, adapter);
-    let (layout, decl) = run.layout;
-    let opened = Gpu::new(Some(&selector)).map_err(anyhow::Error::from);
-    let session = opened
-        .as_ref()
-        .map_err(|e| anyhow!("{e}"))
-        .and_then(|gpu| Session::with_layout(gpu, run.graph, layout, decl.clone(), run.scene, run.options.clone()));
-    let session = match session {
-        Ok(s) => s,
-        Err(e) => {
-            // The other ranks wait in collectives: end the whole job.
-            eprintln!("error: rank {}: {e:#}", place.rank);
-            world.abort(1)
-        }
-    };
-    let mut worker = Worker {
-        session,
-        film: Reference::new(film.size, film.info.clone()),
-        blocks: 0,
-        rays: 0,
-        done: false,
-    };
-    let root = world.process_at_rank(0);
+    let gpu = Gpu::new(Some(&rank_adapter(&place, adapter)));
+    let mut worker = open_worker(world, gpu.as_ref().map_err(|e| anyhow!("{e}")), run, place, film);
     world.barrier();
     let start = Instant::now();
     let mut outcome = Outcome {
@@ -208,63 +237,67 @@ pub fn render_across<C: Communicator>(
     let mut failure: Option<anyhow::Error> = None;
     for round in 1u32.. {
         let interrupted_here = crate::interrupt::requested().is_some();
-        if interrupted_here {
-            worker.done = true;
-        }
-        let snapshot = match worker.snapshot(place) {
-            Ok(v) => v,
-            Err(e) => {
-                eprintln!("error: rank {}: {e:#}", place.rank);
-                world.abort(1)
-            }
-        };
-        let mut sums = vec![0.0; snapshot.len()];
-        // Ranks done, and ranks a signal stopped (all stop once one did).
-        let done_here = [u32::from(worker.done || failure.is_some()), u32::from(interrupted_here)];
-        let mut done_ranks = [0u32; 2];
-        mpi::request::scope(|scope| {
-            let films = if place.rank == 0 {
-                root.immediate_reduce_into_root(scope, &snapshot[..], &mut sums[..], SystemOperation::sum())
-            } else {
-                root.immediate_reduce_into(scope, &snapshot[..], SystemOperation::sum())
-            };
-            let done =
-                world.immediate_all_reduce_into(scope, &done_here[..], &mut done_ranks[..], SystemOperation::sum());
-            // Render on while the reductions complete, until the next round.
+        worker.done |= interrupted_here;
+        worker.check_budget(place, budget, start);
+        let state = worker.state(place, worker.done || failure.is_some(), interrupted_here);
+        let mut all = vec![0.0; state.len()];
+        let waited = mpi::request::scope(|scope| {
+            let request = world.immediate_all_reduce_into(scope, &state[..], &mut all[..], SystemOperation::sum());
+            // Render on while the message completes, until the round's end.
             while failure.is_none() && !worker.done && start.elapsed() < INTERVAL * round {
                 if let Err(e) = worker.render_block(run, place, budget, start) {
                     failure = Some(e);
                 }
             }
-            let waited = Instant::now();
-            films.wait();
-            done.wait();
-            outcome.last_reduction_seconds = waited.elapsed().as_secs_f64();
+            let waiting = Instant::now();
+            request.wait();
+            waiting.elapsed().as_secs_f64()
         });
-        outcome.reduction_bytes = 8 * snapshot.len();
+        outcome.waiting_seconds += waited;
+        let all_done = all[2 * place.ranks] as usize == place.ranks;
+        if all_done || live {
+            if let Err(e) = worker.absorb() {
+                eprintln!("error: rank {}: {e:#}", place.rank);
+                world.abort(1)
+            }
+            reduce_film(world, &worker, film, &mut outcome);
+        }
         if place.rank == 0 {
-            (outcome.frames_by_rank, outcome.rays_by_rank) = rebuild(film, &sums, run, place, budget)?;
+            (outcome.frames_by_rank, outcome.rays_by_rank) = set_ranges(film, &all, run, place, budget)?;
             progress(&Progress {
                 film,
                 frames_by_rank: &outcome.frames_by_rank,
                 rays_by_rank: &outcome.rays_by_rank,
             });
         }
-        if done_ranks[1] > 0 {
-            // A signal on some rank: every rank's next snapshot is its last.
+        if all[2 * place.ranks + 1] > 0.0 {
+            // A signal on some rank: every rank's next message is its last.
             outcome.interrupted = true;
             worker.done = true;
         }
-        if done_ranks[0] as usize == place.ranks {
+        if all_done {
             break;
         }
-        if worker.done || failure.is_some() {
-            // Wait for the others at the next round without spinning.
-            std::thread::sleep((INTERVAL * round).saturating_sub(start.elapsed()));
-        }
     }
+    outcome.render_seconds = start.elapsed().as_secs_f64();
     if let Some(e) = failure {
         bail!("rank {}: {e:#}", place.rank);
     }
     Ok(outcome)
+}
+
+/// Reduces every rank's sums into rank 0's film (blocking), timing it into `outcome`.
+fn reduce_film<C: Communicator>(world: &C, worker: &Worker, film: &mut Reference, outcome: &mut Outcome) {
+    let root = world.process_at_rank(0);
+    let sums = worker.sums();
+    let started = Instant::now();
+    if world.rank() == 0 {
+        let mut total = vec![0.0; sums.len()];
+        root.reduce_into_root(&sums[..], &mut total[..], SystemOperation::sum());
+        set_sums(film, &total);
+    } else {
+        root.reduce_into(&sums[..], SystemOperation::sum());
+    }
+    outcome.last_reduction_seconds = started.elapsed().as_secs_f64();
+    outcome.reduction_bytes = 8 * sums.len();
 }

@@ -52,7 +52,7 @@ pub struct Share {
     pub frames: u64,
     /// Rays it traced (the graph's `rays_*` counters).
     pub rays: u64,
-    /// Seconds it spent rendering its batches (set-up excluded).
+    /// Seconds it spent rendering and handing over its batches (set-up excluded).
     pub busy_seconds: f64,
 }
 
@@ -108,6 +108,14 @@ impl Claims {
     /// When the clock started (now, if it had not).
     fn started(&self) -> Instant {
         *self.start.get_or_init(Instant::now)
+    }
+
+    /// The time a timed run has left (None for a run of frames).
+    fn left(&self) -> Option<Duration> {
+        match self.budget {
+            Budget::Time(t) => Some(t.saturating_sub(self.started().elapsed())),
+            Budget::Frames(_) => None,
+        }
     }
 
     /// Up to `n` frames (offsets from the run's first frame), or None when the budget is
@@ -203,9 +211,9 @@ pub fn render_on_gpus(
     }
 }
 
-/// One GPU's thread: opens the adapter and a session, then renders claimed batches, each
-/// sized to take about [`BATCH_TIME`] at the GPU's own measured frame time, and hands its sums
-/// to the host after its first batch (so that a checkpoint, a preview and an interrupted run
+/// One GPU's thread: opens the adapter and a session, then renders claimed batches
+/// ([`batch_frames`]), one queued on the GPU while the host records the next, and hands its
+/// sums to the host after its first batch (so that a checkpoint, a preview and an interrupted run
 /// hold frames early), then every [`SEND_EVERY`] and at the end (the GPU keeps accumulating
 /// between: a read-back per batch cost 8% of the rate on an H200).
 fn gpu_thread(i: usize, selector: &str, run: &Run, claims: &Claims, tx: &mpsc::Sender<Message>) -> Result<()> {
@@ -217,46 +225,43 @@ fn gpu_thread(i: usize, selector: &str, run: &Run, claims: &Claims, tx: &mpsc::S
     });
     claims.wait_ready();
     let mut session = session?;
-    let mut frame_seconds: Option<f64> = None;
-    let (mut rays, mut busy, mut sent_at, mut sent) = (0u64, 0.0, Instant::now(), false);
+    let began = Instant::now();
+    let (mut rays_sent, mut sent_at, mut sent) = (0u64, began, false);
     loop {
-        // Claims come in whole groups of the frames the GPU renders as one.
-        let at_once = session.frames_at_once() as u64;
-        let n = at_once
-            * match frame_seconds {
-                None => 1,
-                Some(t) => {
-                    (BATCH_TIME.as_secs_f64() / (t.max(1e-6) * at_once as f64)).clamp(1.0, MAX_BATCH as f64) as u64
-                }
-            };
-        let claimed = claims.claim(n);
+        let claimed = claims.claim(batch_frames(&session, began, claims.left()));
         if let Some((offset, count)) = claimed {
             let first = u32::try_from(run.first_frame + offset)
                 .map_err(|_| anyhow!("frame index {} is past 2^32", run.first_frame + offset))?;
             session.jump_to(first)?;
-            let started = Instant::now();
-            let stats = session.render_frames(count as u32)?;
-            let seconds = started.elapsed().as_secs_f64();
-            frame_seconds = Some(seconds / count as f64);
-            busy += seconds;
-            rays += stats
-                .counters
-                .iter()
-                .filter(|(k, _)| k.starts_with("rays_"))
-                .map(|(_, v)| v)
-                .sum::<u64>();
+            session.render_frames_behind(count as u32)?;
         }
         if claimed.is_none() || !sent || sent_at.elapsed() >= SEND_EVERY {
-            let started = Instant::now();
             let taken = session.take_accumulation()?;
-            busy += started.elapsed().as_secs_f64();
-            if tx.send(Message::Batch(i, taken, rays, busy)).is_err() {
+            let (rays, busy) = (session.rays(), sent_at.elapsed().as_secs_f64());
+            if tx.send(Message::Batch(i, taken, rays - rays_sent, busy)).is_err() {
                 return Ok(());
             }
-            (rays, busy, sent_at, sent) = (0, 0.0, Instant::now(), true);
+            (rays_sent, sent_at, sent) = (rays, Instant::now(), true);
         }
         if claimed.is_none() {
             return Ok(());
         }
     }
+}
+
+/// Frames of a GPU's next claim: about [`BATCH_TIME`] at its measured wall-clock time a frame
+/// since it `began` (one group of frames until a frame is read back), no more than a timed
+/// run has `left` beyond the frames queued, in whole groups of the frames the GPU renders
+/// as one.
+fn batch_frames(session: &Session, began: Instant, left: Option<Duration>) -> u64 {
+    let at_once = session.frames_at_once() as u64;
+    if session.settled == 0 {
+        return at_once;
+    }
+    let per_frame = began.elapsed().as_secs_f64().max(1e-6) / session.settled as f64;
+    let queued = (session.frames - session.settled) as f64 * per_frame;
+    let room = left.map_or(BATCH_TIME.as_secs_f64(), |t| {
+        (t.as_secs_f64() - queued).min(BATCH_TIME.as_secs_f64())
+    });
+    at_once * (room / (per_frame * at_once as f64)).clamp(1.0, MAX_BATCH as f64) as u64
 }

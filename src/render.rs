@@ -453,11 +453,20 @@ impl<'g> Session<'g> {
             0 if self.in_flight.is_empty() => max.min(at_once),
             n => n,
         };
-        if count > 0 {
-            self.submit(count)?;
+        match count {
+            0 => self.settle(),
+            _ => self.render_frames_behind(count),
         }
+    }
+
+    /// Submits `count` more frames (as [`Session::render_frames`]) and reads back the batches
+    /// before them, leaving this one running, so that the host records the next batch while
+    /// the GPU renders; returns the statistics of the batches read back
+    /// ([`Session::settle`] reads the rest).
+    pub fn render_frames_behind(&mut self, count: u32) -> Result<FrameStats> {
+        self.submit(count)?;
         let mut stats = FrameStats::default();
-        while self.in_flight.len() > (count > 0) as usize {
+        while self.in_flight.len() > 1 {
             stats.add(&self.collect()?);
         }
         Ok(stats)

@@ -103,3 +103,38 @@ fn ranks_share_rank_zeros_measured_constant() {
     assert!(worst < 2e-4, "2 ranks differ from one process by {worst:.2e}");
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// A run across ranks on a time budget: the ranks stop by the clock, each after a whole block,
+/// and the film holds every block the ranks rendered (reduced once, at the end). Where the
+/// ranks' blocks make one run's first frames, the film equals one process's render of them.
+#[test]
+fn a_timed_run_across_ranks_holds_every_rank_s_blocks() {
+    let d = dir("timed");
+    let film = render_with(
+        Some(2),
+        &["--scene", "cornell-diffuse", "--time", "1s"],
+        &d.join("two.exr"),
+    );
+    assert!(
+        film.frames > 0 && film.frames.is_multiple_of(16),
+        "{} frames: not whole blocks of 16",
+        film.frames
+    );
+    let blocks: u64 = film.ranges.iter().map(|r| r.1 - r.0).sum();
+    assert_eq!(blocks, film.frames, "ranges {:?}", film.ranges);
+    assert_eq!(film.info.get("ranks").map(String::as_str), Some("2"));
+    if film.ranges.len() == 1 {
+        let frames = film.frames.to_string();
+        let one = render_with(
+            None,
+            &["--scene", "cornell-diffuse", "--frames", &frames],
+            &d.join("one.exr"),
+        );
+        let worst = largest_difference(&film, &one);
+        assert!(
+            worst < 1e-5,
+            "2 ranks on a clock differ from one process by {worst:.2e}"
+        );
+    }
+    std::fs::remove_dir_all(&d).ok();
+}

@@ -7,7 +7,7 @@ use super::gpus::{Setup, budget, progress_bar};
 use super::render::RenderArgs;
 use anyhow::{Result, anyhow};
 use indicatif::ProgressBar;
-use lightgraph::cluster::{place, rank_adapter, render_across};
+use lightgraph::cluster::{Outcome, place, rank_adapter, render_across};
 use lightgraph::reference::Reference;
 use lightgraph_engine::ConstValue;
 use mpi::topology::SimpleCommunicator;
@@ -44,6 +44,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
         &run,
         args.common.adapter.as_deref(),
         budget(args),
+        args.tev.tev.is_some(),
         &mut film,
         |p| {
             if let Some(v) = view.as_mut().filter(|v| v.due()) {
@@ -78,7 +79,8 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
     if let Some(v) = &mut view {
         v.show(&film.mean());
     }
-    let seconds = start.elapsed().as_secs_f64();
+    let seconds = outcome.render_seconds;
+    let setup_seconds = start.elapsed().as_secs_f64() - seconds;
     film.info.insert("layout".into(), setup.layout.clone());
     let frames_by_rank = &outcome.frames_by_rank;
     film.info.insert("ranks".into(), frames_by_rank.len().to_string());
@@ -90,19 +92,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
         film = whole;
     }
     let png = super::render::write_film(&film, &out, args.exposure)?;
-    eprintln!(
-        "{} frames, {} spp in {seconds:.2} s on {} ranks: {}samples/s wall-clock; frames by rank: {:?}",
-        film.frames,
-        film.samples_per_pixel(),
-        frames_by_rank.len(),
-        si(film.samples_per_pixel() as f64 * pixels / seconds),
-        frames_by_rank
-    );
-    eprintln!(
-        "last film reduction: {:.1} MB a rank in {:.1} ms",
-        outcome.reduction_bytes as f64 / 1e6,
-        1e3 * outcome.last_reduction_seconds
-    );
+    report(&film, &outcome, pixels, setup_seconds);
     println!("wrote {} and {}", out.display(), png.display());
     if outcome.interrupted {
         return super::film::stopped_by_signal(format!(
@@ -118,6 +108,30 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
         ));
     }
     Ok(())
+}
+
+/// The run's rates on stderr: samples/s over the time after every rank's set-up (as `--gpus`
+/// counts it), the set-up, frames by rank, the ranks' waits and the film reduction.
+fn report(film: &lightgraph::reference::Reference, outcome: &Outcome, pixels: f64, setup_seconds: f64) {
+    let seconds = outcome.render_seconds;
+    eprintln!(
+        "{} frames, {} spp in {seconds:.2} s on {} ranks (set-up {setup_seconds:.2} s before): {}samples/s wall-clock, {}rays/s",
+        film.frames,
+        film.samples_per_pixel(),
+        outcome.frames_by_rank.len(),
+        si(film.samples_per_pixel() as f64 * pixels / seconds),
+        si(outcome.rays_by_rank.iter().sum::<u64>() as f64 / seconds),
+    );
+    eprintln!(
+        "frames by rank: {:?}; rank 0 waited {:.1} ms for the ranks at the round ends",
+        outcome.frames_by_rank,
+        1e3 * outcome.waiting_seconds
+    );
+    eprintln!(
+        "film reduction: {:.1} MB a rank in {:.1} ms",
+        outcome.reduction_bytes as f64 / 1e6,
+        1e3 * outcome.last_reduction_seconds
+    );
 }
 
 /// Rank 0 measures the graph's measured constants that the options do not give (on its GPU)
