@@ -18,7 +18,7 @@ use std::fmt::Write;
 use std::time::Instant;
 
 /// Built-in graphs that do not estimate radiance, so have no stress invariant to keep.
-pub const NOT_RADIANCE: [&str; 2] = ["ao", "aov"];
+pub const NOT_RADIANCE: [&str; 3] = ["ao", "aov", "trace"];
 
 /// Built-in radiance estimators left out of the stress suite, with the reason: light tracing
 /// misses lights seen directly and whatever is seen through a specular surface, so it cannot

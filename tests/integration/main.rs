@@ -35,5 +35,6 @@ mod study;
 mod subgroups;
 mod tev;
 mod textures;
+mod trace;
 mod vcm;
 mod verify;
