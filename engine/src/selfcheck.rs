@@ -17,6 +17,7 @@ use crate::runtime::Instance;
 use crate::vfs::{Layer, Vfs};
 use crate::{Graph, Plan};
 use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
 
 /// The graph: every step an operator, the data written by the host.
 const GRAPH: &str = r#"// Exclusive scans (u32, f32) and counting sort of host-written data (the engine's self-check).
@@ -313,8 +314,11 @@ pub struct Outputs {
 
 /// Runs the scans of the values and weights of `inputs` and the counting sort of its elements
 /// by their keys into `buckets` buckets on `gpu` (with subgroup kernels when `target` has
-/// subgroups), `runs` times.
-pub fn run(gpu: &Gpu, target: &Target, inputs: &Inputs, buckets: u64, runs: u32) -> Result<Outputs> {
+/// subgroups), `runs` times, after running them untimed for `warm_up`: a GPU that idled runs
+/// its first tenth of a second or so at a fraction of its clock (an H200's SM clock went from
+/// 345 to 1980 MHz within 0.1-0.2 s of load), which made every instance after a pause of CPU
+/// work 3.5x slower than the first (docs/performance.md, "Operators run the same every time").
+pub fn run(gpu: &Gpu, target: &Target, inputs: &Inputs, buckets: u64, runs: u32, warm_up: Duration) -> Result<Outputs> {
     let Inputs { values, keys, weights } = inputs;
     let n = values.len();
     let lengths_differ = keys.len() != n || weights.len() != n;
@@ -348,6 +352,10 @@ pub fn run(gpu: &Gpu, target: &Target, inputs: &Inputs, buckets: u64, runs: u32)
         instance.write("payload", bytemuck::cast_slice(&payload))?;
         instance.write("wide", bytemuck::cast_slice(&wide))?;
         instance.write("weights", bytemuck::cast_slice(weights))?;
+    }
+    let warming = Instant::now();
+    while warming.elapsed() < warm_up {
+        instance.run_frame(0, 0)?;
     }
     let (mut scan, mut sort, mut f32_scan) = (Vec::new(), Vec::new(), Vec::new());
     let mut per_kernel: Vec<Vec<f64>> = vec![Vec::new(); op_kernels.iter().flatten().count()];
@@ -410,10 +418,18 @@ fn wide_element(i: usize, k: u32) -> [u32; 12] {
 }
 
 /// Runs the scan and the counting sort of `n` elements drawn by `pattern` into `buckets`
-/// buckets, `runs` times, and checks the last run against the CPU.
-pub fn check(gpu: &Gpu, target: &Target, n: u64, buckets: u64, pattern: Pattern, runs: u32) -> Result<Report> {
+/// buckets, `runs` times after `warm_up` ([`run`]), and checks the last run against the CPU.
+pub fn check(
+    gpu: &Gpu,
+    target: &Target,
+    n: u64,
+    buckets: u64,
+    pattern: Pattern,
+    runs: u32,
+    warm_up: Duration,
+) -> Result<Report> {
     let inputs = Inputs::draw(n as usize, buckets.max(1), pattern, n ^ 0x5eed);
-    let out = run(gpu, target, &inputs, buckets, runs)?;
+    let out = run(gpu, target, &inputs, buckets, runs, warm_up)?;
     let mismatch = compare(&inputs, buckets, &out);
     Ok(Report {
         n,

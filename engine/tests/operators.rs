@@ -17,6 +17,7 @@ use lightgraph_engine::selfcheck::sort::{Keys, Sorter, compare};
 use lightgraph_engine::selfcheck::{Inputs, Pattern, check, run};
 use lightgraph_engine::{Graph, Instance, Plan, Program, Target, Vfs};
 use std::collections::BTreeMap;
+use std::time::Duration;
 
 #[path = "common/gpu.rs"]
 mod gpu_common;
@@ -26,7 +27,7 @@ fn check_all(target: &Target, what: &str, lengths: &[u64]) {
     for &n in lengths {
         for buckets in [n.max(1), 7] {
             for pattern in Pattern::ALL {
-                let r = check(gpu(), target, n, buckets, pattern, 1).unwrap();
+                let r = check(gpu(), target, n, buckets, pattern, 1, Duration::ZERO).unwrap();
                 assert!(
                     r.mismatch.is_none(),
                     "{what}: n {n}, {buckets} buckets, {pattern:?}: {}",
@@ -86,7 +87,7 @@ fn f32_scans_equal_an_f64_sum_to_float_rounding() {
             target.scan_items = items;
             for n in [1, 1000, 4097, 70_000] {
                 for pattern in Pattern::ALL {
-                    let r = check(gpu(), &target, n, 7, pattern, 1).unwrap();
+                    let r = check(gpu(), &target, n, 7, pattern, 1, Duration::ZERO).unwrap();
                     assert!(
                         r.mismatch.is_none(),
                         "{what}, tiles of {}: n {n}, {pattern:?}: {}",
@@ -103,7 +104,7 @@ fn f32_scans_equal_an_f64_sum_to_float_rounding() {
 fn a_key_beyond_the_buckets_is_an_error_not_a_lost_element() {
     let mut inputs = Inputs::draw(40, 7, Pattern::Random, 1);
     inputs.keys[13] = 7;
-    let err = run(gpu(), &gpu().target(), &inputs, 7, 1)
+    let err = run(gpu(), &gpu().target(), &inputs, 7, 1, Duration::ZERO)
         .err()
         .expect("the frame fails");
     let msg = err.to_string();

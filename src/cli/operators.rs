@@ -31,6 +31,14 @@ pub struct OperatorsArgs {
     /// Runs per size; the times are the median.
     #[arg(long, default_value_t = 5, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub runs: u32,
+    /// Instances per size and input: each compiles the operators anew, allocates its own
+    /// buffers and runs `--runs` times (a row each: later instances against the first).
+    #[arg(long, default_value_t = 1, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
+    pub instances: u32,
+    /// Untimed runs before each instance's timed ones, for this long: a GPU that idled
+    /// (drawing inputs, checking on the CPU) starts at a fraction of its clock.
+    #[arg(long, value_parser = super::checks::duration, default_value = "500ms")]
+    pub warm_up: std::time::Duration,
     /// Use no subgroup operations even where the adapter has them.
     #[arg(long)]
     pub no_subgroups: bool,
@@ -87,8 +95,10 @@ fn scans(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize> {
     } else {
         args.patterns.iter().map(|p| parse_pattern(p)).collect::<Result<_>>()?
     };
-    println!("\n| elements | buckets | inputs | scan (ms) | f32 scan (ms) | counting sort (ms) | against the CPU |");
-    println!("|---:|---:|---|---:|---:|---:|---|");
+    println!(
+        "\n| elements | buckets | inputs | instance | scan (ms) | f32 scan (ms) | counting sort (ms) | against the CPU |"
+    );
+    println!("|---:|---:|---|---:|---:|---:|---:|---|");
     let mut failed = 0;
     let mut kernel_lines = Vec::new();
     for &n in &args.sizes {
@@ -96,17 +106,20 @@ fn scans(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize> {
             "n" => n.max(1),
             b => b.parse()?,
         };
-        for &pattern in &patterns {
-            let r = check(gpu, target, n, buckets, pattern, args.runs)?;
+        for (&pattern, i) in patterns
+            .iter()
+            .flat_map(|p| std::iter::repeat(p).zip(1..=args.instances))
+        {
+            let r = check(gpu, target, n, buckets, pattern, args.runs, args.warm_up)?;
             failed += r.mismatch.is_some() as usize;
             println!(
-                "| {n} | {buckets} | {pattern:?} | {} | {} | {} | {} |",
+                "| {n} | {buckets} | {pattern:?} | {i} | {} | {} | {} | {} |",
                 ms(r.scan_seconds),
                 ms(r.f32_scan_seconds),
                 ms(r.sort_seconds),
                 verdict(&r.mismatch)
             );
-            kernel_lines.push(format!("{n} {pattern:?}: {}", kernel_times(&r.kernels)));
+            kernel_lines.push(format!("{n} {pattern:?} #{i}: {}", kernel_times(&r.kernels)));
         }
     }
     if args.kernels {
@@ -127,25 +140,25 @@ fn radix_sorts(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize
     } else {
         args.keys.iter().map(|k| parse_keys(k)).collect::<Result<_>>()?
     };
-    println!("\n| elements | keys | bits | radix sort (ms) | keys/s | against the CPU |");
-    println!("|---:|---|---:|---:|---:|---|");
+    println!("\n| elements | keys | bits | instance | radix sort (ms) | keys/s | against the CPU |");
+    println!("|---:|---|---:|---:|---:|---:|---|");
     let mut failed = 0;
     let mut kernel_lines = Vec::new();
     for &n in &args.sizes {
-        for &pattern in &keys {
-            let r = sort::check(gpu, target, n, pattern, args.bits, args.runs)?;
+        for (&pattern, i) in keys.iter().flat_map(|k| std::iter::repeat(k).zip(1..=args.instances)) {
+            let r = sort::check(gpu, target, n, pattern, args.bits, args.runs, args.warm_up)?;
             failed += r.mismatch.is_some() as usize;
             let rate = r
                 .seconds
                 .filter(|&s| s > 0.0)
                 .map_or("-".to_string(), |s| format!("{:.3e}", n as f64 / s));
             println!(
-                "| {n} | {pattern:?} | {} | {} | {rate} | {} |",
+                "| {n} | {pattern:?} | {} | {i} | {} | {rate} | {} |",
                 args.bits,
                 ms(r.seconds),
                 verdict(&r.mismatch)
             );
-            kernel_lines.push(format!("{n} {pattern:?}: {}", kernel_times(&r.kernels)));
+            kernel_lines.push(format!("{n} {pattern:?} #{i}: {}", kernel_times(&r.kernels)));
         }
     }
     if args.kernels {

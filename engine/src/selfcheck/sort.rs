@@ -12,6 +12,7 @@ use crate::runtime::Instance;
 use crate::vfs::Vfs;
 use crate::{Graph, Plan};
 use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
 
 /// The keys a check sorts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -201,11 +202,24 @@ pub struct SortReport {
 }
 
 /// Sorts `n` keys drawn by `pattern` by their low `bits` bits, with their indices as values
-/// (so any instability shows), `runs` times, and checks the last run against the CPU.
-pub fn check(gpu: &Gpu, target: &Target, n: u64, pattern: Keys, bits: u32, runs: u32) -> Result<SortReport> {
+/// (so any instability shows), `runs` times after sorting them untimed for `warm_up`
+/// ([`crate::selfcheck::run`] says why), and checks the last run against the CPU.
+pub fn check(
+    gpu: &Gpu,
+    target: &Target,
+    n: u64,
+    pattern: Keys,
+    bits: u32,
+    runs: u32,
+    warm_up: Duration,
+) -> Result<SortReport> {
     let keys = pattern.draw(n as usize, n ^ 0x50f7);
     let values: Vec<u32> = (0..n as u32).collect();
     let mut sorter = Sorter::new(gpu, target, n, bits, false)?;
+    let warming = Instant::now();
+    while warming.elapsed() < warm_up {
+        sorter.sort(&keys, &values, n, 0, 1)?;
+    }
     let sorted = sorter.sort(&keys, &values, n, 0, runs)?;
     Ok(SortReport {
         mismatch: compare(&keys, &values, n as usize, bits, &sorted),
