@@ -16,6 +16,7 @@ pub mod cluster;
 pub mod compare;
 pub mod fetch;
 pub mod interrupt;
+pub mod layout_cache;
 pub mod metrics;
 pub mod multi;
 pub mod output;

@@ -4,7 +4,7 @@
 //! the catalog with `Use("name")` or declared inline with `Pass(...)`), its resources,
 //! streams, counters, constants and layouts. See `docs/graphs.md` for the full reference.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// A frame graph: one estimator, with the layouts it can be run in.
@@ -516,7 +516,7 @@ impl std::fmt::Display for PerCall {
 }
 
 /// A constant's value, emitted as a WGSL `const` (or a parameter's value).
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 pub enum ConstValue {
     /// `u32`
     U32(u32),
@@ -600,7 +600,7 @@ impl ConstValue {
 }
 
 /// How item state is laid out in buffers between split kernels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
 pub enum StateStorage {
     /// Structure of arrays: word `w` of item `i` at `w * capacity + i` (coalesced).
     #[default]
@@ -610,7 +610,7 @@ pub enum StateStorage {
 }
 
 /// A layout: how the passes become kernels.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct LayoutDecl {
     /// What the layout is (e.g. the paper's name for it).
@@ -667,7 +667,7 @@ fn default_loop_guards() -> bool {
 }
 
 /// How a chain with a loop keeps its threads busy (the paper's regeneration policies).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
 pub enum Policy {
     /// One thread (slot) per item; finished items leave their slot idle.
     #[default]
@@ -681,7 +681,7 @@ pub enum Policy {
 }
 
 /// Where a chain's loop passes repeat.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
 pub enum LoopMode {
     /// Inside the kernel, with the item in registers.
     #[default]

@@ -6,13 +6,15 @@ use anyhow::{Result, bail};
 use clap::Args;
 use lightgraph::aov::{Aov, AovRender};
 use lightgraph::interrupt;
+use lightgraph::layout_cache;
 use lightgraph::metrics::image_error;
 use lightgraph::output;
 use lightgraph::reference::{Reference, film_settings};
 use lightgraph::render::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
 use lightgraph::tev::LiveView;
 use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::{Gpu, Graph};
+use lightgraph_engine::{Gpu, Graph, Plan};
+use lightgraph_scenes::bvh::BvhKind;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -31,6 +33,10 @@ pub struct RenderArgs {
     /// Time each layout gets when --layout auto measures it.
     #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "500ms")]
     pub tune_time: Duration,
+    /// With --layout auto: measure again even where the layout cache holds this render's
+    /// fastest layout (and store the new winner).
+    #[arg(long)]
+    pub retune: bool,
     /// Render for this long (e.g. 10s, 2m); overrides --frames.
     #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true)]
     pub time: Option<Duration>,
@@ -187,10 +193,7 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     let mut opts = options(c, &scene, &graph, args.seed())?;
     args.check_out()?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
-    let (layout, decl) = match named {
-        Some(named) => named,
-        None => tune_layout(&gpu, &graph, &scene, &opts, &args)?,
-    };
+    let (layout, decl) = choose_layout(&gpu, &graph, &scene, &opts, &args, named, kind)?;
     // Measured once, so that the film records the value (shards must share it to merge).
     let measured = lightgraph::render::measure_constants(&gpu, &graph, &layout, decl.clone(), &scene, &opts)?;
     opts.constants.extend(measured);
@@ -408,14 +411,74 @@ fn report_rates(session: &Session, seconds: f64) {
     }
 }
 
+/// The layout of a render: a layout named with `--layout` as it is; else the one `--layout
+/// auto` measured fastest for this render's key (`lightgraph::layout_cache`) unless
+/// `--retune`; else, without `--layout`, the graph's default (`named`), and with `--layout
+/// auto`, the fastest measured now (and stored).
+fn choose_layout(
+    gpu: &Gpu,
+    graph: &Graph,
+    scene: &LoadedScene,
+    opts: &SessionOptions,
+    args: &RenderArgs,
+    named: Option<(String, LayoutDecl)>,
+    kind: BvhKind,
+) -> Result<(String, LayoutDecl)> {
+    if let (Some(named), Some(_)) = (&named, &args.layout) {
+        return Ok(named.clone());
+    }
+    let key = cache_key(gpu, opts, args, kind);
+    if let Some(cached) = layout_cache::find(&key).filter(|_| !args.retune) {
+        match Plan::with_decl(graph, &cached.name, cached.layout.clone()) {
+            Ok(_) => {
+                eprintln!(
+                    "layout {} from the layout cache ({:.1} Msamples/s when --layout auto measured it, {}; \
+                     --layout NAME or --layout auto --retune to choose)",
+                    cached.name,
+                    cached.samples_per_second / 1e6,
+                    cached.measured
+                );
+                return Ok((cached.name, cached.layout));
+            }
+            Err(e) => eprintln!(
+                "warning: the cached layout {} no longer plans ({e}); not used",
+                cached.name
+            ),
+        }
+    }
+    match named {
+        Some(default) => Ok(default),
+        None => tune_layout(gpu, graph, scene, opts, args, key),
+    }
+}
+
+/// What the layout cache keys a render's measurement by.
+fn cache_key(gpu: &Gpu, opts: &SessionOptions, args: &RenderArgs, kind: BvhKind) -> layout_cache::Key {
+    layout_cache::Key {
+        graph: args.graph.name().to_string(),
+        scene: args.common.scene().to_string(),
+        size: (opts.width, opts.height),
+        spp: opts.samples_per_frame,
+        bvh: format!("{kind:?}"),
+        constants: opts
+            .constants
+            .iter()
+            .map(|(k, v)| (k.clone(), format!("{v:?}")))
+            .collect(),
+        adapter: gpu.describe(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+    }
+}
+
 /// `--layout auto`: measures every legal layout of `graph`, writes the table beside the
-/// output, and returns the fastest.
+/// output, stores the fastest in the layout cache under `key`, and returns it.
 fn tune_layout(
     gpu: &Gpu,
     graph: &Graph,
     scene: &LoadedScene,
     opts: &SessionOptions,
     args: &RenderArgs,
+    key: layout_cache::Key,
 ) -> Result<(String, LayoutDecl)> {
     eprintln!(
         "--layout auto: measuring every legal layout of '{}' for {:?} each",
@@ -438,6 +501,17 @@ fn tune_layout(
         best.score() / 1e6,
         report.display()
     );
+    let entry = layout_cache::Entry {
+        key,
+        name: best.name.clone(),
+        layout: best.decl.clone(),
+        samples_per_second: best.score(),
+        measured: layout_cache::now(),
+    };
+    match layout_cache::store(entry) {
+        Ok(path) => eprintln!("stored in the layout cache {}", path.display()),
+        Err(e) => eprintln!("warning: the winner is not stored: {e:#}"),
+    }
     Ok((best.name.clone(), best.decl.clone()))
 }
 

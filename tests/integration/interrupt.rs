@@ -18,6 +18,11 @@ fn start(args: &[&str]) -> Child {
     Command::new(env!("CARGO_BIN_EXE_lightgraph"))
         .args(args)
         .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        // No test takes a layout from a cache of the machine's own (tests/integration/layout_cache.rs).
+        .env(
+            "LIGHTGRAPH_CACHE",
+            std::env::temp_dir().join(format!("lightgraph-cache-{}", std::process::id())),
+        )
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()

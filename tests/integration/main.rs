@@ -15,6 +15,7 @@ mod docs;
 mod frames;
 mod gltf;
 mod interrupt;
+mod layout_cache;
 mod layouts;
 mod lights;
 mod lost_work;
