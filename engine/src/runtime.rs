@@ -100,6 +100,8 @@ pub struct Instance<'g> {
     kernels: Kernels,
     parameters: BTreeMap<String, ParameterSource>,
     frames: frames::FrameState,
+    /// GPU copies of resources taken by [`Instance::snapshot`].
+    snapshots: BTreeMap<String, wgpu::Buffer>,
 }
 
 impl<'g> Instance<'g> {
@@ -116,6 +118,7 @@ impl<'g> Instance<'g> {
             kernels,
             parameters: BTreeMap::new(),
             frames,
+            snapshots: BTreeMap::new(),
         })
     }
 
@@ -254,6 +257,38 @@ impl<'g> Instance<'g> {
         self.gpu
             .queue
             .write_buffer(self.buffers.buffer(slot), slot.offset, bytes);
+        Ok(())
+    }
+
+    /// Keeps a copy of resource `name`'s bytes on the GPU (queued after the work before it)
+    /// for [`Instance::restore`]: inputs that an operator changes in place are put back
+    /// between runs without a host upload. A later snapshot of the name replaces it.
+    pub fn snapshot(&mut self, name: &str) -> Result<()> {
+        let slot = self.resource(name)?;
+        let copy = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("resource snapshot"),
+            size: slot.size,
+            usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(self.buffers.buffer(slot), slot.offset, &copy, 0, slot.size);
+        self.gpu.queue.submit([encoder.finish()]);
+        self.snapshots.insert(name.to_string(), copy);
+        Ok(())
+    }
+
+    /// Puts resource `name`'s last [`Instance::snapshot`] back, on the GPU (queued before the
+    /// next frame).
+    pub fn restore(&self, name: &str) -> Result<()> {
+        let slot = self.resource(name)?;
+        let copy = self
+            .snapshots
+            .get(name)
+            .ok_or_else(|| Error::Runtime(format!("resource '{name}' has no snapshot to restore")))?;
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(copy, 0, self.buffers.buffer(slot), slot.offset, slot.size);
+        self.gpu.queue.submit([encoder.finish()]);
         Ok(())
     }
 

@@ -248,6 +248,29 @@ fn an_f32_scan_in_place_leaves_the_exclusive_sums() {
     }
 }
 
+/// An in-place scan run twice gives the sums of the sums; with the input restored from its
+/// snapshot before the second run, it gives the first run's sums again.
+#[test]
+fn a_snapshot_puts_an_operators_input_back_on_the_gpu() {
+    let weights: Vec<f32> = (0..100).map(|i| i as f32 + 0.5).collect();
+    let program = compile_for(r#"Scan(name: "cdf", input: "floats", over: "100")"#, &gpu().target()).unwrap();
+    let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
+    let read = |instance: &Instance| -> Vec<f32> { bytemuck::pod_collect_to_vec(&instance.read("floats").unwrap()) };
+    instance.write("floats", bytemuck::cast_slice(&weights)).unwrap();
+    instance.snapshot("floats").unwrap();
+    instance.run_frame(0, 0).unwrap();
+    let once = read(&instance);
+    instance.run_frame(1, 0).unwrap();
+    assert_ne!(read(&instance), once, "a second in-place scan changes the sums");
+    instance.restore("floats").unwrap();
+    instance.run_frame(2, 0).unwrap();
+    assert_eq!(read(&instance), once);
+    let program = compile_for(r#"Scan(name: "cdf", input: "floats", over: "100")"#, &gpu().target()).unwrap();
+    let fresh = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
+    let err = fresh.restore("floats").unwrap_err().to_string();
+    assert!(err.contains("'floats' has no snapshot"), "{err}");
+}
+
 #[test]
 fn sort_errors_name_the_operator() {
     let cases = [

@@ -85,8 +85,9 @@ impl<'g> Sorter<'g> {
     }
 
     /// Writes `keys` and `values` from the first element, sorts the first `over` of them
-    /// (with a counted sorter, the first `count`, at most `over`), `runs` times (writing
-    /// them again before each), and reads back as many as were written.
+    /// (with a counted sorter, the first `count`, at most `over`), `runs` times (restoring
+    /// them on the GPU before each, so that the runs follow one another without host
+    /// uploads), and reads back as many as were written.
     pub fn sort(&mut self, keys: &[u32], values: &[u32], over: u64, count: u32, runs: u32) -> Result<Sorted> {
         let n = keys.len();
         if values.len() != n || n as u64 > self.capacity || over > n as u64 {
@@ -99,10 +100,16 @@ impl<'g> Sorter<'g> {
         self.instance.set_parameter("ELEMENTS", ConstValue::U32(over as u32))?;
         let mut times = Vec::new();
         let mut per_kernel: Vec<Vec<f64>> = vec![Vec::new(); self.kernels.len()];
+        if n > 0 {
+            self.instance.write("keys", bytemuck::cast_slice(keys))?;
+            self.instance.write("values", bytemuck::cast_slice(values))?;
+            self.instance.snapshot("keys")?;
+            self.instance.snapshot("values")?;
+        }
         for run in 0..runs.max(1) {
-            if n > 0 {
-                self.instance.write("keys", bytemuck::cast_slice(keys))?;
-                self.instance.write("values", bytemuck::cast_slice(values))?;
+            if run > 0 && n > 0 {
+                self.instance.restore("keys")?;
+                self.instance.restore("values")?;
             }
             if self.counted {
                 self.instance.write("elements", bytemuck::bytes_of(&count))?;
