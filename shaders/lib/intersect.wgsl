@@ -118,6 +118,9 @@ fn primitive_at(i: u32) -> PrimitiveFields {
 }
 
 fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: ptr<function, Hit>) {
+#if TRACE_STATS
+    trace_stats_add(1u);
+#endif
     let p = primitive_at(index);
 #if SPHERES
     if (p.kind == PRIMITIVE_SPHERE) {
@@ -152,6 +155,9 @@ const BVH_STACK_SIZE: u32 = 32u;
 
 // Node `i`, loaded as five 16-byte words and unpacked into its fields.
 fn cwbvh_node(i: u32) -> CwbvhNode {
+#if TRACE_STATS
+    trace_stats_add(0u);
+#endif
     let w0 = bvh[i].w0;
     let w1 = bvh[i].w1;
     let w2 = bvh[i].w2;
@@ -338,6 +344,9 @@ fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
     var sp = 0u;
     var node = 0u;
     loop {
+#if TRACE_STATS
+        trace_stats_add(0u);
+#endif
         let n = bvh[node];
         var t_left = intersect_box(o, inv_d, n.left_min, n.left_max, hit.t);
         var t_right = intersect_box(o, inv_d, n.right_min, n.right_max, hit.t);
@@ -383,6 +392,9 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
     var sp = 0u;
     var node = 0u;
     loop {
+#if TRACE_STATS
+        trace_stats_add(0u);
+#endif
         let n = bvh[node];
         let t_left = intersect_box(o, inv_d, n.left_min, n.left_max, t_max);
         let t_right = intersect_box(o, inv_d, n.right_min, n.right_max, t_max);

@@ -61,3 +61,26 @@ fn both_bvhs_find_the_same_hits() {
         images[0].len()
     );
 }
+
+/// TRACE_STATS counts what the traversal does without changing what it finds: on a lone
+/// sphere (one primitive, a CWBVH of its root alone) every ray visits exactly one node, and
+/// every camera ray that hits the sphere tested it.
+#[test]
+fn trace_stats_count_nodes_and_tests_and_change_no_result() {
+    use lightgraph_engine::ConstValue;
+    let path = data("scenes/diffuse-sphere-background.ron");
+    let sphere = load_scene_with(path.to_str().unwrap(), BvhKind::Cwbvh).unwrap();
+    let plain = render(&sphere, "trace", "Trace", (32, 32), 1, 1, 5, &[]);
+    let stats = [("TRACE_STATS", ConstValue::Bool(true))];
+    let counted = render(&sphere, "trace", "Trace", (32, 32), 1, 1, 5, &stats);
+    assert_eq!(plain.image.mean, counted.image.mean, "counting changed the image");
+    assert_eq!(plain.counters["nodes_primary"], 0, "no counting without TRACE_STATS");
+    let c = &counted.counters;
+    assert_eq!(c["nodes_primary"], c["rays_primary"]);
+    assert_eq!(c["nodes_ao"], c["rays_occlusion"]);
+    assert_eq!(c["nodes_diffuse"], c["rays_diffuse"]);
+    assert!(
+        c["tests_primary"] >= c["rays_occlusion"],
+        "{c:?}: a camera ray that hit tested the sphere"
+    );
+}
