@@ -94,8 +94,7 @@ impl Worker<'_> {
         if self.done {
             return Ok(());
         }
-        let j = self.blocks * place.ranks as u64 + place.rank as u64;
-        let (a, b) = block_frames(j, budget).expect("a block within the budget");
+        let (a, b) = block_frames(self.next_block(place), budget).expect("a block within the budget");
         let first = u32::try_from(run.first_frame + a).map_err(|_| anyhow!("frame index past 2^32"))?;
         self.session.jump_to(first)?;
         self.session.render_frames_behind((b - a) as u32)?;
@@ -106,12 +105,16 @@ impl Worker<'_> {
     /// Marks the rank done when its budget has no block left for it: before a round's
     /// message, so that a rank whose time ran out says so at once.
     fn check_budget(&mut self, place: Place, budget: Budget, start: Instant) {
-        let j = self.blocks * place.ranks as u64 + place.rank as u64;
         let left = match budget {
             Budget::Time(t) => start.elapsed() < t,
-            Budget::Frames(_) => block_frames(j, budget).is_some(),
+            Budget::Frames(_) => block_frames(self.next_block(place), budget).is_some(),
         };
         self.done |= !left;
+    }
+
+    /// The index of the run's block this rank renders next.
+    fn next_block(&self, place: Place) -> u64 {
+        self.blocks * place.ranks as u64 + place.rank as u64
     }
 
     /// Adds the GPU's sums so far into the rank's f64 film.
@@ -119,8 +122,9 @@ impl Worker<'_> {
         self.film.absorb(&self.session.take_accumulation()?)
     }
 
-    /// The rank's round message (the rays read back so far): its blocks and rays in its own slots of a vector per rank
-    /// (zeros elsewhere), then whether it is done and whether a signal stopped it.
+    /// The rank's round message: its blocks and the rays read back so far in its own slots of
+    /// a vector per rank (zeros elsewhere), then whether it is done and whether a signal
+    /// stopped it.
     fn state(&self, place: Place, done: bool, interrupted: bool) -> Vec<f64> {
         let mut v = vec![0.0; 2 * place.ranks + 2];
         v[place.rank] = self.blocks as f64;

@@ -67,7 +67,7 @@ fn entries() -> Result<Vec<Entry>> {
     };
     ron::from_str(&text).map_err(|e| {
         anyhow::anyhow!(
-            "{}:{}:{}: the layout cache is not valid: {} (delete the file to start a new one)",
+            "{}:{}:{}: the layout cache is not valid: {} (the next --layout auto replaces it)",
             path.display(),
             e.span.start.line,
             e.span.start.col,
@@ -88,7 +88,8 @@ pub fn find(key: &Key) -> Option<Entry> {
     }
 }
 
-/// Stores `entry` in the cache, in place of an entry of the same key; returns the file.
+/// Stores `entry` in the cache, in place of an entry of the same key (a file that cannot be
+/// read is replaced); returns the file.
 pub fn store(entry: Entry) -> Result<PathBuf> {
     let path = path().context("no cache folder: set LIGHTGRAPH_CACHE, XDG_CACHE_HOME or HOME")?;
     let mut all = entries().unwrap_or_default();

@@ -279,6 +279,16 @@ fn compare_words(values: &[u32], keys: &[u32], buckets: u64, out: &Outputs) -> O
 }
 
 /// Median of a list of seconds.
+/// Calls `f` again and again until `time` has passed (not at all for zero): untimed runs that
+/// bring an idle GPU's clock up before timed ones.
+fn repeat_for(time: Duration, mut f: impl FnMut() -> Result<()>) -> Result<()> {
+    let start = Instant::now();
+    while start.elapsed() < time {
+        f()?;
+    }
+    Ok(())
+}
+
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.sort_by(f64::total_cmp);
     (!v.is_empty()).then(|| v[v.len() / 2])
@@ -353,10 +363,7 @@ pub fn run(gpu: &Gpu, target: &Target, inputs: &Inputs, buckets: u64, runs: u32,
         instance.write("wide", bytemuck::cast_slice(&wide))?;
         instance.write("weights", bytemuck::cast_slice(weights))?;
     }
-    let warming = Instant::now();
-    while warming.elapsed() < warm_up {
-        instance.run_frame(0, 0)?;
-    }
+    repeat_for(warm_up, || instance.run_frame(0, 0).map(drop))?;
     let (mut scan, mut sort, mut f32_scan) = (Vec::new(), Vec::new(), Vec::new());
     let mut per_kernel: Vec<Vec<f64>> = vec![Vec::new(); op_kernels.iter().flatten().count()];
     for run in 0..runs.max(1) {

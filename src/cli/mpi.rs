@@ -112,7 +112,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
 
 /// The run's rates on stderr: samples/s over the time after every rank's set-up (as `--gpus`
 /// counts it), the set-up, frames by rank, the ranks' waits and the film reduction.
-fn report(film: &lightgraph::reference::Reference, outcome: &Outcome, pixels: f64, setup_seconds: f64) {
+fn report(film: &Reference, outcome: &Outcome, pixels: f64, setup_seconds: f64) {
     let seconds = outcome.render_seconds;
     eprintln!(
         "{} frames, {} spp in {seconds:.2} s on {} ranks (set-up {setup_seconds:.2} s before): {}samples/s wall-clock, {}rays/s",

@@ -424,9 +424,10 @@ fn choose_layout(
     named: Option<(String, LayoutDecl)>,
     kind: BvhKind,
 ) -> Result<(String, LayoutDecl)> {
-    if let (Some(named), Some(_)) = (&named, &args.layout) {
-        return Ok(named.clone());
-    }
+    let named = match (named, &args.layout) {
+        (Some(named), Some(_)) => return Ok(named),
+        (named, _) => named,
+    };
     let key = cache_key(gpu, opts, args, kind);
     if let Some(cached) = layout_cache::find(&key).filter(|_| !args.retune) {
         match Plan::with_decl(graph, &cached.name, cached.layout.clone()) {
@@ -552,7 +553,7 @@ fn mpi_asked(_: &RenderArgs) -> bool {
 
 /// The scene's size and load time: primitives, lights, seconds to load, the BVH's build time
 /// and rate, and the geometry's bytes on the GPU, in all and a primitive.
-fn scene_size(scene: &lightgraph::render::LoadedScene) -> String {
+fn scene_size(scene: &LoadedScene) -> String {
     let c = &scene.compiled;
     let n = c.primitives.len().max(1) as f64;
     let build = c.bvh_time.as_secs_f64();

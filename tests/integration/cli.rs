@@ -62,6 +62,12 @@ fn line_of(text: &str, needle: &str) -> usize {
     text[..text.find(needle).expect("needle")].matches('\n').count() + 1
 }
 
+/// Asserts that `err` points at `file`'s line where `text` holds `needle` (`FILE:LINE:`).
+fn assert_at_line(err: &str, file: &str, text: &str, needle: &str) {
+    let at = format!("{file}:{}:", line_of(text, needle));
+    assert!(err.contains(&at), "not at {at}: {err}");
+}
+
 #[test]
 fn render_writes_exr_with_metadata_and_png() {
     let dir = temp_dir("render");
@@ -263,10 +269,7 @@ fn a_constant_named_like_a_host_flag_is_an_error_at_its_line() {
         err.contains("constant 'TEXTURES' has the name of a flag the host sets"),
         "{err}"
     );
-    assert!(
-        err.contains(&format!("flag-constant.ron:{}:", line_of(&text, "\"TEXTURES\""))),
-        "{err}"
-    );
+    assert_at_line(&err, "flag-constant.ron", &text, "\"TEXTURES\"");
 }
 
 #[test]
@@ -274,10 +277,7 @@ fn unknown_pass() {
     let (text, path) = pt_variant("unknown-pass", "Use(\"shadow\")", "Use(\"shadowz\")");
     let err = render_graph_fails(&path);
     assert!(err.contains("unknown pass 'shadowz'"), "{err}");
-    assert!(
-        err.contains(&format!("unknown-pass.ron:{}:", line_of(&text, "\"shadowz\""))),
-        "{err}"
-    );
+    assert_at_line(&err, "unknown-pass.ron", &text, "\"shadowz\"");
 }
 
 #[test]
@@ -289,10 +289,7 @@ fn use_with_an_unknown_pass_or_resource_is_an_error_at_its_line() {
     );
     let err = render_graph_fails(&path);
     assert!(err.contains("unknown pass 'shadowz'"), "{err}");
-    assert!(
-        err.contains(&format!("use-with-pass.ron:{}:", line_of(&text, "\"shadowz\""))),
-        "{err}"
-    );
+    assert_at_line(&err, "use-with-pass.ron", &text, "\"shadowz\"");
     // Reads it adds are checked as a catalog's are: a resource no file declares is an error.
     let (_, path) = pt_variant(
         "use-with-resource",
@@ -331,10 +328,7 @@ fn stream_type_mismatch() {
         err.contains("stream type mismatch") && err.contains("'CameraPath'") && err.contains("'ShadowRay'"),
         "{err}"
     );
-    assert!(
-        err.contains(&format!("stream-mismatch.ron:{}:", line_of(&text, "\"shadow\": (item"))),
-        "{err}"
-    );
+    assert_at_line(&err, "stream-mismatch.ron", &text, "\"shadow\": (item");
 }
 
 #[test]
@@ -438,10 +432,7 @@ fn fusing_across_a_barrier_names_both_passes_and_the_resource() {
         err.contains("'generate'") && err.contains("'accumulate'") && err.contains("'film'") && err.contains("barrier"),
         "{err}"
     );
-    assert!(
-        err.contains(&format!("barrier.ron:{}:", line_of(&text, "\"accumulate\"]]"))),
-        "{err}"
-    );
+    assert_at_line(&err, "barrier.ron", &text, "\"accumulate\"]]");
 }
 
 #[test]
@@ -469,8 +460,6 @@ fn a_layout_naming_an_unknown_pass_or_option_is_refused() {
         "            loops: Host,\n            polcy: Compaction,",
     );
     let err = render_graph_fails(&path);
-    assert!(
-        err.contains("polcy") && err.contains(&format!("layout-option.ron:{}:", line_of(&text, "polcy"))),
-        "{err}"
-    );
+    assert!(err.contains("polcy"), "{err}");
+    assert_at_line(&err, "layout-option.ron", &text, "polcy");
 }

@@ -3,16 +3,16 @@
 //! elements (so one compiled program sorts every length up to its capacity), optionally
 //! counted on the GPU.
 
-use super::{Numbers, median};
+use super::{Numbers, median, repeat_for};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
 use crate::ir::ConstValue;
 use crate::program::{Program, Specialization, Target};
-use crate::runtime::Instance;
+use crate::runtime::{FrameStats, Instance};
 use crate::vfs::Vfs;
 use crate::{Graph, Plan};
 use std::collections::BTreeMap;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// The keys a check sorts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -65,6 +65,7 @@ pub struct Sorter<'g> {
     kernels: Vec<String>,
     capacity: u64,
     counted: bool,
+    warm_up: Duration,
 }
 
 impl<'g> Sorter<'g> {
@@ -81,7 +82,28 @@ impl<'g> Sorter<'g> {
             kernels,
             capacity,
             counted,
+            warm_up: Duration::ZERO,
         })
+    }
+
+    /// One sort of the written keys (restored from their snapshot where `restore`), frame
+    /// index `run`.
+    fn run_once(&mut self, restore: bool, count: u32, run: u32) -> Result<FrameStats> {
+        if restore {
+            self.instance.restore("keys")?;
+            self.instance.restore("values")?;
+        }
+        if self.counted {
+            self.instance.write("elements", bytemuck::bytes_of(&count))?;
+        }
+        self.instance.run_frame(run, 0)
+    }
+
+    /// The same sorter sorting untimed for `time` before each [`Sorter::sort`]'s timed runs
+    /// ([`crate::selfcheck::run`] says why).
+    pub fn warmed_up(mut self, time: Duration) -> Sorter<'g> {
+        self.warm_up = time;
+        self
     }
 
     /// Writes `keys` and `values` from the first element, sorts the first `over` of them
@@ -106,15 +128,10 @@ impl<'g> Sorter<'g> {
             self.instance.snapshot("keys")?;
             self.instance.snapshot("values")?;
         }
+        let warm_up = self.warm_up;
+        repeat_for(warm_up, || self.run_once(n > 0, count, 0).map(drop))?;
         for run in 0..runs.max(1) {
-            if run > 0 && n > 0 {
-                self.instance.restore("keys")?;
-                self.instance.restore("values")?;
-            }
-            if self.counted {
-                self.instance.write("elements", bytemuck::bytes_of(&count))?;
-            }
-            let stats = self.instance.run_frame(run, 0)?;
+            let stats = self.run_once(n > 0, count, run)?;
             let found: Vec<f64> = self
                 .kernels
                 .iter()
@@ -222,11 +239,7 @@ pub fn check(
 ) -> Result<SortReport> {
     let keys = pattern.draw(n as usize, n ^ 0x50f7);
     let values: Vec<u32> = (0..n as u32).collect();
-    let mut sorter = Sorter::new(gpu, target, n, bits, false)?;
-    let warming = Instant::now();
-    while warming.elapsed() < warm_up {
-        sorter.sort(&keys, &values, n, 0, 1)?;
-    }
+    let mut sorter = Sorter::new(gpu, target, n, bits, false)?.warmed_up(warm_up);
     let sorted = sorter.sort(&keys, &values, n, 0, runs)?;
     Ok(SortReport {
         mismatch: compare(&keys, &values, n as usize, bits, &sorted),
