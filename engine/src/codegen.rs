@@ -6,6 +6,7 @@ use crate::access::Access;
 use crate::graph::Graph;
 use crate::ids::{ChainId, KernelId};
 use crate::ir::{ConstValue, Scope, StateStorage};
+use crate::limits::FRAME_BINDING;
 use crate::plan::{Plan, Root};
 use crate::resolve::{BufferRef, Resolved};
 use std::fmt::Write;
@@ -70,9 +71,6 @@ pub fn slot_traffic(plan: &Plan, resolved: &Resolved, k: KernelId) -> Option<Slo
         words: resolved.words[&chain.item].len(),
     })
 }
-
-/// The frame record's declaration: group 1, bound with a dynamic offset per chunk.
-pub const FRAME_BINDING: &str = "@group(1) @binding(0) var<uniform> frame: Frame;\n";
 
 /// `lg_slot`, which passes may read: the slot the thread's item holds in its chain's state
 /// buffer (below `ITEM_SLOTS`, which a resource's count may use) in kernels of a chain stored

@@ -172,8 +172,8 @@ impl Gpu {
     }
 
     /// Compilation target for this device.
-    pub fn target(&self) -> crate::program::Target {
-        crate::program::Target {
+    pub fn target(&self) -> crate::limits::Target {
+        crate::limits::Target {
             capabilities: self.capabilities(),
             max_binding_bytes: self.limits.max_storage_buffer_binding_size,
             max_workgroups_per_dimension: self.limits.max_compute_workgroups_per_dimension,

@@ -3,31 +3,15 @@
 //! operators in order). Every error names the file and position of the offending name.
 
 use crate::error::{Error, Result};
-use crate::ids::{ChainId, OpId, PassId, PhaseId};
-use crate::ir::{ConstValue, LayoutDecl, MeasuredDecl, PassDecl, ResourceDecl, Role, StreamDecl};
-use crate::load::{Declared, declare};
+use crate::ids::{ChainId, OpId, PassId, PhaseId, indexes};
+use crate::ir::{ConstValue, LayoutDecl, MeasuredDecl, ResourceDecl, Role, StreamDecl};
+use crate::load::{Declared, Pass, declare};
 use crate::operator::{Domain, Operator};
 use crate::vfs::Vfs;
 use petgraph::graph::{DiGraph, NodeIndex};
 use std::collections::{BTreeMap, BTreeSet};
 
 pub use crate::load::parse_ron;
-
-/// A pass of a loaded graph, with the file it was declared in.
-#[derive(Debug, Clone)]
-pub struct Pass {
-    /// The declaration.
-    pub decl: PassDecl,
-    /// The file (virtual path) that declares it: a catalog or the graph.
-    pub origin: String,
-}
-
-impl Pass {
-    /// The WGSL function implementing the pass.
-    pub fn function(&self) -> &str {
-        self.decl.function.as_deref().unwrap_or(&self.decl.name)
-    }
-}
 
 /// How a chain receives its items.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,6 +43,9 @@ pub struct Phase {
     /// The chains of the phase, the start chain first.
     pub chains: Vec<ChainId>,
 }
+
+indexes!(ChainId => Chain);
+indexes!(PhaseId => Phase);
 
 /// One step of a frame: a phase of passes, or a collective operator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -128,15 +115,10 @@ pub struct Graph {
 }
 
 impl Graph {
-    /// Loads the graph at virtual path `file` from `vfs`.
-    pub fn load(vfs: &Vfs, file: &str) -> Result<Graph> {
-        let text = vfs.read(file)?;
-        Self::from_text(vfs, file, &text)
-    }
-
-    /// Loads a graph from its text (`file` names it in errors). The live view is that of the
-    /// default constants; [`Graph::specialize`] gives the view of others.
-    pub fn from_text(vfs: &Vfs, file: &str, text: &str) -> Result<Graph> {
+    /// A graph from its text (`file` names it in errors), its chains and phases built on every
+    /// declared pass: the structure is checked whatever the constants cull. [`Graph::load`]
+    /// gives its live view of the default constants.
+    pub(crate) fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Graph> {
         let declared = declare(vfs, file, text)?;
         let g = &declared.file;
         let mut graph = Graph {
@@ -163,10 +145,9 @@ impl Graph {
             vfs: vfs.clone(),
             declared,
         };
-        // The structure is checked on every declared pass, whatever the constants cull.
         graph.chains = graph.build_chains()?;
         graph.phases = graph.build_phases()?;
-        graph.specialize_view(&BTreeMap::new(), false)
+        Ok(graph)
     }
 
     /// An error located at the first occurrence of `name` in the graph file.

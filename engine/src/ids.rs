@@ -1,11 +1,12 @@
 //! Typed indices of the things the stages hand to one another: passes, operators, chains,
 //! phases, kernels and compaction boundaries. Each indexes its own table, so a chain index
-//! cannot be used to look up a pass.
+//! cannot be used to look up a pass: the module that defines an item says which id indexes it
+//! (`indexes!`), so that this leaf module names none of them.
 
 use std::fmt;
 
 macro_rules! typed_id {
-    ($(#[$doc:meta])* $name:ident indexes $item:ty) => {
+    ($(#[$doc:meta])* $name:ident) => {
         $(#[$doc])*
         #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
         pub struct $name(pub usize);
@@ -15,7 +16,13 @@ macro_rules! typed_id {
                 write!(f, "{}", self.0)
             }
         }
+    };
+}
 
+/// Lets an id index the `Vec` of the items it names (`indexes!(PassId => Pass)`), written by
+/// the module that defines the item, so that no other id indexes it.
+macro_rules! indexes {
+    ($name:ty => $item:ty) => {
         impl std::ops::Index<$name> for Vec<$item> {
             type Output = $item;
             fn index(&self, id: $name) -> &$item {
@@ -30,28 +37,29 @@ macro_rules! typed_id {
         }
     };
 }
+pub(crate) use indexes;
 
 typed_id!(
     /// A live pass: an index into [`crate::Graph::passes`].
-    PassId indexes crate::graph::Pass
+    PassId
 );
 typed_id!(
     /// A live operator: an index into [`crate::Graph::ops`].
-    OpId indexes crate::operator::Operator
+    OpId
 );
 typed_id!(
     /// An item chain: an index into [`crate::Graph::chains`].
-    ChainId indexes crate::graph::Chain
+    ChainId
 );
 typed_id!(
     /// A phase: an index into [`crate::Graph::phases`].
-    PhaseId indexes crate::graph::Phase
+    PhaseId
 );
 typed_id!(
     /// A kernel of a layout: an index into [`crate::Plan::kernels`].
-    KernelId indexes crate::plan::KernelPlan
+    KernelId
 );
 typed_id!(
     /// A compaction boundary: an index into [`crate::Plan::boundaries`].
-    BoundaryId indexes crate::plan::Boundary
+    BoundaryId
 );

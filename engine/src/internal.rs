@@ -210,7 +210,7 @@ fn {name}() {{
     lg_args[{args_offset} + 2u] = 1u;
 }}
 ",
-            frame = crate::codegen::FRAME_BINDING
+            frame = crate::limits::FRAME_BINDING
         )
     }
 }

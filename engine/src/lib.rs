@@ -5,10 +5,29 @@
 //! fused into which kernel), generates one WGSL module per kernel, validates it with naga,
 //! and runs frames through wgpu. It knows nothing about light transport.
 //!
-//! The stages, in order: parse and load ([`Graph::load`], [`load`]) → specialise and cull
-//! ([`Graph::specialize`]) → plan a layout ([`Plan::new`]) → resolve sizes, lifetimes and
-//! shared memory ([`resolve`]) → generate and validate WGSL ([`Program::compile`],
-//! [`codegen`], [`collective`], [`radix`]) → execute ([`Instance::new`], [`Instance::run_frame`]).
+//! The stages run in this order, each module importing only modules of earlier stages and of
+//! its own (without a cycle); the leaf modules hold what every stage shares
+//! (`tests/stage_order.rs` checks both against this table, and that `docs/graphs.md` repeats
+//! it):
+//!
+//! | stage | modules | what it does |
+//! |---|---|---|
+//! | leaf | `error`, `expr`, `ids`, `ir`, `limits`, `vfs` | errors, count expressions, typed indices, the RON declarations, shared limits and the target, the file system |
+//! | load | `operator`, `load`, `graph` | the graph file with its catalogs and includes, every name checked; chains and phases |
+//! | specialise | `specialize` | the constants' values, then culling: the live graph |
+//! | plan | `plan`, `auto` | a layout's kernels, roots and schedule, its fusion checked; every legal layout |
+//! | reflect | `wgsl`, `reflect`, `access` | the sources compiled together with naga: item words, what each pass touches of its item, each pass checked against its declaration |
+//! | resolve | `memory`, `scratch`, `resolve` | bindings, control words, sizes, domains, pools, capacities, operator scratch, lifetimes and shared memory |
+//! | generate | `codegen`, `internal`, `scan`, `radix`, `collective`, `program` | one WGSL module per kernel (passes, the engine's own, the operators'), validated with naga |
+//! | run | `gpu`, `runtime` | the device, buffers, pipelines and frames |
+//! | consumers | `explain`, `outline`, `selfcheck` | reports of programs and graphs, the operators' checks on a device |
+//!
+//! The entry points: [`Graph::load`] (load, then the default constants' live view),
+//! [`Graph::specialize`], [`Plan::new`], [`Program::compile`] (specialise, plan, reflect,
+//! resolve and generate), [`Instance::new`] and [`Instance::run_frame`]. Within a compile the
+//! resolve stage begins before reflection ([`resolve::Resolved::for_reflection`]: binding
+//! numbers and control words, from the plan alone), since the prelude every source is compiled
+//! with declares them.
 
 pub mod access;
 pub mod auto;
@@ -22,6 +41,7 @@ pub mod graph;
 pub mod ids;
 pub mod internal;
 pub mod ir;
+pub mod limits;
 pub mod load;
 pub mod memory;
 pub mod operator;
@@ -32,6 +52,8 @@ pub mod radix;
 pub mod reflect;
 pub mod resolve;
 pub mod runtime;
+pub mod scan;
+pub mod scratch;
 pub mod selfcheck;
 pub mod specialize;
 pub mod vfs;
@@ -41,7 +63,8 @@ pub use error::{Error, Location, Result};
 pub use gpu::Gpu;
 pub use graph::Graph;
 pub use ir::ConstValue;
+pub use limits::Target;
 pub use plan::Plan;
-pub use program::{Program, Specialization, Target};
+pub use program::{Program, Specialization};
 pub use runtime::{FrameStats, Instance};
 pub use vfs::{Layer, Vfs};

@@ -4,7 +4,7 @@
 
 use crate::error::{Error, Location, Result};
 use crate::expr::Expr;
-use crate::graph::Pass;
+use crate::ids::{PassId, indexes};
 use crate::ir::{CatalogFile, ConstValue, GraphFile, PassDecl, PassEntry, PerCall, ResourceDecl, Role, Scope};
 use crate::operator::{OpKind, Operator, is_u32_word, summed_type};
 use crate::vfs::Vfs;
@@ -61,6 +61,24 @@ impl Sources {
         Error::invalid_at_key(file, self.text(file), name, message)
     }
 }
+
+/// A pass of a loaded graph, with the file it was declared in.
+#[derive(Debug, Clone)]
+pub struct Pass {
+    /// The declaration.
+    pub decl: PassDecl,
+    /// The file (virtual path) that declares it: a catalog or the graph.
+    pub origin: String,
+}
+
+impl Pass {
+    /// The WGSL function implementing the pass.
+    pub fn function(&self) -> &str {
+        self.decl.function.as_deref().unwrap_or(&self.decl.name)
+    }
+}
+
+indexes!(PassId => Pass);
 
 /// An entry of the graph's `passes` list, in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -842,7 +860,7 @@ impl Declared {
     }
 
     fn check_parameters(&self, file: &str) -> Result<()> {
-        let most = crate::resolve::MAX_PARAMETERS;
+        let most = crate::limits::MAX_PARAMETERS;
         if let Some(first) = self.file.parameters.keys().next()
             && self.file.parameters.len() > most
         {

@@ -5,6 +5,7 @@
 //! ([`crate::collective`]).
 
 use crate::expr::Expr;
+use crate::ids::{OpId, indexes};
 use crate::ir::{ConstValue, PassEntry};
 
 /// Where a start pass or an operator runs.
@@ -92,6 +93,8 @@ pub struct Operator {
     /// The file that declares it.
     pub origin: String,
 }
+
+indexes!(OpId => Operator);
 
 impl Operator {
     /// The operator of a graph entry, or `None` for a pass entry. An error gives the text

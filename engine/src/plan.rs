@@ -3,7 +3,7 @@
 
 use crate::error::Result;
 use crate::graph::{ChainEntry, Graph};
-use crate::ids::{BoundaryId, ChainId, KernelId, PassId, PhaseId};
+use crate::ids::{BoundaryId, ChainId, KernelId, PassId, PhaseId, indexes};
 use crate::ir::{LayoutDecl, LoopMode, Policy};
 use std::collections::BTreeSet;
 use std::ops::Range;
@@ -75,6 +75,9 @@ pub struct KernelPlan {
     /// The compaction boundary it appends surviving or new items to.
     pub output: Option<Port>,
 }
+
+indexes!(BoundaryId => Boundary);
+indexes!(KernelId => KernelPlan);
 
 /// A step of a phase's schedule.
 #[derive(Debug, Clone, PartialEq)]

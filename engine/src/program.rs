@@ -5,14 +5,17 @@
 //! kernels, the operators') and validate each with naga.
 
 use crate::codegen::CodegenContext;
-use crate::collective::{Groups, op_kernels};
+use crate::collective::op_kernels;
 use crate::error::{Error, Result};
 use crate::ids::{OpId, PhaseId};
 use crate::internal::{ArgsKernel, CommitKernel, DomainKernel, fold_kernel, roll_kernel, zero_kernel};
-use crate::ir::{ConstValue, Role};
+use crate::ir::ConstValue;
+use crate::limits::Target;
 use crate::plan::Plan;
+use crate::reflect;
 use crate::resolve::{BufferRef, Resolved};
-use crate::wgsl::{ModuleSource, callees, preprocess};
+use crate::scan::Groups;
+use crate::wgsl::ModuleSource;
 use std::collections::{BTreeMap, BTreeSet};
 
 /// How a program is specialised: constant values and preprocessor flags.
@@ -22,62 +25,6 @@ pub struct Specialization {
     pub constants: BTreeMap<String, ConstValue>,
     /// Flags for `#if` in WGSL sources.
     pub flags: BTreeSet<String>,
-}
-
-/// Device properties that shape compilation.
-#[derive(Debug, Clone)]
-pub struct Target {
-    /// naga capabilities of the device.
-    pub capabilities: naga::valid::Capabilities,
-    /// Largest storage buffer binding, in bytes.
-    pub max_binding_bytes: u64,
-    /// Largest buffer, in bytes (the most one arena of shared memory may take).
-    pub max_buffer_bytes: u64,
-    /// Alignment of storage buffer binding offsets.
-    pub storage_offset_alignment: u64,
-    /// Largest number of workgroups per dispatch dimension.
-    pub max_workgroups_per_dimension: u32,
-    /// Cap on the iterations of in-kernel loops (a guard against hangs).
-    pub max_loop_iterations: u32,
-    /// Whether transient buffers whose lifetimes do not overlap share memory.
-    pub alias_transients: bool,
-    /// Elements each thread of a scan operator handles (a tile is 256 times as many).
-    pub scan_items: u32,
-    /// Whether persistent threads take at most their share of the items, ceil(items /
-    /// threads), each: for drivers that cap the loop iterations of an invocation (llvmpipe:
-    /// 65535, shared by all its loops), where a thread taking items until none is left passes
-    /// the cap whenever the others start late (a loaded CPU). Off on GPUs, where threads that
-    /// take more items balance the load.
-    pub fair_shares: bool,
-}
-
-impl Default for Target {
-    fn default() -> Self {
-        Target {
-            capabilities: naga::valid::Capabilities::all(),
-            max_binding_bytes: 128 << 20,
-            max_buffer_bytes: 1 << 31,
-            storage_offset_alignment: 256,
-            max_workgroups_per_dimension: 65535,
-            max_loop_iterations: 1 << 16,
-            alias_transients: true,
-            scan_items: crate::collective::SCAN_ITEMS,
-            fair_shares: false,
-        }
-    }
-}
-
-impl Target {
-    /// Whether the target has subgroup operations.
-    pub fn subgroups(&self) -> bool {
-        self.capabilities.contains(naga::valid::Capabilities::SUBGROUP)
-    }
-
-    /// The same target without subgroup operations (the portable kernels).
-    pub fn without_subgroups(mut self) -> Target {
-        self.capabilities.remove(naga::valid::Capabilities::SUBGROUP);
-        self
-    }
 }
 
 /// One compiled kernel.
@@ -161,7 +108,7 @@ impl Program {
         constants.extend(spec.constants.iter().map(|(k, v)| (k.clone(), *v)));
         let graph = plan.graph.specialize(&constants)?;
         let plan = Plan::with_decl(&graph, &plan.layout_name, plan.layout.clone())?;
-        let shared = shared_sources(&plan, &flags_with_constants(&spec.flags, &plan.graph.constants))?;
+        let shared = reflect::sources(&plan, &spec.flags)?;
         // Reflect: every source compiled together, with emits that do nothing.
         let begun = Resolved::for_reflection(&plan);
         let ctx = CodegenContext {
@@ -171,14 +118,7 @@ impl Program {
             subgroup_appends: target.subgroups(),
             fair_shares: target.fair_shares,
         };
-        let mut reflection = ModuleSource::default();
-        reflection.push("<generated prelude>", &ctx.prelude());
-        for (f, text) in &shared {
-            reflection.push(f, text);
-        }
-        reflection.push("<generated emits>", &ctx.stub_emits());
-        let (rmod, rinfo) = reflection.compile(target.capabilities)?;
-        check_passes(&plan, &rmod, &rinfo)?;
+        let rmod = reflect::reflect(&plan, &shared, &ctx.prelude(), &ctx.stub_emits(), target.capabilities)?;
         // Resolve, then generate.
         let resolved = begun.complete(&plan, &rmod, target)?;
         let kernels = pass_kernels(&plan, &resolved, &shared, target)?;
@@ -210,31 +150,6 @@ impl Program {
     pub fn constants(&self) -> &BTreeMap<String, ConstValue> {
         &self.resolved.constants
     }
-}
-
-/// The flags of `#if` lines: the host's, and every `Bool` constant that is true (a graph
-/// switches code in its library files with its own constants).
-fn flags_with_constants(flags: &BTreeSet<String>, constants: &BTreeMap<String, ConstValue>) -> BTreeSet<String> {
-    let on = constants.iter().filter(|(_, v)| matches!(v, ConstValue::Bool(true)));
-    flags.iter().cloned().chain(on.map(|(k, _)| k.clone())).collect()
-}
-
-/// The library and the pass sources of every declared pass (a live pass may call functions
-/// a culled pass's file defines; what no kernel calls is shaken out later), preprocessed.
-fn shared_sources(plan: &Plan, flags: &BTreeSet<String>) -> Result<Vec<(String, String)>> {
-    let g = &plan.graph;
-    let mut files: Vec<String> = g.library.clone();
-    for p in &g.declared.passes {
-        if !files.contains(&p.decl.source) {
-            files.push(p.decl.source.clone());
-        }
-    }
-    let mut shared = Vec::new();
-    for f in &files {
-        let text = g.vfs.read(f).map_err(|e| g.error_at(f, e.to_string()))?;
-        shared.push((f.clone(), preprocess(f, &text, flags)?));
-    }
-    Ok(shared)
 }
 
 /// The pass kernels: prelude, shared sources and the kernel's own part, without the
@@ -506,100 +421,4 @@ pub fn entry_uses(
         });
     }
     out
-}
-
-/// Checks every live pass function against its declaration: signature, resource use,
-/// emits; and that no pass writes a parameter.
-fn check_passes(plan: &Plan, module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result<()> {
-    let g = &plan.graph;
-    let find_fn = |name: &str| {
-        module
-            .functions
-            .iter()
-            .find(|(_, f)| f.name.as_deref() == Some(name))
-            .map(|(h, _)| h)
-    };
-    let type_name = |ty: naga::Handle<naga::Type>| {
-        module.types[ty]
-            .name
-            .clone()
-            .unwrap_or_else(|| format!("{:?}", module.types[ty].inner))
-    };
-    for p in &g.passes {
-        let d = &p.decl;
-        let fname = p.function();
-        let expected = match d.role {
-            Role::Start { .. } => format!("fn {fname}(item: ptr<function, {}>, index: u32) -> bool", d.item),
-            _ => format!("fn {fname}(item: ptr<function, {}>) -> bool", d.item),
-        };
-        let bad = |why: String| Error::Shader(format!("{}: pass '{}': {why}; expected `{expected}`", d.source, d.name));
-        let h = find_fn(fname).ok_or_else(|| bad(format!("no function '{fname}' in {}", d.source)))?;
-        let f = &module.functions[h];
-        let want_args = if matches!(d.role, Role::Start { .. }) { 2 } else { 1 };
-        if f.arguments.len() != want_args {
-            return Err(bad(format!("it takes {} arguments", f.arguments.len())));
-        }
-        match &module.types[f.arguments[0].ty].inner {
-            naga::TypeInner::Pointer {
-                base,
-                space: naga::AddressSpace::Function,
-            } if type_name(*base) == d.item => {}
-            _ => {
-                return Err(bad(format!("its first argument is {}", type_name(f.arguments[0].ty))));
-            }
-        }
-        if want_args == 2
-            && !matches!(
-                module.types[f.arguments[1].ty].inner,
-                naga::TypeInner::Scalar(naga::Scalar::U32)
-            )
-        {
-            return Err(bad("its second argument is not u32".into()));
-        }
-        match &f.result {
-            Some(r) if matches!(module.types[r.ty].inner, naga::TypeInner::Scalar(naga::Scalar::BOOL)) => {}
-            _ => return Err(bad("it does not return bool".into())),
-        }
-        let fi = &info[h];
-        for (gh, var) in module.global_variables.iter() {
-            let Some(name) = var.name.as_deref() else {
-                continue;
-            };
-            let uses = fi[gh];
-            if g.parameters.contains_key(name) && uses.contains(naga::valid::GlobalUse::WRITE) {
-                return Err(Error::Shader(format!(
-                    "{}: pass '{}' writes parameter '{name}'; parameters are set by the host ({})",
-                    d.source, d.name, p.origin
-                )));
-            }
-            if !g.resources.contains_key(name) {
-                continue;
-            }
-            if uses.contains(naga::valid::GlobalUse::WRITE) && !d.writes.iter().any(|w| w == name) {
-                return Err(Error::Shader(format!(
-                    "{}: pass '{}' writes resource '{name}' but does not declare it in `writes` ({})",
-                    d.source, d.name, p.origin
-                )));
-            }
-            if !uses.is_empty() && !d.reads.iter().chain(d.writes.iter()).any(|w| w == name) {
-                return Err(Error::Shader(format!(
-                    "{}: pass '{}' reads resource '{name}' but does not declare it in `reads` ({})",
-                    d.source, d.name, p.origin
-                )));
-            }
-        }
-        let called: BTreeSet<String> = callees(module, vec![h])
-            .iter()
-            .filter_map(|&c| module.functions[c].name.clone())
-            .collect();
-        for s in g.streams.keys() {
-            if called.contains(&format!("emit_{s}")) && !d.emits.contains(s) {
-                return Err(Error::Shader(format!(
-                    "{}: pass '{}' calls emit_{s} but does not declare `emits: [\"{s}\"]` ({})",
-                    d.source, d.name, p.origin
-                )));
-            }
-        }
-    }
-    Ok(())
 }

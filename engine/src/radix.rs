@@ -8,48 +8,12 @@
 //! buffers and two scratch buffers, copied back at the end when the passes are odd. No kernel
 //! waits on another workgroup, so the sort needs no forward-progress guarantee.
 
-use crate::collective::{Groups, Module, OpKernel, Scan, WORKGROUP, element_entry, scan_levels};
 use crate::ids::OpId;
+use crate::limits::WORKGROUP;
 use crate::resolve::{BufferRef, Resolved};
+use crate::scan::{Groups, Module, OpKernel, Scan, element_entry};
+use crate::scratch::{DIGIT_BITS, HISTOGRAMS, KEYS, PARTIALS, RADIX, SORT_ITEMS, SORT_TILE, VALUES};
 use std::fmt::Write;
-
-/// Bits of a digit, sorted by one pass (the scatter packs the counts of the 16 digits into
-/// two vectors of four words).
-pub const DIGIT_BITS: u32 = 4;
-/// Digits of a pass.
-const RADIX: u64 = 1 << DIGIT_BITS;
-/// Elements each thread of a sort pass ranks.
-const SORT_ITEMS: u32 = 8;
-/// Elements of a sort tile: one workgroup ranks them together.
-pub const SORT_TILE: u64 = (WORKGROUP * SORT_ITEMS) as u64;
-// A digit's count in a tile fits the 16 bits the scatter gives it.
-const _: () = assert!(SORT_TILE < 1 << 16);
-
-/// The sort's scratch buffers, by their index in [`BufferRef::Scratch`].
-const KEYS: usize = 0;
-const VALUES: usize = 1;
-const HISTOGRAMS: usize = 2;
-const PARTIALS: usize = 3;
-
-/// Words of the scratch buffers of a sort of `n` elements: keys and values (the other side
-/// of the ping-pong), the digit histograms of the tiles, and the levels of their scan in
-/// tiles of `scan_tile`.
-pub fn sort_scratch(n: u64, scan_tile: u64) -> Vec<u64> {
-    let histograms = RADIX * n.div_ceil(SORT_TILE);
-    let mut out = vec![n, n, histograms];
-    out.extend(scan_levels(histograms, scan_tile));
-    out
-}
-
-/// What a sort's scratch buffer `index` holds.
-pub fn scratch_name(index: usize) -> String {
-    match index {
-        KEYS => "sort keys".to_string(),
-        VALUES => "sort values".to_string(),
-        HISTOGRAMS => "sort digit histograms".to_string(),
-        l => format!("sort histogram partials {}", l - PARTIALS + 1),
-    }
-}
 
 /// Passes of a sort by the low `bits` bits.
 pub fn passes(bits: u32) -> u32 {

@@ -1,7 +1,15 @@
-//! Reflection over naga's view of WGSL types: struct layouts from naga's layouter, and the
-//! flattening of item structs into 32-bit words for state buffers and queues.
+//! The reflect stage: a planned graph's WGSL sources compiled together with naga, each live pass
+//! function checked against its declaration (signature, resources, emits, no parameter
+//! written), and reflection over naga's view of WGSL types: struct layouts from naga's
+//! layouter, and the flattening of item structs into 32-bit words for state buffers and
+//! queues ([`crate::access`] finds which of them each pass touches).
 
+use crate::error::{Error, Result};
+use crate::ir::{ConstValue, Role};
+use crate::plan::Plan;
+use crate::wgsl::{ModuleSource, callees, preprocess};
 use naga::{Module, ScalarKind, TypeInner};
+use std::collections::{BTreeMap, BTreeSet};
 
 /// One 32-bit word of a flattened item: how to reach it and what it holds.
 #[derive(Debug, Clone, PartialEq)]
@@ -134,6 +142,150 @@ pub fn struct_layout(module: &Module, name: &str) -> Option<(u32, Vec<(String, u
         )),
         _ => None,
     }
+}
+
+/// The module of every source of `plan` compiled together between `prelude` and `emits` (the
+/// declarations and the emits that do nothing, as code generation writes them), after each
+/// live pass function is checked against its declaration.
+pub fn reflect(
+    plan: &Plan,
+    sources: &[(String, String)],
+    prelude: &str,
+    emits: &str,
+    capabilities: naga::valid::Capabilities,
+) -> Result<Module> {
+    let mut reflection = ModuleSource::default();
+    reflection.push("<generated prelude>", prelude);
+    for (f, text) in sources {
+        reflection.push(f, text);
+    }
+    reflection.push("<generated emits>", emits);
+    let (module, info) = reflection.compile(capabilities)?;
+    check_passes(plan, &module, &info)?;
+    Ok(module)
+}
+
+/// The flags of `#if` lines: the host's, and every `Bool` constant that is true (a graph
+/// switches code in its library files with its own constants).
+fn flags_with_constants(flags: &BTreeSet<String>, constants: &BTreeMap<String, ConstValue>) -> BTreeSet<String> {
+    let on = constants.iter().filter(|(_, v)| matches!(v, ConstValue::Bool(true)));
+    flags.iter().cloned().chain(on.map(|(k, _)| k.clone())).collect()
+}
+
+/// The library and the pass sources of every declared pass of `plan` (a live pass may call
+/// functions a culled pass's file defines; what no kernel calls is shaken out later),
+/// preprocessed with `flags` and the graph's true `Bool` constants.
+pub fn sources(plan: &Plan, flags: &BTreeSet<String>) -> Result<Vec<(String, String)>> {
+    let flags = &flags_with_constants(flags, &plan.graph.constants);
+    let g = &plan.graph;
+    let mut files: Vec<String> = g.library.clone();
+    for p in &g.declared.passes {
+        if !files.contains(&p.decl.source) {
+            files.push(p.decl.source.clone());
+        }
+    }
+    let mut shared = Vec::new();
+    for f in &files {
+        let text = g.vfs.read(f).map_err(|e| g.error_at(f, e.to_string()))?;
+        shared.push((f.clone(), preprocess(f, &text, flags)?));
+    }
+    Ok(shared)
+}
+
+/// Checks every live pass function against its declaration: signature, resource use,
+/// emits; and that no pass writes a parameter.
+fn check_passes(plan: &Plan, module: &naga::Module, info: &naga::valid::ModuleInfo) -> Result<()> {
+    let g = &plan.graph;
+    let find_fn = |name: &str| {
+        module
+            .functions
+            .iter()
+            .find(|(_, f)| f.name.as_deref() == Some(name))
+            .map(|(h, _)| h)
+    };
+    let type_name = |ty: naga::Handle<naga::Type>| {
+        module.types[ty]
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("{:?}", module.types[ty].inner))
+    };
+    for p in &g.passes {
+        let d = &p.decl;
+        let fname = p.function();
+        let expected = match d.role {
+            Role::Start { .. } => format!("fn {fname}(item: ptr<function, {}>, index: u32) -> bool", d.item),
+            _ => format!("fn {fname}(item: ptr<function, {}>) -> bool", d.item),
+        };
+        let bad = |why: String| Error::Shader(format!("{}: pass '{}': {why}; expected `{expected}`", d.source, d.name));
+        let h = find_fn(fname).ok_or_else(|| bad(format!("no function '{fname}' in {}", d.source)))?;
+        let f = &module.functions[h];
+        let want_args = if matches!(d.role, Role::Start { .. }) { 2 } else { 1 };
+        if f.arguments.len() != want_args {
+            return Err(bad(format!("it takes {} arguments", f.arguments.len())));
+        }
+        match &module.types[f.arguments[0].ty].inner {
+            naga::TypeInner::Pointer {
+                base,
+                space: naga::AddressSpace::Function,
+            } if type_name(*base) == d.item => {}
+            _ => {
+                return Err(bad(format!("its first argument is {}", type_name(f.arguments[0].ty))));
+            }
+        }
+        if want_args == 2
+            && !matches!(
+                module.types[f.arguments[1].ty].inner,
+                naga::TypeInner::Scalar(naga::Scalar::U32)
+            )
+        {
+            return Err(bad("its second argument is not u32".into()));
+        }
+        match &f.result {
+            Some(r) if matches!(module.types[r.ty].inner, naga::TypeInner::Scalar(naga::Scalar::BOOL)) => {}
+            _ => return Err(bad("it does not return bool".into())),
+        }
+        let fi = &info[h];
+        for (gh, var) in module.global_variables.iter() {
+            let Some(name) = var.name.as_deref() else {
+                continue;
+            };
+            let uses = fi[gh];
+            if g.parameters.contains_key(name) && uses.contains(naga::valid::GlobalUse::WRITE) {
+                return Err(Error::Shader(format!(
+                    "{}: pass '{}' writes parameter '{name}'; parameters are set by the host ({})",
+                    d.source, d.name, p.origin
+                )));
+            }
+            if !g.resources.contains_key(name) {
+                continue;
+            }
+            if uses.contains(naga::valid::GlobalUse::WRITE) && !d.writes.iter().any(|w| w == name) {
+                return Err(Error::Shader(format!(
+                    "{}: pass '{}' writes resource '{name}' but does not declare it in `writes` ({})",
+                    d.source, d.name, p.origin
+                )));
+            }
+            if !uses.is_empty() && !d.reads.iter().chain(d.writes.iter()).any(|w| w == name) {
+                return Err(Error::Shader(format!(
+                    "{}: pass '{}' reads resource '{name}' but does not declare it in `reads` ({})",
+                    d.source, d.name, p.origin
+                )));
+            }
+        }
+        let called: BTreeSet<String> = callees(module, vec![h])
+            .iter()
+            .filter_map(|&c| module.functions[c].name.clone())
+            .collect();
+        for s in g.streams.keys() {
+            if called.contains(&format!("emit_{s}")) && !d.emits.contains(s) {
+                return Err(Error::Shader(format!(
+                    "{}: pass '{}' calls emit_{s} but does not declare `emits: [\"{s}\"]` ({})",
+                    d.source, d.name, p.origin
+                )));
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

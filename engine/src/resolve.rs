@@ -3,21 +3,19 @@
 //! queue capacities, the lifetime of every buffer, and which transient buffers share memory.
 
 use crate::access::Access;
-use crate::collective::{scratch_name, scratch_words};
 use crate::error::Result;
 use crate::expr::Expr;
 use crate::graph::{ChainEntry, FrameStep};
 use crate::ids::{BoundaryId, ChainId, KernelId, OpId, PhaseId};
 use crate::ir::{ConstValue, PerCall, Scope};
+use crate::limits::{Target, WORKGROUP};
 use crate::memory::{Lifetime, MemoryPlan, Request};
 use crate::operator::OpKind;
 use crate::plan::{Plan, Root};
-use crate::program::Target;
 use crate::reflect::{self, Word};
+use crate::scratch::{scratch_name, scratch_words};
 use std::collections::{BTreeMap, BTreeSet};
 
-/// Most parameters a graph may declare (a frame record is 256 bytes, 16 of them taken).
-pub const MAX_PARAMETERS: usize = 60;
 /// Most items a split chain keeps in flight when its layout does not say.
 const MAX_DEFAULT_IN_FLIGHT: u64 = 1 << 22;
 /// Default thread pool of regeneration and compaction layouts: enough items per host
@@ -386,7 +384,7 @@ impl Resolved {
             };
             self.check_operator_fits(plan, o, n, vars)?;
             self.op_elements.insert(o, n);
-            let tile = (crate::collective::WORKGROUP * target.scan_items) as u64;
+            let tile = (WORKGROUP * target.scan_items) as u64;
             self.op_scratch.insert(o, scratch_words(&op.kind, n, tile));
         }
         Ok(())

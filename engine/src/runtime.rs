@@ -84,7 +84,7 @@ struct Kernels {
     /// Domain kernels of GPU-counted phases, with the byte offset of their arguments.
     domains: BTreeMap<PhaseId, (Kernel, u64)>,
     /// The kernels of each operator, with their workgroups.
-    ops: Vec<Vec<(Kernel, crate::collective::Groups)>>,
+    ops: Vec<Vec<(Kernel, crate::scan::Groups)>>,
     fold: Kernel,
     /// Names of the timed kernels, by timing slot.
     timed_names: Vec<String>,

@@ -11,11 +11,13 @@ pub mod sort;
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
+use crate::graph::Graph;
 use crate::ir::ConstValue;
-use crate::program::{Program, Specialization, Target};
+use crate::limits::Target;
+use crate::plan::Plan;
+use crate::program::{Program, Specialization};
 use crate::runtime::Instance;
 use crate::vfs::{Layer, Vfs};
-use crate::{Graph, Plan};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 

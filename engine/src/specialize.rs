@@ -2,6 +2,8 @@
 //! whose `enabled` condition is 0 leaves the graph, and with it every pass of a chain that
 //! starts with it and every chain that nothing live feeds; then whatever no output depends
 //! on leaves too. What remains is the live graph that plans, kernels and memory are made of.
+//! Loading ends here too: [`Graph::load`] gives the declared graph's view of its default
+//! constants.
 
 use crate::error::Result;
 use crate::expr::Expr;
@@ -9,6 +11,7 @@ use crate::graph::{ChainEntry, Culled, FrameStep, Graph};
 use crate::ids::{ChainId, OpId};
 use crate::ir::ConstValue;
 use crate::load::Entry;
+use crate::vfs::Vfs;
 use petgraph::visit::{Bfs, Reversed};
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -20,6 +23,18 @@ enum Node {
 }
 
 impl Graph {
+    /// Loads the graph at virtual path `file` from `vfs`.
+    pub fn load(vfs: &Vfs, file: &str) -> Result<Graph> {
+        let text = vfs.read(file)?;
+        Self::from_text(vfs, file, &text)
+    }
+
+    /// Loads a graph from its text (`file` names it in errors). The live view is that of the
+    /// default constants; [`Graph::specialize`] gives the view of others.
+    pub fn from_text(vfs: &Vfs, file: &str, text: &str) -> Result<Graph> {
+        Graph::declare(vfs, file, text)?.specialize_view(&BTreeMap::new(), false)
+    }
+
     /// The live view of the graph with `constants` (the graph's defaults overridden and
     /// extended); every `enabled` condition must evaluate.
     pub fn specialize(&self, constants: &BTreeMap<String, ConstValue>) -> Result<Graph> {
@@ -28,7 +43,7 @@ impl Graph {
 
     /// Recomputes the live view. When not `strict`, a condition naming a constant that is
     /// not known yet (a host constant such as `PATHS`) keeps its pass.
-    pub(crate) fn specialize_view(mut self, given: &BTreeMap<String, ConstValue>, strict: bool) -> Result<Graph> {
+    fn specialize_view(mut self, given: &BTreeMap<String, ConstValue>, strict: bool) -> Result<Graph> {
         self.constants = self.declared.constants.clone();
         for (name, v) in given {
             if let Some(default) = self.declared.constants.get(name)

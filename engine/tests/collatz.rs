@@ -505,7 +505,7 @@ fn a_pool_is_cut_to_what_fits_one_binding_with_its_header() {
         ..Default::default()
     };
     let item_bytes = 4 * Program::compile(&plan, &spec, &gpu().target()).unwrap().resolved.words["Walk"].len() as u64;
-    let target = lightgraph_engine::program::Target {
+    let target = lightgraph_engine::Target {
         max_binding_bytes: 256 * item_bytes,
         ..gpu().target()
     };

@@ -11,8 +11,8 @@
 //! errors; and its scratch as transient memory of its step.
 
 use lightgraph_engine::ids::OpId;
-use lightgraph_engine::radix::SORT_TILE;
 use lightgraph_engine::resolve::BufferRef;
+use lightgraph_engine::scratch::SORT_TILE;
 use lightgraph_engine::selfcheck::sort::{Keys, Sorter, compare};
 use lightgraph_engine::selfcheck::{Inputs, Pattern, check, run};
 use lightgraph_engine::{Graph, Instance, Plan, Program, Target, Vfs};

@@ -6,11 +6,13 @@
 use super::{Numbers, median, repeat_for};
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
+use crate::graph::Graph;
 use crate::ir::ConstValue;
-use crate::program::{Program, Specialization, Target};
+use crate::limits::Target;
+use crate::plan::Plan;
+use crate::program::{Program, Specialization};
 use crate::runtime::{FrameStats, Instance};
 use crate::vfs::Vfs;
-use crate::{Graph, Plan};
 use std::collections::BTreeMap;
 use std::time::Duration;
 
