@@ -66,6 +66,52 @@ struct Reference {
     text: String,
 }
 
+/// Where the identifier `s` starts with ends.
+fn ident_end(s: &str) -> usize {
+    s.find(|c: char| !(c.is_alphanumeric() || c == '_')).unwrap_or(s.len())
+}
+
+/// The path `s` starts with (`a::b::`), and the group after it up to its first `}`, without
+/// white space: how a reference is shown.
+fn shown(s: &str) -> String {
+    let path_end = s
+        .find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
+        .unwrap_or(s.len());
+    let (path, rest) = s.split_at(path_end);
+    let group = if rest.starts_with('{') {
+        rest.split_inclusive('}').next().unwrap_or("")
+    } else {
+        ""
+    };
+    format!("{path}{}", group.split_whitespace().collect::<String>())
+}
+
+/// The items of the group `s` starts with (`{a, b::{c, d}}`: `a` and `b::{c, d}`), each with
+/// its offset in `s`.
+fn group_items(s: &str) -> Vec<(usize, &str)> {
+    let mut out = Vec::new();
+    let mut depth = 0;
+    let mut item_start = 1;
+    for (i, c) in s.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' | ',' if depth == 1 => {
+                let item = s[item_start..i].trim_start();
+                if !item.trim().is_empty() {
+                    out.push((i - item.len(), item.trim_end()));
+                }
+                if c == '}' {
+                    break;
+                }
+                item_start = i + 1;
+            }
+            '}' => depth -= 1,
+            _ => {}
+        }
+    }
+    out
+}
+
 /// The `crate::` references of `text` outside comments: each path's first segment, and each
 /// item's first segment in a grouped `crate::{a, b::c}` (which may span lines).
 fn references(text: &str) -> Vec<Reference> {
@@ -75,59 +121,26 @@ fn references(text: &str) -> Vec<Reference> {
         .collect::<Vec<_>>()
         .join("\n");
     let line_at = |i: usize| code[..i].matches('\n').count() + 1;
-    let ident_end = |s: &str| s.find(|c: char| !(c.is_alphanumeric() || c == '_')).unwrap_or(s.len());
-    let path_end = |s: &str| {
-        s.find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
-            .unwrap_or(s.len())
-    };
     let mut out = Vec::new();
-    for (at, _) in code.match_indices("crate::") {
-        let before = code[..at].chars().next_back();
-        if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
+    for (at, prefix) in code.match_indices("crate::") {
+        if code[..at].ends_with(|c: char| c.is_alphanumeric() || c == '_') {
             continue;
         }
-        let rest = &code[at + "crate::".len()..];
-        if !rest.starts_with('{') {
-            let name = &rest[..ident_end(rest)];
-            let path = &rest[..path_end(rest)];
-            let group = rest[path.len()..]
-                .starts_with('{')
-                .then(|| rest[path.len()..].split_inclusive('}').next());
-            let group: String = group.flatten().unwrap_or("").split_whitespace().collect();
-            let text = format!("crate::{path}{group}");
+        let start = at + prefix.len();
+        let rest = &code[start..];
+        let items = match rest.starts_with('{') {
+            true => group_items(rest)
+                .into_iter()
+                .map(|(o, item)| (start + o, item))
+                .collect(),
+            false => vec![(at, rest)],
+        };
+        for (offset, item) in items {
             out.push(Reference {
-                line: line_at(at),
-                module: name.to_string(),
-                text,
+                line: line_at(offset),
+                module: item[..ident_end(item)].to_string(),
+                text: format!("{prefix}{}", shown(item)),
             });
-            continue;
-        }
-        // A group: the items at depth 1, split at its commas.
-        let mut depth = 0;
-        let mut item_start = 1;
-        for (i, c) in rest.char_indices() {
-            match c {
-                '{' => depth += 1,
-                '}' | ',' if depth == 1 => {
-                    let item = rest[item_start..i].trim_start();
-                    if !item.trim().is_empty() {
-                        let offset = at + "crate::".len() + i - item.len();
-                        let name = &item[..ident_end(item)];
-                        let text = format!("crate::{{{}}}", item.split_whitespace().collect::<String>());
-                        out.push(Reference {
-                            line: line_at(offset),
-                            module: name.to_string(),
-                            text,
-                        });
-                    }
-                    item_start = i + 1;
-                    if c == '}' {
-                        break;
-                    }
-                }
-                '}' => depth -= 1,
-                _ => {}
-            }
         }
     }
     out
@@ -270,8 +283,8 @@ fn a_later_stage_and_a_cycle_are_named() {
     assert_eq!(
         errors,
         [
-            "engine/src/graph.rs:1: `crate::{plan::Plan}`: `graph` (stage load) imports `plan` of a later stage (plan)",
-            "engine/src/graph.rs:1: `crate::{load::declare}`: `graph` imports `load` of its own stage (load), which imports it back: load → graph",
+            "engine/src/graph.rs:1: `crate::plan::Plan`: `graph` (stage load) imports `plan` of a later stage (plan)",
+            "engine/src/graph.rs:1: `crate::load::declare`: `graph` imports `load` of its own stage (load), which imports it back: load → graph",
             "engine/src/load.rs:2: `crate::graph::g`: `load` imports `graph` of its own stage (load), which imports it back: graph → load",
         ]
     );
