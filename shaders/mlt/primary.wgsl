@@ -14,6 +14,12 @@
 // Where `primary_next` takes its numbers from.
 const PRIMARY_STREAM: u32 = 0u;    // the uniform stream `key`
 const PRIMARY_PROPOSAL: u32 = 1u;  // chain `chain`'s state mutated with the numbers of `key`
+const PRIMARY_CURRENT: u32 = 2u;   // chain `chain`'s state itself (past MLT_DIMS: stream `key`)
+
+// The size of the small steps of this thread's proposals: 0 for Kelemen's exponential steps
+// (MLT_MUTATION_MIN to MLT_MUTATION_MAX), else Hachisuka and Jensen's (2011) adaptive size d,
+// whose steps are xi^(1 / d + 1) (shaders/pm/adaptive.wgsl sets it).
+var<private> primary_strength: f32 = 0.0;
 
 // A source of primary samples for one path, and the next dimension it gives.
 struct PrimarySamples {
@@ -46,8 +52,7 @@ fn primary_uniform(key: u32, d: u32) -> f32 {
 }
 
 // Dimension `d`, at `current`, mutated with the numbers of `key`: drawn anew by a large step,
-// else moved by Kelemen's exponential small step, between MLT_MUTATION_MIN and
-// MLT_MUTATION_MAX either way, wrapped into [0, 1).
+// else moved either way by a small step (`primary_step`), wrapped into [0, 1).
 fn primary_mutated(current: f32, key: u32, d: u32, large: bool) -> f32 {
     let h = primary_hash(key, d);
     let a = primary_unit(h);
@@ -55,16 +60,28 @@ fn primary_mutated(current: f32, key: u32, d: u32, large: bool) -> f32 {
         return a;
     }
     let b = primary_unit(rng_hash(h));
-    let dv = MLT_MUTATION_MAX * exp(-log(MLT_MUTATION_MAX / MLT_MUTATION_MIN) * a);
+    let dv = primary_step(a);
     var v = current + select(-dv, dv, b < 0.5);
     v -= floor(v);
     return select(v, 0.0, v >= 1.0);
+}
+
+// A small step's size for the uniform number `a`: Kelemen's, between MLT_MUTATION_MIN and
+// MLT_MUTATION_MAX, or with `primary_strength` d the adaptive a^(1 / d + 1).
+fn primary_step(a: f32) -> f32 {
+    if (primary_strength > 0.0) {
+        return pow(a, 1.0 / primary_strength + 1.0);
+    }
+    return MLT_MUTATION_MAX * exp(-log(MLT_MUTATION_MAX / MLT_MUTATION_MIN) * a);
 }
 
 // Dimension `d` of the samples of `src`.
 fn primary_at(src: PrimarySamples, d: u32) -> f32 {
     if (src.mode == PRIMARY_STREAM || d >= MLT_DIMS) {
         return primary_uniform(src.key, d);
+    }
+    if (src.mode == PRIMARY_CURRENT) {
+        return mlt_samples[d * MLT_CHAINS + src.chain];
     }
     return primary_mutated(mlt_samples[d * MLT_CHAINS + src.chain], src.key, d, src.large != 0u);
 }

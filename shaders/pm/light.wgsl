@@ -21,14 +21,16 @@ const PM_NONE: u32 = 0xffffffffu;
 // measured average and starts it on a light, as light tracing does.
 fn pm_light_generate(p: ptr<function, PhotonPath>, index: u32) -> bool {
     count(COUNTER_PM_PATHS, 1u);
-    (*p).d_vm = 0.0;
-    (*p).stored = PM_NONE;
-    (*p).alive = 1u;
     var light: LightPath;
     let started = light_generate_stratified(&light, index, PM_LIGHT_STARTS);
-    (*p).light = light;
-    (*p).delta_chain = select(0u, 1u, sppm_delta_chains() && light_path_from_delta_light(light));
+    *p = photon_path(light);
     return started;
+}
+
+// The photon-mapping sub-path of the light sub-path `light`, just started.
+fn photon_path(light: LightPath) -> PhotonPath {
+    let delta_chain = select(0u, 1u, sppm_delta_chains() && light_path_from_delta_light(light));
+    return PhotonPath(light, 0.0, PM_NONE, 1u, delta_chain);
 }
 
 // Pass `pm_light_trace` (Loop): the closest hit of the sub-path's ray.
@@ -62,24 +64,46 @@ fn pm_visit_light_vertex(p: ptr<function, PhotonPath>) -> bool {
     if (!a.alive) {
         return false;
     }
-    let length = (*p).light.length;
-    (*p).d_vm = mis_clamp((*p).d_vm / mis_pow(abs(a.bsdf.fix.z)));
-    if (!a.bsdf.is_delta && length + 1u <= MAX_PATH_LENGTH) {
-        count(COUNTER_PM_STORED, 1u);
-        if (!PM_MEASURING) {
-            let i = atomicAdd(&pm_count, 1u);
-            if (i < arrayLength(&pm_staging)) {
-                let towards = -(*p).light.direction;
-                let position = light_vertex_position(a.s, towards);
-                let packed = photon_pack(towards, length, (*p).delta_chain != 0u);
-                pm_staging[i] = Photon(position, (*p).d_vm, (*p).light.throughput, packed);
-                (*p).stored = i;
-            } else {
-                count(COUNTER_PM_OVERFLOW, 1u);
-            }
+    let here = pm_light_arrive(p, a);
+    if (here.stored && !PM_MEASURING) {
+        let i = atomicAdd(&pm_count, 1u);
+        if (i < arrayLength(&pm_staging)) {
+            pm_staging[i] = here.photon;
+            (*p).stored = i;
+        } else {
+            count(COUNTER_PM_OVERFLOW, 1u);
         }
     }
-    if (length + 2u > MAX_PATH_LENGTH) {
+    return pm_light_scatter(p, a);
+}
+
+// The photon a sub-path leaves at the vertex it arrived at (`a`, landed): stored when the
+// vertex is not delta and a merge there keeps the path within MAX_PATH_LENGTH (counted as
+// `pm_stored`).
+struct PhotonHere {
+    photon: Photon,
+    stored: bool,
+}
+
+// The sub-path's arrival at `a`: its dVM there, and the photon it leaves (`PhotonHere`).
+fn pm_light_arrive(p: ptr<function, PhotonPath>, a: Arrival) -> PhotonHere {
+    let length = (*p).light.length;
+    (*p).d_vm = mis_clamp((*p).d_vm / mis_pow(abs(a.bsdf.fix.z)));
+    var here: PhotonHere;
+    here.stored = !a.bsdf.is_delta && length + 1u <= MAX_PATH_LENGTH;
+    if (here.stored) {
+        count(COUNTER_PM_STORED, 1u);
+        let towards = -(*p).light.direction;
+        let position = light_vertex_position(a.s, towards);
+        let packed = photon_pack(towards, length, (*p).delta_chain != 0u);
+        here.photon = Photon(position, (*p).d_vm, (*p).light.throughput, packed);
+    }
+    return here;
+}
+
+// The sub-path's next direction from the vertex it arrived at (`a`); false when it ends there.
+fn pm_light_scatter(p: ptr<function, PhotonPath>, a: Arrival) -> bool {
+    if ((*p).light.length + 2u > MAX_PATH_LENGTH) {
         return false;
     }
     var rng = (*p).light.rng;

@@ -13,7 +13,7 @@ use std::path::{Component, Path};
 
 /// The estimators a study runs when none are named: each graph's best layout, chosen by
 /// measurement.
-pub const DEFAULT_ESTIMATORS: &str = "pt,bpt-lvc,ppm,sppm,pbpm,vcm,pssmlt,mmlt,mvcm";
+pub const DEFAULT_ESTIMATORS: &str = "pt,bpt-lvc,ppm,sppm,pbpm,vcm,pssmlt,mmlt,mvcm,appm";
 
 /// The extensions of scene files (`--scene` takes RON, glTF and Mitsuba files).
 const SCENE_FILE_EXTENSIONS: [&str; 4] = ["ron", "gltf", "glb", "xml"];

@@ -26,7 +26,7 @@ pub const DEFAULT_SCENES: &str = "cornell-diffuse,cornell-glossy-sun,cornell-glo
 /// its default layout, and VCM in both of its halves' other modes (connections alone,
 /// LVC-BPT; merges alone, PBPM), and Metropolised VCM also without merges (Metropolised
 /// LVC-BPT).
-pub const DEFAULT_ESTIMATORS: &str = "pt,lt,bpt-naive,bpt-streaming,bpt-lvc,ppm,sppm,pbpm,vcm,vcm@VCM_MERGE=false,vcm@VCM_CONNECT=false,pssmlt,mmlt,mvcm,mvcm@VCM_MERGE=false";
+pub const DEFAULT_ESTIMATORS: &str = "pt,lt,bpt-naive,bpt-streaming,bpt-lvc,ppm,sppm,pbpm,vcm,vcm@VCM_MERGE=false,vcm@VCM_CONNECT=false,pssmlt,mmlt,mvcm,mvcm@VCM_MERGE=false,appm";
 
 /// The quantity a graph estimates when its `coverage` names none.
 pub const DEFAULT_QUANTITY: &str = "radiance";
