@@ -3,6 +3,7 @@
 //! operators in order). Every error names the file and position of the offending name.
 
 use crate::error::{Error, Result};
+use crate::extend::resolve;
 use crate::ids::{ChainId, OpId, PassId, PhaseId, indexes};
 use crate::ir::{ConstValue, LayoutDecl, MeasuredDecl, ResourceDecl, Role, StreamDecl};
 use crate::load::{Declared, Pass, declare};
@@ -119,7 +120,7 @@ impl Graph {
     /// declared pass: the structure is checked whatever the constants cull. [`Graph::load`]
     /// gives its live view of the default constants.
     pub(crate) fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Graph> {
-        let declared = declare(vfs, file, text)?;
+        let declared = declare(vfs, file, resolve(vfs, file, text)?)?;
         let g = &declared.file;
         let mut graph = Graph {
             name: g.name.clone(),
@@ -188,13 +189,10 @@ impl Graph {
     /// An error located at the first occurrence of `name` within the declaration of
     /// `layout` (or at the layout's declaration).
     pub fn error_in_layout(&self, layout: &str, name: &str, message: impl Into<String>) -> Error {
+        let sources = &self.declared.sources;
+        let file = sources.declaring(&self.file, layout);
         Error::Invalid {
-            at: crate::error::Location::of_name_under_key(
-                &self.file,
-                self.declared.sources.text(&self.file),
-                layout,
-                name,
-            ),
+            at: crate::error::Location::of_name_under_key(file, sources.text(file), layout, name),
             message: message.into(),
         }
     }

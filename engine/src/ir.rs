@@ -185,6 +185,115 @@ pub enum PassEntry {
     Sort(SortDecl),
 }
 
+impl PassEntry {
+    /// The name of the pass or operator the entry declares.
+    pub fn name(&self) -> &str {
+        match self {
+            PassEntry::Use(name) => name,
+            PassEntry::UseWith(d) => &d.name,
+            PassEntry::Pass(d) => &d.name,
+            PassEntry::Clear(d) => &d.name,
+            PassEntry::Scan(d) => &d.name,
+            PassEntry::Count(d) => &d.name,
+            PassEntry::Scatter(d) => &d.name,
+            PassEntry::Gather(d) => &d.name,
+            PassEntry::Sort(d) => &d.name,
+        }
+    }
+}
+
+/// A graph file that extends another (`extends: "graphs/ppm.ron"`): the base's declaration
+/// with this file's overrides. Maps merge by key (this file's value wins), `passes` and
+/// `layouts` are edits of the base's, and every other field given replaces the base's.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExtendingFile {
+    /// The base graph file (a virtual path, as `include` and `catalogs`).
+    pub extends: String,
+    /// Replaces the base's name.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Replaces the base's description.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Replaces the base's included files.
+    #[serde(default)]
+    pub include: Option<Vec<String>>,
+    /// Replaces the base's library.
+    #[serde(default)]
+    pub library: Option<Vec<String>>,
+    /// Replaces the base's catalogs.
+    #[serde(default)]
+    pub catalogs: Option<Vec<String>>,
+    /// Edits of the base's `passes`, applied in order.
+    #[serde(default)]
+    pub passes: Vec<PassEdit>,
+    /// Merged into the base's resources.
+    #[serde(default)]
+    pub resources: BTreeMap<String, ResourceDecl>,
+    /// Merged into the base's streams.
+    #[serde(default)]
+    pub streams: BTreeMap<String, StreamDecl>,
+    /// Replaces the base's counters.
+    #[serde(default)]
+    pub counters: Option<Vec<String>>,
+    /// Merged into the base's constants.
+    #[serde(default)]
+    pub constants: BTreeMap<String, ConstValue>,
+    /// Merged into the base's parameters.
+    #[serde(default)]
+    pub parameters: BTreeMap<String, ConstValue>,
+    /// Merged into the base's derived constants.
+    #[serde(default)]
+    pub derived: BTreeMap<String, String>,
+    /// Merged into the base's checks.
+    #[serde(default)]
+    pub checks: BTreeMap<String, String>,
+    /// Replaces the base's outputs.
+    #[serde(default)]
+    pub outputs: Option<Vec<String>>,
+    /// Merged into the base's measured constants.
+    #[serde(default)]
+    pub measured: BTreeMap<String, MeasuredDecl>,
+    /// Replaces the base's loop bounds (they follow the passes, which the edits may change).
+    #[serde(default)]
+    pub loop_bounds: Option<BTreeMap<String, String>>,
+    /// Edits of the base's layouts, by name.
+    #[serde(default)]
+    pub layouts: BTreeMap<String, LayoutEdit>,
+    /// Replaces the base's default layout.
+    #[serde(default)]
+    pub default_layout: Option<String>,
+    /// Replaces the base's coverage.
+    #[serde(default)]
+    pub coverage: Option<Coverage>,
+}
+
+/// An edit of the base's `passes` in a graph that extends another; each names an entry (a
+/// pass or operator) of the list as the edits before it left it.
+#[derive(Debug, Clone, Deserialize)]
+pub enum PassEdit {
+    /// `Replace("name", [entries])`: the entry replaced by the entries (none removes it).
+    Replace(String, Vec<PassEntry>),
+    /// `Before("name", [entries])`: the entries inserted before the entry.
+    Before(String, Vec<PassEntry>),
+    /// `After("name", [entries])`: the entries inserted after the entry.
+    After(String, Vec<PassEntry>),
+    /// `Remove("name")`: the entry removed.
+    Remove(String),
+}
+
+/// An edit of a layout of the base, by name, in a graph that extends another.
+#[derive(Debug, Clone, Deserialize)]
+pub enum LayoutEdit {
+    /// `Layout(kernels: [...], ...)`: a layout declared here, new or replacing the base's.
+    Layout(LayoutDecl),
+    /// `From("name")`: a copy of the base's layout `name`.
+    From(String),
+    /// `Remove`: the base's layout leaves.
+    Remove,
+}
+
 /// `UseWith(name: "pass", reads: [...], writes: [...], enabled: "...")`: catalog pass `name`
 /// with more resources read and written than its catalog declares, and a condition of the
 /// graph's that it runs under.

@@ -13,7 +13,7 @@
 //! | stage | modules | what it does |
 //! |---|---|---|
 //! | leaf | `error`, `expr`, `ids`, `ir`, `limits`, `vfs` | errors, count expressions, typed indices, the RON declarations, shared limits and the target, the file system |
-//! | load | `operator`, `load`, `graph` | the graph file with its catalogs and includes, every name checked; chains and phases |
+//! | load | `operator`, `load`, `extend`, `graph` | the graph file with its bases, catalogs and includes, every name checked; chains and phases |
 //! | specialise | `specialize` | the constants' values, then culling: the live graph |
 //! | plan | `plan`, `auto` | a layout's kernels, roots and schedule, its fusion checked; every legal layout |
 //! | reflect | `wgsl`, `reflect`, `access` | the sources compiled together with naga: item words, what each pass touches of its item, each pass checked against its declaration |
@@ -36,6 +36,7 @@ pub mod collective;
 pub mod error;
 pub mod explain;
 pub mod expr;
+pub mod extend;
 pub mod gpu;
 pub mod graph;
 pub mod ids;

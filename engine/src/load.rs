@@ -38,6 +38,8 @@ pub fn is_identifier(name: &str) -> bool {
 #[derive(Debug, Clone, Default)]
 pub struct Sources {
     texts: BTreeMap<String, String>,
+    /// The graph file each extending graph file extends.
+    bases: BTreeMap<String, String>,
 }
 
 impl Sources {
@@ -46,18 +48,40 @@ impl Sources {
         self.texts.insert(file.to_string(), text.to_string());
     }
 
+    /// Remembers that graph file `file` extends `base`.
+    pub fn add_base(&mut self, file: &str, base: &str) {
+        self.bases.insert(file.to_string(), base.to_string());
+    }
+
     /// The text of `file` (empty when unknown).
     pub fn text(&self, file: &str) -> &str {
         self.texts.get(file).map_or("", |t| t.as_str())
     }
 
-    /// An error at the first quoted `name` in `file`.
+    /// The file that declared `name` among `file` and the files it extends: the first of them,
+    /// extending file first, whose text quotes `name` (`file` when none does).
+    pub fn declaring<'a>(&'a self, file: &'a str, name: &str) -> &'a str {
+        let quoted = format!("\"{name}\"");
+        let mut at = file;
+        while !self.text(at).contains(&quoted) {
+            match self.bases.get(at) {
+                Some(base) => at = base,
+                None => return file,
+            }
+        }
+        at
+    }
+
+    /// An error at the first quoted `name` in `file` (or in the file it extends that declared it).
     pub fn at_name(&self, file: &str, name: &str, message: impl Into<String>) -> Error {
+        let file = self.declaring(file, name);
         Error::invalid_at_name(file, self.text(file), name, message)
     }
 
-    /// An error at the declaration `"name":` in `file`.
+    /// An error at the declaration `"name":` in `file` (or in the file it extends that declared
+    /// it).
     pub fn at_key(&self, file: &str, name: &str, message: impl Into<String>) -> Error {
+        let file = self.declaring(file, name);
         Error::invalid_at_key(file, self.text(file), name, message)
     }
 }
@@ -197,14 +221,33 @@ fn push_unique(list: &mut Vec<String>, items: &[String]) {
     }
 }
 
-/// Reads and merges the graph `file` (text `text`) with its catalogs and includes.
-pub fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Declared> {
-    let g: GraphFile = parse_ron(file, text)?;
-    let mut sources = Sources::default();
-    sources.add(file, text);
+/// A graph file's declaration with what it was read from: the texts of the graph file and of
+/// any files it extends, and the file that declared each entry of `passes` (the graph file, or
+/// a graph it extends).
+#[derive(Debug, Clone)]
+pub struct GraphSource {
+    /// The declaration, any bases' merged in.
+    pub file: GraphFile,
+    /// The file that declared each entry of `file.passes`.
+    pub entry_files: Vec<String>,
+    /// The texts read so far.
+    pub sources: Sources,
+}
+
+/// Merges the graph `file` (its declaration `source`) with its catalogs and includes.
+pub fn declare(vfs: &Vfs, file: &str, source: GraphSource) -> Result<Declared> {
+    let GraphSource {
+        file: g,
+        entry_files,
+        mut sources,
+    } = source;
     let catalogs = read_catalogs(vfs, file, &g.catalogs, &mut sources)?;
     let includes = read_catalogs(vfs, file, &g.include, &mut sources)?;
-    let (passes, ops, entries) = graph_entries(&g, file, &includes, &catalogs, &sources)?;
+    let offered = Offered {
+        includes: &includes,
+        catalogs: &catalogs,
+    };
+    let (passes, ops, entries) = graph_entries(&g, &entry_files, &offered, &sources)?;
     // What each part brings: library, counters, constants, resources.
     let mut parts = Parts::of_graph(&g, file, &sources)?;
     for (path, inc) in &includes {
@@ -269,13 +312,12 @@ fn read_catalogs(vfs: &Vfs, file: &str, paths: &[String], sources: &mut Sources)
 /// pass or a name used twice.
 fn graph_entries(
     g: &GraphFile,
-    file: &str,
-    includes: &[(String, CatalogFile)],
-    catalogs: &[(String, CatalogFile)],
+    entry_files: &[String],
+    from: &Offered,
     sources: &Sources,
 ) -> Result<(Vec<Pass>, Vec<Operator>, Vec<Entry>)> {
     let mut offered: BTreeMap<String, (PassDecl, String)> = BTreeMap::new();
-    for (path, cat) in includes.iter().chain(catalogs) {
+    for (path, cat) in from.includes.iter().chain(from.catalogs) {
         for d in &cat.passes {
             offered.insert(d.name.clone(), (d.clone(), path.clone()));
         }
@@ -283,7 +325,8 @@ fn graph_entries(
     let mut passes: Vec<Pass> = Vec::new();
     let mut ops: Vec<Operator> = Vec::new();
     let mut entries = Vec::new();
-    for entry in &g.passes {
+    for (entry, file) in g.passes.iter().zip(entry_files) {
+        let file = file.as_str();
         if let Some(op) = Operator::from_entry(entry, file) {
             let op = op.map_err(|(what, why)| sources.at_name(file, &what, why))?;
             entries.push(Entry::Op(ops.len()));
@@ -326,14 +369,19 @@ fn graph_entries(
         entries.push(Entry::Pass(passes.len()));
         passes.push(pass);
     }
-    let mut names: Vec<&str> = passes.iter().map(|p| p.decl.name.as_str()).collect();
-    names.extend(ops.iter().map(|o| o.name.as_str()));
+    let names: Vec<&str> = g.passes.iter().map(PassEntry::name).collect();
     for (i, n) in names.iter().enumerate() {
         if names[..i].contains(n) {
-            return Err(sources.at_name(file, n, format!("pass '{n}' appears twice")));
+            return Err(sources.at_name(&entry_files[i], n, format!("pass '{n}' appears twice")));
         }
     }
     Ok((passes, ops, entries))
+}
+
+/// The declaration files a graph's `Use` entries take passes from.
+struct Offered<'a> {
+    includes: &'a [(String, CatalogFile)],
+    catalogs: &'a [(String, CatalogFile)],
 }
 
 /// Appends the names of `more` that `list` lacks, in order.

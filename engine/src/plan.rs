@@ -362,7 +362,9 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
         return Err(graph.error_in_layout(
             layout_name,
             layout_name,
-            format!("layout '{layout_name}' puts pass '{name}' in no kernel"),
+            format!(
+                "layout '{layout_name}' puts pass '{name}' in no kernel; it is enabled, and a layout may leave out only the passes the constants disable"
+            ),
         ));
     }
     Ok(groups)

@@ -360,13 +360,9 @@ impl Graph {
                             .filter(|op| op.writes().contains(&o.as_str()))
                             .map(|op| op.name.as_str()),
                     );
+                let file = self.declared.sources.declaring(&self.file, o);
                 return Err(crate::error::Error::Invalid {
-                    at: crate::error::Location::of_name_after(
-                        &self.file,
-                        self.declared.sources.text(&self.file),
-                        "outputs:",
-                        o,
-                    ),
+                    at: crate::error::Location::of_name_after(file, self.declared.sources.text(file), "outputs:", o),
                     message: format!("output '{o}' has no live writer{}", why(&mut writers)),
                 });
             }

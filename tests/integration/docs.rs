@@ -27,8 +27,8 @@ fn write_examples() -> PathBuf {
         rest = &after[body_end + 3..];
     }
     assert_eq!(
-        written, 4,
-        "docs/graphs.md has two examples of a graph and its WGSL each"
+        written, 5,
+        "docs/graphs.md has two examples of a graph and its WGSL each, and one graph that extends the first"
     );
     dir
 }
@@ -52,6 +52,16 @@ fn the_examples_of_the_graph_guide_render() {
         assert!(
             r.image.mean.iter().any(|p| p[0] > 0.5),
             "ao {layout}: nothing unoccluded"
+        );
+    }
+    // The graph that extends `ao`: its constants, its layouts.
+    let wide = dir.join("lab/ao-wide.ron");
+    for layout in ["stored", "fused_again"] {
+        let r = render(&scene, wide.to_str().unwrap(), layout, (w, h), 2, 2, 3, &[]);
+        assert_eq!(
+            r.counters["rays_occlusion"],
+            8 * r.counters["rays_primary"],
+            "ao-wide {layout}"
         );
     }
     let sorted = dir.join("lab/sorted.ron");

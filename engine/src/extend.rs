@@ -1,0 +1,194 @@
+//! Graphs that extend graphs: a graph file with `extends: "graphs/ppm.ron"` starts from the
+//! base graph's declaration (itself resolved the same way) and overrides it: maps merge by key,
+//! `passes` and `layouts` are edits of the base's, every other field given replaces the base's.
+//! Errors point into the file that declared the offending name: an edit's into the extending
+//! file, a base's own into the base.
+
+use crate::error::Result;
+use crate::ir::{ExtendingFile, GraphFile, LayoutEdit, PassEdit, PassEntry};
+use crate::load::{GraphSource, Sources, parse_ron};
+use crate::vfs::Vfs;
+
+/// Reads graph `file` (text `text`) and, when it extends another, its bases, merged into one
+/// declaration.
+pub fn resolve(vfs: &Vfs, file: &str, text: &str) -> Result<GraphSource> {
+    let mut sources = Sources::default();
+    let (g, entry_files) = resolve_in(vfs, file, text, &mut sources, &mut Vec::new())?;
+    Ok(GraphSource {
+        file: g,
+        entry_files,
+        sources,
+    })
+}
+
+/// A graph file as written: a whole graph, or one extending another.
+enum Written {
+    Whole(Box<GraphFile>),
+    Extending(Box<ExtendingFile>),
+}
+
+/// Parses `text` as a whole graph, or as one that extends another where it says `extends`.
+fn parse_written(file: &str, text: &str) -> Result<Written> {
+    match parse_ron::<GraphFile>(file, text) {
+        Ok(g) => Ok(Written::Whole(Box::new(g))),
+        Err(whole) => match parse_ron::<ExtendingFile>(file, text) {
+            Ok(e) => Ok(Written::Extending(Box::new(e))),
+            Err(extending) if whole.to_string().contains("`extends`") => Err(extending),
+            Err(_) => Err(whole),
+        },
+    }
+}
+
+/// The declaration of `file` with its bases merged in, and the file of each `passes` entry;
+/// `chain` holds the files that extend it, to refuse a cycle.
+fn resolve_in(
+    vfs: &Vfs,
+    file: &str,
+    text: &str,
+    sources: &mut Sources,
+    chain: &mut Vec<String>,
+) -> Result<(GraphFile, Vec<String>)> {
+    sources.add(file, text);
+    let ext = match parse_written(file, text)? {
+        Written::Whole(g) => {
+            let files = vec![file.to_string(); g.passes.len()];
+            return Ok((*g, files));
+        }
+        Written::Extending(ext) => ext,
+    };
+    chain.push(file.to_string());
+    if chain.contains(&ext.extends) {
+        let cycle: Vec<&str> = chain
+            .iter()
+            .skip_while(|f| **f != ext.extends)
+            .map(|f| f.as_str())
+            .chain([ext.extends.as_str()])
+            .collect();
+        return Err(sources.at_name(
+            file,
+            &ext.extends,
+            format!("extends closes a cycle: {}", cycle.join(" → ")),
+        ));
+    }
+    let base_text = vfs
+        .read(&ext.extends)
+        .map_err(|e| sources.at_name(file, &ext.extends, format!("cannot read the base graph: {e}")))?;
+    let (base, files) = resolve_in(vfs, &ext.extends, &base_text, sources, chain)?;
+    sources.add_base(file, &ext.extends);
+    apply(*ext, base, files, file, sources)
+}
+
+/// `base` (with the file of each of its entries) as `ext` (file `file`) overrides it.
+fn apply(
+    ext: ExtendingFile,
+    mut base: GraphFile,
+    files: Vec<String>,
+    file: &str,
+    sources: &Sources,
+) -> Result<(GraphFile, Vec<String>)> {
+    let mut entries: Vec<(PassEntry, String)> = std::mem::take(&mut base.passes).into_iter().zip(files).collect();
+    for edit in ext.passes {
+        edit_passes(&mut entries, edit, file, &ext.extends, sources)?;
+    }
+    let (passes, files): (Vec<PassEntry>, Vec<String>) = entries.into_iter().unzip();
+    let layouts = edit_layouts(&base, ext.layouts, file, &ext.extends, sources)?;
+    let g = GraphFile {
+        name: ext.name.unwrap_or(base.name),
+        description: ext.description.unwrap_or(base.description),
+        include: ext.include.unwrap_or(base.include),
+        library: ext.library.unwrap_or(base.library),
+        catalogs: ext.catalogs.unwrap_or(base.catalogs),
+        passes,
+        resources: merged(base.resources, ext.resources),
+        streams: merged(base.streams, ext.streams),
+        counters: ext.counters.unwrap_or(base.counters),
+        constants: merged(base.constants, ext.constants),
+        parameters: merged(base.parameters, ext.parameters),
+        derived: merged(base.derived, ext.derived),
+        checks: merged(base.checks, ext.checks),
+        outputs: ext.outputs.unwrap_or(base.outputs),
+        measured: merged(base.measured, ext.measured),
+        loop_bounds: ext.loop_bounds.unwrap_or(base.loop_bounds),
+        layouts,
+        default_layout: ext.default_layout.unwrap_or(base.default_layout),
+        coverage: ext.coverage.unwrap_or(base.coverage),
+    };
+    Ok((g, files))
+}
+
+/// `base` with `over`'s entries added, replacing those of the same key.
+fn merged<T>(
+    mut base: std::collections::BTreeMap<String, T>,
+    over: std::collections::BTreeMap<String, T>,
+) -> std::collections::BTreeMap<String, T> {
+    base.extend(over);
+    base
+}
+
+/// Applies one edit of the extending `file` to the entries of its base `base_file`.
+fn edit_passes(
+    entries: &mut Vec<(PassEntry, String)>,
+    edit: PassEdit,
+    file: &str,
+    base_file: &str,
+    sources: &Sources,
+) -> Result<()> {
+    let (name, new, remove, offset) = match edit {
+        PassEdit::Replace(name, new) => (name, new, true, 0),
+        PassEdit::Before(name, new) => (name, new, false, 0),
+        PassEdit::After(name, new) => (name, new, false, 1),
+        PassEdit::Remove(name) => (name, Vec::new(), true, 0),
+    };
+    let Some(at) = entries.iter().position(|(e, _)| e.name() == name) else {
+        let known: Vec<&str> = entries.iter().map(|(e, _)| e.name()).collect();
+        return Err(sources.at_name(
+            file,
+            &name,
+            format!(
+                "passes: no entry '{name}' to edit in the graph it extends ({base_file}; entries: {})",
+                known.join(", ")
+            ),
+        ));
+    };
+    let new = new.into_iter().map(|e| (e, file.to_string()));
+    let range = if remove { at..at + 1 } else { at + offset..at + offset };
+    entries.splice(range, new);
+    Ok(())
+}
+
+/// The base's layouts as the extending `file`'s `edits` leave them.
+fn edit_layouts(
+    base: &GraphFile,
+    edits: std::collections::BTreeMap<String, LayoutEdit>,
+    file: &str,
+    base_file: &str,
+    sources: &Sources,
+) -> Result<std::collections::BTreeMap<String, crate::ir::LayoutDecl>> {
+    let mut layouts = base.layouts.clone();
+    let missing = |name: &str| {
+        let known: Vec<&str> = base.layouts.keys().map(|s| s.as_str()).collect();
+        sources.at_name(
+            file,
+            name,
+            format!(
+                "layouts: no layout '{name}' in the graph it extends ({base_file}; layouts: {})",
+                known.join(", ")
+            ),
+        )
+    };
+    for (name, edit) in edits {
+        match edit {
+            LayoutEdit::Layout(decl) => {
+                layouts.insert(name, decl);
+            }
+            LayoutEdit::From(from) => {
+                let decl = base.layouts.get(&from).ok_or_else(|| missing(&from))?;
+                layouts.insert(name, decl.clone());
+            }
+            LayoutEdit::Remove => {
+                layouts.remove(&name).ok_or_else(|| missing(&name))?;
+            }
+        }
+    }
+    Ok(layouts)
+}
