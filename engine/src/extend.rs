@@ -5,9 +5,10 @@
 //! file, a base's own into the base.
 
 use crate::error::Result;
-use crate::ir::{ExtendingFile, GraphFile, LayoutEdit, PassEdit, PassEntry};
+use crate::ir::{ExtendingFile, GraphFile, LayoutDecl, LayoutEdit, PassEdit, PassEntry};
 use crate::load::{GraphSource, Sources, parse_ron};
 use crate::vfs::Vfs;
+use std::collections::BTreeMap;
 
 /// Reads graph `file` (text `text`) and, when it extends another, its bases, merged into one
 /// declaration.
@@ -117,10 +118,7 @@ fn apply(
 }
 
 /// `base` with `over`'s entries added, replacing those of the same key.
-fn merged<T>(
-    mut base: std::collections::BTreeMap<String, T>,
-    over: std::collections::BTreeMap<String, T>,
-) -> std::collections::BTreeMap<String, T> {
+fn merged<T>(mut base: BTreeMap<String, T>, over: BTreeMap<String, T>) -> BTreeMap<String, T> {
     base.extend(over);
     base
 }
@@ -159,11 +157,11 @@ fn edit_passes(
 /// The base's layouts as the extending `file`'s `edits` leave them.
 fn edit_layouts(
     base: &GraphFile,
-    edits: std::collections::BTreeMap<String, LayoutEdit>,
+    edits: BTreeMap<String, LayoutEdit>,
     file: &str,
     base_file: &str,
     sources: &Sources,
-) -> Result<std::collections::BTreeMap<String, crate::ir::LayoutDecl>> {
+) -> Result<BTreeMap<String, LayoutDecl>> {
     let mut layouts = base.layouts.clone();
     let missing = |name: &str| {
         let known: Vec<&str> = base.layouts.keys().map(|s| s.as_str()).collect();
