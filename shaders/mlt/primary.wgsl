@@ -14,7 +14,6 @@
 // Where `primary_next` takes its numbers from.
 const PRIMARY_STREAM: u32 = 0u;    // the uniform stream `key`
 const PRIMARY_PROPOSAL: u32 = 1u;  // chain `chain`'s state mutated with the numbers of `key`
-const PRIMARY_CURRENT: u32 = 2u;   // chain `chain`'s state itself (past MLT_DIMS: stream `key`)
 
 // The size of the small steps of this thread's proposals: 0 for Kelemen's exponential steps
 // (MLT_MUTATION_MIN to MLT_MUTATION_MAX), else Hachisuka and Jensen's (2011) adaptive size d,
@@ -79,9 +78,6 @@ fn primary_step(a: f32) -> f32 {
 fn primary_at(src: PrimarySamples, d: u32) -> f32 {
     if (src.mode == PRIMARY_STREAM || d >= MLT_DIMS) {
         return primary_uniform(src.key, d);
-    }
-    if (src.mode == PRIMARY_CURRENT) {
-        return mlt_samples[d * MLT_CHAINS + src.chain];
     }
     return primary_mutated(mlt_samples[d * MLT_CHAINS + src.chain], src.key, d, src.large != 0u);
 }

@@ -12,9 +12,9 @@
 // photons at every iteration, scaled by F, the fraction of uniform paths found visible in
 // the frames before: the frame estimates the photons of paths with V = 0 from its uniform
 // paths and those with V = 1 from the chains (F times their mean), an unbiased split for any
-// V. A chain's state stays in `mlt_samples` across frames and is traced again at the start
-// of a frame; a chain with no state yet, or a frame with no F yet (the first frames), deposits
-// its uniform paths whole, as photon mapping does. `appm_update` adds the frame's counts to
+// V. A chain's state stays in `mlt_samples` across frames, its photons in `appm_paths`; a
+// chain with no state yet, or a frame with no F yet (the first frames), deposits its uniform
+// paths whole, as photon mapping does. `appm_update` adds the frame's counts to
 // the totals and moves d by the frame's acceptance: d += (accepted / mutations - 0.234) / t at
 // frame t since the chains started (Robbins-Monro, the paper's target rate 0.234).
 
@@ -57,17 +57,26 @@ fn appm_mark(p: ptr<function, MergePath>) -> bool {
     return true;
 }
 
-// The photons of a traced path: two slots, the chain's state and a proposal.
-var<private> appm_photons_of: array<array<Photon, MAX_PATH_LENGTH>, 2>;
+// Whether this frame judges visibility: from AMC_MARK_FRAMES on, when the marks are complete.
+fn appm_judging() -> bool {
+    return frame.index >= AMC_MARK_FRAMES && !PM_MEASURING;
+}
 
-// A traced photon path: its photons (in a slot of `appm_photons_of`) and its visibility.
+// Where photon `i` of slot `slot` (0 or 1: the state's and a proposal's) of chain `chain` is
+// kept in `appm_paths` (slot-major, so that a warp's chains touch neighbouring photons).
+fn appm_path_at(chain: u32, slot: u32, i: u32) -> u32 {
+    return (slot * MAX_PATH_LENGTH + i) * MLT_CHAINS + chain;
+}
+
+// A traced photon path: its photons (in a slot of the chain's in `appm_paths`) and its
+// visibility.
 struct AppmPath {
     photons: u32,
     visible: bool,
 }
 
-// Traces the photon path of the samples `src` into slot `slot`.
-fn appm_trace(src: PrimarySamples, slot: u32) -> AppmPath {
+// Traces the photon path of the samples `src` into slot `slot` of chain `chain`.
+fn appm_trace(src: PrimarySamples, chain: u32, slot: u32) -> AppmPath {
     count(COUNTER_PM_PATHS, 1u);
     streams_read(src);
     var rng = stream_start(0u);
@@ -87,9 +96,9 @@ fn appm_trace(src: PrimarySamples, slot: u32) -> AppmPath {
         }
         let here = pm_light_arrive(&p, a);
         if (here.stored && r.photons < MAX_PATH_LENGTH) {
-            appm_photons_of[slot][r.photons] = here.photon;
+            appm_paths[appm_path_at(chain, slot, r.photons)] = here.photon;
             r.photons += 1u;
-            r.visible = r.visible || (frame.index >= AMC_MARK_FRAMES && appm_visible(here.photon.position));
+            r.visible = r.visible || (appm_judging() && appm_visible(here.photon.position));
         }
         if (!pm_light_scatter(&p, a)) {
             break;
@@ -99,9 +108,9 @@ fn appm_trace(src: PrimarySamples, slot: u32) -> AppmPath {
     return r;
 }
 
-// Deposits the `n` photons of slot `slot` into the frame's photons, their throughputs times
-// `scale` (the overflow counted as `pm_overflow`).
-fn appm_deposit(slot: u32, n: u32, scale: f32) {
+// Deposits the `n` photons of slot `slot` of chain `chain` into the frame's photons, their
+// throughputs times `scale` (the overflow counted as `pm_overflow`).
+fn appm_deposit(chain: u32, slot: u32, n: u32, scale: f32) {
     if (n == 0u || PM_MEASURING) {
         return;
     }
@@ -111,17 +120,18 @@ fn appm_deposit(slot: u32, n: u32, scale: f32) {
             count(COUNTER_PM_OVERFLOW, n - i);
             return;
         }
-        var photon = appm_photons_of[slot][i];
+        var photon = appm_paths[appm_path_at(chain, slot, i)];
         photon.throughput *= scale;
         pm_staging[first + i] = photon;
     }
 }
 
-// A chain between frames (`appm_chains`): the stream key of its state (for dimensions past
-// MLT_DIMS, which a photon path of MAX_PATH_LENGTH does not reach) and whether it has one.
+// A chain between frames (`appm_chains`): whether it has a state, the slot of `appm_paths`
+// holding its state's photons, and how many.
 struct AppmState {
-    key: u32,
     seeded: u32,
+    slot: u32,
+    photons: u32,
 }
 
 // The item of `appm_photons`: a chain.
@@ -161,13 +171,11 @@ fn appm_visible_fraction() -> f32 {
     return select(0.0, appm_total(AMC_VISIBLE) / uniform, uniform > 0.0);
 }
 
-// A chain's run through one frame: its state's photons (slot `current`, `n` of them), the
-// iterations they stood for since they were last deposited, and F.
+// A chain's run through one frame: its state, the iterations its photons stood for since
+// they were last deposited, and F.
 struct AppmRun {
     chain: u32,
     state: AppmState,
-    current: u32,
-    n: u32,
     repeats: u32,
     fraction: f32,
 }
@@ -175,11 +183,8 @@ struct AppmRun {
 // Pass `appm_photons` (Start over MLT_CHAINS): chain `index`'s iterations of the frame.
 fn appm_photons(item: ptr<function, AppmChain>, index: u32) -> bool {
     primary_strength = appm_strength();
-    var run = AppmRun(index, appm_chains[index], 0u, 0u, 0u, appm_visible_fraction());
+    var run = AppmRun(index, appm_chains[index], 0u, appm_visible_fraction());
     let chains = run.fraction > 0.0 && !PM_MEASURING;
-    if (chains && run.state.seeded != 0u) {
-        run.n = appm_trace(PrimarySamples(PRIMARY_CURRENT, index, run.state.key, 0u, 0u), run.current).photons;
-    }
     for (var k = 0u; k < AMC_CHAIN_STEPS; k += 1u) {
         let iteration = index * AMC_CHAIN_STEPS + k;
         if (iteration >= PM_LIGHT_PATHS) {
@@ -188,7 +193,7 @@ fn appm_photons(item: ptr<function, AppmChain>, index: u32) -> bool {
         appm_iterate(&run, frame.index * AMC_CHAIN_STEPS + k, chains);
     }
     if (chains && run.state.seeded != 0u) {
-        appm_deposit(run.current, run.n, f32(run.repeats) * run.fraction);
+        appm_deposit_state(&run);
     }
     appm_chains[index] = run.state;
     return false;
@@ -199,19 +204,19 @@ fn appm_photons(item: ptr<function, AppmChain>, index: u32) -> bool {
 // the uniform path is deposited whole, and seeds the chain when visible (from the frame
 // AMC_MARK_FRAMES on, when the marks are complete and visibility is judged).
 fn appm_iterate(run: ptr<function, AppmRun>, step: u32, chains: bool) {
-    let proposal = 1u - (*run).current;
-    let key = primary_key(4u, step, (*run).chain);
-    let u = appm_trace(PrimarySamples(PRIMARY_STREAM, 0u, key, 0u, 0u), proposal);
-    let judged = frame.index >= AMC_MARK_FRAMES && !PM_MEASURING;
-    if (judged) {
+    let chain = (*run).chain;
+    let proposal = 1u - (*run).state.slot;
+    let key = primary_key(4u, step, chain);
+    let u = appm_trace(PrimarySamples(PRIMARY_STREAM, 0u, key, 0u, 0u), chain, proposal);
+    if (appm_judging()) {
         count(COUNTER_AMC_UNIFORM, 1u);
         count(COUNTER_AMC_VISIBLE, u32(u.visible));
         atomicAdd(&appm_frame[AMC_FRAME_UNIFORM], 1u);
         atomicAdd(&appm_frame[AMC_FRAME_VISIBLE], u32(u.visible));
     }
     if (!chains || (*run).state.seeded == 0u) {
-        appm_deposit(proposal, u.photons, 1.0);
-        if (u.visible && judged) {
+        appm_deposit(chain, proposal, u.photons, 1.0);
+        if (u.visible) {
             appm_take(run, proposal, u.photons, key, false);
         }
         return;
@@ -219,7 +224,7 @@ fn appm_iterate(run: ptr<function, AppmRun>, step: u32, chains: bool) {
     if (u.visible) {
         appm_take(run, proposal, u.photons, key, false);
     } else {
-        appm_deposit(proposal, u.photons, 1.0);
+        appm_deposit(chain, proposal, u.photons, 1.0);
         appm_mutate(run, step);
     }
     (*run).repeats += 1u;
@@ -227,9 +232,9 @@ fn appm_iterate(run: ptr<function, AppmRun>, step: u32, chains: bool) {
 
 // The chain's small step: a proposal of the adaptive size, taken when it is visible.
 fn appm_mutate(run: ptr<function, AppmRun>, step: u32) {
-    let proposal = 1u - (*run).current;
+    let proposal = 1u - (*run).state.slot;
     let key = primary_key(5u, step, (*run).chain);
-    let m = appm_trace(PrimarySamples(PRIMARY_PROPOSAL, (*run).chain, key, 0u, 0u), proposal);
+    let m = appm_trace(PrimarySamples(PRIMARY_PROPOSAL, (*run).chain, key, 0u, 0u), (*run).chain, proposal);
     count(COUNTER_AMC_MUTATIONS, 1u);
     atomicAdd(&appm_frame[AMC_FRAME_MUTATIONS], 1u);
     if (m.visible) {
@@ -244,17 +249,21 @@ fn appm_mutate(run: ptr<function, AppmRun>, step: u32) {
 // deposited for the iterations they stood for, and the new state's samples stored.
 fn appm_take(run: ptr<function, AppmRun>, slot: u32, n: u32, key: u32, mutated: bool) {
     if ((*run).state.seeded != 0u && (*run).repeats > 0u) {
-        appm_deposit((*run).current, (*run).n, f32((*run).repeats) * (*run).fraction);
+        appm_deposit_state(run);
     }
     if (mutated) {
         primary_accept((*run).chain, key, false);
     } else {
         primary_seed((*run).chain, key);
     }
-    (*run).state = AppmState(key, 1u);
-    (*run).current = slot;
-    (*run).n = n;
+    (*run).state = AppmState(1u, slot, n);
     (*run).repeats = 0u;
+}
+
+// Deposits the state's photons for the iterations they stood for, times F.
+fn appm_deposit_state(run: ptr<function, AppmRun>) {
+    let state = (*run).state;
+    appm_deposit((*run).chain, state.slot, state.photons, f32((*run).repeats) * (*run).fraction);
 }
 
 // The item of `appm_update`.
