@@ -4,16 +4,19 @@
 
 use crate::graph::Graph;
 use crate::ids::OpId;
-use crate::limits::WORKGROUP;
+use crate::limits::{Target, WORKGROUP};
 use crate::operator::{OpKind, summed_type};
 use crate::radix::Sort;
 use crate::resolve::{BufferRef, Resolved};
 use crate::scan::{Groups, Module, OpKernel, Scan, element_entry};
+use crate::scratch::SortShape;
 use std::fmt::Write;
 
-/// The kernels of operator `o` of `graph`, in the order they run: `subgroups` where the adapter
-/// has them, scans in tiles of `WORKGROUP * items` elements.
-pub fn op_kernels(graph: &Graph, o: OpId, resolved: &Resolved, subgroups: bool, items: u32) -> Vec<OpKernel> {
+/// The kernels of operator `o` of `graph`, in the order they run, for `target`: subgroup
+/// operations where it has them, scans in tiles of `WORKGROUP * scan_items` elements, sorts in
+/// its [`SortShape`].
+pub fn op_kernels(graph: &Graph, o: OpId, resolved: &Resolved, target: &Target) -> Vec<OpKernel> {
+    let (subgroups, items) = (target.subgroups(), target.scan_items);
     let op = &graph.ops[o.0];
     let counted = op.domain.as_ref().and_then(|d| d.counted.as_deref());
     let words = |r: &str| resolved.sizes[r].element_bytes / 4;
@@ -93,11 +96,13 @@ pub fn op_kernels(graph: &Graph, o: OpId, resolved: &Resolved, subgroups: bool, 
             let sort = Sort {
                 o,
                 keys,
-                values,
+                values: values.as_deref(),
                 bits: *bits,
                 counted,
                 subgroups,
                 items,
+                shape: SortShape::of(target),
+                overflow: resolved.control.op_overflow[&o],
             };
             sort.kernels(&prefix, resolved)
         }

@@ -181,6 +181,9 @@ impl Gpu {
             // Below llvmpipe's cap on an invocation's iterations (an item's loop and the
             // loops inside it count against it), so the engine's own cap is met first.
             max_loop_iterations: if self.caps_invocation_loops() { 1 << 14 } else { 1 << 16 },
+            subgroup_min_size: self.info.subgroup_min_size,
+            subgroup_max_size: self.info.subgroup_max_size,
+            workgroup_bytes: self.limits.max_compute_workgroup_storage_size,
             ..Default::default()
         }
     }

@@ -470,7 +470,8 @@ pub struct GatherDecl {
 }
 
 /// `Sort(name, keys, values, over, counted, bits)`: sorts the `u32` keys ascending in place,
-/// stably, by their low `bits` bits, moving each element's `u32` value with its key.
+/// stably, by their low `bits` bits, moving each element's `u32` value with its key (values
+/// are optional: without them only the keys move).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SortDecl {
@@ -478,8 +479,9 @@ pub struct SortDecl {
     pub name: String,
     /// The `u32` keys, sorted in place.
     pub keys: String,
-    /// The `u32` values, permuted with their keys.
-    pub values: String,
+    /// The `u32` values, permuted with their keys (none: keys only).
+    #[serde(default)]
+    pub values: Option<String>,
     /// Elements.
     pub over: String,
     /// A GPU counter of the elements (at most `over`).

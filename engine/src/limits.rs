@@ -38,6 +38,12 @@ pub struct Target {
     /// the cap whenever the others start late (a loaded CPU). Off on GPUs, where threads that
     /// take more items balance the load.
     pub fair_shares: bool,
+    /// Fewest invocations a subgroup of the device may have (4 when unknown).
+    pub subgroup_min_size: u32,
+    /// Most invocations a subgroup of the device may have (128 when unknown).
+    pub subgroup_max_size: u32,
+    /// Workgroup memory a kernel may declare, in bytes.
+    pub workgroup_bytes: u32,
 }
 
 impl Default for Target {
@@ -52,6 +58,9 @@ impl Default for Target {
             alias_transients: true,
             scan_items: SCAN_ITEMS,
             fair_shares: false,
+            subgroup_min_size: 4,
+            subgroup_max_size: 128,
+            workgroup_bytes: 16 << 10,
         }
     }
 }

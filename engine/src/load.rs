@@ -698,7 +698,11 @@ impl Declared {
     /// gather moves elements into a resource of their type.
     fn check_op_pairs(&self, op: &Operator) -> Result<()> {
         let here = |name: &str, message: String| self.sources.at_name(&op.origin, name, message);
-        if let OpKind::Sort { keys, values, .. } = &op.kind
+        if let OpKind::Sort {
+            keys,
+            values: Some(values),
+            ..
+        } = &op.kind
             && keys == values
         {
             return Err(here(

@@ -68,12 +68,13 @@ pub enum OpKind {
         /// The elements in the order of `indices`.
         output: String,
     },
-    /// Stable ascending sort of `keys` by their low `bits` bits, `values` moved alongside.
+    /// Stable ascending sort of `keys` by their low `bits` bits, `values` (if any) moved
+    /// alongside.
     Sort {
         /// The `u32` keys, sorted in place.
         keys: String,
-        /// The `u32` values.
-        values: String,
+        /// The `u32` values, if any.
+        values: Option<String>,
         /// Low bits sorted by, 1 to 32.
         bits: u32,
     },
@@ -210,7 +211,7 @@ impl Operator {
                 .map(String::as_str)
                 .collect(),
             OpKind::Gather { indices, input, .. } => vec![indices, input],
-            OpKind::Sort { keys, values, .. } => vec![keys, values],
+            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).map(String::as_str).collect(),
         };
         if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
             out.push(c);
@@ -225,7 +226,7 @@ impl Operator {
             OpKind::Scan { output, .. } => vec![output],
             OpKind::Count { counts, slots, .. } => vec![counts, slots],
             OpKind::Scatter { output, .. } | OpKind::Gather { output, .. } => vec![output],
-            OpKind::Sort { keys, values, .. } => vec![keys, values],
+            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).map(String::as_str).collect(),
         }
     }
 
@@ -264,7 +265,11 @@ impl Operator {
                     (output, Elements::Any),
                 ]
             }
-            OpKind::Sort { keys, values, .. } => vec![(keys, Elements::U32), (values, Elements::U32)],
+            OpKind::Sort { keys, values, .. } => [keys]
+                .into_iter()
+                .chain(values)
+                .map(|r| (r.as_str(), Elements::U32))
+                .collect(),
         };
         if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
             out.push((c, Elements::U32));

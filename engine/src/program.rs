@@ -329,13 +329,7 @@ impl Internal<'_> {
         let mut out = Vec::new();
         for (o, op) in g.ops.iter().enumerate() {
             let mut kernels = Vec::new();
-            for k in op_kernels(
-                g,
-                OpId(o),
-                self.resolved,
-                self.target.subgroups(),
-                self.target.scan_items,
-            ) {
+            for k in op_kernels(g, OpId(o), self.resolved, self.target) {
                 let mut source = ModuleSource::default();
                 source.push(&format!("<generated operator '{}'>", op.name), &k.wgsl);
                 let (module, _) = source.compile(self.target.capabilities)?;

@@ -13,7 +13,7 @@ use crate::memory::{Lifetime, MemoryPlan, Request};
 use crate::operator::OpKind;
 use crate::plan::{Plan, Root};
 use crate::reflect::{self, Word};
-use crate::scratch::{scratch_name, scratch_words};
+use crate::scratch::{SortShape, scratch_name, scratch_words};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Most items a split chain keeps in flight when its layout does not say.
@@ -231,7 +231,7 @@ fn control_map(plan: &Plan) -> ControlMap {
     for (o, op) in g.ops.iter().enumerate() {
         if matches!(
             op.kind,
-            OpKind::Count { .. } | OpKind::Scatter { .. } | OpKind::Gather { .. }
+            OpKind::Count { .. } | OpKind::Scatter { .. } | OpKind::Gather { .. } | OpKind::Sort { .. }
         ) {
             control.op_overflow.insert(OpId(o), word());
         }
@@ -385,7 +385,8 @@ impl Resolved {
             self.check_operator_fits(plan, o, n, vars)?;
             self.op_elements.insert(o, n);
             let tile = (WORKGROUP * target.scan_items) as u64;
-            self.op_scratch.insert(o, scratch_words(&op.kind, n, tile));
+            self.op_scratch
+                .insert(o, scratch_words(&op.kind, n, tile, SortShape::of(target)));
         }
         Ok(())
     }
@@ -436,7 +437,7 @@ impl Resolved {
                 [keys, slots].into_iter().chain(input).map(String::as_str).collect()
             }
             OpKind::Gather { indices, output, .. } => vec![indices, output],
-            OpKind::Sort { keys, values, .. } => vec![keys, values],
+            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).map(String::as_str).collect(),
         };
         for b in per_element {
             let have = self.elements(b);

@@ -7,12 +7,15 @@
 //! so that the scan goes through two and three levels of partial sums. The radix sort against
 //! a stable CPU sort (values from the indices show any instability): lengths 0, 1, a tile
 //! minus one, a tile, a tile plus one and 10^5 and more; random, all-equal, descending and
-//! high-bit-only keys; fewer bits (odd passes copy back); small scan tiles; a GPU count; its
-//! errors; and its scratch as transient memory of its step.
+//! high-bit-only keys; fewer bits (odd passes copy back); small scan tiles; a GPU count; keys
+//! without values; its errors; and its scratch as transient memory of its step. Each sort
+//! test runs both rankings: subgroup ballots (the adapter's target, 8-bit digits) and
+//! per-thread counts (without subgroups, and with subgroups but too little workgroup memory
+//! for the ballots' rows).
 
 use lightgraph_engine::ids::OpId;
 use lightgraph_engine::resolve::BufferRef;
-use lightgraph_engine::scratch::SORT_TILE;
+use lightgraph_engine::scratch::SortShape;
 use lightgraph_engine::selfcheck::sort::{Keys, Sorter, compare};
 use lightgraph_engine::selfcheck::{Inputs, Pattern, check, run};
 use lightgraph_engine::{Graph, Instance, Plan, Program, Target, Vfs};
@@ -125,11 +128,42 @@ fn sort_equals_cpu(sorter: &mut Sorter, keys: &[u32], (over, count): (u64, u32),
     }
 }
 
+/// The targets the sort tests run: the adapter's and the one without subgroups, and where the
+/// adapter ranks by ballots, the same with too little workgroup memory for them (per-thread
+/// counts with subgroup scans).
+fn sort_targets() -> Vec<(&'static str, Target)> {
+    let mut out = targets();
+    let adapter = gpu().target();
+    if SortShape::of(&adapter).ballots() {
+        let small = Target {
+            workgroup_bytes: 8 << 10,
+            ..adapter
+        };
+        assert!(!SortShape::of(&small).ballots());
+        out.push(("subgroups, ranked by counts", small));
+    }
+    out
+}
+
+#[test]
+fn an_adapter_with_subgroups_ranks_the_sort_by_ballots() {
+    // lavapipe (subgroups of 8, 32 KiB of workgroup memory) must run the ballot ranking, or
+    // CI would not test it: 32 rows of 128 words and 13 elements a thread fit.
+    let target = gpu().target();
+    if target.subgroups() {
+        let shape = SortShape::of(&target);
+        assert!(shape.ballots(), "{shape:?} for {target:?}");
+        assert_eq!(shape.digit_bits, 8);
+        assert_eq!(shape.rows, 256 / target.subgroup_min_size);
+    }
+    assert_eq!(SortShape::of(&target.without_subgroups()), SortShape::PORTABLE);
+}
+
 #[test]
 fn radix_sort_equals_a_stable_cpu_sort() {
-    let tile = SORT_TILE as usize;
-    let lengths = [0, 1, tile - 1, tile, tile + 1, 100_000, 250_007];
-    for (what, target) in targets() {
+    for (what, target) in sort_targets() {
+        let tile = SortShape::of(&target).tile() as usize;
+        let lengths = [0, 1, tile - 1, tile, tile + 1, 100_000, 250_007];
         let mut sorter = Sorter::new(gpu(), &target, 250_012, 32, false).unwrap();
         for n in lengths {
             for pattern in Keys::ALL {
@@ -155,7 +189,7 @@ fn radix_sort_by_fewer_bits_and_with_small_scan_tiles() {
     // which need a level of partial sums.
     let n = 30_000;
     let keys = Keys::Random.draw(n, 7);
-    for (what, mut target) in targets() {
+    for (what, mut target) in sort_targets() {
         for bits in [30, 12, 1] {
             let mut sorter = Sorter::new(gpu(), &target, n as u64, bits, false).unwrap();
             sort_equals_cpu(
@@ -184,7 +218,7 @@ fn radix_sort_by_fewer_bits_and_with_small_scan_tiles() {
 fn a_counted_radix_sort_sorts_the_counted_elements_only() {
     let (len, over) = (30_000, 25_000u64);
     let keys = Keys::HighBits.draw(len, 11);
-    for (what, target) in targets() {
+    for (what, target) in sort_targets() {
         let mut sorter = Sorter::new(gpu(), &target, len as u64, 32, true).unwrap();
         for count in [0, 1, 12_345, 25_000, 40_000] {
             let sorted = count.min(over) as usize;
@@ -196,6 +230,25 @@ fn a_counted_radix_sort_sorts_the_counted_elements_only() {
                 32,
                 &format!("{what}: {count} counted"),
             );
+        }
+    }
+}
+
+#[test]
+fn a_radix_sort_of_keys_alone_sorts_them() {
+    // Keys only (no values bound or moved), at lengths around a tile and with 1, 12 and 32
+    // bits (an odd number of passes copies back); the keys are checked at every place.
+    for (what, target) in sort_targets() {
+        let tile = SortShape::of(&target).tile() as usize;
+        for (n, bits) in [(tile + 1, 32), (3 * tile - 5, 12), (50_000, 1), (50_000, 32)] {
+            let keys = Keys::Random.draw(n, n as u64 + 3);
+            let mut sorter = Sorter::keys_only(gpu(), &target, n as u64, bits).unwrap();
+            let out = sorter.sort(&keys, &[], n as u64, 0, 1).unwrap();
+            assert!(out.values.is_none(), "{what}: a sort of keys read values back");
+            let unused = vec![0; n];
+            if let Some(m) = compare(&keys, &unused, n, bits, &out) {
+                panic!("{what}: keys only, n {n}, {bits} bits: {m}");
+            }
         }
     }
 }

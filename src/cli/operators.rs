@@ -3,7 +3,8 @@
 
 use anyhow::{Result, bail};
 use clap::Args;
-use lightgraph_engine::selfcheck::sort::{self, Keys};
+use lightgraph_engine::scratch::SortShape;
+use lightgraph_engine::selfcheck::sort::{self, Keys, SortCheck};
 use lightgraph_engine::selfcheck::{Pattern, check};
 use lightgraph_engine::{Gpu, Target};
 
@@ -28,6 +29,9 @@ pub struct OperatorsArgs {
     /// Low bits of the keys the radix sort sorts by (1 to 32).
     #[arg(long, default_value_t = 32)]
     pub bits: u32,
+    /// What the radix sort moves: keys (keys alone), pairs (keys and values), comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "pairs,keys")]
+    pub moves: Vec<String>,
     /// Runs per size; the times are the median.
     #[arg(long, default_value_t = 5, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub runs: u32,
@@ -69,6 +73,27 @@ fn parse_keys(name: &str) -> Result<Keys> {
     })
 }
 
+/// Whether the sort moves values: `pairs` or `keys`.
+fn parse_moves(name: &str) -> Result<bool> {
+    Ok(match name {
+        "pairs" => true,
+        "keys" => false,
+        other => bail!("unknown --moves '{other}' (pairs, keys)"),
+    })
+}
+
+/// How the target's radix sort ranks.
+fn describe_sort(shape: SortShape) -> String {
+    let ranking = match shape.ballots() {
+        true => "subgroup ballots",
+        false => "per-thread counts",
+    };
+    format!(
+        "radix sort: {}-bit digits ranked by {ranking}, {} elements a thread",
+        shape.digit_bits, shape.items
+    )
+}
+
 fn ms(s: Option<f64>) -> String {
     s.map_or("-".to_string(), |s| format!("{:.4}", s * 1e3))
 }
@@ -81,6 +106,7 @@ pub fn operators(args: OperatorsArgs) -> Result<()> {
     };
     println!("adapter: {}", gpu.describe());
     println!("subgroup kernels: {}", target.subgroups());
+    println!("{}", describe_sort(SortShape::of(&target)));
     let failed = scans(&args, &gpu, &target)? + radix_sorts(&args, &gpu, &target)?;
     if failed > 0 {
         bail!("{failed} runs differ from the CPU");
@@ -140,25 +166,37 @@ fn radix_sorts(args: &OperatorsArgs, gpu: &Gpu, target: &Target) -> Result<usize
     } else {
         args.keys.iter().map(|k| parse_keys(k)).collect::<Result<_>>()?
     };
-    println!("\n| elements | keys | bits | instance | radix sort (ms) | keys/s | against the CPU |");
-    println!("|---:|---|---:|---:|---:|---:|---|");
+    let moves = args.moves.iter().map(|m| parse_moves(m)).collect::<Result<Vec<_>>>()?;
+    println!("\n| elements | keys | moves | bits | instance | radix sort (ms) | keys/s | against the CPU |");
+    println!("|---:|---|---|---:|---:|---:|---:|---|");
     let mut failed = 0;
     let mut kernel_lines = Vec::new();
     for &n in &args.sizes {
-        for (&pattern, i) in keys.iter().flat_map(|k| std::iter::repeat(k).zip(1..=args.instances)) {
-            let r = sort::check(gpu, target, n, pattern, args.bits, args.runs, args.warm_up)?;
-            failed += r.mismatch.is_some() as usize;
-            let rate = r
-                .seconds
-                .filter(|&s| s > 0.0)
-                .map_or("-".to_string(), |s| format!("{:.3e}", n as f64 / s));
-            println!(
-                "| {n} | {pattern:?} | {} | {i} | {} | {rate} | {} |",
-                args.bits,
-                ms(r.seconds),
-                verdict(&r.mismatch)
-            );
-            kernel_lines.push(format!("{n} {pattern:?} #{i}: {}", kernel_times(&r.kernels)));
+        for &values in &moves {
+            for (&pattern, i) in keys.iter().flat_map(|k| std::iter::repeat(k).zip(1..=args.instances)) {
+                let c = SortCheck {
+                    n,
+                    pattern,
+                    bits: args.bits,
+                    values,
+                    runs: args.runs,
+                    warm_up: args.warm_up,
+                };
+                let r = sort::check(gpu, target, c)?;
+                failed += r.mismatch.is_some() as usize;
+                let rate = r
+                    .seconds
+                    .filter(|&s| s > 0.0)
+                    .map_or("-".to_string(), |s| format!("{:.3e}", n as f64 / s));
+                let moved = if values { "pairs" } else { "keys" };
+                println!(
+                    "| {n} | {pattern:?} | {moved} | {} | {i} | {} | {rate} | {} |",
+                    args.bits,
+                    ms(r.seconds),
+                    verdict(&r.mismatch)
+                );
+                kernel_lines.push(format!("{n} {pattern:?} {moved} #{i}: {}", kernel_times(&r.kernels)));
+            }
         }
     }
     if args.kernels {

@@ -864,6 +864,9 @@ impl Instance<'_> {
                 let op = &g.ops[*o];
                 let what = match op.kind {
                     OpKind::Count { .. } => "a key beyond its counts",
+                    OpKind::Sort { .. } => {
+                        "a workgroup whose subgroups were not all full (the sort ranks by subgroup ballots)"
+                    }
                     _ => "a key beyond its offsets or a place beyond its output",
                 };
                 return Err(Error::Runtime(format!(

@@ -1,6 +1,6 @@
 //! The radix sort operator checked against a stable sort on the CPU and timed: a graph whose
-//! one step is a `Sort` of host-written keys and values, over a parameter's number of
-//! elements (so one compiled program sorts every length up to its capacity), optionally
+//! one step is a `Sort` of host-written keys (and values, or none), over a parameter's number
+//! of elements (so one compiled program sorts every length up to its capacity), optionally
 //! counted on the GPU.
 
 use super::{Numbers, median, repeat_for};
@@ -52,8 +52,8 @@ impl Keys {
 pub struct Sorted {
     /// The keys (as many as were written).
     pub keys: Vec<u32>,
-    /// The values.
-    pub values: Vec<u32>,
+    /// The values (none for a sort of keys only).
+    pub values: Option<Vec<u32>>,
     /// GPU seconds of the sort, all its kernels (median of the runs; `None` without
     /// timestamps).
     pub seconds: Option<f64>,
@@ -67,14 +67,32 @@ pub struct Sorter<'g> {
     kernels: Vec<String>,
     capacity: u64,
     counted: bool,
+    values: bool,
     warm_up: Duration,
 }
 
 impl<'g> Sorter<'g> {
     /// A sort of at most `capacity` elements by their low `bits` bits on `gpu` (subgroup
-    /// kernels where `target` has subgroups), over a GPU-written count when `counted`.
+    /// kernels where `target` has subgroups), over a GPU-written count when `counted`, moving
+    /// values with the keys.
     pub fn new(gpu: &'g Gpu, target: &Target, capacity: u64, bits: u32, counted: bool) -> Result<Sorter<'g>> {
-        let text = graph_text(capacity.max(1), bits, counted);
+        Sorter::build(gpu, target, capacity, bits, counted, true)
+    }
+
+    /// The same sort of keys alone.
+    pub fn keys_only(gpu: &'g Gpu, target: &Target, capacity: u64, bits: u32) -> Result<Sorter<'g>> {
+        Sorter::build(gpu, target, capacity, bits, false, false)
+    }
+
+    fn build(
+        gpu: &'g Gpu,
+        target: &Target,
+        capacity: u64,
+        bits: u32,
+        counted: bool,
+        values: bool,
+    ) -> Result<Sorter<'g>> {
+        let text = graph_text(capacity.max(1), bits, counted, values);
         let graph = Graph::from_text(&Vfs::default(), "sort.ron", &text)?;
         let plan = Plan::new(&graph, "sort")?;
         let program = Program::compile(&plan, &Specialization::default(), target)?;
@@ -84,6 +102,7 @@ impl<'g> Sorter<'g> {
             kernels,
             capacity,
             counted,
+            values,
             warm_up: Duration::ZERO,
         })
     }
@@ -93,7 +112,9 @@ impl<'g> Sorter<'g> {
     fn run_once(&mut self, restore: bool, count: u32, run: u32) -> Result<FrameStats> {
         if restore {
             self.instance.restore("keys")?;
-            self.instance.restore("values")?;
+            if self.values {
+                self.instance.restore("values")?;
+            }
         }
         if self.counted {
             self.instance.write("elements", bytemuck::bytes_of(&count))?;
@@ -108,13 +129,13 @@ impl<'g> Sorter<'g> {
         self
     }
 
-    /// Writes `keys` and `values` from the first element, sorts the first `over` of them
-    /// (with a counted sorter, the first `count`, at most `over`), `runs` times (restoring
-    /// them on the GPU before each, so that the runs follow one another without host
-    /// uploads), and reads back as many as were written.
+    /// Writes `keys` and `values` (ignored by a sort of keys only) from the first element,
+    /// sorts the first `over` of them (with a counted sorter, the first `count`, at most
+    /// `over`), `runs` times (restoring them on the GPU before each, so that the runs follow
+    /// one another without host uploads), and reads back as many as were written.
     pub fn sort(&mut self, keys: &[u32], values: &[u32], over: u64, count: u32, runs: u32) -> Result<Sorted> {
         let n = keys.len();
-        if values.len() != n || n as u64 > self.capacity || over > n as u64 {
+        if (self.values && values.len() != n) || n as u64 > self.capacity || over > n as u64 {
             return Err(Error::Runtime(format!(
                 "cannot sort {over} of {n} keys with {} values in a sort of {}",
                 values.len(),
@@ -126,9 +147,11 @@ impl<'g> Sorter<'g> {
         let mut per_kernel: Vec<Vec<f64>> = vec![Vec::new(); self.kernels.len()];
         if n > 0 {
             self.instance.write("keys", bytemuck::cast_slice(keys))?;
-            self.instance.write("values", bytemuck::cast_slice(values))?;
             self.instance.snapshot("keys")?;
-            self.instance.snapshot("values")?;
+            if self.values {
+                self.instance.write("values", bytemuck::cast_slice(values))?;
+                self.instance.snapshot("values")?;
+            }
         }
         let warm_up = self.warm_up;
         repeat_for(warm_up, || self.run_once(n > 0, count, 0).map(drop))?;
@@ -160,21 +183,26 @@ impl<'g> Sorter<'g> {
             .collect();
         Ok(Sorted {
             keys: read("keys")?,
-            values: read("values")?,
+            values: if self.values { Some(read("values")?) } else { None },
             seconds: median(times),
             kernels,
         })
     }
 }
 
-/// The graph of a sort: `ELEMENTS` (a parameter) of `CAPACITY` keys and values.
-fn graph_text(capacity: u64, bits: u32, counted: bool) -> String {
+/// The graph of a sort: `ELEMENTS` (a parameter) of `CAPACITY` keys and values (or keys
+/// alone).
+fn graph_text(capacity: u64, bits: u32, counted: bool, values: bool) -> String {
     let counted = if counted { ", counted: \"elements\"" } else { "" };
+    let (moved, outputs) = match values {
+        true => (", values: \"values\"", r#""keys", "values""#),
+        false => ("", r#""keys""#),
+    };
     format!(
         r#"(
     name: "sort",
     description: "stable radix sort of host-written keys and values",
-    passes: [Sort(name: "sort", keys: "keys", values: "values", over: "ELEMENTS", bits: {bits}{counted})],
+    passes: [Sort(name: "sort", keys: "keys"{moved}, over: "ELEMENTS", bits: {bits}{counted})],
     resources: {{
         "keys": (ty: "u32", count: "CAPACITY"),
         "values": (ty: "u32", count: "CAPACITY"),
@@ -182,7 +210,7 @@ fn graph_text(capacity: u64, bits: u32, counted: bool) -> String {
     }},
     constants: {{ "CAPACITY": U32({capacity}) }},
     parameters: {{ "ELEMENTS": U32({capacity}) }},
-    outputs: ["keys", "values"],
+    outputs: [{outputs}],
     layouts: {{ "sort": (kernels: []) }},
     default_layout: "sort",
 )
@@ -191,21 +219,24 @@ fn graph_text(capacity: u64, bits: u32, counted: bool) -> String {
 }
 
 /// The first disagreement of `sorted` with a stable sort on the CPU of the first `n` of
-/// `keys` (with `values`) by their low `bits` bits, the rest left as they were.
+/// `keys` (with `values`, unless `sorted` has none) by their low `bits` bits, the rest left as
+/// they were.
 pub fn compare(keys: &[u32], values: &[u32], n: usize, bits: u32, sorted: &Sorted) -> Option<String> {
     let mask = if bits >= 32 { u32::MAX } else { (1u32 << bits) - 1 };
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by_key(|&i| keys[i] & mask);
     order.extend(n..keys.len());
-    if sorted.keys.len() != keys.len() || sorted.values.len() != keys.len() {
+    let values_read = sorted.values.as_ref().map_or(keys.len(), Vec::len);
+    if sorted.keys.len() != keys.len() || values_read != keys.len() {
         return Some(format!(
-            "read back {} keys, {} were written",
+            "read back {} keys and {values_read} values, {} were written",
             sorted.keys.len(),
             keys.len()
         ));
     }
     for (place, &i) in order.iter().enumerate() {
-        let (k, v) = (sorted.keys[place], sorted.values[place]);
+        let k = sorted.keys[place];
+        let v = sorted.values.as_ref().map_or(values[i], |v| v[place]);
         if k != keys[i] || v != values[i] {
             return Some(format!(
                 "place {place} holds key {k:#x} value {v}, the CPU says key {:#x} value {} (of {n} sorted)",
@@ -227,21 +258,40 @@ pub struct SortReport {
     pub kernels: Vec<(String, f64)>,
 }
 
-/// Sorts `n` keys drawn by `pattern` by their low `bits` bits, with their indices as values
-/// (so any instability shows), `runs` times after sorting them untimed for `warm_up`
-/// ([`crate::selfcheck::run`] says why), and checks the last run against the CPU.
-pub fn check(
-    gpu: &Gpu,
-    target: &Target,
-    n: u64,
-    pattern: Keys,
-    bits: u32,
-    runs: u32,
-    warm_up: Duration,
-) -> Result<SortReport> {
+/// One check of the sort: what it sorts and how often.
+#[derive(Debug, Clone, Copy)]
+pub struct SortCheck {
+    /// Elements.
+    pub n: u64,
+    /// Their keys.
+    pub pattern: Keys,
+    /// Low bits sorted by.
+    pub bits: u32,
+    /// Whether values move with the keys (their indices, so that any instability shows).
+    pub values: bool,
+    /// Timed runs.
+    pub runs: u32,
+    /// Untimed sorting before them ([`crate::selfcheck::run`] says why).
+    pub warm_up: Duration,
+}
+
+/// Sorts as `c` says and checks the last run against the CPU.
+pub fn check(gpu: &Gpu, target: &Target, c: SortCheck) -> Result<SortReport> {
+    let SortCheck {
+        n,
+        pattern,
+        bits,
+        values: moved,
+        runs,
+        warm_up,
+    } = c;
     let keys = pattern.draw(n as usize, n ^ 0x50f7);
     let values: Vec<u32> = (0..n as u32).collect();
-    let mut sorter = Sorter::new(gpu, target, n, bits, false)?.warmed_up(warm_up);
+    let sorter = match moved {
+        true => Sorter::new(gpu, target, n, bits, false)?,
+        false => Sorter::keys_only(gpu, target, n, bits)?,
+    };
+    let mut sorter = sorter.warmed_up(warm_up);
     let sorted = sorter.sort(&keys, &values, n, 0, runs)?;
     Ok(SortReport {
         mismatch: compare(&keys, &values, n as usize, bits, &sorted),
