@@ -2,6 +2,7 @@
 //! every way, crossed with the loop modes and policies, kept when the planner accepts them
 //! and distinct in what they run.
 
+use crate::error::Result;
 use crate::graph::Graph;
 use crate::ir::{LayoutDecl, LoopMode, Policy};
 use crate::plan::Plan;
@@ -142,6 +143,32 @@ pub fn legal_layouts(graph: &Graph, base: &LayoutDecl) -> Vec<(String, LayoutDec
         }
     }
     out
+}
+
+/// Which of a layout's options are worth varying: its thread pool, where a kernel regenerates
+/// items, and its state storage, where items are stored between kernels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Variable {
+    /// A kernel regenerates items from a pool of threads.
+    pub pool: bool,
+    /// Items or their streams are stored in buffers between kernels.
+    pub state: bool,
+}
+
+/// Checks that the layout `decl` (called `name` in errors) plans for `graph` (a layout kept
+/// from an earlier run: a cache).
+pub fn check(graph: &Graph, name: &str, decl: &LayoutDecl) -> Result<()> {
+    variable(graph, name, decl).map(|_| ())
+}
+
+/// What of the layout `decl` (called `name` in errors) of `graph` is worth varying; an error
+/// where the layout does not plan.
+pub fn variable(graph: &Graph, name: &str, decl: &LayoutDecl) -> Result<Variable> {
+    let plan = Plan::with_decl(graph, name, decl.clone())?;
+    Ok(Variable {
+        pool: plan.kernels.iter().any(|k| k.regenerates),
+        state: !plan.stored_chains.is_empty() || !plan.boundaries.is_empty() || !plan.queued_streams.is_empty(),
+    })
 }
 
 #[cfg(test)]

@@ -151,6 +151,21 @@ impl Graph {
         Ok(graph)
     }
 
+    /// The layout called `name`; an unknown name is an error that lists the graph's layouts.
+    pub fn layout(&self, name: &str) -> Result<&LayoutDecl> {
+        self.layouts.get(name).ok_or_else(|| {
+            let known: Vec<&str> = self.layouts.keys().map(|s| s.as_str()).collect();
+            self.error_at(
+                &self.name,
+                format!(
+                    "unknown layout '{name}' for graph '{}'; available layouts: {}",
+                    self.name,
+                    known.join(", ")
+                ),
+            )
+        })
+    }
+
     /// An error located at the first occurrence of `name` in the graph file.
     pub fn error_at(&self, name: &str, message: impl Into<String>) -> Error {
         self.declared.sources.at_name(&self.file, name, message)

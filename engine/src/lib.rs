@@ -23,8 +23,10 @@
 //! | consumers | `explain`, `outline`, `selfcheck` | reports of programs and graphs, the operators' checks on a device |
 //!
 //! The entry points: [`Graph::load`] (load, then the default constants' live view),
-//! [`Graph::specialize`], [`Plan::new`], [`Program::compile`] (specialise, plan, reflect,
-//! resolve and generate), [`Instance::new`] and [`Instance::run_frame`]. Within a compile the
+//! [`Graph::layout`], [`compile`] (the one compile entry: a graph, a layout, a specialisation
+//! and a target; it specialises, plans, reflects, resolves and generates), [`Instance::new`]
+//! and [`Instance::run_frame`]; [`auto::legal_layouts`] lists the layouts `--layout auto`
+//! measures. Within a compile the
 //! resolve stage begins before reflection ([`resolve::Resolved::for_reflection`]: binding
 //! numbers and control words, from the plan alone), since the prelude every source is compiled
 //! with declares them.
@@ -66,6 +68,6 @@ pub use graph::Graph;
 pub use ir::ConstValue;
 pub use limits::Target;
 pub use plan::Plan;
-pub use program::{Program, Specialization};
+pub use program::{Program, Specialization, compile, compiles_on_this_thread};
 pub use runtime::{FrameStats, Instance};
 pub use vfs::{Layer, Vfs};

@@ -119,18 +119,7 @@ pub struct Plan {
 impl Plan {
     /// Resolves `layout` (a name from the graph, listed in the error when unknown).
     pub fn new(graph: &Graph, layout: &str) -> Result<Plan> {
-        let decl = graph.layouts.get(layout).ok_or_else(|| {
-            let known: Vec<&str> = graph.layouts.keys().map(|s| s.as_str()).collect();
-            graph.error_at(
-                &graph.name,
-                format!(
-                    "unknown layout '{layout}' for graph '{}'; available layouts: {}",
-                    graph.name,
-                    known.join(", ")
-                ),
-            )
-        })?;
-        Self::with_decl(graph, layout, decl.clone())
+        Self::with_decl(graph, layout, graph.layout(layout)?.clone())
     }
 
     /// Resolves an explicit layout declaration.

@@ -1,15 +1,17 @@
-//! Compiling a planned graph, in the engine's stages: specialise to the constants (which
-//! culls), plan the layout again on the live graph, reflect over the WGSL with naga (pass
-//! checks, sizes, item words), resolve (capacities, lifetimes, shared memory), then generate
-//! every kernel (pass kernels without the functions they never call, the engine's own small
-//! kernels, the operators') and validate each with naga.
+//! Compiling a graph in a layout ([`compile`], the engine's one compile entry), in the
+//! engine's stages: specialise to the constants (which culls), plan the layout on the live
+//! graph, reflect over the WGSL with naga (pass checks, sizes, item words), resolve
+//! (capacities, lifetimes, shared memory), then generate every kernel (pass kernels without
+//! the functions they never call, the engine's own small kernels, the operators') and validate
+//! each with naga.
 
 use crate::codegen::CodegenContext;
 use crate::collective::op_kernels;
 use crate::error::{Error, Result};
+use crate::graph::Graph;
 use crate::ids::{OpId, PhaseId};
 use crate::internal::{ArgsKernel, CommitKernel, DomainKernel, fold_kernel, roll_kernel, zero_kernel};
-use crate::ir::ConstValue;
+use crate::ir::{ConstValue, LayoutDecl};
 use crate::limits::Target;
 use crate::plan::Plan;
 use crate::reflect;
@@ -99,15 +101,46 @@ pub struct Program {
     pub target: Target,
 }
 
+thread_local! {
+    /// Programs compiled on this thread ([`compile`]), for [`compiles_on_this_thread`].
+    static COMPILES: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// How many programs [`compile`] has compiled on the calling thread: a test's count of the
+/// compiles one front-end call makes (other threads' compiles do not count).
+pub fn compiles_on_this_thread() -> u64 {
+    COMPILES.with(|c| c.get())
+}
+
+/// The engine's compile entry: specialises `graph` to `spec` (the layout's constants where
+/// `spec` does not give them; culling what the constants switch off), plans the layout `decl`
+/// (called `layout` in errors) once on the live graph, reflects over the WGSL with naga,
+/// resolves sizes and memory, and generates and validates every kernel for `target`. The
+/// program holds its plan and resolved memory.
+pub fn compile(
+    graph: &Graph,
+    layout: &str,
+    decl: &LayoutDecl,
+    spec: &Specialization,
+    target: &Target,
+) -> Result<Program> {
+    COMPILES.with(|c| c.set(c.get() + 1));
+    let mut constants = decl.constants.clone();
+    constants.extend(spec.constants.iter().map(|(k, v)| (k.clone(), *v)));
+    let live = graph.specialize(&constants)?;
+    let plan = Plan::with_decl(&live, layout, decl.clone())?;
+    Program::generate(plan, spec, target)
+}
+
 impl Program {
-    /// Compiles `plan` for `target` with `spec`.
+    /// [`compile`] of the graph and layout of `plan` (which is planned again, on the live
+    /// graph).
     pub fn compile(plan: &Plan, spec: &Specialization, target: &Target) -> Result<Program> {
-        // Specialise (the layout's constants where the program is not given them), then plan
-        // the layout on what the constants leave.
-        let mut constants = plan.layout.constants.clone();
-        constants.extend(spec.constants.iter().map(|(k, v)| (k.clone(), *v)));
-        let graph = plan.graph.specialize(&constants)?;
-        let plan = Plan::with_decl(&graph, &plan.layout_name, plan.layout.clone())?;
+        compile(&plan.graph, &plan.layout_name, &plan.layout, spec, target)
+    }
+
+    /// Reflects, resolves and generates the planned live graph `plan`.
+    fn generate(plan: Plan, spec: &Specialization, target: &Target) -> Result<Program> {
         let shared = reflect::sources(&plan, &spec.flags)?;
         // Reflect: every source compiled together, with emits that do nothing.
         let begun = Resolved::for_reflection(&plan);
