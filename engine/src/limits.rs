@@ -32,6 +32,9 @@ pub struct Target {
     pub alias_transients: bool,
     /// Elements each thread of a scan operator handles (a tile is 256 times as many).
     pub scan_items: u32,
+    /// Most elements each thread of a sort ranked by subgroup ballots ranks (fewer where the
+    /// workgroup memory is short).
+    pub sort_items: u32,
     /// Whether persistent threads take at most their share of the items, ceil(items /
     /// threads), each: for drivers that cap the loop iterations of an invocation (llvmpipe:
     /// 65535, shared by all its loops), where a thread taking items until none is left passes
@@ -57,6 +60,7 @@ impl Default for Target {
             max_loop_iterations: 1 << 16,
             alias_transients: true,
             scan_items: SCAN_ITEMS,
+            sort_items: 16,
             fair_shares: false,
             subgroup_min_size: 4,
             subgroup_max_size: 128,

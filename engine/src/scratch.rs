@@ -13,7 +13,8 @@ pub const DIGIT_BITS: u32 = 4;
 pub const SORT_ITEMS: u32 = 8;
 /// Bits of a digit of the sort ranked by subgroup ballots.
 pub const BALLOT_DIGIT_BITS: u32 = 8;
-/// Most elements each thread of a ballot-ranked sort pass ranks.
+/// Most elements each thread of a ballot-ranked sort pass may rank (a tile's digit counts fit
+/// 16 bits).
 pub const BALLOT_ITEMS: u32 = 16;
 /// Fewest elements a thread of a ballot-ranked sort ranks: with less workgroup memory than
 /// this needs, the target sorts the portable way.
@@ -41,7 +42,8 @@ impl SortShape {
     };
 
     /// The shape `target` sorts with: ballots where it has subgroups and the workgroup memory
-    /// for a row per subgroup plus a tile of at least [`BALLOT_MIN_ITEMS`] elements a thread.
+    /// for a row per subgroup plus a tile of at least [`BALLOT_MIN_ITEMS`] elements a thread
+    /// (at most its `sort_items`).
     pub fn of(target: &Target) -> SortShape {
         let radix = 1u32 << BALLOT_DIGIT_BITS;
         let min = target.subgroup_min_size.max(1);
@@ -51,7 +53,9 @@ impl SortShape {
         let rows = WORKGROUP / min;
         // Rows of 16-bit counts, the digits' starts and offsets, the subgroups' sums.
         let fixed = 4 * (rows * radix / 2 + 2 * radix + rows);
-        let items = (target.workgroup_bytes.saturating_sub(fixed) / (4 * WORKGROUP)).min(BALLOT_ITEMS);
+        let items = (target.workgroup_bytes.saturating_sub(fixed) / (4 * WORKGROUP))
+            .min(target.sort_items)
+            .min(BALLOT_ITEMS);
         if items < BALLOT_MIN_ITEMS {
             return SortShape::PORTABLE;
         }

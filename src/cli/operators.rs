@@ -43,6 +43,10 @@ pub struct OperatorsArgs {
     /// (drawing inputs, checking on the CPU) starts at a fraction of its clock.
     #[arg(long, value_parser = super::checks::duration, default_value = "500ms")]
     pub warm_up: std::time::Duration,
+    /// Most elements a thread of the radix sort ranks by subgroup ballots (4 to 16; fewer
+    /// where the workgroup memory is short, the per-thread-count ranking below 4).
+    #[arg(long, default_value_t = 16)]
+    pub sort_items: u32,
     /// Use no subgroup operations even where the adapter has them.
     #[arg(long)]
     pub no_subgroups: bool,
@@ -100,9 +104,13 @@ fn ms(s: Option<f64>) -> String {
 
 pub fn operators(args: OperatorsArgs) -> Result<()> {
     let gpu = Gpu::new(args.adapter.as_deref())?;
+    let target = Target {
+        sort_items: args.sort_items,
+        ..gpu.target()
+    };
     let target = match args.no_subgroups {
-        true => gpu.target().without_subgroups(),
-        false => gpu.target(),
+        true => target.without_subgroups(),
+        false => target,
     };
     println!("adapter: {}", gpu.describe());
     println!("subgroup kernels: {}", target.subgroups());
