@@ -11,7 +11,7 @@
 //! world position. Samples that escape count for none of them: each is averaged over the
 //! pixel's samples that hit (the coverage); a pixel none of whose samples hit holds 0.
 
-use crate::render::{LoadedScene, Session, SessionOptions, load_graph};
+use crate::run::{LoadedScene, Session, SessionOptions, load_graph};
 use anyhow::{Result, bail};
 use lightgraph_engine::{ConstValue, Gpu};
 use std::collections::BTreeMap;

@@ -3,7 +3,7 @@
 //! Markdown table, a CSV and a PNG plot.
 
 use crate::plot::{Axes, Series, line_plot};
-use crate::render::{LoadedScene, Session, SessionOptions};
+use crate::run::{LoadedScene, Session, SessionOptions};
 use anyhow::{Context, Result};
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{Gpu, Graph};

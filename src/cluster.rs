@@ -9,9 +9,10 @@
 //! round in which every rank was done (and every round where a live view wants the film),
 //! so a run pays for one read-back and one film reduction, not one every round.
 
-use crate::multi::{Budget, Run};
+use crate::multi::Budget;
 use crate::reference::Reference;
-use crate::render::Session;
+use crate::run::Run;
+use crate::run::Session;
 use anyhow::{Result, anyhow, bail};
 use lightgraph_engine::Gpu;
 use mpi::collective::SystemOperation;
@@ -95,7 +96,7 @@ impl Worker<'_> {
             return Ok(());
         }
         let (a, b) = block_frames(self.next_block(place), budget).expect("a block within the budget");
-        let first = u32::try_from(run.first_frame + a).map_err(|_| anyhow!("frame index past 2^32"))?;
+        let first = u32::try_from(run.spec.first_frame + a).map_err(|_| anyhow!("frame index past 2^32"))?;
         self.session.jump_to(first)?;
         self.session.render_frames_behind((b - a) as u32)?;
         self.blocks += 1;
@@ -161,7 +162,7 @@ fn set_ranges(
     for (r, frames) in frames_by_rank.iter_mut().enumerate() {
         for k in 0..state[r] as u64 {
             let (a, b) = block_frames(k * place.ranks as u64 + r as u64, budget).expect("a rendered block");
-            ranges.push((run.first_frame + a, run.first_frame + b));
+            ranges.push((run.spec.first_frame + a, run.spec.first_frame + b));
             *frames += b - a;
         }
     }
@@ -197,9 +198,7 @@ fn open_worker<'g, C: Communicator>(
     place: Place,
     film: &Reference,
 ) -> Worker<'g> {
-    let (layout, decl) = run.layout;
-    let session =
-        gpu.and_then(|gpu| Session::with_layout(gpu, run.graph, layout, decl.clone(), run.scene, run.options.clone()));
+    let session = gpu.and_then(|gpu| run.session(gpu));
     match session {
         Ok(session) => Worker {
             session,

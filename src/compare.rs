@@ -14,7 +14,7 @@ use crate::interrupt::Interrupted;
 use crate::metrics::{ImageError, image_error};
 use crate::plot::{Axes, Series, line_plot};
 use crate::reference::Reference;
-use crate::render::{Image, LoadedScene, Session, SessionOptions};
+use crate::run::{Image, LoadedScene, Session, SessionOptions};
 use anyhow::{Context, Result, bail};
 use lightgraph_engine::{Gpu, Graph};
 use std::fmt::Write;
@@ -25,7 +25,7 @@ use std::time::{Duration, Instant};
 /// each optionally followed by `@NAME=VALUE` settings of its own constants (e.g.
 /// `ppm:PPMsk@PM_STRUCTURE=3`), which the reference need not share.
 #[derive(Debug, Clone, PartialEq)]
-pub struct RunSpec {
+pub struct EstimatorSpec {
     /// Graph name or `.ron` path.
     pub graph: String,
     /// Layout name; the graph's default when absent.
@@ -34,10 +34,10 @@ pub struct RunSpec {
     pub sets: Vec<String>,
 }
 
-impl RunSpec {
+impl EstimatorSpec {
     /// Parses a comma-separated list of `graph[:layout][@NAME=VALUE...]`.
-    pub fn parse_list(list: &str) -> Result<Vec<RunSpec>> {
-        let runs: Vec<RunSpec> = list
+    pub fn parse_list(list: &str) -> Result<Vec<EstimatorSpec>> {
+        let runs: Vec<EstimatorSpec> = list
             .split(',')
             .map(str::trim)
             .filter(|s| !s.is_empty())
@@ -49,7 +49,7 @@ impl RunSpec {
                     Some((g, l)) if !l.is_empty() && !l.contains(['/', '\\']) => (g, Some(l.to_string())),
                     _ => (run, None),
                 };
-                RunSpec {
+                EstimatorSpec {
                     graph: graph.to_string(),
                     layout,
                     sets,
@@ -63,8 +63,8 @@ impl RunSpec {
     }
 }
 
-/// The inverse of [`RunSpec::parse_list`] for one run: `graph[:layout][@NAME=VALUE...]`.
-impl std::fmt::Display for RunSpec {
+/// The inverse of [`EstimatorSpec::parse_list`] for one run: `graph[:layout][@NAME=VALUE...]`.
+impl std::fmt::Display for EstimatorSpec {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(&self.graph)?;
         if let Some(layout) = &self.layout {
@@ -521,20 +521,20 @@ pub(crate) mod tests {
 
     #[test]
     fn run_lists_parse() {
-        let runs = RunSpec::parse_list("pt:NaivePTsk, pt ,tests/x.ron:L").unwrap();
+        let runs = EstimatorSpec::parse_list("pt:NaivePTsk, pt ,tests/x.ron:L").unwrap();
         assert_eq!(runs[0].layout.as_deref(), Some("NaivePTsk"));
         assert_eq!((runs[1].graph.as_str(), runs[1].layout.as_ref()), ("pt", None));
         assert_eq!(
             (runs[2].graph.as_str(), runs[2].layout.as_deref()),
             ("tests/x.ron", Some("L"))
         );
-        assert!(RunSpec::parse_list(" , ").is_err());
-        let set = RunSpec::parse_list("ppm:PPMsk@PM_STRUCTURE=3@PM_ALPHA=1, ppm@PM_STRUCTURE=1").unwrap();
+        assert!(EstimatorSpec::parse_list(" , ").is_err());
+        let set = EstimatorSpec::parse_list("ppm:PPMsk@PM_STRUCTURE=3@PM_ALPHA=1, ppm@PM_STRUCTURE=1").unwrap();
         assert_eq!(set[0].layout.as_deref(), Some("PPMsk"));
         assert_eq!(set[0].sets, ["PM_STRUCTURE=3", "PM_ALPHA=1"]);
         assert_eq!((set[1].graph.as_str(), set[1].layout.as_ref()), ("ppm", None));
         assert_eq!(set[1].sets, ["PM_STRUCTURE=1"]);
-        let text: Vec<String> = set.iter().map(RunSpec::to_string).collect();
+        let text: Vec<String> = set.iter().map(EstimatorSpec::to_string).collect();
         assert_eq!(text, ["ppm:PPMsk@PM_STRUCTURE=3@PM_ALPHA=1", "ppm@PM_STRUCTURE=1"]);
     }
 

@@ -22,7 +22,7 @@ pub mod multi;
 pub mod output;
 pub mod plot;
 pub mod reference;
-pub mod render;
+pub mod run;
 pub mod stress;
 pub mod study;
 pub mod tev;

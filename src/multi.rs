@@ -5,11 +5,10 @@
 //! the film equals that run's to float rounding.
 
 use crate::reference::Reference;
-use crate::render::{LoadedScene, Session, SessionOptions};
-use anyhow::{Result, anyhow};
-use lightgraph_engine::ir::LayoutDecl;
+use crate::run::{Run, Session};
+use anyhow::{Result, anyhow, bail};
+use lightgraph_engine::Gpu;
 use lightgraph_engine::runtime::MAX_BATCH;
-use lightgraph_engine::{Gpu, Graph};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;
 use std::sync::{Barrier, OnceLock};
@@ -63,18 +62,40 @@ impl Share {
     }
 }
 
-/// One run of a graph, to be shared by GPUs.
-pub struct Run<'a> {
-    /// The graph.
-    pub graph: &'a Graph,
-    /// The layout's name and declaration.
-    pub layout: (&'a str, &'a LayoutDecl),
-    /// The scene.
-    pub scene: &'a LoadedScene,
-    /// Session options (resolution, samples per frame, seed, constants).
-    pub options: &'a SessionOptions,
-    /// Frame index of the run's first frame.
-    pub first_frame: u64,
+/// The adapters `--gpus` names: `all`, the first N, or a comma-separated list of indices, PCI
+/// bus ids or names (one may repeat: several devices of one adapter).
+pub fn gpu_selectors(spec: &str) -> Result<Vec<String>> {
+    let adapters = lightgraph_engine::gpu::adapters();
+    let listed = || {
+        adapters
+            .iter()
+            .enumerate()
+            .map(|(i, a)| lightgraph_engine::gpu::describe_adapter(i, a))
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let count = match spec.trim() {
+        "all" => adapters.len(),
+        s if !s.contains(',') => match s.parse::<usize>() {
+            Ok(n) => n,
+            Err(_) => return Ok(vec![s.to_string()]),
+        },
+        s => {
+            return Ok(s
+                .split(',')
+                .map(|x| x.trim().to_string())
+                .filter(|x| !x.is_empty())
+                .collect());
+        }
+    };
+    if count == 0 || count > adapters.len() {
+        bail!(
+            "--gpus {spec}: this machine has {} adapters: {}",
+            adapters.len(),
+            listed()
+        );
+    }
+    Ok((0..count).map(|i| i.to_string()).collect())
 }
 
 /// A message from a GPU's thread.
@@ -82,7 +103,7 @@ enum Message {
     /// The adapter opened: its description.
     Opened(usize, String),
     /// A GPU's sums since its last message, with the rays and the seconds it rendered.
-    Batch(usize, crate::render::Accumulation, u64, f64),
+    Batch(usize, crate::run::Accumulation, u64, f64),
     /// The thread stopped with an error.
     Failed(usize, anyhow::Error),
 }
@@ -220,8 +241,7 @@ fn gpu_thread(i: usize, selector: &str, run: &Run, claims: &Claims, tx: &mpsc::S
     let gpu = Gpu::new(Some(selector)).map_err(anyhow::Error::from);
     let session = gpu.as_ref().map_err(|e| anyhow!("{e}")).and_then(|gpu| {
         let _ = tx.send(Message::Opened(i, gpu.describe()));
-        let (layout, decl) = run.layout;
-        Session::with_layout(gpu, run.graph, layout, decl.clone(), run.scene, run.options.clone())
+        run.session(gpu)
     });
     claims.wait_ready();
     let mut session = session?;
@@ -230,8 +250,8 @@ fn gpu_thread(i: usize, selector: &str, run: &Run, claims: &Claims, tx: &mpsc::S
     loop {
         let claimed = claims.claim(batch_frames(&session, began, claims.left()));
         if let Some((offset, count)) = claimed {
-            let first = u32::try_from(run.first_frame + offset)
-                .map_err(|_| anyhow!("frame index {} is past 2^32", run.first_frame + offset))?;
+            let first = u32::try_from(run.spec.first_frame + offset)
+                .map_err(|_| anyhow!("frame index {} is past 2^32", run.spec.first_frame + offset))?;
             session.jump_to(first)?;
             session.render_frames_behind(count as u32)?;
         }

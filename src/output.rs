@@ -1,6 +1,6 @@
 //! Result files: 32-bit float EXR with metadata, and sRGB PNG previews.
 
-use crate::render::Image;
+use crate::run::Image;
 use anyhow::{Context, Result, anyhow};
 use lightgraph_scenes::texture::linear_to_srgb8;
 use std::collections::BTreeMap;

@@ -5,7 +5,7 @@
 //! films of the same settings over disjoint frame ranges (shards of one run) into one.
 
 use crate::output::{ExrFile, read_exr, write_channels};
-use crate::render::{Accumulation, Image, SessionOptions};
+use crate::run::{Accumulation, Image, SessionOptions};
 use anyhow::{Result, anyhow, bail};
 use lightgraph_engine::{ConstValue, Graph};
 use std::collections::BTreeMap;
@@ -57,7 +57,7 @@ impl Reference {
     }
 
     /// Adds the frames of a GPU accumulation (see
-    /// [`crate::render::Session::take_accumulation`]); an error, and nothing added, if it
+    /// [`crate::run::Session::take_accumulation`]); an error, and nothing added, if it
     /// holds frame indices the film has already.
     pub fn absorb(&mut self, taken: &Accumulation) -> Result<()> {
         self.ranges = join_ranges(self.ranges.iter().chain(&taken.ranges).copied().collect())?;

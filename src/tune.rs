@@ -4,10 +4,10 @@
 //! loop guards the other way.
 
 use crate::bench::{Measurement, measure};
-use crate::render::{LoadedScene, SessionOptions};
+use crate::run::Run;
 use anyhow::{Result, bail};
 use lightgraph_engine::ir::{LayoutDecl, Policy, StateStorage};
-use lightgraph_engine::{Gpu, Graph, Plan};
+use lightgraph_engine::Gpu;
 use std::fmt::Write;
 use std::time::Duration;
 
@@ -51,17 +51,11 @@ fn base_name(name: &str) -> String {
     name.rsplit_once(" (").map_or(name, |(n, _)| n).to_string()
 }
 
-/// Measures every legal layout for `budget` each, then the three fastest over option values
+/// Measures every legal layout of `run`'s graph for `budget` each, then the three fastest over option values
 /// and the fastest of all with the loop guards flipped;
 /// returns all trials, fastest first. `report` sees each trial as it finishes.
-pub fn autotune(
-    gpu: &Gpu,
-    graph: &Graph,
-    scene: &LoadedScene,
-    options: &SessionOptions,
-    budget: Duration,
-    mut report: impl FnMut(&Trial),
-) -> Result<Vec<Trial>> {
+pub fn autotune(gpu: &Gpu, run: &Run, budget: Duration, mut report: impl FnMut(&Trial)) -> Result<Vec<Trial>> {
+    let (graph, scene, options) = (&run.graph, &run.scene, &run.options);
     let base = graph.layouts[&graph.default_layout].clone();
     let candidates = lightgraph_engine::auto::legal_layouts(
         graph,
@@ -93,15 +87,13 @@ pub fn autotune(
         .collect();
     for (name, decl) in best {
         let base = base_name(&name);
-        let plan = Plan::with_decl(graph, &name, decl.clone())?;
-        let pooled = plan.kernels.iter().any(|k| k.regenerates);
-        let stores = !plan.stored_chains.is_empty() || !plan.boundaries.is_empty() || !plan.queued_streams.is_empty();
-        let threads: Vec<Option<u64>> = if pooled {
+        let variable = lightgraph_engine::auto::variable(graph, &name, &decl)?;
+        let threads: Vec<Option<u64>> = if variable.pool {
             vec![Some(1 << 16), Some(1 << 17), Some(1 << 19), Some(1 << 20)]
         } else {
             vec![decl.threads]
         };
-        let states: &[StateStorage] = if stores {
+        let states: &[StateStorage] = if variable.state {
             &[StateStorage::SoA, StateStorage::AoS]
         } else {
             &[StateStorage::SoA]

@@ -2,7 +2,7 @@
 //! (`frames=-1: ...`), as `ValueError`s: counts and times above zero, seeds in range, images
 //! that fit, and constants the graph has, of their type.
 
-use ::lightgraph::cli::checks;
+use ::lightgraph::run::{BvhChoice, checks};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
@@ -70,9 +70,7 @@ pub fn constants(py: Python<'_>, graph: &str, constants: Option<&Bound<'_, PyDic
     let Some(dict) = constants.filter(|d| !d.is_empty()) else {
         return Ok(());
     };
-    let loaded = py
-        .detach(|| ::lightgraph::render::load_graph(graph))
-        .map_err(crate::err)?;
+    let loaded = py.detach(|| ::lightgraph::run::load_graph(graph)).map_err(crate::err)?;
     for (k, v) in dict.iter() {
         let name = k.str()?.to_string();
         let value = constant_text(&v)?;
@@ -80,6 +78,11 @@ pub fn constants(py: Python<'_>, graph: &str, constants: Option<&Bound<'_, PyDic
             .map_err(|e| PyValueError::new_err(format!("constants['{name}']: {e}")))?;
     }
     Ok(())
+}
+
+/// `bvh=value`: `auto`, `cwbvh` or `bvh2`.
+pub fn bvh(value: &str) -> PyResult<BvhChoice> {
+    BvhChoice::parse(value).map_err(|e| PyValueError::new_err(format!("bvh='{value}': {e}")))
 }
 
 /// A constant's value as `--set` takes it (booleans as true/false).

@@ -9,10 +9,9 @@
 
 mod checks;
 
-use ::lightgraph::cli::gpus::Setup;
 use ::lightgraph::cli::{Cli, Command};
 use ::lightgraph::reference::Reference;
-use ::lightgraph::render::Session as RenderSession;
+use ::lightgraph::run::{Run, RunSpec, Session as RenderSession};
 use lightgraph_engine::Gpu;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::create_exception;
@@ -120,6 +119,29 @@ struct SceneArgs<'a> {
 }
 
 impl SceneArgs<'_> {
+    /// The run of these options, `constants` and `seed`, each checked first (as the CLI
+    /// checks its flags, with messages that name the keyword).
+    fn spec(&self, py: Python<'_>, constants: Option<&Bound<'_, PyDict>>, seed: u32) -> PyResult<RunSpec> {
+        checks::constants(py, self.graph, constants)?;
+        let sets = constants.into_iter().flat_map(|d| d.iter()).map(|(k, v)| {
+            let value = checks::constant_text(&v)?;
+            Ok(format!("{}={value}", k.str()?))
+        });
+        Ok(RunSpec {
+            scene: self.scene.to_string(),
+            graph: self.graph.to_string(),
+            layout: self.layout.map(str::to_string),
+            res: self.res,
+            spp: self.spp,
+            max_path_length: self.max_path_length,
+            sets: sets.collect::<PyResult<_>>()?,
+            bvh: checks::bvh(self.bvh)?,
+            seed,
+            adapter: self.adapter.map(str::to_string),
+            ..RunSpec::default()
+        })
+    }
+
     /// `lightgraph COMMAND` with these options and `constants`, each checked first.
     fn argv(&self, py: Python<'_>, command: &str, constants: Option<&Bound<'_, PyDict>>) -> PyResult<Argv> {
         checks::constants(py, self.graph, constants)?;
@@ -161,18 +183,12 @@ struct Session {
 }
 
 impl Session {
-    /// The session `render`'s command-line options describe (loaded as the CLI loads a render
-    /// shared by GPUs: `--layout auto` is refused).
-    fn open(py: Python<'_>, command: Command) -> PyResult<Session> {
-        let Command::Render(args) = command else {
-            unreachable!("a render command line")
-        };
-        let gpu = gpu(args.common.adapter.as_deref())?;
+    /// The session of the run `spec` (a layout must be named or the default: `auto`, which
+    /// measures on one GPU, is refused).
+    fn open(py: Python<'_>, spec: RunSpec) -> PyResult<Session> {
+        let gpu = gpu(spec.adapter.as_deref())?;
         let session = py
-            .detach(|| {
-                let s = Setup::load(&args, "lightgraph.Session")?;
-                RenderSession::with_layout(gpu, &s.graph, &s.layout, s.decl, &s.scene, s.opts)
-            })
+            .detach(|| Run::load_named(&spec, "lightgraph.Session")?.session(gpu))
             .map_err(err)?;
         Ok(Session {
             session,
@@ -243,8 +259,8 @@ impl Session {
             bvh,
             adapter,
         };
-        let command = s.argv(py, "render", constants)?.opt("seed", Some(seed)).parse()?;
-        Session::open(py, command)
+        let spec = s.spec(py, constants, seed)?;
+        Session::open(py, spec)
     }
 
     /// Renders `frames` more frames, or as many as fit in `time` seconds when given (the GPU

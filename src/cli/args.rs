@@ -1,24 +1,19 @@
 //! Options shared by the commands: scene, graph, resolution, constants, layout overrides.
 
-use super::checks::{self, count};
+use super::checks::count;
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
-use lightgraph::compare::RunSpec;
+use lightgraph::compare::EstimatorSpec;
 use lightgraph::reference::Reference;
-use lightgraph::render::{LayoutOverrides, LoadedScene, SessionOptions, load_graph};
+use lightgraph::run::{
+    BvhChoice, DEFAULT_GRAPH, DEFAULT_SCENE, LayoutOverrides, LoadedScene, RunSpec, SessionOptions, load_graph,
+    named_layout, parse_sets,
+};
 use lightgraph::tev::LiveView;
-use lightgraph_engine::ir::LayoutDecl;
+use lightgraph_engine::Graph;
 use lightgraph_engine::ir::StateStorage;
-use lightgraph_engine::{ConstValue, Gpu, Graph, Plan};
-use lightgraph_scenes::bvh::BvhKind;
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-
-/// The scene rendered when none is named.
-pub const DEFAULT_SCENE: &str = "cornell-mitsuba";
-/// The graph used when none is named.
-pub const DEFAULT_GRAPH: &str = "pt";
 
 /// The live view option of the commands that render progressively.
 #[derive(Args, Clone)]
@@ -119,6 +114,38 @@ impl Common {
     pub fn scene(&self) -> &str {
         self.scene.as_deref().unwrap_or(DEFAULT_SCENE)
     }
+
+    /// The run these options name with graph `graph`, layout `layout` (None: the graph's
+    /// default) and `seed`.
+    pub fn spec(&self, graph: &str, layout: Option<&str>, seed: u32) -> RunSpec {
+        RunSpec {
+            scene: self.scene().to_string(),
+            graph: graph.to_string(),
+            layout: layout.map(str::to_string),
+            res: self.res,
+            spp: self.spp.unwrap_or(1),
+            max_path_length: self.max_path_length,
+            sets: self.set.clone(),
+            overrides: LayoutOverrides {
+                threads: self.threads,
+                workgroup_size: self.workgroup,
+                state: self.state,
+                all_features: self.all_features,
+                separate_memory: self.separate_memory,
+                no_subgroups: self.no_subgroups,
+                loop_guards: self.loop_guards,
+            },
+            bvh: self.bvh,
+            seed,
+            first_frame: 0,
+            adapter: self.adapter.clone(),
+        }
+    }
+
+    /// The session options of `graph` on `scene` with `seed` ([`RunSpec::options`]).
+    pub fn options(&self, scene: &LoadedScene, graph: &Graph, seed: u32) -> Result<SessionOptions> {
+        self.spec(&graph.name, None, seed).options(scene, graph)
+    }
 }
 
 /// Parses an `on` or `off` switch.
@@ -130,89 +157,9 @@ pub fn parse_on_off(s: &str) -> Result<bool, String> {
     }
 }
 
-/// Parses `--bvh`.
-pub fn parse_bvh(s: &str) -> Result<BvhKind, String> {
-    match s.to_lowercase().as_str() {
-        "bvh2" => Ok(BvhKind::Bvh2),
-        "cwbvh" => Ok(BvhKind::Cwbvh),
-        _ => Err(format!("'{s}' is not bvh2 or cwbvh")),
-    }
-}
-
-/// `--bvh`: a BVH kind, or `auto` (none named): the layout's measured choice.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct BvhChoice(pub Option<BvhKind>);
-
-/// Parses `--bvh` with `auto`.
+/// Parses `--bvh`: bvh2, cwbvh or auto.
 pub fn parse_bvh_choice(s: &str) -> Result<BvhChoice, String> {
-    match s.to_lowercase().as_str() {
-        "auto" => Ok(BvhChoice(None)),
-        _ => parse_bvh(s)
-            .map(|k| BvhChoice(Some(k)))
-            .map_err(|e| format!("{e} or auto")),
-    }
-}
-
-impl BvhChoice {
-    /// The BVH of a layout: the one named, else the layout's `bvh` hint (graphs/*.ron, from
-    /// measurements on an H100: docs/performance.md), else the CWBVH.
-    pub fn for_layout(self, name: &str, decl: &LayoutDecl) -> Result<BvhKind> {
-        if let Some(kind) = self.0 {
-            return Ok(kind);
-        }
-        match decl.hints.get("bvh") {
-            None => Ok(BvhKind::Cwbvh),
-            Some(hint) => parse_bvh(hint).map_err(|e| anyhow!("layout '{name}': its hint bvh: {e}")),
-        }
-    }
-
-    /// The BVH when no layout decides (`--layout auto` measures layouts on one scene).
-    pub fn or_default(self) -> BvhKind {
-        self.0.unwrap_or(BvhKind::Cwbvh)
-    }
-}
-
-/// Scenes loaded with each BVH kind asked for, once each (layouts of one command may want
-/// different kinds).
-pub struct Scenes {
-    name: String,
-    loaded: Vec<(BvhKind, LoadedScene)>,
-}
-
-impl Scenes {
-    /// None loaded yet of scene `name`.
-    pub fn new(name: &str) -> Scenes {
-        Scenes {
-            name: name.to_string(),
-            loaded: Vec::new(),
-        }
-    }
-
-    /// Loads the scene with the BVH `bvh` gives layout `name` (`decl`), unless it is loaded
-    /// already; returns that BVH.
-    pub fn load_for(&mut self, bvh: BvhChoice, name: &str, decl: &LayoutDecl) -> Result<BvhKind> {
-        let kind = bvh.for_layout(name, decl)?;
-        if !self.loaded.iter().any(|(k, _)| *k == kind) {
-            self.loaded
-                .push((kind, lightgraph::render::load_scene_with(&self.name, kind)?));
-        }
-        Ok(kind)
-    }
-
-    /// The longest time one of the loads took (parsing and the BVH build), in seconds.
-    pub fn load_seconds(&self) -> f64 {
-        self.loaded.iter().map(|(_, s)| s.load_seconds).fold(0.0, f64::max)
-    }
-
-    /// The scene with `kind`, which [`Scenes::load_for`] loaded.
-    pub fn get(&self, kind: BvhKind) -> &LoadedScene {
-        &self
-            .loaded
-            .iter()
-            .find(|(k, _)| *k == kind)
-            .expect("loaded before use")
-            .1
-    }
+    BvhChoice::parse(s)
 }
 
 /// Parses `--state`.
@@ -234,61 +181,6 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// Parses `NAME=VALUE` entries as constants of `graph`, each of its type; an error starts
-/// with `flag` and the entry (`flag` is `--set ` for `--set`, `--runs @` for a run's own).
-pub fn parse_sets(sets: &[String], graph: &Graph, flag: &str) -> Result<BTreeMap<String, ConstValue>> {
-    let mut out = BTreeMap::new();
-    for s in sets {
-        let (name, value) = s
-            .split_once('=')
-            .ok_or_else(|| anyhow!("{flag}{s}: expected NAME=VALUE"))?;
-        let v = checks::constant(graph, name.trim(), value).map_err(|e| anyhow!("{flag}{s}: {e}"))?;
-        out.insert(name.trim().to_string(), v);
-    }
-    Ok(out)
-}
-
-/// The session options the shared flags give for `scene` rendered by `graph`, with the seed
-/// of the command; the image size is checked to fit before anything is allocated.
-pub fn options(common: &Common, scene: &LoadedScene, graph: &Graph, seed: u32) -> Result<SessionOptions> {
-    let (width, height) = common.res.unwrap_or(scene.scene.resolution);
-    let spp = common.spp.unwrap_or(1);
-    checks::image_fits(width, height, spp).map_err(|e| anyhow!("--res {width}x{height} with --spp {spp}: {e}"))?;
-    let mut constants = parse_sets(&common.set, graph, "--set ")?;
-    if let Some(n) = common.max_path_length {
-        constants.insert("MAX_PATH_LENGTH".into(), ConstValue::U32(n));
-    }
-    let layout = LayoutOverrides {
-        threads: common.threads,
-        workgroup_size: common.workgroup,
-        state: common.state,
-        all_features: common.all_features,
-        separate_memory: common.separate_memory,
-        no_subgroups: common.no_subgroups,
-        loop_guards: common.loop_guards,
-    };
-    Ok(SessionOptions {
-        width,
-        height,
-        samples_per_frame: spp,
-        seed,
-        constants,
-        layout,
-    })
-}
-
-/// The layout called `name`, or the graph's default.
-pub fn named_layout(graph: &Graph, name: Option<&str>) -> Result<(String, LayoutDecl)> {
-    Ok(match name {
-        Some(name) => (name.to_string(), Plan::new(graph, name)?.layout),
-        None => (
-            graph.default_layout.clone(),
-            graph.layouts[&graph.default_layout].clone(),
-        ),
-    })
-}
-
-/// Checks that a reference has the image size of the render compared with it.
 /// The mean of the reference at `path`, if any, checked to be `size` (for `--reference`).
 pub fn reference_mean(path: Option<&PathBuf>, size: (u32, u32)) -> Result<Option<Vec<[f32; 3]>>> {
     let Some(path) = path else { return Ok(None) };
@@ -297,6 +189,7 @@ pub fn reference_mean(path: Option<&PathBuf>, size: (u32, u32)) -> Result<Option
     Ok(Some(r.mean()))
 }
 
+/// Checks that a reference has the image size of the render compared with it.
 pub fn check_size(reference: &Reference, path: &Path, size: (u32, u32)) -> Result<()> {
     if reference.size != size {
         bail!(
@@ -310,25 +203,6 @@ pub fn check_size(reference: &Reference, path: &Path, size: (u32, u32)) -> Resul
             reference.size.1
         );
     }
-    Ok(())
-}
-
-/// Puts the graph's measured constants (those `opts` does not give) into `opts`, measured
-/// once on the GPU `adapter`, so that every session and GPU of a run, and the film's settings,
-/// share one measurement (see [`lightgraph::render::measure_constants`]).
-pub fn measure_into(
-    opts: &mut SessionOptions,
-    graph: &Graph,
-    (layout, decl): (&str, &LayoutDecl),
-    scene: &LoadedScene,
-    adapter: Option<&str>,
-) -> Result<()> {
-    if graph.measured.keys().all(|name| opts.constants.contains_key(name)) {
-        return Ok(());
-    }
-    let gpu = Gpu::new(adapter)?;
-    let measured = lightgraph::render::measure_constants(&gpu, graph, layout, decl.clone(), scene, opts)?;
-    opts.constants.extend(measured);
     Ok(())
 }
 
@@ -353,11 +227,11 @@ pub fn find_scene(scene: &str, flag: &str) -> Result<()> {
 
 /// The estimators a list of `graph[:Layout][@NAME=VALUE...]` names (option `flag`), each
 /// graph, named layout and constant checked, none named twice.
-pub fn estimator_specs(list: &str, flag: &str) -> Result<Vec<RunSpec>> {
+pub fn estimator_specs(list: &str, flag: &str) -> Result<Vec<EstimatorSpec>> {
     if list.split(',').all(|s| s.trim().is_empty()) {
         bail!("{flag} names no estimator; give graphs or graph:Layout pairs, e.g. pt,bpt-lvc:LVC-BPTmk");
     }
-    let specs = RunSpec::parse_list(list)?;
+    let specs = EstimatorSpec::parse_list(list)?;
     for (i, spec) in specs.iter().enumerate() {
         if specs[..i].contains(spec) {
             bail!("{flag} names {spec} twice");

@@ -4,7 +4,7 @@ use super::args::*;
 use super::checks::count;
 use anyhow::Result;
 use clap::Args;
-use lightgraph::render::load_graph;
+use lightgraph::run::{Scenes, load_graph};
 use lightgraph_engine::{Gpu, Plan};
 use lightgraph_scenes::bvh::BvhKind;
 use std::path::PathBuf;
@@ -78,7 +78,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     for (w, h, spp) in points {
         for ((name, decl), &kind) in layouts.iter().zip(&kinds) {
             let scene = scenes.get(kind);
-            let mut opts = options(c, scene, &graph, 1)?;
+            let mut opts = c.options(scene, &graph, 1)?;
             (opts.width, opts.height, opts.samples_per_frame) = (w, h, spp);
             match lightgraph::bench::measure(&gpu, &graph, name, decl.clone(), scene, opts, args.time) {
                 Ok(m) => {

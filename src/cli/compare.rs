@@ -1,15 +1,15 @@
 //! `lightgraph compare`: estimators and layouts against a reference, error against time.
 
 use super::args::*;
-use super::gpus::gpu_selectors;
 use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use lightgraph::compare::resume::{check_settings, finished_runs, write_settings};
-use lightgraph::compare::{ReportContext, RunBudget, RunCurve, RunSpec, run, write_report, write_run_images};
+use lightgraph::compare::{EstimatorSpec, ReportContext, RunBudget, RunCurve, run, write_report, write_run_images};
 use lightgraph::interrupt::{Interrupted, Signal};
+use lightgraph::multi::gpu_selectors;
 use lightgraph::reference::{Reference, constants_text};
-use lightgraph::render::{SessionOptions, load_graph};
+use lightgraph::run::{Scenes, SessionOptions, load_graph, named_layout, parse_sets};
 use lightgraph_engine::{Gpu, Graph};
 use lightgraph_scenes::bvh::BvhKind;
 use std::path::PathBuf;
@@ -223,13 +223,13 @@ pub(super) fn check_reference(args: &CompareArgs, reference: &Reference) -> Resu
 fn jobs(args: &CompareArgs, reference: &Reference, scenes: &mut Scenes) -> Result<Vec<Job>> {
     let info = |k: &str| reference.info.get(k).cloned().unwrap_or_default();
     let c = &args.common;
-    let specs = RunSpec::parse_list(&args.runs)?;
+    let specs = EstimatorSpec::parse_list(&args.runs)?;
     let mut runs = Vec::new();
     for spec in &specs {
         let graph = load_graph(&spec.graph)?;
         let (layout, decl) = named_layout(&graph, spec.layout.as_deref())?;
         let kind = scenes.load_for(c.bvh, &layout, &decl)?;
-        let opts = options(c, scenes.get(kind), &graph, args.seed)?;
+        let opts = c.options(scenes.get(kind), &graph, args.seed)?;
         if constants_text(&opts.constants) != info("constants") {
             bail!(
                 "{}: the reference was made with constants '{}', run {} would use '{}'",

@@ -3,9 +3,9 @@
 use super::args::*;
 use anyhow::{Context, Result};
 use clap::Args;
-use lightgraph::render::{Session, load_graph};
+use lightgraph::run::{Scenes, Session, load_graph, named_layout};
 use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::{Gpu, Plan, Program};
+use lightgraph_engine::{Gpu, compile};
 use lightgraph_scenes::bvh::BvhKind;
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -46,8 +46,8 @@ pub fn outline(args: &ExplainArgs) -> Result<String> {
     let mut scenes = Scenes::new(c.scene());
     let kind = scenes.load_for(c.bvh, &graph.default_layout, &graph.layouts[&graph.default_layout])?;
     let scene = scenes.get(kind);
-    let opts = options(c, scene, &graph, 1)?;
-    let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, Default::default());
+    let opts = c.options(scene, &graph, 1)?;
+    let spec = lightgraph::run::specialization(&graph, &scene.scene, &opts, Default::default());
     Ok(lightgraph_engine::outline::outline(&graph.specialize(&spec.constants)?))
 }
 
@@ -67,17 +67,17 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
         .map(|(name, decl)| scenes.load_for(c.bvh, name, decl))
         .collect::<Result<_>>()?;
     let gpu = Gpu::new(c.adapter.as_deref()).ok();
-    let device = gpu.as_ref().map(|g| (lightgraph::render::device_flags(g), g.target()));
+    let device = gpu.as_ref().map(|g| (lightgraph::run::device_flags(g), g.target()));
     let (device, mut target) = device.unwrap_or_default();
     target.alias_transients = !c.separate_memory;
     if c.no_subgroups {
         target = target.without_subgroups();
     }
     let first = scenes.get(kinds[0]);
-    let opts = options(c, first, &graph, 1)?;
+    let opts = c.options(first, &graph, 1)?;
     features(
         &mut out,
-        &lightgraph::render::kernel_flags(device.clone(), first, c.all_features),
+        &lightgraph::run::kernel_flags(device.clone(), first, c.all_features),
     )?;
     writeln!(
         out,
@@ -88,11 +88,11 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
     for ((layout, decl), kind) in layouts.into_iter().zip(kinds) {
         let scene = scenes.get(kind);
         writeln!(out, "layout {layout}: BVH {}", kind.name())?;
-        let flags = lightgraph::render::kernel_flags(device.clone(), scene, c.all_features);
-        let spec = lightgraph::render::specialization(&graph, &scene.scene, &opts, flags);
+        let flags = lightgraph::run::kernel_flags(device.clone(), scene, c.all_features);
+        let spec = lightgraph::run::specialization(&graph, &scene.scene, &opts, flags);
         let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
         let externals = scene.compiled.resources(&camera);
-        let plan = Plan::with_decl(&graph, &layout, opts.layout.apply(decl))?;
+        let decl = opts.layout.apply(decl);
         // A graph with measured constants (LVC-BPT's average light sub-path length) is
         // measured by a session first, so that the sizes shown are those a render allocates.
         let session = match &gpu {
@@ -103,7 +103,7 @@ pub fn report(args: &ExplainArgs) -> Result<String> {
         let program = match &session {
             Some(s) => s.program(),
             None => {
-                compiled = Program::compile(&plan, &spec, &target)?;
+                compiled = compile(&graph, &layout, &decl, &spec, &target)?;
                 &compiled
             }
         };

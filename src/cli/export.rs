@@ -1,9 +1,10 @@
 //! `lightgraph export`: a scene written in another renderer's format (Mitsuba 3), to render
 //! the same scene there (bench/peers/).
 
-use super::args::{DEFAULT_SCENE, parse_resolution};
+use super::args::parse_resolution;
 use anyhow::{Result, anyhow};
 use clap::{Args, ValueEnum};
+use lightgraph::run::DEFAULT_SCENE;
 use std::path::PathBuf;
 
 /// The formats `export` writes.
@@ -37,7 +38,7 @@ pub struct ExportArgs {
 /// Writes the scene in the chosen format and prints what renders differently there.
 pub fn export(a: ExportArgs) -> Result<()> {
     let name = a.scene.as_deref().unwrap_or(DEFAULT_SCENE);
-    let loaded = lightgraph::render::load_scene(name)?;
+    let loaded = lightgraph::run::load_scene(name)?;
     let size = a.res.unwrap_or(loaded.scene.resolution);
     let ExportFormat::Mitsuba = a.format;
     let notes = lightgraph_scenes::mitsuba::export::write(&loaded.scene, size, &a.out)

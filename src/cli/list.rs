@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use lightgraph::assets;
-use lightgraph::render::load_graph;
+use lightgraph::run::load_graph;
 
 pub fn list() -> Result<()> {
     println!("graphs:");

@@ -4,16 +4,13 @@
 pub mod args;
 pub mod assets;
 pub mod bench;
-pub mod checks;
+pub use crate::run::checks;
 pub mod compare;
 pub mod explain;
 pub mod export;
 pub mod film;
-pub mod gpus;
 pub mod list;
 pub mod merge;
-#[cfg(feature = "mpi")]
-pub mod mpi;
 pub mod operators;
 pub mod reference;
 pub mod render;

@@ -3,13 +3,12 @@
 
 use super::args::*;
 use super::film::{check_out, settings_from_film, stopped_by_signal};
-use super::gpus::gpu_selectors;
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use lightgraph::multi::{Budget, Run, render_on_gpus};
+use lightgraph::multi::{Budget, gpu_selectors, render_on_gpus};
 use lightgraph::reference::{Reference, film_settings};
-use lightgraph::render::{Session, load_graph, load_scene_with};
+use lightgraph::run::Run;
 use lightgraph::tev::LiveView;
 use lightgraph_engine::Gpu;
 use std::collections::BTreeMap;
@@ -119,11 +118,8 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         (None, Some(r)) => r.clone(),
         (None, None) => PathBuf::from("out/reference.exr"),
     };
-    let graph = load_graph(args.graph.name())?;
-    let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
-    let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
     let seed = args.seed.unwrap_or(REFERENCE_SEED);
-    let mut opts = options(c, &scene, &graph, seed)?;
+    let mut run = Run::load_named(&c.spec(args.graph.name(), args.layout.as_deref(), seed), "`reference`")?;
     // After the inputs' checks (their errors first), before any GPU work.
     check_out(&out, args.force, args.resume.as_deref())?;
     // One measurement for every GPU and for the film (a resumed film brings its own).
@@ -131,9 +127,9 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         Some(spec) => gpu_selectors(spec)?.into_iter().next(),
         None => c.adapter.clone(),
     };
-    measure_into(&mut opts, &graph, (&layout, &decl), &scene, first_gpu.as_deref())?;
-    let size = (opts.width, opts.height);
-    let info = film_settings(c.scene(), &graph, &opts);
+    run.measure_on(first_gpu.as_deref())?;
+    let size = (run.options.width, run.options.height);
+    let info = film_settings(c.scene(), &run.graph, &run.options);
     let mut film = match resumed {
         Some(r) => {
             let path = args.resume.as_ref().expect("resumed from a path");
@@ -144,13 +140,14 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
         None => Reference::new(size, info.clone()),
     };
     film.info.extend(info);
-    list_once(&mut film.info, "layout", &layout);
-    let first = first_frame(args.first_frame, &film)?;
+    list_once(&mut film.info, "layout", &run.layout);
+    run.spec.first_frame = first_frame(args.first_frame, &film)? as u64;
     eprintln!(
-        "scene {} (loaded in {:.2} s) | graph {} layout {layout} | {}x{} | {} spp so far",
+        "scene {} (loaded in {:.2} s) | graph {} layout {} | {}x{} | {} spp so far",
         c.scene(),
-        scene.load_seconds,
-        graph.name,
+        run.scene.load_seconds,
+        run.graph.name,
+        run.layout,
         size.0,
         size.1,
         film.samples_per_pixel()
@@ -162,13 +159,6 @@ pub fn reference(mut args: ReferenceArgs) -> Result<()> {
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
     let view = args.tev.view(&out.display().to_string(), size);
     let mut target = Target { film, out, bar, view };
-    let run = Run {
-        graph: &graph,
-        layout: (&layout, &decl),
-        scene: &scene,
-        options: &opts,
-        first_frame: first as u64,
-    };
     match &args.gpus {
         Some(spec) => on_several_gpus(&args, &run, spec, &mut target)?,
         None => on_one_gpu(&args, &run, &mut target)?,
@@ -211,9 +201,7 @@ fn on_one_gpu(args: &ReferenceArgs, run: &Run, target: &mut Target) -> Result<()
     eprintln!("{}", gpu.describe());
     let film = &mut target.film;
     list_once(&mut film.info, "adapter", &gpu.info.name);
-    let (layout, decl) = run.layout;
-    let mut session = Session::with_layout(&gpu, run.graph, layout, decl.clone(), run.scene, run.options.clone())?;
-    session.first_frame = run.first_frame as u32;
+    let mut session = run.session(&gpu)?;
     let spp_before = film.samples_per_pixel();
     let start = Instant::now();
     let (mut absorbed_at, mut saved_at) = (Instant::now(), Instant::now());
@@ -257,7 +245,7 @@ fn on_one_gpu(args: &ReferenceArgs, run: &Run, target: &mut Target) -> Result<()
 /// Renders `run` on the GPUs `spec` names (`--gpus`, lightgraph::multi) into the target's
 /// film, writing it every `--checkpoint` (with the seconds of the runs before this one).
 fn on_several_gpus(args: &ReferenceArgs, run: &Run, spec: &str, target: &mut Target) -> Result<()> {
-    let selectors = super::gpus::gpu_selectors(spec)?;
+    let selectors = gpu_selectors(spec)?;
     let budget = match (args.time, args.frames) {
         (Some(t), _) => Budget::Time(t),
         (None, frames) => Budget::Frames(frames.unwrap_or(0) as u64),

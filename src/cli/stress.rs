@@ -30,7 +30,7 @@ pub struct StressArgs {
     #[arg(long, default_value = "out/stress")]
     pub out: PathBuf,
     /// Acceleration structure: bvh2 or cwbvh.
-    #[arg(long, value_parser = super::args::parse_bvh, default_value = "cwbvh")]
+    #[arg(long, value_parser = lightgraph::run::parse_bvh, default_value = "cwbvh")]
     pub bvh: lightgraph_scenes::bvh::BvhKind,
     /// GPU adapter whose name contains this text (also LIGHTGRAPH_ADAPTER).
     #[arg(long, env = "LIGHTGRAPH_ADAPTER")]

@@ -9,10 +9,10 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::compare::resume::{check_settings, resumable, write_settings};
-use lightgraph::compare::{RunBudget, RunSpec};
+use lightgraph::compare::{EstimatorSpec, RunBudget};
 use lightgraph::interrupt::Interrupted;
 use lightgraph::reference::Reference;
-use lightgraph::render::load_graph;
+use lightgraph::run::{Scenes, load_graph, named_layout, parse_sets};
 use lightgraph::study::layouts::{
     Candidate, Choices, LayoutChoice, choices_text, fastest, measure_layouts, parse_choices,
 };
@@ -118,7 +118,7 @@ pub fn study(args: StudyArgs) -> Result<()> {
         named_layout(&graph, args.reference_layout.as_deref()).context("--reference-layout")?;
     }
     let gpus = open_gpus_or_adapter(args.gpus.as_deref(), args.common.adapter.as_deref())?;
-    let names: Vec<String> = estimators.iter().map(RunSpec::to_string).collect();
+    let names: Vec<String> = estimators.iter().map(EstimatorSpec::to_string).collect();
     let device = match gpus.len() {
         1 => gpus[0].info.name.clone(),
         n => format!("{} x{n}", gpus[0].info.name),
@@ -205,7 +205,7 @@ fn reference_path(references: &Path, folder: &str) -> PathBuf {
 fn study_scene(
     args: &StudyArgs,
     (scene, folder): (&str, &str),
-    estimators: &[RunSpec],
+    estimators: &[EstimatorSpec],
     gpus: &[Gpu],
 ) -> Result<SceneRuns> {
     let path = reference_path(&references_dir(args), folder);
@@ -219,18 +219,18 @@ fn study_scene(
     }
     let mut scenes = Scenes::new(scene);
     let chosen = choose_layouts(args, estimators, &compare, &mut scenes, &gpus[0])?;
-    let (runs, choices): (Vec<RunSpec>, Vec<LayoutChoice>) = estimators
+    let (runs, choices): (Vec<EstimatorSpec>, Vec<LayoutChoice>) = estimators
         .iter()
         .zip(chosen)
         .map(|(spec, (_, layout, choice))| {
-            let run = RunSpec {
+            let run = EstimatorSpec {
                 layout: Some(layout),
                 ..spec.clone()
             };
             (run, choice)
         })
         .unzip();
-    compare.runs = runs.iter().map(RunSpec::to_string).collect::<Vec<_>>().join(",");
+    compare.runs = runs.iter().map(EstimatorSpec::to_string).collect::<Vec<_>>().join(",");
     compare.resume = args.resume && resumable(&compare.out);
     let (_, results) = compare_with(&compare, &reference, gpus, &mut scenes)?;
     let runs = estimators
@@ -295,7 +295,7 @@ const CHOICES_FILE: &str = "layouts.tsv";
 /// as the scene's folder recorded them, else by [`choose_layout`]; recorded there.
 fn choose_layouts(
     args: &StudyArgs,
-    estimators: &[RunSpec],
+    estimators: &[EstimatorSpec],
     compare: &CompareArgs,
     scenes: &mut Scenes,
     gpu: &Gpu,
@@ -328,7 +328,7 @@ fn choose_layouts(
 /// layouts with the most samples per second on the scene (`--layout-time` each).
 fn choose_layout(
     args: &StudyArgs,
-    spec: &RunSpec,
+    spec: &EstimatorSpec,
     common: &Common,
     scenes: &mut Scenes,
     gpu: &Gpu,
@@ -349,7 +349,7 @@ fn choose_layout(
         .map(|((name, decl), kind)| (name.as_str(), decl, scenes.get(kind)))
         .collect();
     let scene = candidates.first().map(|c| c.2).context("the graph has no layout")?;
-    let mut opts = options(common, scene, &graph, args.seed)?;
+    let mut opts = common.options(scene, &graph, args.seed)?;
     opts.constants.extend(parse_sets(&spec.sets, &graph, "--estimators @")?);
     let bar = ProgressBar::new(candidates.len() as u64);
     bar.set_style(ProgressStyle::with_template("{prefix:>24} {bar:30} {msg}").expect("valid template"));

@@ -7,9 +7,9 @@ use super::checks::constant_names;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use lightgraph::compare::RunSpec;
+use lightgraph::compare::EstimatorSpec;
 use lightgraph::output::{write_exr, write_png};
-use lightgraph::render::{LoadedScene, load_graph};
+use lightgraph::run::{LoadedScene, Scenes, load_graph, named_layout, parse_sets};
 use lightgraph::study::scene_folders;
 use lightgraph::verify::batches::{Amount, Budget, RunBatches, render_batches};
 use lightgraph::verify::paths::{Kinds, describe, scene_kinds};
@@ -132,7 +132,7 @@ impl VerifyArgs {
 /// One estimator: its label, graph and layout, and its own constant settings.
 struct Estimator {
     label: String,
-    spec: RunSpec,
+    spec: EstimatorSpec,
     graph: Graph,
     layout: String,
 }
@@ -363,7 +363,7 @@ fn render_run(args: &VerifyArgs, gpu: &Gpu, scene: &LoadedScene, e: &Estimator, 
     let seed = args.seed.wrapping_mul(1000).wrapping_add(index);
     let mut common = args.common.clone();
     common.set = own_sets(&args.common.set, &e.graph);
-    let mut opts = options(&common, scene, &e.graph, seed)?;
+    let mut opts = common.options(scene, &e.graph, seed)?;
     opts.constants.extend(parse_sets(&e.spec.sets, &e.graph, "--graphs @")?);
     let claims = claims(&e.graph, &opts.constants)?;
     let bar = ProgressBar::new(args.batches as u64);

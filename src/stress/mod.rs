@@ -6,7 +6,7 @@
 pub mod cases;
 pub mod stats;
 
-use crate::render::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
+use crate::run::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
 use anyhow::{Result, bail};
 use cases::{Case, Invariant};
 use lightgraph_engine::Gpu;
@@ -126,7 +126,7 @@ pub struct Outcome {
     /// Seconds of rendering, comparison renders included.
     pub seconds: f64,
     /// The mean image, for previews (none when the render failed).
-    pub image: Option<crate::render::Image>,
+    pub image: Option<crate::run::Image>,
 }
 
 /// A render of one scene: its frames and what the counters said.
@@ -255,7 +255,7 @@ impl<'g> Runner<'g> {
                 check_enclosed(&mean, cases::background(scene), samples, rate, &mut failures)
             }
         };
-        let image = crate::render::Image {
+        let image = crate::run::Image {
             width: size.0,
             height: size.1,
             frames: s.frames,

@@ -3,7 +3,7 @@
 //! clock) and the one with the most camera samples per second runs in the study.
 
 use crate::bench::measure;
-use crate::render::{LoadedScene, SessionOptions};
+use crate::run::{LoadedScene, SessionOptions};
 use anyhow::{Result, bail};
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{Gpu, Graph};

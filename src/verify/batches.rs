@@ -4,7 +4,7 @@
 
 use super::stats::BlockBatches;
 use crate::reference::Reference;
-use crate::render::{Image, LoadedScene, Session, SessionOptions};
+use crate::run::{Image, LoadedScene, Session, SessionOptions};
 use anyhow::{Result, bail};
 use lightgraph_engine::runtime::MAX_BATCH;
 use lightgraph_engine::{Gpu, Graph};

@@ -4,7 +4,7 @@
 
 use super::stats::{PairTest, TestSettings};
 use super::{Gap, Outcome, PairResult, unconfirmed_gaps};
-use crate::render::Image;
+use crate::run::Image;
 use anyhow::{Context, Result};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};

@@ -5,7 +5,7 @@
 //! the check has the power to catch a bias of a few percent.
 
 use crate::common::{assert_analytic, data, region, render};
-use lightgraph::render::load_scene;
+use lightgraph::run::load_scene;
 
 /// The module's check: within 3 standard errors (see the module comment).
 fn check(what: &str, mean: [f64; 3], se: [f64; 3], expected: [f64; 3]) {

@@ -6,7 +6,7 @@
 use crate::cli::{lightgraph, temp_dir};
 use crate::common::{gpu, kernel_sources, options};
 use lightgraph::aov::{Aov, AovRender};
-use lightgraph::render::{LoadedScene, load_scene};
+use lightgraph::run::{LoadedScene, load_scene};
 use lightgraph_scenes::CompiledScene;
 use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::model::{Camera, FovAxis, Integrator, Look, Material, Pbr, Scene, Shape};

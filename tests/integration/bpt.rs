@@ -12,7 +12,7 @@ const FRAMES: u32 = 48;
 
 use crate::common::{borrowed, largest_relative_difference, measured, render, render_with};
 use crate::frames::{Frames, block_means, render_frames, render_frames_with, worst_z};
-use lightgraph::render::{LoadedScene, load_graph, load_scene};
+use lightgraph::run::{LoadedScene, load_graph, load_scene};
 use lightgraph_engine::ConstValue;
 use lightgraph_scenes::bvh::BvhKind;
 
@@ -511,7 +511,7 @@ pub fn sds_scene() -> LoadedScene {
 
 /// The specular-diffuse-specular scene's pixels that see only the mirror (none of its edges)
 /// and those that see only the floor: the mean green of `image` over each.
-pub fn mirror_and_floor(image: &lightgraph::render::Image) -> (f64, f64) {
+pub fn mirror_and_floor(image: &lightgraph::run::Image) -> (f64, f64) {
     let parse = |text: &str| LoadedScene::parse("sds.ron", text, lightgraph_scenes::bvh::BvhKind::Bvh2, None).unwrap();
     // The mirror made a unit emitter, seen by paths of one segment with 16 jittered samples
     // per pixel.

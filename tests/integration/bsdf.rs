@@ -12,7 +12,7 @@
 use crate::chi2::{SphereBins, goodness_of_fit, significance};
 use crate::common::{region, render};
 use crate::probe::{probe, scene};
-use lightgraph::render::LoadedScene;
+use lightgraph::run::LoadedScene;
 use lightgraph_engine::ConstValue;
 
 /// The chi-square tests in this file, for the Šidák-corrected significance of each.
@@ -1192,7 +1192,7 @@ fn pbr_spheres_under_uniform_background() {
 /// A 32 x 32 image of a unit square light (radiance 1, black around it) 9 units in front of
 /// the camera, seen through a 4 x 4 pane of `pane` (a material, or none) turned 45 degrees
 /// about the vertical, halfway: the pane's reflection sees only the black surroundings.
-fn light_behind_pane(pane: Option<&str>) -> lightgraph::render::Image {
+fn light_behind_pane(pane: Option<&str>) -> lightgraph::run::Image {
     let (material, shape) = match pane {
         Some(m) => (
             format!(r#""pane": {m},"#),
@@ -1219,7 +1219,7 @@ fn light_behind_pane(pane: Option<&str>) -> lightgraph::render::Image {
 
 /// The image's centroid along x (red channel), with its standard error: sum x v / sum v,
 /// whose variance is sum (x - c)^2 var(v) / (sum v)^2 to first order, pixels independent.
-fn centroid_x(image: &lightgraph::render::Image) -> (f64, f64) {
+fn centroid_x(image: &lightgraph::run::Image) -> (f64, f64) {
     let pixel = |i: usize| {
         let x = (i % image.width as usize) as f64 + 0.5;
         (

@@ -1,6 +1,6 @@
 //! Shared helpers: one GPU per test binary, rendering a scene to an image, region statistics.
 
-use lightgraph::render::{
+use lightgraph::run::{
     Image, LayoutOverrides, LoadedScene, Session, SessionOptions, device_flags, kernel_flags, load_graph,
     specialization,
 };
@@ -61,7 +61,7 @@ pub fn measured(
     let loaded = load_graph(graph).unwrap();
     let decl = Plan::new(&loaded, layout).unwrap().layout;
     let opts = options(size, spp, seed, constants, Default::default());
-    let measured = lightgraph::render::measure_constants(gpu(), &loaded, layout, decl, scene, &opts).unwrap();
+    let measured = lightgraph::run::measure_constants(gpu(), &loaded, layout, decl, scene, &opts).unwrap();
     measured.into_iter().collect()
 }
 

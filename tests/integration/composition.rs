@@ -4,7 +4,7 @@
 //! escape), and the inside of a closed box occludes everything at unbounded distance.
 
 use crate::common::{data, render};
-use lightgraph::render::load_scene;
+use lightgraph::run::load_scene;
 use lightgraph_engine::ConstValue;
 
 #[test]

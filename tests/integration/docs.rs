@@ -4,7 +4,7 @@
 
 use crate::cli::temp_dir;
 use crate::common::render;
-use lightgraph::render::load_scene;
+use lightgraph::run::load_scene;
 use std::path::PathBuf;
 
 /// Writes the example files of docs/graphs.md below a fresh folder; returns it.

@@ -3,7 +3,7 @@
 //! independent within a frame when light sub-paths splat or photons are shared; frames are).
 
 use crate::common::{assert_finite, gpu};
-use lightgraph::render::{Image, LoadedScene, Session, SessionOptions, load_graph};
+use lightgraph::run::{Image, LoadedScene, Session, SessionOptions, load_graph};
 use lightgraph_engine::ConstValue;
 
 /// Per-frame block means of a render: `frames` frames of `spp` samples per pixel on a `size`

@@ -4,7 +4,7 @@
 //! beside the repository (skipped with a printed reason otherwise).
 
 use crate::common::{assert_finite, data, render};
-use lightgraph::render::LoadedScene;
+use lightgraph::run::LoadedScene;
 use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::gpu::light_kind;
 use std::path::Path;
@@ -402,7 +402,7 @@ fn a_bare_gltf_renders_with_its_camera_or_a_default_one_and_a_default_background
         // Without its emission the asset has no light.
         let json = std::fs::read_to_string(&path).unwrap();
         std::fs::write(&path, json.replace(r#""emissiveFactor": [0.5, 0.25, 0.0],"#, "")).unwrap();
-        let scene = lightgraph::render::load_scene_with(path.to_str().unwrap(), BvhKind::Cwbvh).unwrap();
+        let scene = lightgraph::run::load_scene_with(path.to_str().unwrap(), BvhKind::Cwbvh).unwrap();
         assert!(
             matches!(
                 scene.scene.lights[..],

@@ -5,7 +5,7 @@
 use crate::common::{
     assert_same_render, borrowed, gpu, largest_relative_difference, measured, render, render_with_layout,
 };
-use lightgraph::render::{Image, LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
+use lightgraph::run::{Image, LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
 use lightgraph_engine::{ConstValue, Graph};
 
 #[test]
@@ -84,7 +84,7 @@ fn layouts_without_loop_guards_render_what_they_render_with_them() {
 #[test]
 fn layouts_with_the_child_scan_render_what_the_loop_of_eight_renders() {
     use lightgraph_scenes::bvh::BvhKind;
-    let scene = lightgraph::render::load_scene_with("cornell-glossy-sun", BvhKind::Cwbvh).unwrap();
+    let scene = lightgraph::run::load_scene_with("cornell-glossy-sun", BvhKind::Cwbvh).unwrap();
     let eight = [("CWBVH_CHILD_SCAN", ConstValue::Bool(false))];
     for (graph, layout) in [
         ("pt", "NaivePTsk"),
@@ -125,14 +125,14 @@ fn pt_in_tiled_pixel_order_matches_its_layouts_and_the_row_order() {
     // The box fills the frame: a pixel whose 16 paths all miss the light is rare (rows with
     // seed 43 have 1 of 400, in the shadow under the box); a tile order that skipped pixels
     // would leave whole runs of them black.
-    let black = |im: &lightgraph::render::Image| im.mean.iter().filter(|m| m.iter().all(|&v| v <= 0.0)).count();
+    let black = |im: &lightgraph::run::Image| im.mean.iter().filter(|m| m.iter().all(|&v| v <= 0.0)).count();
     assert!(
         black(image) <= 4,
         "{} pixels left black in tile order ({} in rows)",
         black(image),
         black(&rows)
     );
-    let stat = |im: &lightgraph::render::Image| {
+    let stat = |im: &lightgraph::run::Image| {
         let n = im.mean.len() as f64;
         let mean = im.mean.iter().map(|m| m[1] as f64).sum::<f64>() / n;
         let var = im.variance.iter().map(|v| v[1] as f64).sum::<f64>() / (n * n * im.frames as f64);
@@ -185,26 +185,17 @@ fn pooled_layouts_regenerate_across_many_iterations() {
 
 #[test]
 fn auto_layout_tunes_the_ambient_occlusion_graph() {
-    let graph = load_graph("ao").unwrap();
-    let scene = load_scene("cornell-diffuse").unwrap();
-    let options = lightgraph::render::SessionOptions {
-        width: 16,
-        height: 16,
-        samples_per_frame: 1,
-        seed: 1,
-        constants: Default::default(),
-        layout: Default::default(),
-    };
-    let mut seen = 0;
-    let trials = lightgraph::tune::autotune(
-        crate::common::gpu(),
-        &graph,
-        &scene,
-        &options,
-        std::time::Duration::from_millis(20),
-        |_| seen += 1,
-    )
+    let run = lightgraph::run::Run::load(&lightgraph::run::RunSpec {
+        scene: "cornell-diffuse".into(),
+        graph: "ao".into(),
+        res: Some((16, 16)),
+        bvh: lightgraph::run::BvhChoice(Some(lightgraph_scenes::bvh::BvhKind::Bvh2)),
+        ..Default::default()
+    })
     .unwrap();
+    let mut seen = 0;
+    let budget = std::time::Duration::from_millis(20);
+    let trials = lightgraph::tune::autotune(crate::common::gpu(), &run, budget, |_| seen += 1).unwrap();
     assert_eq!(seen, trials.len());
     assert!(
         trials.iter().all(|t| t.result.is_ok()),

@@ -5,7 +5,7 @@
 use crate::chi2::{SphereBins, goodness_of_fit, pearson, significance};
 use crate::common::{assert_analytic, data, region, render};
 use crate::probe::{probe, scene};
-use lightgraph::render::LoadedScene;
+use lightgraph::run::LoadedScene;
 use lightgraph_engine::ConstValue;
 use lightgraph_scenes::alias::luminance;
 use lightgraph_scenes::bvh::BvhKind;

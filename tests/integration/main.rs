@@ -10,6 +10,7 @@ mod bvh;
 mod chi2;
 mod cli;
 mod common;
+mod compiles;
 mod composition;
 mod docs;
 mod frames;

@@ -25,7 +25,7 @@
 
 use crate::common::{assert_finite, gpu};
 use crate::frames::{Frames, block_means, worst_z};
-use lightgraph::render::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
+use lightgraph::run::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
 use lightgraph_engine::ConstValue;
 use lightgraph_scenes::CompiledScene;
 use lightgraph_scenes::bvh::BvhKind;

@@ -6,7 +6,7 @@
 //! `verify`'s (tests/integration/verify.rs).
 
 use crate::common::{Rendered, assert_same_render, data, render};
-use lightgraph::render::load_scene;
+use lightgraph::run::load_scene;
 
 /// The image size, samples per pixel and frames of the runs below: 1152 paths a frame, so
 /// 144 bootstrap paths and chains (PATHS / 8) of 8 steps each.

@@ -15,7 +15,7 @@
 use crate::bpt::{mirror_and_floor, sds_scene};
 use crate::common::{Rendered, largest_relative_difference, render};
 use crate::frames::{Frames, render_frames, render_frames_with};
-use lightgraph::render::{LoadedScene, load_scene};
+use lightgraph::run::{LoadedScene, load_scene};
 use lightgraph_engine::ConstValue;
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -149,7 +149,7 @@ fn photon_mapping_renders_the_caustic_seen_in_a_mirror() {
 /// In an image of the specular-diffuse-specular scene (bpt.rs) by `what`: the floor is lit,
 /// and the mirror shows its caustic. BPT leaves the mirror below 1e-3 of the floor; photon
 /// mapping finds some 12%, so the bound is 2%.
-pub fn assert_the_mirror_shows_the_caustic(image: &lightgraph::render::Image, what: &str) {
+pub fn assert_the_mirror_shows_the_caustic(image: &lightgraph::run::Image, what: &str) {
     let (m_mirror, m_floor) = mirror_and_floor(image);
     eprintln!("{what}: floor {m_floor:.4}, floor seen in the mirror {m_mirror:.4}");
     assert!(m_floor > 1e-3, "{what}: the floor is not lit ({m_floor})");
@@ -447,9 +447,9 @@ fn merge_radii_from_a_millionth_to_ten_times_the_scene_stay_finite() {
         }
         assert_eq!(memory[0], memory[1], "{graph}: the grid's memory depends on the radius");
         let options = crate::common::options((16, 16), 1, 9, &[], Default::default());
-        let loaded = lightgraph::render::load_graph(graph).unwrap();
+        let loaded = lightgraph::run::load_graph(graph).unwrap();
         let mut session =
-            lightgraph::render::Session::new(crate::common::gpu(), &loaded, layout, &scene, options).unwrap();
+            lightgraph::run::Session::new(crate::common::gpu(), &loaded, layout, &scene, options).unwrap();
         session.first_frame = 10_000;
         session.render_frames(4).unwrap();
         crate::common::assert_finite(&session.image().unwrap(), &format!("{graph} after 10^4 frames"));

@@ -10,7 +10,7 @@
 //! `rng_seed(frame.seed, frame.index, index)`.
 
 use crate::common::gpu;
-use lightgraph::render::{LoadedScene, device_flags, kernel_flags, load_graph};
+use lightgraph::run::{LoadedScene, device_flags, kernel_flags, load_graph};
 use lightgraph_engine::ir::Scope;
 use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization, Vfs};
 use lightgraph_scenes::CompiledScene;

@@ -140,7 +140,7 @@ fn settings_that_would_mix_estimates_are_refused() {
     assert_eq!((film.frames, film.ranges.clone()), (3, vec![(0, 3)]));
     // An EXR without lightgraph's settings is not a reference.
     let plain = dir.join("plain.exr");
-    let image = lightgraph::render::Image {
+    let image = lightgraph::run::Image {
         width: 16,
         height: 12,
         frames: 1,

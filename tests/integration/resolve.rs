@@ -6,7 +6,7 @@
 use crate::common::{
     borrowed, data, gpu, kernel_sources, largest_relative_difference, measured, options, render, render_with_layout,
 };
-use lightgraph::render::{LayoutOverrides, device_flags, kernel_flags, load_graph, load_scene, specialization};
+use lightgraph::run::{LayoutOverrides, device_flags, kernel_flags, load_graph, load_scene, specialization};
 use lightgraph_engine::{ConstValue, Plan, Program};
 
 /// The kernels' WGSL of `graph` in `layout` for the Cornell box with `constants`.

@@ -3,7 +3,7 @@
 
 use crate::common::{assert_finite, gpu, render};
 use lightgraph::assets::scene_names;
-use lightgraph::render::load_scene;
+use lightgraph::run::load_scene;
 use lightgraph_engine::reflect::struct_layout;
 use lightgraph_engine::wgsl::preprocess;
 use lightgraph_scenes::bvh::BvhKind;

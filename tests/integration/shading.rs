@@ -6,7 +6,7 @@
 //! vertices renders as the analytic sphere does.
 
 use crate::common::{assert_analytic, data, region, render};
-use lightgraph::render::{Image, LoadedScene, load_scene};
+use lightgraph::run::{Image, LoadedScene, load_scene};
 use lightgraph_engine::ConstValue;
 use lightgraph_scenes::bvh::BvhKind;
 

@@ -7,7 +7,7 @@
 use crate::cli::{fails, lightgraph, temp_dir};
 use crate::common::{borrowed, gpu, measured, options};
 use lightgraph::reference::Reference;
-use lightgraph::render::{LoadedScene, Session, load_graph, load_scene};
+use lightgraph::run::{LoadedScene, Session, load_graph, load_scene};
 use lightgraph_engine::ConstValue;
 use std::collections::BTreeMap;
 

@@ -2,7 +2,7 @@
 //! specialised kernel renders the same image as one with every feature compiled in.
 
 use crate::common::{gpu, kernel_sources, largest_relative_difference};
-use lightgraph::render::{LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
+use lightgraph::run::{LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
 
 /// The generated WGSL of every kernel of `pt` in NaivePTsk for `scene`.
 fn kernel_source(scene: &LoadedScene, all_features: bool) -> String {

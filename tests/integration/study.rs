@@ -8,7 +8,7 @@ use crate::common::gpu;
 use crate::reference::reference;
 use lightgraph::compare::{RunBudget, run};
 use lightgraph::reference::Reference;
-use lightgraph::render::{load_graph, load_scene};
+use lightgraph::run::{load_graph, load_scene};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Stdio};

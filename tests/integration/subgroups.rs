@@ -7,7 +7,7 @@
 
 use crate::cli::{lightgraph, temp_dir};
 use crate::common::{assert_same_render, gpu, render_with_layout};
-use lightgraph::render::{LayoutOverrides, load_graph, load_scene};
+use lightgraph::run::{LayoutOverrides, load_graph, load_scene};
 use lightgraph_engine::Plan;
 
 /// The layouts of `graph` whose kernels append: to a queue, or to a compaction boundary.

@@ -5,7 +5,7 @@
 //! a test graph, in path tracing (an emitter seen through the holes) and in ambient occlusion.
 
 use crate::common::{data, gpu, render};
-use lightgraph::render::LoadedScene;
+use lightgraph::run::LoadedScene;
 use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization};
 use lightgraph_scenes::CompiledScene;
 use lightgraph_scenes::bvh::BvhKind;
@@ -550,7 +550,7 @@ fn occlusion_rays_pass_through_alpha_masked_holes() {
 /// Kernels sample textures and test alpha masks only for scenes that have them.
 #[test]
 fn only_scenes_with_textures_or_masks_set_their_flags() {
-    let cornell = lightgraph::render::load_scene("cornell-diffuse").unwrap();
+    let cornell = lightgraph::run::load_scene("cornell-diffuse").unwrap();
     let shading = |flags: std::collections::BTreeSet<String>| -> Vec<String> {
         flags
             .into_iter()

@@ -4,7 +4,7 @@
 //! frames (three frames give one frame's image), and the two BVHs find the same hits.
 
 use crate::common::{data, render};
-use lightgraph::render::load_scene_with;
+use lightgraph::run::load_scene_with;
 use lightgraph_scenes::bvh::BvhKind;
 
 #[test]

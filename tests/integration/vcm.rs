@@ -8,7 +8,7 @@ use crate::common::{Rendered, borrowed, gpu, largest_relative_difference, measur
 use crate::frames::{render_frames, render_frames_with};
 use crate::pm::assert_the_mirror_shows_the_caustic;
 use lightgraph::aov::{Aov, AovRender};
-use lightgraph::render::{LoadedScene, load_scene};
+use lightgraph::run::{LoadedScene, load_scene};
 use lightgraph_engine::ConstValue;
 use lightgraph_scenes::bvh::BvhKind;
 

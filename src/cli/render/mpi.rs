@@ -1,34 +1,35 @@
 //! `render --mpi` (cargo feature `mpi`): one run across the ranks of an MPI job, one GPU each
 //! (lightgraph::cluster); rank 0 shows the progress and writes the film.
 
-use super::args::measure_into;
-use super::args::si;
-use super::gpus::{Setup, budget, progress_bar};
-use super::render::RenderArgs;
+use super::{RenderArgs, budget, progress_bar, write_film};
+use crate::cli::args::si;
+use crate::cli::film::stopped_by_signal;
 use anyhow::{Result, anyhow};
 use indicatif::ProgressBar;
 use lightgraph::cluster::{Outcome, place, rank_adapter, render_across};
 use lightgraph::reference::Reference;
+use lightgraph::run::Run;
 use lightgraph_engine::ConstValue;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::time::Instant;
 
+/// `lightgraph render --mpi`: the frames of one render shared by the ranks of an MPI job, one
+/// GPU each; rank 0 shows the progress, takes a resumed film in and writes the film.
 pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<()> {
     let universe = mpi::initialize().ok_or_else(|| anyhow!("MPI is initialised already"))?;
     let world = universe.world();
     let root = place(&world).rank == 0;
-    let mut setup = Setup::load(args, "--mpi")?;
+    let mut run = Run::load_named(&args.spec(), "--mpi")?;
     args.check_out()?;
-    share_measured(&world, &mut setup, args.common.adapter.as_deref());
-    let (w, h) = (setup.opts.width, setup.opts.height);
+    share_measured(&world, &mut run, args.common.adapter.as_deref());
+    let (w, h) = (run.options.width, run.options.height);
     // The ranks render into an empty film; a resumed one takes it in at the end.
-    let mut film = setup.film(args, None)?;
+    let mut film = args.start_film(&run, None)?;
     if let Some(r) = &resumed {
-        setup.film(args, Some(r.clone()))?;
+        args.start_film(&run, Some(r.clone()))?;
     }
     let out = args.out();
-    let run = setup.run(args);
     let bar = if root {
         progress_bar(args)
     } else {
@@ -72,7 +73,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
     bar.finish();
     if !root {
         return match outcome.interrupted {
-            true => super::film::stopped_by_signal("rank 0 writes the film".into()),
+            true => stopped_by_signal("rank 0 writes the film".into()),
             false => Ok(()),
         };
     }
@@ -81,7 +82,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
     }
     let seconds = outcome.render_seconds;
     let setup_seconds = start.elapsed().as_secs_f64() - seconds;
-    film.info.insert("layout".into(), setup.layout.clone());
+    film.info.insert("layout".into(), run.layout.clone());
     let frames_by_rank = &outcome.frames_by_rank;
     film.info.insert("ranks".into(), frames_by_rank.len().to_string());
     film.info
@@ -91,11 +92,11 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
         whole.merge(&film, path)?;
         film = whole;
     }
-    let png = super::render::write_film(&film, &out, args.exposure)?;
+    let png = write_film(&film, &out, args.exposure)?;
     report(&film, &outcome, pixels, setup_seconds);
     println!("wrote {} and {}", out.display(), png.display());
     if outcome.interrupted {
-        return super::film::stopped_by_signal(format!(
+        return stopped_by_signal(format!(
             "{} holds {} frames ({}); `render --mpi --resume {}` goes on after the last",
             out.display(),
             film.frames,
@@ -137,9 +138,9 @@ fn report(film: &Reference, outcome: &Outcome, pixels: f64, setup_seconds: f64) 
 /// Rank 0 measures the graph's measured constants that the options do not give (on its GPU)
 /// and sends them to every rank, so that all ranks render one estimator and the film records
 /// the values. A failed measurement ends the job.
-fn share_measured(world: &SimpleCommunicator, setup: &mut Setup, adapter: Option<&str>) {
-    let opts = &setup.opts;
-    let names: Vec<String> = setup
+fn share_measured(world: &SimpleCommunicator, run: &mut Run, adapter: Option<&str>) {
+    let opts = &run.options;
+    let names: Vec<String> = run
         .graph
         .measured
         .keys()
@@ -153,19 +154,18 @@ fn share_measured(world: &SimpleCommunicator, setup: &mut Setup, adapter: Option
     let mut values = vec![0f32; names.len()];
     if place.rank == 0 {
         let selector = rank_adapter(&place, adapter);
-        let run = (setup.layout.as_str(), &setup.decl);
-        if let Err(e) = measure_into(&mut setup.opts, &setup.graph, run, &setup.scene, Some(&selector)) {
+        if let Err(e) = run.measure_on(Some(&selector)) {
             eprintln!("error: rank 0: {e:#}");
             world.abort(1)
         }
         for (value, name) in values.iter_mut().zip(&names) {
-            if let Some(ConstValue::F32(v)) = setup.opts.constants.get(name) {
+            if let Some(ConstValue::F32(v)) = run.options.constants.get(name) {
                 *value = *v;
             }
         }
     }
     world.process_at_rank(0).broadcast_into(&mut values[..]);
     for (name, value) in names.into_iter().zip(values) {
-        setup.opts.constants.insert(name, ConstValue::F32(value));
+        run.options.constants.insert(name, ConstValue::F32(value));
     }
 }

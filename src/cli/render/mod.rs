@@ -1,20 +1,25 @@
-//! `lightgraph render`: a progressive render to EXR and PNG.
+//! `lightgraph render`: a progressive render to EXR and PNG, on one GPU, several (`--gpus`,
+//! [`gpus`]) or the ranks of an MPI job (`--mpi`, [`mpi`]); `--layout auto` ([`auto`]).
+
+mod auto;
+mod gpus;
+#[cfg(feature = "mpi")]
+mod mpi;
 
 use super::args::*;
 use super::film::{check_out, frames_left, settings_from_film, stopped_by_signal};
 use anyhow::{Result, bail};
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::aov::{Aov, AovRender};
 use lightgraph::interrupt;
-use lightgraph::layout_cache;
 use lightgraph::metrics::image_error;
+use lightgraph::multi::Budget;
 use lightgraph::output;
 use lightgraph::reference::{Reference, film_settings};
-use lightgraph::render::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
+use lightgraph::run::{LoadedScene, Run, RunSpec, Session};
 use lightgraph::tev::LiveView;
-use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::{Gpu, Graph, Plan};
-use lightgraph_scenes::bvh::BvhKind;
+use lightgraph_engine::Gpu;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -31,17 +36,17 @@ pub struct RenderArgs {
     #[arg(long)]
     pub layout: Option<String>,
     /// Time each layout gets when --layout auto measures it.
-    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "500ms")]
+    #[arg(long, value_parser = crate::cli::checks::duration, allow_hyphen_values = true, default_value = "500ms")]
     pub tune_time: Duration,
     /// With --layout auto: measure again even where the layout cache holds this render's
     /// fastest layout (and store the new winner).
     #[arg(long)]
     pub retune: bool,
     /// Render for this long (e.g. 10s, 2m); overrides --frames.
-    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true)]
+    #[arg(long, value_parser = crate::cli::checks::duration, allow_hyphen_values = true)]
     pub time: Option<Duration>,
     /// Frames to render.
-    #[arg(long, default_value_t = 64, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 64, value_parser = crate::cli::checks::count::<u32>, allow_negative_numbers = true)]
     pub frames: u32,
     /// Seed of the random streams [default: 1, or the resumed film's].
     #[arg(long)]
@@ -62,7 +67,7 @@ pub struct RenderArgs {
     pub resume: Option<PathBuf>,
     /// Write the film (and the PNG) every this often while rendering (e.g. 10m), so a run
     /// that is killed keeps its frames up to the last checkpoint.
-    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true)]
+    #[arg(long, value_parser = crate::cli::checks::duration, allow_hyphen_values = true)]
     pub checkpoint: Option<Duration>,
     /// Exposure of the PNG preview in stops.
     #[arg(long, default_value_t = 0.0)]
@@ -115,10 +120,19 @@ impl RenderArgs {
         self.seed.unwrap_or(1)
     }
 
-    /// The film the run starts from: the resumed one (its settings checked against the
-    /// run's `graph` and `opts`, measured constants included) or an empty one.
-    pub fn start_film(&self, graph: &Graph, opts: &SessionOptions, resumed: Option<Reference>) -> Result<Reference> {
-        let info = film_settings(self.common.scene(), graph, opts);
+    /// The run these arguments name.
+    pub fn spec(&self) -> RunSpec {
+        RunSpec {
+            first_frame: self.first_frame as u64,
+            ..self.common.spec(self.graph.name(), self.layout.as_deref(), self.seed())
+        }
+    }
+
+    /// The film `run` starts from: the resumed one (its settings checked against the run's,
+    /// measured constants included) or an empty one.
+    pub fn start_film(&self, run: &Run, resumed: Option<Reference>) -> Result<Reference> {
+        let opts = &run.options;
+        let info = film_settings(&run.spec.scene, &run.graph, opts);
         let size = (opts.width, opts.height);
         match (resumed, &self.resume) {
             (Some(film), Some(path)) => {
@@ -171,48 +185,35 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     let resumed = resume_film(&mut args)?;
     #[cfg(feature = "mpi")]
     if args.mpi {
-        return super::mpi::render_with_mpi(&args, resumed);
+        return mpi::render_with_mpi(&args, resumed);
     }
     if let Some(spec) = &args.gpus {
-        return super::gpus::render_on_several_gpus(&args, spec, resumed);
+        return gpus::render_on_several_gpus(&args, spec, resumed);
     }
-    let c = &args.common;
-    let graph = load_graph(args.graph.name())?;
-    // A named layout chooses the BVH; `--layout auto` measures its layouts on one.
-    let named = match args.layout.as_deref() {
-        Some("auto") => None,
-        name => Some(named_layout(&graph, name)?),
-    };
-    let kind = match &named {
-        Some((name, decl)) => c.bvh.for_layout(name, decl)?,
-        None => c.bvh.or_default(),
-    };
-    let scene = load_scene_with(c.scene(), kind)?;
-    // Options and the output are checked (after the inputs, whose errors come first) before
-    // the device opens.
-    let mut opts = options(c, &scene, &graph, args.seed())?;
+    let mut run = Run::load(&args.spec())?;
+    // The output is checked (after the inputs, whose errors come first) before the device opens.
     args.check_out()?;
-    let gpu = Gpu::new(c.adapter.as_deref())?;
-    let (layout, decl) = choose_layout(&gpu, &graph, &scene, &opts, &args, named, kind)?;
+    let gpu = Gpu::new(run.spec.adapter.as_deref())?;
+    if let Some((layout, decl)) = auto::choose_layout(&gpu, &run, &args)? {
+        (run.layout, run.decl) = (layout, decl);
+    }
     // Measured once, so that the film records the value (shards must share it to merge).
-    let measured = lightgraph::render::measure_constants(&gpu, &graph, &layout, decl.clone(), &scene, &opts)?;
-    opts.constants.extend(measured);
-    let (w, h) = (opts.width, opts.height);
+    run.measure(&gpu)?;
+    let (w, h) = (run.options.width, run.options.height);
     eprintln!(
         "{} | scene {} ({}) | graph {} layout {} | {w}x{h}",
         gpu.describe(),
-        c.scene(),
-        scene_size(&scene),
-        graph.name,
-        layout
+        run.spec.scene,
+        scene_size(&run.scene),
+        run.graph.name,
+        run.layout
     );
     let reference = reference_mean(args.reference.as_ref(), (w, h))?;
-    let mut film = args.start_film(&graph, &opts, resumed)?;
-    for (k, v) in [("layout", layout.clone()), ("adapter", gpu.info.name.clone())] {
+    let mut film = args.start_film(&run, resumed)?;
+    for (k, v) in [("layout", run.layout.clone()), ("adapter", gpu.info.name.clone())] {
         film.info.insert(k.to_string(), v);
     }
-    let mut session = Session::with_layout(&gpu, &graph, &layout, decl, &scene, opts)?;
-    session.first_frame = args.first_frame;
+    let mut session = run.session(&gpu)?;
     // A frame count that splits a group of frames rendered at once is refused before rendering.
     session.check_frames(args.first_frame, if args.time.is_none() { args.frames } else { 0 })?;
     let out = args.out();
@@ -239,7 +240,7 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     }
     add_statistics(&mut film, &session);
     if let Some(list) = &args.aov {
-        film.layers = feature_buffers(&gpu, &scene, &session, list, args.first_frame)?;
+        film.layers = feature_buffers(&gpu, &run.scene, &session, list, args.first_frame)?;
     }
     let png = write_film(&film, &out, args.exposure)?;
     report_rates(&session, film.seconds - seconds_before);
@@ -308,7 +309,7 @@ fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut
     let (w, h) = (session.options.width as f64, session.options.height as f64);
     let mut error_text = String::new();
     let mut error_at: Option<Instant> = None;
-    let bar = super::gpus::progress_bar(args);
+    let bar = progress_bar(args);
     let start = Instant::now();
     let (mut absorbed_at, mut saved_at) = (start, Instant::now());
     loop {
@@ -411,111 +412,6 @@ fn report_rates(session: &Session, seconds: f64) {
     }
 }
 
-/// The layout of a render: a layout named with `--layout` as it is; else the one `--layout
-/// auto` measured fastest for this render's key (`lightgraph::layout_cache`) unless
-/// `--retune`; else, without `--layout`, the graph's default (`named`), and with `--layout
-/// auto`, the fastest measured now (and stored).
-fn choose_layout(
-    gpu: &Gpu,
-    graph: &Graph,
-    scene: &LoadedScene,
-    opts: &SessionOptions,
-    args: &RenderArgs,
-    named: Option<(String, LayoutDecl)>,
-    kind: BvhKind,
-) -> Result<(String, LayoutDecl)> {
-    let named = match (named, &args.layout) {
-        (Some(named), Some(_)) => return Ok(named),
-        (named, _) => named,
-    };
-    let key = cache_key(gpu, opts, args, kind);
-    if let Some(cached) = layout_cache::find(&key).filter(|_| !args.retune) {
-        match Plan::with_decl(graph, &cached.name, cached.layout.clone()) {
-            Ok(_) => {
-                eprintln!(
-                    "layout {} from the layout cache ({:.1} Msamples/s when --layout auto measured it, {}; \
-                     --layout NAME or --layout auto --retune to choose)",
-                    cached.name,
-                    cached.samples_per_second / 1e6,
-                    cached.measured
-                );
-                return Ok((cached.name, cached.layout));
-            }
-            Err(e) => eprintln!(
-                "warning: the cached layout {} no longer plans ({e}); not used",
-                cached.name
-            ),
-        }
-    }
-    match named {
-        Some(default) => Ok(default),
-        None => tune_layout(gpu, graph, scene, opts, args, key),
-    }
-}
-
-/// What the layout cache keys a render's measurement by.
-fn cache_key(gpu: &Gpu, opts: &SessionOptions, args: &RenderArgs, kind: BvhKind) -> layout_cache::Key {
-    layout_cache::Key {
-        graph: args.graph.name().to_string(),
-        scene: args.common.scene().to_string(),
-        size: (opts.width, opts.height),
-        spp: opts.samples_per_frame,
-        bvh: format!("{kind:?}"),
-        constants: opts
-            .constants
-            .iter()
-            .map(|(k, v)| (k.clone(), format!("{v:?}")))
-            .collect(),
-        adapter: gpu.describe(),
-        version: env!("CARGO_PKG_VERSION").to_string(),
-    }
-}
-
-/// `--layout auto`: measures every legal layout of `graph`, writes the table beside the
-/// output, stores the fastest in the layout cache under `key`, and returns it.
-fn tune_layout(
-    gpu: &Gpu,
-    graph: &Graph,
-    scene: &LoadedScene,
-    opts: &SessionOptions,
-    args: &RenderArgs,
-    key: layout_cache::Key,
-) -> Result<(String, LayoutDecl)> {
-    eprintln!(
-        "--layout auto: measuring every legal layout of '{}' for {:?} each",
-        graph.name, args.tune_time
-    );
-    let trials = lightgraph::tune::autotune(gpu, graph, scene, opts, args.tune_time, |t| {
-        eprintln!("  {:>9.1} Msamples/s  {}", t.score() / 1e6, t.name);
-    })?;
-    let table = lightgraph::tune::table(&trials);
-    println!("{table}");
-    let report = args.out().with_extension("auto.md");
-    if let Some(dir) = report.parent() {
-        std::fs::create_dir_all(dir)?;
-    }
-    std::fs::write(&report, &table)?;
-    let best = &trials[0];
-    eprintln!(
-        "winner: {} ({:.1} Msamples/s); table in {}",
-        best.name,
-        best.score() / 1e6,
-        report.display()
-    );
-    let entry = layout_cache::Entry {
-        key,
-        name: best.name.clone(),
-        layout: best.decl.clone(),
-        samples_per_second: best.score(),
-        measured: layout_cache::now(),
-    };
-    match layout_cache::store(entry) {
-        Ok(path) => eprintln!("stored in the layout cache {}", path.display()),
-        Err(e) => eprintln!("warning: the winner is not stored: {e:#}"),
-    }
-    Ok((best.name.clone(), best.decl.clone()))
-}
-
 /// The feature buffers `list` names, over the frames `session` rendered (see lightgraph::aov).
 fn feature_buffers(
     gpu: &Gpu,
@@ -567,4 +463,19 @@ fn scene_size(scene: &LoadedScene) -> String {
         c.geometry_bytes() as f64 / 1048576.0,
         c.geometry_bytes() as f64 / n,
     )
+}
+
+/// The progress bar of a render of `args`: over its time in milliseconds, else its frames.
+fn progress_bar(args: &RenderArgs) -> ProgressBar {
+    let bar = ProgressBar::new(args.time.map_or(args.frames as u64, |t| t.as_millis() as u64));
+    bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
+    bar
+}
+
+/// The budget of `args`: its time, else its frames.
+fn budget(args: &RenderArgs) -> Budget {
+    match args.time {
+        Some(t) => Budget::Time(t),
+        None => Budget::Frames(args.frames as u64),
+    }
 }

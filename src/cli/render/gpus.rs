@@ -1,53 +1,15 @@
 //! `render --gpus`: one run on several GPUs of the machine (lightgraph::multi), with a
 //! progress line of each GPU's rate and one film at the end.
 
-use super::args::*;
-use super::render::RenderArgs;
-use anyhow::{Result, bail};
-use indicatif::{ProgressBar, ProgressStyle};
+use super::{RenderArgs, budget, progress_bar, write_film};
+use crate::cli::args::{reference_mean, si};
+use crate::cli::film::stopped_by_signal;
+use anyhow::Result;
 use lightgraph::metrics::image_error;
-use lightgraph::multi::{Budget, Merging, Run, Share, render_on_gpus};
+use lightgraph::multi::{Merging, Share, gpu_selectors, render_on_gpus};
 use lightgraph::reference::Reference;
-use lightgraph::render::{LoadedScene, SessionOptions, load_graph, load_scene_with};
-use lightgraph_engine::Graph;
-use lightgraph_engine::ir::LayoutDecl;
+use lightgraph::run::Run;
 use std::time::{Duration, Instant};
-
-/// The adapters `--gpus` names: `all`, the first N, or a comma-separated list of indices, PCI
-/// bus ids or names (one may repeat: several devices of one adapter).
-pub fn gpu_selectors(spec: &str) -> Result<Vec<String>> {
-    let adapters = lightgraph_engine::gpu::adapters();
-    let listed = || {
-        adapters
-            .iter()
-            .enumerate()
-            .map(|(i, a)| lightgraph_engine::gpu::describe_adapter(i, a))
-            .collect::<Vec<_>>()
-            .join("; ")
-    };
-    let count = match spec.trim() {
-        "all" => adapters.len(),
-        s if !s.contains(',') => match s.parse::<usize>() {
-            Ok(n) => n,
-            Err(_) => return Ok(vec![s.to_string()]),
-        },
-        s => {
-            return Ok(s
-                .split(',')
-                .map(|x| x.trim().to_string())
-                .filter(|x| !x.is_empty())
-                .collect());
-        }
-    };
-    if count == 0 || count > adapters.len() {
-        bail!(
-            "--gpus {spec}: this machine has {} adapters: {}",
-            adapters.len(),
-            listed()
-        );
-    }
-    Ok((0..count).map(|i| i.to_string()).collect())
-}
 
 /// The progress line: frames, samples/s and each GPU's rate.
 fn progress_line(shares: &[Share], film: &Reference, pixels: f64, secs: f64, error: &str) -> String {
@@ -65,98 +27,27 @@ fn progress_line(shares: &[Share], film: &Reference, pixels: f64, secs: f64, err
     )
 }
 
-/// What a render shared by GPUs or ranks needs: scene, graph, options and the named layout.
-pub struct Setup {
-    pub scene: LoadedScene,
-    pub graph: Graph,
-    pub opts: SessionOptions,
-    pub layout: String,
-    pub decl: LayoutDecl,
-}
-
-impl Setup {
-    /// Loads what `args` name; `how` is the option that shares the run (for the error when
-    /// the layout is `auto`, which measures on one GPU).
-    pub fn load(args: &RenderArgs, how: &str) -> Result<Setup> {
-        let c = &args.common;
-        if args.layout.as_deref() == Some("auto") {
-            bail!("--layout auto measures layouts on one GPU; name a layout with {how}");
-        }
-        let graph = load_graph(args.graph.name())?;
-        let (layout, decl) = named_layout(&graph, args.layout.as_deref())?;
-        let scene = load_scene_with(c.scene(), c.bvh.for_layout(&layout, &decl)?)?;
-        let opts = options(c, &scene, &graph, args.seed())?;
-        Ok(Setup {
-            scene,
-            graph,
-            opts,
-            layout,
-            decl,
-        })
-    }
-
-    /// The run of `args`'s frames.
-    pub fn run(&self, args: &RenderArgs) -> Run<'_> {
-        Run {
-            graph: &self.graph,
-            layout: (&self.layout, &self.decl),
-            scene: &self.scene,
-            options: &self.opts,
-            first_frame: args.first_frame as u64,
-        }
-    }
-
-    /// The run's film: `resumed` (its settings checked) or an empty one.
-    pub fn film(&self, args: &RenderArgs, resumed: Option<Reference>) -> Result<Reference> {
-        args.start_film(&self.graph, &self.opts, resumed)
-    }
-}
-
-/// The progress bar of a render of `args`: over its time in milliseconds, else its frames.
-pub fn progress_bar(args: &RenderArgs) -> ProgressBar {
-    let bar = ProgressBar::new(args.time.map_or(args.frames as u64, |t| t.as_millis() as u64));
-    bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
-    bar
-}
-
-/// The budget of `args`: its time, else its frames.
-pub fn budget(args: &RenderArgs) -> Budget {
-    match args.time {
-        Some(t) => Budget::Time(t),
-        None => Budget::Frames(args.frames as u64),
-    }
-}
-
 /// `lightgraph render --gpus`: the frames of one render shared by several GPUs, each claiming
 /// batches sized to its speed, added into one film.
 pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Reference>) -> Result<()> {
-    let c = &args.common;
     let selectors = gpu_selectors(spec)?;
-    let mut setup = Setup::load(args, "--gpus")?;
+    let mut run = Run::load_named(&args.spec(), "--gpus")?;
     args.check_out()?;
     // One measurement shared by every GPU (each measuring its own could differ).
-    let first = selectors.first().map(String::as_str);
-    measure_into(
-        &mut setup.opts,
-        &setup.graph,
-        (&setup.layout, &setup.decl),
-        &setup.scene,
-        first,
-    )?;
-    let (graph, layout) = (&setup.graph, &setup.layout);
-    let (w, h) = (setup.opts.width, setup.opts.height);
+    run.measure_on(selectors.first().map(String::as_str))?;
+    let (graph, layout) = (&run.graph, &run.layout);
+    let (w, h) = (run.options.width, run.options.height);
     let reference = reference_mean(args.reference.as_ref(), (w, h))?;
     eprintln!(
         "{} GPUs ({}) | scene {} | graph {} layout {layout} | {w}x{h}",
         selectors.len(),
         selectors.join(", "),
-        c.scene(),
+        run.spec.scene,
         graph.name
     );
-    let mut film = setup.film(args, resumed)?;
+    let mut film = args.start_film(&run, resumed)?;
     let out = args.out();
     let bar = progress_bar(args);
-    let run = setup.run(args);
     let start = Instant::now();
     let pixels = (w as f64) * (h as f64);
     let (mut error, mut error_at) = (String::new(), None::<Instant>);
@@ -169,7 +60,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
             && film.frames > frames_before
             && saved_at.is_none_or(|t| t.elapsed() >= every)
         {
-            if let Err(e) = super::render::write_film(film, &out, args.exposure) {
+            if let Err(e) = write_film(film, &out, args.exposure) {
                 checkpoint_error.get_or_insert(e);
             }
             saved_at = Some(Instant::now());
@@ -208,7 +99,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
     let rays = rays_before + shares.iter().map(|s| s.rays).sum::<u64>();
     film.info.insert("rays".into(), rays.to_string());
     film.seconds += seconds;
-    let png = super::render::write_film(&film, &out, args.exposure)?;
+    let png = write_film(&film, &out, args.exposure)?;
     if let Some(r) = &reference {
         let e = image_error(&film.mean(), r);
         eprintln!(
@@ -218,7 +109,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
     }
     report_shares(&film, &shares, &merging, pixels);
     println!("wrote {} and {}", out.display(), png.display());
-    super::film::stopped_by_signal(format!(
+    stopped_by_signal(format!(
         "{} and {} hold {} frames; `lightgraph render --resume {} --gpus ...` goes on",
         out.display(),
         png.display(),

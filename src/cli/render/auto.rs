@@ -1,0 +1,99 @@
+//! `render --layout auto` and the layout cache: the layout of a one-GPU render, cached,
+//! measured now, or the one named.
+
+use super::RenderArgs;
+use anyhow::Result;
+use lightgraph::layout_cache;
+use lightgraph::run::Run;
+use lightgraph_engine::Gpu;
+use lightgraph_engine::ir::LayoutDecl;
+
+/// The layout of a render where it is not the run's own: none for a layout named with
+/// `--layout`; else the one `--layout auto` measured fastest for this render's key
+/// (`lightgraph::layout_cache`) unless `--retune`; else, without `--layout`, none (the graph's
+/// default), and with `--layout auto`, the fastest measured now (and stored).
+pub fn choose_layout(gpu: &Gpu, run: &Run, args: &RenderArgs) -> Result<Option<(String, LayoutDecl)>> {
+    if args.layout.is_some() && !run.spec.auto_layout() {
+        return Ok(None);
+    }
+    let key = cache_key(gpu, run);
+    if let Some(cached) = layout_cache::find(&key).filter(|_| !args.retune) {
+        match lightgraph_engine::auto::check(&run.graph, &cached.name, &cached.layout) {
+            Ok(()) => {
+                eprintln!(
+                    "layout {} from the layout cache ({:.1} Msamples/s when --layout auto measured it, {}; \
+                     --layout NAME or --layout auto --retune to choose)",
+                    cached.name,
+                    cached.samples_per_second / 1e6,
+                    cached.measured
+                );
+                return Ok(Some((cached.name, cached.layout)));
+            }
+            Err(e) => eprintln!(
+                "warning: the cached layout {} no longer plans ({e}); not used",
+                cached.name
+            ),
+        }
+    }
+    match run.spec.auto_layout() {
+        true => tune_layout(gpu, run, args, key).map(Some),
+        false => Ok(None),
+    }
+}
+
+/// What the layout cache keys a render's measurement by.
+fn cache_key(gpu: &Gpu, run: &Run) -> layout_cache::Key {
+    let opts = &run.options;
+    layout_cache::Key {
+        graph: run.spec.graph.clone(),
+        scene: run.spec.scene.clone(),
+        size: (opts.width, opts.height),
+        spp: opts.samples_per_frame,
+        bvh: format!("{:?}", run.bvh()),
+        constants: opts
+            .constants
+            .iter()
+            .map(|(k, v)| (k.clone(), format!("{v:?}")))
+            .collect(),
+        adapter: gpu.describe(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+    }
+}
+
+/// `--layout auto`: measures every legal layout of `graph`, writes the table beside the
+/// output, stores the fastest in the layout cache under `key`, and returns it.
+fn tune_layout(gpu: &Gpu, run: &Run, args: &RenderArgs, key: layout_cache::Key) -> Result<(String, LayoutDecl)> {
+    eprintln!(
+        "--layout auto: measuring every legal layout of '{}' for {:?} each",
+        run.graph.name, args.tune_time
+    );
+    let trials = lightgraph::tune::autotune(gpu, run, args.tune_time, |t| {
+        eprintln!("  {:>9.1} Msamples/s  {}", t.score() / 1e6, t.name);
+    })?;
+    let table = lightgraph::tune::table(&trials);
+    println!("{table}");
+    let report = args.out().with_extension("auto.md");
+    if let Some(dir) = report.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(&report, &table)?;
+    let best = &trials[0];
+    eprintln!(
+        "winner: {} ({:.1} Msamples/s); table in {}",
+        best.name,
+        best.score() / 1e6,
+        report.display()
+    );
+    let entry = layout_cache::Entry {
+        key,
+        name: best.name.clone(),
+        layout: best.decl.clone(),
+        samples_per_second: best.score(),
+        measured: layout_cache::now(),
+    };
+    match layout_cache::store(entry) {
+        Ok(path) => eprintln!("stored in the layout cache {}", path.display()),
+        Err(e) => eprintln!("warning: the winner is not stored: {e:#}"),
+    }
+    Ok((best.name.clone(), best.decl.clone()))
+}

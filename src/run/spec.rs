@@ -1,0 +1,199 @@
+//! What names a run ([`RunSpec`]: scene, graph, layout, options, constants, seed, frames) and
+//! the run it loads ([`Run`]: the graph, its layout, the scene and the checked options, the
+//! measured constants once measured), from which every front end makes its sessions.
+
+use crate::run::checks;
+use crate::run::graph::{load_graph, named_layout};
+use crate::run::measure::measure_constants;
+use crate::run::options::{LayoutOverrides, SessionOptions, parse_sets};
+use crate::run::scene::{BvhChoice, LoadedScene, load_scene_with};
+use crate::run::session::Session;
+use anyhow::{Result, anyhow, bail};
+use lightgraph_engine::ir::LayoutDecl;
+use lightgraph_engine::{ConstValue, Gpu, Graph};
+use lightgraph_scenes::bvh::BvhKind;
+
+/// The scene rendered when none is named.
+pub const DEFAULT_SCENE: &str = "cornell-mitsuba";
+/// The graph used when none is named.
+pub const DEFAULT_GRAPH: &str = "pt";
+/// The layout name that asks a front end to measure the graph's layouts and take the fastest.
+pub const AUTO_LAYOUT: &str = "auto";
+
+/// Everything that names a run, before anything is loaded: what the command line's flags and
+/// the Python module's keyword arguments both become.
+#[derive(Debug, Clone)]
+pub struct RunSpec {
+    /// Scene: a built-in name, a .ron scene file, a bare .gltf/.glb or a Mitsuba .xml file.
+    pub scene: String,
+    /// Graph: a built-in name or a .ron graph file.
+    pub graph: String,
+    /// Layout name (None: the graph's default; [`AUTO_LAYOUT`]: measured by the front end).
+    pub layout: Option<String>,
+    /// Image size (None: the scene's).
+    pub res: Option<(u32, u32)>,
+    /// Samples per pixel in each frame.
+    pub spp: u32,
+    /// Longest path in segments (None: the scene's).
+    pub max_path_length: Option<u32>,
+    /// Constant settings, `NAME=VALUE`, checked against the graph when it is loaded.
+    pub sets: Vec<String>,
+    /// Layout option overrides and compilation switches.
+    pub overrides: LayoutOverrides,
+    /// The acceleration structure.
+    pub bvh: BvhChoice,
+    /// Seed of the random streams.
+    pub seed: u32,
+    /// Frame index of the run's first frame.
+    pub first_frame: u64,
+    /// GPU adapter: an index, a PCI bus id or text of its name (None: the default).
+    pub adapter: Option<String>,
+}
+
+impl Default for RunSpec {
+    fn default() -> RunSpec {
+        RunSpec {
+            scene: DEFAULT_SCENE.to_string(),
+            graph: DEFAULT_GRAPH.to_string(),
+            layout: None,
+            res: None,
+            spp: 1,
+            max_path_length: None,
+            sets: Vec::new(),
+            overrides: LayoutOverrides::default(),
+            bvh: BvhChoice::default(),
+            seed: 1,
+            first_frame: 0,
+            adapter: None,
+        }
+    }
+}
+
+impl RunSpec {
+    /// Whether the layout is to be measured ([`AUTO_LAYOUT`]).
+    pub fn auto_layout(&self) -> bool {
+        self.layout.as_deref() == Some(AUTO_LAYOUT)
+    }
+
+    /// The session options for `scene` rendered by `graph`; the image size is checked to fit
+    /// before anything is allocated, and the settings to be constants of the graph.
+    pub fn options(&self, scene: &LoadedScene, graph: &Graph) -> Result<SessionOptions> {
+        let (width, height) = self.res.unwrap_or(scene.scene.resolution);
+        let spp = self.spp;
+        checks::image_fits(width, height, spp).map_err(|e| anyhow!("--res {width}x{height} with --spp {spp}: {e}"))?;
+        let mut constants = parse_sets(&self.sets, graph, "--set ")?;
+        if let Some(n) = self.max_path_length {
+            constants.insert("MAX_PATH_LENGTH".into(), ConstValue::U32(n));
+        }
+        Ok(SessionOptions {
+            width,
+            height,
+            samples_per_frame: spp,
+            seed: self.seed,
+            constants,
+            layout: self.overrides.clone(),
+        })
+    }
+}
+
+/// A loaded run: the graph in a layout, the scene with the layout's BVH and the checked
+/// options. Its sessions ([`Run::session`]) compile it for one GPU each.
+pub struct Run {
+    /// What it was loaded from.
+    pub spec: RunSpec,
+    /// The graph.
+    pub graph: Graph,
+    /// The layout's name.
+    pub layout: String,
+    /// The layout.
+    pub decl: LayoutDecl,
+    /// The scene, with the BVH the layout asks for.
+    pub scene: LoadedScene,
+    /// The session options (measured constants among the constants once measured).
+    pub options: SessionOptions,
+}
+
+impl Run {
+    /// Loads the graph, its layout (the default one while [`RunSpec::auto_layout`], until the
+    /// front end chooses), the scene and the options `spec` names, in that order (so the
+    /// errors of the inputs come first).
+    pub fn load(spec: &RunSpec) -> Result<Run> {
+        let graph = load_graph(&spec.graph)?;
+        let auto = spec.auto_layout();
+        let (layout, decl) = named_layout(&graph, spec.layout.as_deref().filter(|_| !auto))?;
+        let kind = match auto {
+            true => spec.bvh.or_default(),
+            false => spec.bvh.for_layout(&layout, &decl)?,
+        };
+        let scene = load_scene_with(&spec.scene, kind)?;
+        let options = spec.options(&scene, &graph)?;
+        Ok(Run {
+            spec: spec.clone(),
+            graph,
+            layout,
+            decl,
+            scene,
+            options,
+        })
+    }
+
+    /// [`Run::load`] of a run with a named layout: `how` (the option or call that shares the
+    /// run) is in the error when the layout is `auto`, which measures on one GPU.
+    pub fn load_named(spec: &RunSpec, how: &str) -> Result<Run> {
+        if spec.auto_layout() {
+            bail!("--layout auto measures layouts on one GPU; name a layout with {how}");
+        }
+        Run::load(spec)
+    }
+
+    /// The BVH the scene was loaded with.
+    pub fn bvh(&self) -> BvhKind {
+        self.scene.compiled.bvh_kind
+    }
+
+    /// Puts the graph's measured constants (those the options do not give) into the options,
+    /// measured once on `gpu`, so that every session and GPU of the run, and its film's
+    /// settings, share one measurement.
+    pub fn measure(&mut self, gpu: &Gpu) -> Result<()> {
+        let measured = measure_constants(
+            gpu,
+            &self.graph,
+            &self.layout,
+            self.decl.clone(),
+            &self.scene,
+            &self.options,
+        )?;
+        self.options.constants.extend(measured);
+        Ok(())
+    }
+
+    /// [`Run::measure`] on the adapter `adapter` names, opened only where something is left
+    /// to measure.
+    pub fn measure_on(&mut self, adapter: Option<&str>) -> Result<()> {
+        if self.measured() {
+            return Ok(());
+        }
+        self.measure(&Gpu::new(adapter)?)
+    }
+
+    /// Whether every measured constant of the graph has its value in the options.
+    pub fn measured(&self) -> bool {
+        let constants = &self.options.constants;
+        self.graph.measured.keys().all(|name| constants.contains_key(name))
+    }
+
+    /// The run compiled and instantiated on `gpu`, at the run's first frame.
+    pub fn session<'g>(&self, gpu: &'g Gpu) -> Result<Session<'g>> {
+        let mut session = Session::with_layout(
+            gpu,
+            &self.graph,
+            &self.layout,
+            self.decl.clone(),
+            &self.scene,
+            self.options.clone(),
+        )?;
+        session.first_frame =
+            u32::try_from(self.spec.first_frame).map_err(|_| anyhow!("the first frame is past 2^32"))?;
+        Ok(session)
+    }
+}
