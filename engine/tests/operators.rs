@@ -148,7 +148,7 @@ fn sort_targets() -> Vec<(&'static str, Target)> {
 #[test]
 fn an_adapter_with_subgroups_ranks_the_sort_by_ballots() {
     // lavapipe (subgroups of 8, 32 KiB of workgroup memory) must run the ballot ranking, or
-    // CI would not test it: 32 rows of 128 words and 13 elements a thread fit.
+    // CI would not test it: 32 rows of 128 words and 8 elements a thread fit.
     let target = gpu().target();
     if target.subgroups() {
         let shape = SortShape::of(&target);

@@ -45,7 +45,7 @@ pub struct OperatorsArgs {
     pub warm_up: std::time::Duration,
     /// Most elements a thread of the radix sort ranks by subgroup ballots (4 to 16; fewer
     /// where the workgroup memory is short, the per-thread-count ranking below 4).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 8)]
     pub sort_items: u32,
     /// Use no subgroup operations even where the adapter has them.
     #[arg(long)]
