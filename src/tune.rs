@@ -6,8 +6,8 @@
 use crate::bench::{Measurement, measure};
 use crate::run::Run;
 use anyhow::{Result, bail};
-use lightgraph_engine::ir::{LayoutDecl, Policy, StateStorage};
 use lightgraph_engine::Gpu;
+use lightgraph_engine::ir::{LayoutDecl, Policy, StateStorage};
 use std::fmt::Write;
 use std::time::Duration;
 
