@@ -133,12 +133,6 @@ pub fn compile(
 }
 
 impl Program {
-    /// [`compile`] of the graph and layout of `plan` (which is planned again, on the live
-    /// graph).
-    pub fn compile(plan: &Plan, spec: &Specialization, target: &Target) -> Result<Program> {
-        compile(&plan.graph, &plan.layout_name, &plan.layout, spec, target)
-    }
-
     /// Reflects, resolves and generates the planned live graph `plan`.
     fn generate(plan: Plan, spec: &Specialization, target: &Target) -> Result<Program> {
         let shared = reflect::sources(&plan, &spec.flags)?;

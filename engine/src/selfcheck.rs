@@ -14,8 +14,7 @@ use crate::gpu::Gpu;
 use crate::graph::Graph;
 use crate::ir::ConstValue;
 use crate::limits::Target;
-use crate::plan::Plan;
-use crate::program::{Program, Specialization};
+use crate::program::{Specialization, compile};
 use crate::runtime::Instance;
 use crate::vfs::{Layer, Vfs};
 use std::collections::BTreeMap;
@@ -341,7 +340,6 @@ pub fn run(gpu: &Gpu, target: &Target, inputs: &Inputs, buckets: u64, runs: u32,
     }
     let vfs = Vfs::new(vec![Layer::Embedded(FILES)]);
     let graph = Graph::load(&vfs, "operators.ron")?;
-    let plan = Plan::new(&graph, "operators")?;
     let spec = Specialization {
         constants: BTreeMap::from([
             ("N".to_string(), ConstValue::U32(n as u32)),
@@ -349,7 +347,7 @@ pub fn run(gpu: &Gpu, target: &Target, inputs: &Inputs, buckets: u64, runs: u32,
         ]),
         ..Default::default()
     };
-    let program = Program::compile(&plan, &spec, target)?;
+    let program = compile(&graph, "operators", graph.layout("operators")?, &spec, target)?;
     let op_kernels: Vec<Vec<String>> = program
         .ops
         .iter()

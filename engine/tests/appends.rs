@@ -2,7 +2,7 @@
 //! subgroups and per item without: every item must arrive exactly once, and a queue that is
 //! too small must count exactly the items that did not fit.
 
-use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization, Target, Vfs};
+use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Specialization, Target, Vfs, compile};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
@@ -33,12 +33,11 @@ struct Frame {
 
 fn run(layout: &str, target: &Target, per: u32) -> Frame {
     let g = graph();
-    let plan = Plan::new(&g, layout).unwrap();
     let spec = Specialization {
         constants: [("PER".to_string(), ConstValue::U32(per))].into_iter().collect(),
         ..Default::default()
     };
-    let program = Program::compile(&plan, &spec, target).unwrap();
+    let program = compile(&g, layout, &g.layouts[layout], &spec, target).unwrap();
     let aggregated = program
         .kernels
         .iter()

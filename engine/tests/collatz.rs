@@ -4,7 +4,7 @@
 
 use lightgraph_engine::ir::{LayoutDecl, LoopMode, Policy};
 use lightgraph_engine::program::RuntimeChecks;
-use lightgraph_engine::{ConstValue, Gpu, Graph, Instance, Layer, Plan, Program, Specialization, Vfs};
+use lightgraph_engine::{ConstValue, Gpu, Graph, Instance, Layer, Plan, Specialization, Vfs, compile};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -43,12 +43,11 @@ fn run(layout: &str, n: u32) -> Outputs {
 /// Runs one frame of layout `decl` (named `name`) over the numbers 1..=n: the steps of each
 /// walk, the histogram and the counters.
 fn run_decl(g: &Graph, name: &str, decl: LayoutDecl, n: u32) -> Outputs {
-    let plan = Plan::with_decl(g, name, decl).unwrap();
     let spec = Specialization {
         constants: [("N".to_string(), ConstValue::U32(n))].into_iter().collect(),
         ..Default::default()
     };
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let program = compile(g, name, &decl, &spec, &gpu().target()).unwrap();
     let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
     let stats = instance.run_frame(0, 0).unwrap();
     let steps = bytemuck::pod_collect_to_vec(&instance.read("steps").unwrap());
@@ -119,8 +118,8 @@ fn passes_nobody_reads_are_culled() {
 #[test]
 fn chunked_layouts_run_in_several_chunks() {
     let g = graph();
-    let plan = Plan::new(&g, "split_chunked").unwrap();
-    let program = Program::compile(&plan, &Specialization::default(), &gpu().target()).unwrap();
+    let decl = &g.layouts["split_chunked"];
+    let program = compile(&g, "split_chunked", decl, &Specialization::default(), &gpu().target()).unwrap();
     assert_eq!(program.resolved.domains[0].chunk, 100);
     assert_eq!(program.resolved.domains[0].default, 1000);
     assert_eq!(
@@ -175,12 +174,11 @@ fn graph_with_per_call(per_call: &str) -> Graph {
 fn per_call_expressions_size_queues_from_constants() {
     let compile = |per_call: &str, bins: u32| {
         let g = graph_with_per_call(per_call);
-        let plan = Plan::new(&g, "split_chunked").unwrap();
         let spec = Specialization {
             constants: [("BINS".to_string(), ConstValue::U32(bins))].into_iter().collect(),
             ..Default::default()
         };
-        Program::compile(&plan, &spec, &gpu().target())
+        compile(&g, "split_chunked", &g.layouts["split_chunked"], &spec, &gpu().target())
     };
     // 100 items per chunk, each emitting at most per_call walks into the queue.
     let number = compile("1", 64).unwrap();
@@ -284,7 +282,6 @@ fn run_bounded(g: &Graph, name: &str, decl: LayoutDecl, n: u32, bound: u32) -> R
 
 /// The instance of layout `decl` (named `name`) over 1..=n with the constant BOUND.
 fn bounded_instance(g: &Graph, name: &str, decl: LayoutDecl, n: u32, bound: u32) -> Instance<'static> {
-    let plan = Plan::with_decl(g, name, decl).unwrap();
     let spec = Specialization {
         constants: [
             ("N".to_string(), ConstValue::U32(n)),
@@ -294,7 +291,7 @@ fn bounded_instance(g: &Graph, name: &str, decl: LayoutDecl, n: u32, bound: u32)
         .collect(),
         ..Default::default()
     };
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let program = compile(g, name, &decl, &spec, &gpu().target()).unwrap();
     Instance::new(gpu(), program, &BTreeMap::new()).unwrap()
 }
 
@@ -399,12 +396,19 @@ fn function_text<'a>(wgsl: &'a str, name: &str) -> &'a str {
 #[test]
 fn a_state_kernel_stores_only_the_words_its_passes_write() {
     let g = graph();
-    let plan = Plan::with_decl(&g, "split", g.layouts["split"].clone()).unwrap();
     let spec = Specialization {
         constants: [("N".to_string(), ConstValue::U32(10))].into_iter().collect(),
         ..Default::default()
     };
-    let program = Program::compile(&plan, &spec, &lightgraph_engine::Target::default()).unwrap();
+    let program = compile(
+        &g,
+        "split",
+        &g.layouts["split"],
+        &spec,
+        &lightgraph_engine::Target::default(),
+    )
+    .unwrap();
+    let plan = &program.plan;
     let k = plan
         .kernel_ids()
         .find(|&k| plan.kernels[k].name.contains("step"))
@@ -435,13 +439,12 @@ fn a_layout_compiles_with_its_constants_unless_given_them() {
     let g = graph();
     let mut decl = g.layouts["fused"].clone();
     decl.constants.insert("BINS".to_string(), ConstValue::U32(32));
-    let plan = Plan::with_decl(&g, "fused", decl).unwrap();
     let compiled = |given: &[(&str, ConstValue)]| {
         let spec = Specialization {
             constants: given.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
             ..Default::default()
         };
-        Program::compile(&plan, &spec, &gpu().target())
+        compile(&g, "fused", &decl, &spec, &gpu().target())
             .unwrap()
             .plan
             .graph
@@ -481,8 +484,7 @@ fn a_layout_may_leave_the_loop_guards_out() {
         let mut decl = g.layouts[layout].clone();
         assert!(decl.loop_guards, "the guards are on by default");
         decl.loop_guards = false;
-        let plan = Plan::with_decl(&g, layout, decl.clone()).unwrap();
-        let program = Program::compile(&plan, &Specialization::default(), &gpu().target()).unwrap();
+        let program = compile(&g, layout, &decl, &Specialization::default(), &gpu().target()).unwrap();
         assert!(
             program.kernels.iter().all(|k| k.checks == RuntimeChecks::NoLoopGuards),
             "{layout}"
@@ -499,17 +501,20 @@ fn a_pool_is_cut_to_what_fits_one_binding_with_its_header() {
     let mut decl = g.layouts["split"].clone();
     decl.policy = Policy::Compaction;
     decl.threads = Some(256);
-    let plan = Plan::with_decl(&g, "pool", decl.clone()).unwrap();
     let spec = Specialization {
         constants: [("N".to_string(), ConstValue::U32(700))].into_iter().collect(),
         ..Default::default()
     };
-    let item_bytes = 4 * Program::compile(&plan, &spec, &gpu().target()).unwrap().resolved.words["Walk"].len() as u64;
+    let item_bytes = 4 * compile(&g, "pool", &decl, &spec, &gpu().target())
+        .unwrap()
+        .resolved
+        .words["Walk"]
+        .len() as u64;
     let target = lightgraph_engine::Target {
         max_binding_bytes: 256 * item_bytes,
         ..gpu().target()
     };
-    let program = Program::compile(&plan, &spec, &target).unwrap();
+    let program = compile(&g, "pool", &decl, &spec, &target).unwrap();
     let fits = (256 * item_bytes - lightgraph_engine::resolve::BOUNDARY_HEADER) / item_bytes;
     assert_eq!(program.resolved.pools.values().copied().max(), Some(fits));
     let (steps, _, _) = run_decl(&g, "pool", decl, 700);

@@ -3,7 +3,7 @@
 //! engine enumerates; per-frame parameters changed between frames without recompiling.
 
 use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::{ConstValue, Gpu, Graph, Instance, Layer, Plan, Program, Specialization, Vfs};
+use lightgraph_engine::{ConstValue, Gpu, Graph, Instance, Layer, Specialization, Vfs, compile};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -53,14 +53,13 @@ fn gpu_buckets(
     candidates: u32,
     seed: u32,
 ) -> (Vec<BTreeSet<(u32, u32)>>, u64) {
-    let plan = Plan::with_decl(g, name, decl).unwrap();
     let spec = Specialization {
         constants: [("CANDIDATES".to_string(), ConstValue::U32(candidates))]
             .into_iter()
             .collect(),
         ..Default::default()
     };
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let program = compile(g, name, &decl, &spec, &gpu().target()).unwrap();
     let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
     let stats = instance.run_frame(0, seed).unwrap();
     let starts: Vec<u32> = bytemuck::pod_collect_to_vec(&instance.read("starts").unwrap());
@@ -123,8 +122,14 @@ fn operators_build_a_bucket_table_over_a_counted_domain_in_every_layout() {
 #[test]
 fn parameters_change_between_frames_without_recompiling() {
     let g = load("params.ron");
-    let plan = Plan::new(&g, "fused").unwrap();
-    let program = Program::compile(&plan, &Specialization::default(), &gpu().target()).unwrap();
+    let program = compile(
+        &g,
+        "fused",
+        &g.layouts["fused"],
+        &Specialization::default(),
+        &gpu().target(),
+    )
+    .unwrap();
     let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
     let values = |instance: &Instance| -> Vec<f32> { bytemuck::pod_collect_to_vec(&instance.read("values").unwrap()) };
     instance.run_frame(0, 0).unwrap();

@@ -1,6 +1,6 @@
 //! Fuzzing of the frame-graph front end with proptest: RON graphs, pass catalogs and WGSL
 //! sources are mutated and run through [`Graph::from_text`], [`Plan::new`] for every layout
-//! and [`Program::compile`] (WGSL generation and naga validation, on the CPU with
+//! and [`compile`] (WGSL generation and naga validation, on the CPU with
 //! [`Target::default`]) for one layout; random layouts are planned and compiled against the
 //! unmutated graphs.
 //!
@@ -23,7 +23,7 @@ mod fuzz;
 use fuzz::{Mutated, Outcome, RON, check_located, edits, fuzz};
 use lightgraph_engine::auto;
 use lightgraph_engine::ir::{GraphFile, LayoutDecl, LoopMode, PassEntry, Policy, StateStorage};
-use lightgraph_engine::{ConstValue, Error, Graph, Layer, Plan, Program, Specialization, Target, Vfs};
+use lightgraph_engine::{ConstValue, Error, Graph, Layer, Plan, Specialization, Target, Vfs, compile};
 use proptest::prelude::*;
 use proptest::sample::Index;
 use std::path::PathBuf;
@@ -191,8 +191,11 @@ fn run(
     if plans.is_empty() {
         return Ok(Outcome::Refused("no layout plans".into()));
     }
-    match Program::compile(
-        &plans[layout.index(plans.len())],
+    let plan = &plans[layout.index(plans.len())];
+    match compile(
+        &plan.graph,
+        &plan.layout_name,
+        &plan.layout,
         &specialization(host),
         &Target::default(),
     ) {
@@ -324,8 +327,8 @@ fn seeds_compile() {
     for seed in seeds() {
         let vfs = Vfs::new(vec![Layer::Dir(seed.root.clone())]);
         let graph = Graph::from_text(&vfs, &seed.graph, &seed.files[0].1).unwrap();
-        let plan = Plan::new(&graph, &graph.default_layout).unwrap();
-        Program::compile(&plan, &specialization(DEFAULT_HOST), &Target::default()).unwrap();
+        let (layout, decl) = (&graph.default_layout, &graph.layouts[&graph.default_layout]);
+        compile(&graph, layout, decl, &specialization(DEFAULT_HOST), &Target::default()).unwrap();
     }
 }
 

@@ -18,7 +18,7 @@ use lightgraph_engine::resolve::BufferRef;
 use lightgraph_engine::scratch::SortShape;
 use lightgraph_engine::selfcheck::sort::{Keys, Sorter, compare};
 use lightgraph_engine::selfcheck::{Inputs, Pattern, check, run};
-use lightgraph_engine::{Graph, Instance, Plan, Program, Target, Vfs};
+use lightgraph_engine::{Graph, Instance, Program, Target, Vfs};
 use std::collections::BTreeMap;
 use std::time::Duration;
 
@@ -276,8 +276,7 @@ fn sort_graph(entries: &str) -> String {
 /// The program of `sort_graph(entries)` for `target`.
 fn compile_for(entries: &str, target: &Target) -> lightgraph_engine::Result<Program> {
     let graph = Graph::from_text(&Vfs::default(), "sorting.ron", &sort_graph(entries))?;
-    let plan = Plan::new(&graph, "sort")?;
-    Program::compile(&plan, &Default::default(), target)
+    lightgraph_engine::compile(&graph, "sort", graph.layout("sort")?, &Default::default(), target)
 }
 
 /// The program of `sort_graph(entries)` for a default target (no GPU needed).

@@ -7,7 +7,7 @@
 //! with trees within them, and its rays probe every scale of it.
 
 use crate::common::{data, gpu};
-use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization};
+use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Specialization, compile};
 use lightgraph_scenes::CompiledScene;
 use lightgraph_scenes::bvh::{self, BvhKind};
 use lightgraph_scenes::cwbvh;
@@ -321,7 +321,6 @@ fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes, child_scan: bool
         .collect();
     let vfs = lightgraph::assets::builtin().with_front(Layer::Dir(data("")));
     let graph = Graph::load(&vfs, "graphs/bvh_query.ron").unwrap();
-    let plan = Plan::new(&graph, "fused").unwrap();
     let spec = Specialization {
         constants: [
             ("QUERIES".to_string(), ConstValue::U32(n as u32)),
@@ -336,7 +335,7 @@ fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes, child_scan: bool
             .chain(lightgraph_scenes::features::used(&compiled))
             .collect(),
     };
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let program = compile(&graph, "fused", &graph.layouts["fused"], &spec, &gpu().target()).unwrap();
     let mut externals: BTreeMap<String, Vec<u8>> = compiled
         .resources(&CompiledScene::camera(&scene, 1, 1))
         .into_iter()

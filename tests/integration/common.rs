@@ -4,8 +4,8 @@ use lightgraph::run::{
     Image, LayoutOverrides, LoadedScene, Session, SessionOptions, device_flags, kernel_flags, load_graph,
     specialization,
 };
+use lightgraph_engine::compile;
 use lightgraph_engine::{ConstValue, Gpu};
-use lightgraph_engine::{Plan, Program};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -59,7 +59,7 @@ pub fn measured(
     constants: &[(&str, ConstValue)],
 ) -> Vec<(String, ConstValue)> {
     let loaded = load_graph(graph).unwrap();
-    let decl = Plan::new(&loaded, layout).unwrap().layout;
+    let decl = loaded.layout(layout).unwrap().clone();
     let opts = options(size, spp, seed, constants, Default::default());
     let measured = lightgraph::run::measure_constants(gpu(), &loaded, layout, decl, scene, &opts).unwrap();
     measured.into_iter().collect()
@@ -156,8 +156,7 @@ pub fn kernel_sources(
     let options = options((8, 8), 1, 1, constants, Default::default());
     let flags = kernel_flags(device_flags(gpu()), scene, all_features);
     let spec = specialization(&graph, &scene.scene, &options, flags);
-    let plan = Plan::new(&graph, layout).unwrap();
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let program = compile(&graph, layout, &graph.layouts[layout], &spec, &gpu().target()).unwrap();
     let sources: Vec<&str> = program.kernels.iter().map(|k| k.source.text()).collect();
     sources.join("\n")
 }

@@ -5,7 +5,7 @@
 //! shares of the items, so that ordinary work stays below the cap whatever the CPU's load.
 
 use crate::common::{data, gpu};
-use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization};
+use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Specialization, compile};
 use std::collections::BTreeMap;
 
 /// Runs one frame of the test graph spin.ron in `layout` with `constants`, with subgroup
@@ -14,7 +14,6 @@ use std::collections::BTreeMap;
 fn spin_on(layout: &str, constants: &[(&str, u32)], portable: bool) -> Result<u32, String> {
     let vfs = lightgraph::assets::builtin().with_front(Layer::Dir(data("")));
     let graph = Graph::load(&vfs, "graphs/spin.ron").unwrap();
-    let plan = Plan::new(&graph, layout).unwrap();
     let spec = Specialization {
         constants: constants
             .iter()
@@ -26,7 +25,7 @@ fn spin_on(layout: &str, constants: &[(&str, u32)], portable: bool) -> Result<u3
         true => gpu().target().without_subgroups(),
         false => gpu().target(),
     };
-    let program = Program::compile(&plan, &spec, &target).unwrap();
+    let program = compile(&graph, layout, &graph.layouts[layout], &spec, &target).unwrap();
     let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
     instance.run_frame(0, 1).map_err(|e| e.to_string())?;
     let done = instance.read("done").unwrap();

@@ -20,7 +20,7 @@
 //! cell, always with the same weight, at least the photons of its cell.
 
 use crate::common::{SplitMix64, data, gpu};
-use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization};
+use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Specialization, compile};
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
@@ -296,7 +296,6 @@ const UNSPLIT: Split = Split {
 fn instance(structure: u32, while_query: bool, split: Split) -> Instance<'static> {
     let vfs = lightgraph::assets::builtin().with_front(Layer::Dir(data("graphs")));
     let graph = Graph::load(&vfs, "pm_query.ron").unwrap();
-    let plan = Plan::new(&graph, "query").unwrap();
     let constants = [
         ("PM_CAPACITY", CAPACITY as u32),
         ("QUERIES", QUERIES as u32),
@@ -315,7 +314,7 @@ fn instance(structure: u32, while_query: bool, split: Split) -> Instance<'static
             .collect(),
         ..Default::default()
     };
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let program = compile(&graph, "query", &graph.layouts["query"], &spec, &gpu().target()).unwrap();
     Instance::new(gpu(), program, &BTreeMap::new()).unwrap()
 }
 

@@ -12,7 +12,7 @@
 use crate::common::gpu;
 use lightgraph::run::{LoadedScene, device_flags, kernel_flags, load_graph};
 use lightgraph_engine::ir::Scope;
-use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization, Vfs};
+use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Specialization, Vfs, compile};
 use lightgraph_scenes::CompiledScene;
 use lightgraph_scenes::bvh::BvhKind;
 use std::collections::BTreeMap;
@@ -99,7 +99,6 @@ fn run(
     constants: &[(&str, ConstValue)],
 ) -> Vec<[f32; 4]> {
     let graph = Graph::load(vfs, "probe.ron").unwrap_or_else(|e| panic!("{e}"));
-    let plan = Plan::new(&graph, "fused").unwrap();
     let mut values: BTreeMap<String, ConstValue> = pt.constants.clone();
     for name in ["WIDTH", "HEIGHT", "PIXELS", "SAMPLES_PER_PIXEL", "PATHS"] {
         values.insert(name.to_string(), ConstValue::U32(1));
@@ -112,7 +111,8 @@ fn run(
         constants: values,
         flags,
     };
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap_or_else(|e| panic!("{e}"));
+    let program =
+        compile(&graph, "fused", &graph.layouts["fused"], &spec, &gpu().target()).unwrap_or_else(|e| panic!("{e}"));
     let camera = CompiledScene::camera(&scene.scene, 1, 1);
     let mut externals = scene.compiled.resources(&camera);
     externals.retain(|name, _| graph.resources.get(name).is_some_and(|r| r.scope == Scope::External));

@@ -7,7 +7,7 @@ use crate::common::{
     borrowed, data, gpu, kernel_sources, largest_relative_difference, measured, options, render, render_with_layout,
 };
 use lightgraph::run::{LayoutOverrides, device_flags, kernel_flags, load_graph, load_scene, specialization};
-use lightgraph_engine::{ConstValue, Plan, Program};
+use lightgraph_engine::{ConstValue, compile};
 
 /// The kernels' WGSL of `graph` in `layout` for the Cornell box with `constants`.
 fn cornell_kernels(graph: &str, layout: &str, constants: &[(&str, ConstValue)]) -> String {
@@ -76,7 +76,7 @@ fn shared_memory_is_never_live_twice() {
             kernel_flags(device_flags(gpu()), &scene, false),
         );
         for layout in graph.layouts.keys() {
-            let program = Program::compile(&Plan::new(&graph, layout).unwrap(), &spec, &gpu().target()).unwrap();
+            let program = compile(&graph, layout, &graph.layouts[layout], &spec, &gpu().target()).unwrap();
             let m = &program.resolved.memory;
             for (a, b) in m.sharing() {
                 let (la, lb) = (m.lifetimes[&a], m.lifetimes[&b]);

@@ -6,7 +6,7 @@
 
 use crate::common::{data, gpu, render};
 use lightgraph::run::LoadedScene;
-use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Plan, Program, Specialization};
+use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Specialization, compile};
 use lightgraph_scenes::CompiledScene;
 use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::gpu::{GpuTextureInfo, texture_flags};
@@ -155,7 +155,6 @@ fn surface_queries(
 ) -> Vec<[f32; 4]> {
     let vfs = lightgraph::assets::builtin().with_front(Layer::Dir(data("")));
     let graph = Graph::load(&vfs, "graphs/surface_query.ron").unwrap();
-    let plan = Plan::new(&graph, "fused").unwrap();
     let spec = Specialization {
         constants: [("QUERIES".to_string(), ConstValue::U32(queries.len() as u32))]
             .into_iter()
@@ -168,7 +167,7 @@ fn surface_queries(
             .chain(lightgraph_scenes::features::used(compiled))
             .collect(),
     };
-    let program = Program::compile(&plan, &spec, &gpu().target()).unwrap();
+    let program = compile(&graph, "fused", &graph.layouts["fused"], &spec, &gpu().target()).unwrap();
     let mut externals: BTreeMap<String, Vec<u8>> = compiled
         .resources(&CompiledScene::camera(scene, 1, 1))
         .into_iter()

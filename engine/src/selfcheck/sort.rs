@@ -9,8 +9,7 @@ use crate::gpu::Gpu;
 use crate::graph::Graph;
 use crate::ir::ConstValue;
 use crate::limits::Target;
-use crate::plan::Plan;
-use crate::program::{Program, Specialization};
+use crate::program::{Specialization, compile};
 use crate::runtime::{FrameStats, Instance};
 use crate::vfs::Vfs;
 use std::collections::BTreeMap;
@@ -94,8 +93,13 @@ impl<'g> Sorter<'g> {
     ) -> Result<Sorter<'g>> {
         let text = graph_text(capacity.max(1), bits, counted, values);
         let graph = Graph::from_text(&Vfs::default(), "sort.ron", &text)?;
-        let plan = Plan::new(&graph, "sort")?;
-        let program = Program::compile(&plan, &Specialization::default(), target)?;
+        let program = compile(
+            &graph,
+            "sort",
+            graph.layout("sort")?,
+            &Specialization::default(),
+            target,
+        )?;
         let kernels = program.ops[0].kernels.iter().map(|(k, _)| k.name.clone()).collect();
         Ok(Sorter {
             instance: Instance::new(gpu, program, &BTreeMap::new())?,
