@@ -58,7 +58,7 @@ impl Measurement {
     }
 }
 
-/// Renders one warm-up frame, then frames until `budget` has passed (at least one).
+/// Compiles `graph` in `layout` for `scene`, then [`measure_session`].
 pub fn measure(
     gpu: &Gpu,
     graph: &Graph,
@@ -68,8 +68,15 @@ pub fn measure(
     options: SessionOptions,
     budget: Duration,
 ) -> Result<Measurement> {
+    let session = Session::with_layout(gpu, graph, layout, decl, scene, options)?;
+    measure_session(session, layout, budget)
+}
+
+/// Renders one warm-up frame of `session` (of the layout called `layout`), then frames until
+/// `budget` has passed (at least one).
+pub fn measure_session(mut session: Session, layout: &str, budget: Duration) -> Result<Measurement> {
+    let options = &session.options;
     let (resolution, spp) = ((options.width, options.height), options.samples_per_frame);
-    let mut session = Session::with_layout(gpu, graph, layout, decl, scene, options)?;
     session.render_frame()?;
     let (rays0, kernels0) = (session.rays(), session.kernel_seconds.clone());
     let start = Instant::now();

@@ -1,14 +1,17 @@
 //! `--layout auto`: measure every legal layout of a graph on this scene and GPU (the paper's
-//! advice, "measure every configuration", done by the tool), then refine the fastest few over
-//! option values (workgroup size, pool size, state storage), and the fastest of all with wgpu's
-//! loop guards the other way.
+//! advice, "measure every configuration", done by the tool) for a short screening, then refine
+//! the fastest two over the option values that recorded tunings found to matter (workgroup
+//! size, pool size), and the fastest of all with wgpu's loop guards the other way. On a GPU,
+//! threads compile and instantiate the next layouts while one is measured.
 
-use crate::bench::{Measurement, measure};
-use crate::run::Run;
+use crate::bench::{Measurement, measure_session};
+use crate::run::{Run, Session};
 use anyhow::{Result, bail};
 use lightgraph_engine::Gpu;
 use lightgraph_engine::ir::{LayoutDecl, Policy, StateStorage};
 use std::fmt::Write;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc;
 use std::time::Duration;
 
 /// A layout tried by the tuner, with its measurement or why it failed.
@@ -51,11 +54,49 @@ fn base_name(name: &str) -> String {
     name.rsplit_once(" (").map_or(name, |(n, _)| n).to_string()
 }
 
-/// Measures every legal layout of `run`'s graph for `budget` each, then the three fastest over option values
-/// and the fastest of all with the loop guards flipped;
-/// returns all trials, fastest first. `report` sees each trial as it finishes.
-pub fn autotune(gpu: &Gpu, run: &Run, budget: Duration, mut report: impl FnMut(&Trial)) -> Result<Vec<Trial>> {
-    let (graph, scene, options) = (&run.graph, &run.scene, &run.options);
+/// How the tuner measures.
+#[derive(Debug, Clone, Copy)]
+pub struct Tuning {
+    /// Time each refined layout is measured for; the screening of every legal layout takes
+    /// half of it.
+    pub budget: Duration,
+    /// Threads compiling and instantiating the next layouts while one is measured (0: each in
+    /// turn on the measuring thread).
+    pub preparers: usize,
+}
+
+impl Tuning {
+    /// `budget` a layout, with up to four layouts prepared ahead on a GPU; none ahead on a CPU
+    /// adapter (lavapipe), where compiling beside a measurement would slow the measured device.
+    pub fn for_gpu(gpu: &Gpu, budget: Duration) -> Tuning {
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        Tuning {
+            budget,
+            preparers: if gpu.is_cpu() { 0 } else { threads.clamp(1, 4) },
+        }
+    }
+}
+
+/// Workgroup sizes the refinement tries: 64 and 128 beat 32 and 256 by 5-8% in every recorded
+/// tuning (docs/performance.md, "`--layout auto`").
+const REFINED_WORKGROUPS: [u32; 2] = [64, 128];
+/// Pool sizes the refinement tries besides the layout's own: pool sizes from 2^17 to 2^20
+/// were within 0.1% of each other on the same records.
+const REFINED_POOL: u64 = 1 << 20;
+/// Layouts the refinement takes from the screening, fastest first.
+const REFINED_LAYOUTS: usize = 2;
+
+/// [`autotune_with`] with [`Tuning::for_gpu`].
+pub fn autotune(gpu: &Gpu, run: &Run, budget: Duration, report: impl FnMut(&Trial)) -> Result<Vec<Trial>> {
+    autotune_with(gpu, run, Tuning::for_gpu(gpu, budget), report)
+}
+
+/// Screens every legal layout of `run`'s graph for half the budget each, refines the two
+/// fastest over workgroup size and pool size (state in SoA) for the whole budget, and tries
+/// the fastest of all with the loop guards flipped; returns all trials, fastest first.
+/// `report` sees each trial as it finishes.
+pub fn autotune_with(gpu: &Gpu, run: &Run, tuning: Tuning, mut report: impl FnMut(&Trial)) -> Result<Vec<Trial>> {
+    let graph = &run.graph;
     let base = graph.layouts[&graph.default_layout].clone();
     let candidates = lightgraph_engine::auto::legal_layouts(
         graph,
@@ -67,69 +108,126 @@ pub fn autotune(gpu: &Gpu, run: &Run, budget: Duration, mut report: impl FnMut(&
     if candidates.is_empty() {
         bail!("graph '{}' has no legal layout", graph.name);
     }
-    let mut trials = Vec::new();
-    let mut run = |name: String, decl: LayoutDecl, trials: &mut Vec<Trial>| {
-        let result =
-            measure(gpu, graph, &name, decl.clone(), scene, options.clone(), budget).map_err(|e| format!("{e:#}"));
-        let trial = Trial { name, decl, result };
-        report(&trial);
-        trials.push(trial);
-    };
-    for (name, decl) in candidates {
-        let name = format!("{name} ({})", options_of(&decl));
-        run(name, decl, &mut trials);
-    }
-    trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
-    let best: Vec<(String, LayoutDecl)> = trials
-        .iter()
-        .take(3)
-        .map(|t| (t.name.clone(), t.decl.clone()))
+    let screened = candidates
+        .into_iter()
+        .map(|(name, decl)| (format!("{name} ({})", options_of(&decl)), decl))
         .collect();
-    for (name, decl) in best {
-        let base = base_name(&name);
-        let variable = lightgraph_engine::auto::variable(graph, &name, &decl)?;
-        let threads: Vec<Option<u64>> = if variable.pool {
-            vec![Some(1 << 16), Some(1 << 17), Some(1 << 19), Some(1 << 20)]
-        } else {
-            vec![decl.threads]
+    let mut trials = measure_all(gpu, run, screened, tuning.budget / 2, tuning.preparers, &mut report);
+    trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
+    let refined = refinements(run, &trials)?;
+    trials.extend(measure_all(
+        gpu,
+        run,
+        refined,
+        tuning.budget,
+        tuning.preparers,
+        &mut report,
+    ));
+    trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
+    // The fastest once more with wgpu's loop guards the other way (LayoutDecl::loop_guards).
+    let (name, decl) = (&trials[0].name, &trials[0].decl);
+    let flipped = LayoutDecl {
+        loop_guards: !decl.loop_guards,
+        ..decl.clone()
+    };
+    let label = format!("{} ({})", base_name(name), options_of(&flipped));
+    trials.extend(measure_all(
+        gpu,
+        run,
+        vec![(label, flipped)],
+        tuning.budget,
+        0,
+        &mut report,
+    ));
+    trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
+    Ok(trials)
+}
+
+/// The variants of the fastest screened layouts not measured yet: each of
+/// [`REFINED_WORKGROUPS`], with the layout's own pool and [`REFINED_POOL`] where it has one,
+/// state in SoA.
+fn refinements(run: &Run, trials: &[Trial]) -> Result<Vec<(String, LayoutDecl)>> {
+    let mut out: Vec<(String, LayoutDecl)> = Vec::new();
+    for t in trials.iter().filter(|t| t.result.is_ok()).take(REFINED_LAYOUTS) {
+        let variable = lightgraph_engine::auto::variable(&run.graph, &t.name, &t.decl)?;
+        let pools = match variable.pool {
+            true => vec![t.decl.threads, Some(REFINED_POOL)],
+            false => vec![t.decl.threads],
         };
-        let states: &[StateStorage] = if variable.state {
-            &[StateStorage::SoA, StateStorage::AoS]
-        } else {
-            &[StateStorage::SoA]
-        };
-        for workgroup_size in [32, 64, 128, 256] {
-            for &t in &threads {
-                for &state in states {
-                    let variant = LayoutDecl {
-                        workgroup_size,
-                        threads: t,
-                        state,
-                        ..decl.clone()
-                    };
-                    let label = format!("{base} ({})", options_of(&variant));
-                    if trials.iter().any(|tr| tr.name == label) {
-                        continue;
-                    }
-                    run(label, variant, &mut trials);
+        for workgroup_size in REFINED_WORKGROUPS {
+            for &threads in &pools {
+                let variant = LayoutDecl {
+                    workgroup_size,
+                    threads,
+                    state: StateStorage::SoA,
+                    ..t.decl.clone()
+                };
+                let label = format!("{} ({})", base_name(&t.name), options_of(&variant));
+                let known = |name: &String| *name == label;
+                if !trials.iter().any(|tr| known(&tr.name)) && !out.iter().any(|(n, _)| known(n)) {
+                    out.push((label, variant));
                 }
             }
         }
     }
-    trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
-    // The fastest once more with wgpu's loop guards the other way (LayoutDecl::loop_guards).
-    let (name, decl) = (trials[0].name.clone(), trials[0].decl.clone());
-    let flipped = LayoutDecl {
-        loop_guards: !decl.loop_guards,
-        ..decl
+    Ok(out)
+}
+
+/// Measures each of `layouts` for `budget` after one warm-up frame; `preparers` threads
+/// compile and instantiate the next ones meanwhile (at most `preparers` waiting), so that the
+/// measuring thread only measures. Trials in the order they were measured.
+fn measure_all(
+    gpu: &Gpu,
+    run: &Run,
+    layouts: Vec<(String, LayoutDecl)>,
+    budget: Duration,
+    preparers: usize,
+    report: &mut impl FnMut(&Trial),
+) -> Vec<Trial> {
+    let mut finish = |(name, decl): (String, LayoutDecl), session: Result<Session>| {
+        let result = session
+            .and_then(|s| measure_session(s, &name, budget))
+            .map_err(|e| format!("{e:#}"));
+        let trial = Trial { name, decl, result };
+        report(&trial);
+        trial
     };
-    run(
-        format!("{} ({})", base_name(&name), options_of(&flipped)),
-        flipped,
-        &mut trials,
-    );
-    trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
-    Ok(trials)
+    if preparers == 0 {
+        return layouts
+            .into_iter()
+            .map(|(name, decl)| {
+                let session = prepare(gpu, run, &name, &decl);
+                finish((name, decl), session)
+            })
+            .collect();
+    }
+    let next = AtomicUsize::new(0);
+    let (sender, prepared) = mpsc::sync_channel(preparers);
+    std::thread::scope(|scope| {
+        for _ in 0..preparers.min(layouts.len()) {
+            let (sender, next, layouts) = (sender.clone(), &next, &layouts);
+            scope.spawn(move || {
+                while let Some((name, decl)) = layouts.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    if sender
+                        .send((name.clone(), decl.clone(), prepare(gpu, run, name, decl)))
+                        .is_err()
+                    {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(sender);
+        prepared
+            .iter()
+            .map(|(name, decl, session)| finish((name, decl), session))
+            .collect()
+    })
+}
+
+/// `run` compiled and instantiated on `gpu` in the layout `decl` (called `name`).
+fn prepare<'g>(gpu: &'g Gpu, run: &Run, name: &str, decl: &LayoutDecl) -> Result<Session<'g>> {
+    Session::with_layout(gpu, &run.graph, name, decl.clone(), &run.scene, run.options.clone())
 }
 
 /// The tuner's table as Markdown, fastest first.

@@ -188,6 +188,11 @@ impl Gpu {
         }
     }
 
+    /// Whether the adapter is a CPU (lavapipe), whose "GPU" work shares the host's cores.
+    pub fn is_cpu(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Whether the driver caps the loop iterations of a shader invocation: llvmpipe (lavapipe)
     /// gives each invocation 65535 iterations over all its loops and then ends every loop.
     pub fn caps_invocation_loops(&self) -> bool {

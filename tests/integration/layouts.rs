@@ -184,6 +184,49 @@ fn pooled_layouts_regenerate_across_many_iterations() {
 }
 
 #[test]
+fn auto_layout_prepares_layouts_on_other_threads_and_measures_each_once() {
+    // The GPU path of the tuner (threads compiling the next layouts while one is measured),
+    // forced on lavapipe: every legal layout is screened exactly once, every trial is reported
+    // once and succeeds, whatever order the threads finish in.
+    let run = lightgraph::run::Run::load(&lightgraph::run::RunSpec {
+        scene: "cornell-diffuse".into(),
+        graph: "ao".into(),
+        res: Some((16, 16)),
+        ..Default::default()
+    })
+    .unwrap();
+    let tuning = lightgraph::tune::Tuning {
+        budget: std::time::Duration::from_millis(10),
+        preparers: 3,
+    };
+    let mut seen = Vec::new();
+    let trials =
+        lightgraph::tune::autotune_with(crate::common::gpu(), &run, tuning, |t| seen.push(t.name.clone())).unwrap();
+    let table = lightgraph::tune::table(&trials);
+    assert!(trials.iter().all(|t| t.result.is_ok()), "{table}");
+    let mut names: Vec<&String> = trials.iter().map(|t| &t.name).collect();
+    assert_eq!(seen.len(), names.len(), "{table}");
+    names.sort();
+    names.dedup();
+    assert_eq!(names.len(), trials.len(), "a layout measured twice: {table}");
+    let base = run.graph.layouts[&run.graph.default_layout].clone();
+    let legal = lightgraph_engine::auto::legal_layouts(
+        &run.graph,
+        &lightgraph_engine::ir::LayoutDecl {
+            kernels: Vec::new(),
+            ..base
+        },
+    );
+    for (name, _) in &legal {
+        assert!(
+            trials.iter().any(|t| t.name.starts_with(&format!("{name} ("))),
+            "{name} not screened: {table}"
+        );
+    }
+    assert!(trials.len() > legal.len(), "no refinement: {table}");
+}
+
+#[test]
 fn auto_layout_tunes_the_ambient_occlusion_graph() {
     let run = lightgraph::run::Run::load(&lightgraph::run::RunSpec {
         scene: "cornell-diffuse".into(),

@@ -35,8 +35,9 @@ pub struct RenderArgs {
     /// renders with the fastest.
     #[arg(long)]
     pub layout: Option<String>,
-    /// Time each layout gets when --layout auto measures it.
-    #[arg(long, value_parser = crate::cli::checks::duration, allow_hyphen_values = true, default_value = "500ms")]
+    /// Time each layout gets when --layout auto refines it (half of it to screen each legal
+    /// layout).
+    #[arg(long, value_parser = crate::cli::checks::duration, allow_hyphen_values = true, default_value = "300ms")]
     pub tune_time: Duration,
     /// With --layout auto: measure again even where the layout cache holds this render's
     /// fastest layout (and store the new winner).
