@@ -6,6 +6,7 @@
 //! runs are kept ([`resume`]).
 
 pub mod curve;
+pub mod render;
 pub mod resume;
 
 pub use curve::{convergence_slope, tail_noise, time_to_error};
@@ -14,7 +15,7 @@ use crate::interrupt::Interrupted;
 use crate::metrics::{ImageError, image_error};
 use crate::plot::{Axes, Series, line_plot};
 use crate::reference::Reference;
-use crate::run::{Image, LoadedScene, Session, SessionOptions};
+use crate::run::{Image, LoadedScene, Session, SessionOptions, load_graph, named_layout, parse_sets};
 use anyhow::{Context, Result, bail};
 use lightgraph_engine::{Gpu, Graph};
 use std::fmt::Write;
@@ -495,6 +496,26 @@ fn legend(s: &mut String, extrapolated: bool) -> Result<()> {
         )?;
     }
     Ok(())
+}
+
+/// The estimators a list of `graph[:Layout][@NAME=VALUE...]` names (option `flag`), each
+/// graph, named layout and constant checked, none named twice.
+pub fn estimator_specs(list: &str, flag: &str) -> Result<Vec<EstimatorSpec>> {
+    if list.split(',').all(|s| s.trim().is_empty()) {
+        bail!("{flag} names no estimator; give graphs or graph:Layout pairs, e.g. pt,bpt-lvc:LVC-BPTmk");
+    }
+    let specs = EstimatorSpec::parse_list(list)?;
+    for (i, spec) in specs.iter().enumerate() {
+        if specs[..i].contains(spec) {
+            bail!("{flag} names {spec} twice");
+        }
+        let graph = load_graph(&spec.graph).with_context(|| format!("{flag} {spec}"))?;
+        if let Some(layout) = &spec.layout {
+            named_layout(&graph, Some(layout)).with_context(|| format!("{flag} {spec}"))?;
+        }
+        parse_sets(&spec.sets, &graph, &format!("{flag} @"))?;
+    }
+    Ok(specs)
 }
 
 #[cfg(test)]

@@ -82,3 +82,12 @@ pub fn requested() -> Option<Signal> {
 pub fn exit_code(error: &anyhow::Error) -> u8 {
     error.downcast_ref::<Interrupted>().map_or(1, |i| i.signal.exit_code())
 }
+
+/// After a run wrote `what`: an [`Interrupted`] error if a signal stopped it (so the command
+/// exits with the signal's status), else Ok.
+pub fn stopped_by_signal(what: String) -> anyhow::Result<()> {
+    match requested() {
+        Some(signal) => Err(Interrupted { signal, what }.into()),
+        None => Ok(()),
+    }
+}

@@ -14,6 +14,7 @@ pub mod cli;
 #[cfg(feature = "mpi")]
 pub mod cluster;
 pub mod compare;
+pub mod explain;
 pub mod fetch;
 pub mod interrupt;
 pub mod layout_cache;

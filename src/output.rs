@@ -1,7 +1,7 @@
-//! Result files: 32-bit float EXR with metadata, and sRGB PNG previews.
+//! Result files: 32-bit float EXR with metadata, and sRGB PNG previews; where a film may go.
 
 use crate::run::Image;
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result, anyhow, bail};
 use lightgraph_scenes::texture::linear_to_srgb8;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -124,6 +124,45 @@ pub fn write_png(path: &Path, image: &Image, exposure: f32) -> Result<()> {
     image::save_buffer(path, &bytes, image.width, image.height, image::ColorType::Rgb8)
         .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
+}
+
+/// Checks the film's path `out` before any work: it must be an EXR (the PNG preview goes beside
+/// it), and an existing file is replaced only with `--force`, or added to with `--resume`.
+pub fn check_out(out: &Path, force: bool, resume: Option<&Path>) -> Result<()> {
+    let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !is_exr {
+        bail!(
+            "--out {}: the film is an EXR (the PNG preview is written beside it): give a path ending in .exr, e.g. --out {}",
+            out.display(),
+            out.with_extension("exr").display()
+        );
+    }
+    let resuming_it = resume.is_some_and(|r| same_file(r, out));
+    if out.exists() && !force && !resuming_it {
+        bail!(
+            "--out {}: the file exists; give --resume {0} to add frames to it, --force to replace it, or another --out",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` name the same file (by their canonical paths where they exist).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    }
+}
+
+/// A number with an SI prefix and a trailing space, e.g. "1.28 G".
+pub fn si(v: f64) -> String {
+    match v {
+        v if v >= 1e9 => format!("{:.2} G", v / 1e9),
+        v if v >= 1e6 => format!("{:.2} M", v / 1e6),
+        v if v >= 1e3 => format!("{:.2} k", v / 1e3),
+        v => format!("{v:.1} "),
+    }
 }
 
 #[cfg(test)]

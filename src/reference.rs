@@ -2,7 +2,10 @@
 //! mean radiance (and the f32 remainder of its f64 value), its per-pixel variance, the
 //! settings that made it and the frame indices it holds. `reference` writes them and resumes
 //! them (more samples added with the same settings), `render` writes one, and `merge` adds
-//! films of the same settings over disjoint frame ranges (shards of one run) into one.
+//! films of the same settings over disjoint frame ranges (shards of one run) into one;
+//! [`render`] renders a reference.
+
+pub mod render;
 
 use crate::output::{ExrFile, read_exr, write_channels};
 use crate::run::{Accumulation, Image, SessionOptions};
@@ -279,6 +282,23 @@ impl Reference {
             }
         }
         Ok(reference)
+    }
+
+    /// Checks that a reference has the image size of the render compared with it.
+    pub fn check_size(&self, path: &Path, size: (u32, u32)) -> Result<()> {
+        if self.size != size {
+            bail!(
+                "{}: the reference is {}x{}, the render {}x{}; pass --res {}x{} or make a reference at this size",
+                path.display(),
+                self.size.0,
+                self.size.1,
+                size.0,
+                size.1,
+                self.size.0,
+                self.size.1
+            );
+        }
+        Ok(())
     }
 
     /// Checks that the settings in `info` are those of this reference, naming each that

@@ -126,6 +126,12 @@ pub struct LiveView {
 }
 
 impl LiveView {
+    /// The live view at `address` (none when not asked for) of an image `name` of `size`
+    /// pixels, shown about once a second.
+    pub fn open(address: Option<&str>, name: &str, size: (u32, u32)) -> Option<LiveView> {
+        Some(LiveView::connect(address?, name, size, Duration::from_secs(1)))
+    }
+
     /// Connects to tev at `address` and creates the image `name` of `size` pixels there. Without
     /// a tev there (or when it cannot be reached) warns once and returns a view that shows
     /// nothing.

@@ -2,16 +2,25 @@
 //! shape (height, width, 3); a bad keyword argument raises `ValueError` naming it
 //! (`frames=0: it must be at least 1`), before any work; other errors are `lightgraph.Error`
 //! exceptions carrying the CLI's messages (file:line:column for bad scene and graph files).
-//! Keyword arguments are the CLI's flags (`max_path_length=8` is `--max-path-length 8`). The
+//! Keyword arguments are the CLI's flags (`max_path_length=8` is `--max-path-length 8`),
+//! built into the same typed specs the CLI builds (`RunSpec`, `ReferenceSpec`, `CompareSpec`,
+//! `StudySpec`, `ExplainSpec`). The
 //! GPU work runs with the interpreter released, so other Python threads go on meanwhile.
 //! Every call on one adapter shares one device, opened on first use and kept for the
 //! process's life.
 
 mod checks;
 
-use ::lightgraph::cli::{Cli, Command};
+use ::lightgraph::cli::Cli;
+use ::lightgraph::compare::render::{CompareSpec, PER_DECADE, compare as run_compare};
+use ::lightgraph::explain::{ExplainSpec, report};
 use ::lightgraph::reference::Reference;
-use ::lightgraph::run::{Run, RunSpec, Session as RenderSession};
+use ::lightgraph::reference::render::{
+    REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render as render_reference,
+};
+use ::lightgraph::run::{Run, RunOptions, RunSpec, Session as RenderSession};
+use ::lightgraph::study::DEFAULT_ESTIMATORS;
+use ::lightgraph::study::render::{LAYOUT_TIME, StudySpec, study as run_study};
 use lightgraph_engine::Gpu;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::create_exception;
@@ -52,53 +61,6 @@ fn gpu(adapter: Option<&str>) -> PyResult<&'static Gpu> {
     Ok(opened)
 }
 
-/// A command line built from keyword arguments, parsed by the CLI's own parser.
-struct Argv(Vec<String>);
-
-impl Argv {
-    /// `lightgraph COMMAND`.
-    fn new(command: &str) -> Argv {
-        Argv(vec!["lightgraph".into(), command.into()])
-    }
-
-    /// Adds `--flag value` when `value` is given.
-    fn opt(mut self, flag: &str, value: Option<impl ToString>) -> Argv {
-        if let Some(v) = value {
-            self.0.push(format!("--{flag}"));
-            self.0.push(v.to_string());
-        }
-        self
-    }
-
-    /// Adds `--flag` when `on`.
-    fn flag(mut self, flag: &str, on: bool) -> Argv {
-        if on {
-            self.0.push(format!("--{flag}"));
-        }
-        self
-    }
-
-    /// Adds `--set NAME=VALUE` for each entry of `constants` (booleans as true/false).
-    fn constants(mut self, constants: Option<&Bound<'_, PyDict>>) -> PyResult<Argv> {
-        for (k, v) in constants.into_iter().flat_map(|d| d.iter()) {
-            let value = checks::constant_text(&v)?;
-            self.0.push("--set".into());
-            self.0.push(format!("{}={value}", k.str()?));
-        }
-        Ok(self)
-    }
-
-    /// The command the CLI's parser makes of it; a usage error as `lightgraph.Error`.
-    fn parse(self) -> PyResult<Command> {
-        Ok(Cli::parse_from_args(self.0).map_err(err)?.command)
-    }
-}
-
-/// `WxH` of a (width, height) pair.
-fn size_text(res: Option<(u32, u32)>) -> Option<String> {
-    res.map(|(w, h)| format!("{w}x{h}"))
-}
-
 /// Pixels as a float32 array of shape (height, width, 3).
 fn array<'py>(py: Python<'py>, mean: &[[f32; 3]], (w, h): (u32, u32)) -> PyResult<Bound<'py, PyArray3<f32>>> {
     let flat: Vec<f32> = mean.iter().flatten().copied().collect();
@@ -119,42 +81,29 @@ struct SceneArgs<'a> {
 }
 
 impl SceneArgs<'_> {
-    /// The run of these options, `constants` and `seed`, each checked first (as the CLI
+    /// The run options of these options and `constants`, each checked first (as the CLI
     /// checks its flags, with messages that name the keyword).
-    fn spec(&self, py: Python<'_>, constants: Option<&Bound<'_, PyDict>>, seed: u32) -> PyResult<RunSpec> {
+    fn options(&self, py: Python<'_>, constants: Option<&Bound<'_, PyDict>>) -> PyResult<RunOptions> {
         checks::constants(py, self.graph, constants)?;
         let sets = constants.into_iter().flat_map(|d| d.iter()).map(|(k, v)| {
             let value = checks::constant_text(&v)?;
             Ok(format!("{}={value}", k.str()?))
         });
-        Ok(RunSpec {
-            scene: self.scene.to_string(),
-            graph: self.graph.to_string(),
-            layout: self.layout.map(str::to_string),
+        Ok(RunOptions {
+            scene: Some(self.scene.to_string()),
             res: self.res,
-            spp: self.spp,
+            spp: Some(self.spp),
             max_path_length: self.max_path_length,
             sets: sets.collect::<PyResult<_>>()?,
             bvh: checks::bvh(self.bvh)?,
-            seed,
             adapter: self.adapter.map(str::to_string),
-            ..RunSpec::default()
+            ..RunOptions::default()
         })
     }
 
-    /// `lightgraph COMMAND` with these options and `constants`, each checked first.
-    fn argv(&self, py: Python<'_>, command: &str, constants: Option<&Bound<'_, PyDict>>) -> PyResult<Argv> {
-        checks::constants(py, self.graph, constants)?;
-        Argv::new(command)
-            .opt("scene", Some(self.scene))
-            .opt("graph", Some(self.graph))
-            .opt("layout", self.layout)
-            .opt("spp", Some(self.spp))
-            .opt("res", size_text(self.res))
-            .opt("max-path-length", self.max_path_length)
-            .opt("bvh", Some(self.bvh))
-            .opt("adapter", self.adapter)
-            .constants(constants)
+    /// The run of these options, `constants` and `seed`, each checked first.
+    fn spec(&self, py: Python<'_>, constants: Option<&Bound<'_, PyDict>>, seed: u32) -> PyResult<RunSpec> {
+        Ok(self.options(py, constants)?.spec(self.graph, self.layout, seed))
     }
 }
 
@@ -413,15 +362,31 @@ fn reference<'py>(
         bvh,
         adapter,
     };
-    let frames = frames.or(time.is_none().then_some(64));
-    let cli = s
-        .argv(py, "reference", constants)?
-        .opt("out", Some(out.display()))
-        .opt("seed", seed)
-        .opt("frames", frames)
-        .opt("time", time.map(|t| format!("{}ms", (t * 1e3).round() as u64)))
-        .opt("resume", resume.as_ref().map(|p| p.display()));
-    run(py, cli)?;
+    let mut options = s.options(py, constants)?;
+    let (mut graph, mut seed) = (Some(graph.to_string()), seed);
+    let resume = match resume {
+        Some(path) => {
+            let film = Reference::read(&path).map_err(err)?;
+            options.from_film(&mut graph, &mut seed, REFERENCE_SEED, &film);
+            Some((path, film))
+        }
+        None => None,
+    };
+    let graph = graph.expect("given");
+    let spec = ReferenceSpec {
+        run: options.spec(&graph, layout, seed.unwrap_or(REFERENCE_SEED)),
+        time: time.map(Duration::from_secs_f64),
+        frames: frames.or(time.is_none().then_some(64)),
+        resume,
+        out: out.clone(),
+        force: false,
+        checkpoint: REFERENCE_CHECKPOINT,
+        exposure: 0.0,
+        first_frame: None,
+        gpus: None,
+        tev: None,
+    };
+    py.detach(|| render_reference(spec)).map_err(err)?;
     let film = Reference::read(&out).map_err(err)?;
     array(py, &film.mean(), film.size)
 }
@@ -455,18 +420,25 @@ fn compare(
 ) -> PyResult<String> {
     let time = checks::seconds("time", time)?;
     let (seed, per_decade) = (checks::seed("seed", seed)?, checks::count("per_decade", per_decade)?);
-    let cli = Argv::new("compare")
-        .opt("reference", Some(reference.display()))
-        .opt("runs", Some(runs))
-        .opt("time", Some(format!("{}ms", (time * 1e3).round() as u64)))
-        .opt("seed", Some(seed))
-        .opt("out", Some(out.display()))
-        .opt("per-decade", Some(per_decade))
-        .opt("baseline", baseline)
-        .opt("adapter", adapter);
-    run(py, cli)?;
-    let summary = out.join("summary.md");
-    std::fs::read_to_string(&summary).map_err(|e| Error::new_err(format!("{}: {e}", summary.display())))
+    let spec = CompareSpec {
+        options: RunOptions {
+            adapter: adapter.map(str::to_string),
+            ..RunOptions::default()
+        },
+        runs: runs.to_string(),
+        reference,
+        time: Duration::from_secs_f64(time),
+        setup_on_clock: false,
+        resume: false,
+        baseline: baseline.map(str::to_string),
+        per_decade,
+        seed,
+        tev: None,
+        out,
+        exposure: 0.0,
+        gpus: None,
+    };
+    py.detach(|| run_compare(spec)).map_err(err)
 }
 
 /// Runs `lightgraph study`: each estimator on each scene against a reference per scene,
@@ -503,20 +475,32 @@ fn study(
     let time = checks::seconds("time", time)?;
     let reference_time = checks::seconds("reference_time", reference_time)?;
     let (res, seed) = (checks::image(res, 1)?, checks::seed("seed", seed)?);
-    let millis = |t: f64| format!("{}ms", (t * 1e3).round() as u64);
-    let cli = Argv::new("study")
-        .opt("scenes", Some(scenes.join(",")))
-        .opt("estimators", estimators.map(|e| e.join(",")))
-        .opt("time", Some(millis(time)))
-        .opt("reference-time", Some(millis(reference_time)))
-        .opt("reference-graph", Some(reference_graph))
-        .opt("res", res.map(|(w, h)| format!("{w}x{h}")))
-        .opt("seed", Some(seed))
-        .opt("out", Some(out.display()))
-        .opt("adapter", adapter);
-    run(py, cli)?;
-    let summary = out.join("summary.md");
-    std::fs::read_to_string(&summary).map_err(|e| Error::new_err(format!("{}: {e}", summary.display())))
+    let spec = StudySpec {
+        options: RunOptions {
+            res,
+            adapter: adapter.map(str::to_string),
+            ..RunOptions::default()
+        },
+        scenes,
+        estimators: estimators.map_or_else(|| DEFAULT_ESTIMATORS.to_string(), |e| e.join(",")),
+        time: Duration::from_secs_f64(time),
+        setup_on_clock: false,
+        resume: false,
+        layout_time: LAYOUT_TIME,
+        references: None,
+        reference_graph: reference_graph.to_string(),
+        reference_layout: None,
+        reference_time: Duration::from_secs_f64(reference_time),
+        reference_frames: None,
+        reference_spp: None,
+        per_decade: PER_DECADE,
+        seed,
+        tev: None,
+        out,
+        exposure: 0.0,
+        gpus: None,
+    };
+    py.detach(|| run_study(spec)).map_err(err)
 }
 
 /// The kernels, schedule and resources of `graph`'s layouts (all of them, or `layout`) for
@@ -557,14 +541,16 @@ fn explain(
         bvh: "auto",
         adapter,
     };
-    let Command::Explain(args) = s
-        .argv(py, "explain", constants)?
-        .flag("all-features", all_features)
-        .parse()?
-    else {
-        unreachable!("an explain command line")
+    let mut options = s.options(py, constants)?;
+    options.overrides.all_features = all_features;
+    let spec = ExplainSpec {
+        options,
+        graph: graph.to_string(),
+        layout: layout.map(str::to_string),
+        dot: None,
+        wgsl: None,
     };
-    py.detach(|| ::lightgraph::cli::explain::report(&args)).map_err(err)
+    py.detach(|| report(&spec)).map_err(err)
 }
 
 /// What this installation offers: built-in scenes (name to file), graphs, and the GPU
@@ -612,15 +598,8 @@ fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'py, PyArray3<f3
 /// - args: the command and its options, as strings.
 #[pyfunction]
 fn cli(py: Python<'_>, args: Vec<String>) -> PyResult<()> {
-    run(
-        py,
-        Argv(std::iter::once("lightgraph".to_string()).chain(args).collect()),
-    )
-}
-
-/// Parses and runs `argv` with the interpreter released.
-fn run(py: Python<'_>, argv: Argv) -> PyResult<()> {
-    let command = Cli::parse_from_args(argv.0).map_err(err)?;
+    let argv = std::iter::once("lightgraph".to_string()).chain(args);
+    let command = Cli::parse_from_args(argv).map_err(err)?;
     py.detach(|| command.run()).map_err(err)
 }
 

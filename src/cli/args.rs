@@ -1,19 +1,19 @@
 //! Options shared by the commands: scene, graph, resolution, constants, layout overrides.
 
 use super::checks::count;
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::Result;
 use clap::Args;
-use lightgraph::compare::EstimatorSpec;
+pub use lightgraph::compare::estimator_specs;
+pub use lightgraph::output::si;
 use lightgraph::reference::Reference;
+pub use lightgraph::run::scene::find_scene;
 use lightgraph::run::{
-    BvhChoice, DEFAULT_GRAPH, DEFAULT_SCENE, LayoutOverrides, LoadedScene, RunSpec, SessionOptions, load_graph,
-    named_layout, parse_sets,
+    BvhChoice, DEFAULT_GRAPH, DEFAULT_SCENE, LayoutOverrides, LoadedScene, RunOptions, RunSpec, SessionOptions,
 };
 use lightgraph::tev::LiveView;
 use lightgraph_engine::Graph;
 use lightgraph_engine::ir::StateStorage;
-use std::path::{Path, PathBuf};
-use std::time::Duration;
+use std::path::PathBuf;
 
 /// The live view option of the commands that render progressively.
 #[derive(Args, Clone)]
@@ -28,8 +28,7 @@ pub struct TevArg {
 impl TevArg {
     /// The live view of an image `name` of `size` pixels, if asked for.
     pub fn view(&self, name: &str, size: (u32, u32)) -> Option<LiveView> {
-        let address = self.tev.as_deref()?;
-        Some(LiveView::connect(address, name, size, Duration::from_secs(1)))
+        LiveView::open(self.tev.as_deref(), name, size)
     }
 }
 
@@ -115,15 +114,12 @@ impl Common {
         self.scene.as_deref().unwrap_or(DEFAULT_SCENE)
     }
 
-    /// The run these options name with graph `graph`, layout `layout` (None: the graph's
-    /// default) and `seed`.
-    pub fn spec(&self, graph: &str, layout: Option<&str>, seed: u32) -> RunSpec {
-        RunSpec {
-            scene: self.scene().to_string(),
-            graph: graph.to_string(),
-            layout: layout.map(str::to_string),
+    /// These options as the library takes them.
+    pub fn run_options(&self) -> RunOptions {
+        RunOptions {
+            scene: self.scene.clone(),
             res: self.res,
-            spp: self.spp.unwrap_or(1),
+            spp: self.spp,
             max_path_length: self.max_path_length,
             sets: self.set.clone(),
             overrides: LayoutOverrides {
@@ -136,15 +132,28 @@ impl Common {
                 loop_guards: self.loop_guards,
             },
             bvh: self.bvh,
-            seed,
-            first_frame: 0,
             adapter: self.adapter.clone(),
         }
     }
 
-    /// The session options of `graph` on `scene` with `seed` ([`RunSpec::options`]).
+    /// The run these options name with graph `graph`, layout `layout` (None: the graph's
+    /// default) and `seed` ([`RunOptions::spec`]).
+    pub fn spec(&self, graph: &str, layout: Option<&str>, seed: u32) -> RunSpec {
+        self.run_options().spec(graph, layout, seed)
+    }
+
+    /// The session options of `graph` on `scene` with `seed` ([`RunOptions::options`]).
     pub fn options(&self, scene: &LoadedScene, graph: &Graph, seed: u32) -> Result<SessionOptions> {
-        self.spec(&graph.name, None, seed).options(scene, graph)
+        self.run_options().options(scene, graph, seed)
+    }
+
+    /// Takes the scene, resolution, samples per frame and constants of `options` (filled
+    /// from a film or a reference).
+    pub fn take(&mut self, options: RunOptions) {
+        self.scene = options.scene;
+        self.res = options.res;
+        self.spp = options.spp;
+        self.set = options.sets;
     }
 }
 
@@ -185,62 +194,6 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 pub fn reference_mean(path: Option<&PathBuf>, size: (u32, u32)) -> Result<Option<Vec<[f32; 3]>>> {
     let Some(path) = path else { return Ok(None) };
     let r = Reference::read(path)?;
-    check_size(&r, path, size)?;
+    r.check_size(path, size)?;
     Ok(Some(r.mean()))
-}
-
-/// Checks that a reference has the image size of the render compared with it.
-pub fn check_size(reference: &Reference, path: &Path, size: (u32, u32)) -> Result<()> {
-    if reference.size != size {
-        bail!(
-            "{}: the reference is {}x{}, the render {}x{}; pass --res {}x{} or make a reference at this size",
-            path.display(),
-            reference.size.0,
-            reference.size.1,
-            size.0,
-            size.1,
-            reference.size.0,
-            reference.size.1
-        );
-    }
-    Ok(())
-}
-
-/// A number with an SI prefix and a trailing space, e.g. "1.28 G".
-pub fn si(v: f64) -> String {
-    match v {
-        v if v >= 1e9 => format!("{:.2} G", v / 1e9),
-        v if v >= 1e6 => format!("{:.2} M", v / 1e6),
-        v if v >= 1e3 => format!("{:.2} k", v / 1e3),
-        v => format!("{v:.1} "),
-    }
-}
-
-/// Checks that `scene` (named by option `flag`) is a file or a built-in scene (loading it, and
-/// the errors of its content, come in its turn).
-pub fn find_scene(scene: &str, flag: &str) -> Result<()> {
-    if !Path::new(scene).is_file() {
-        lightgraph::assets::scene_text(scene).map_err(|e| anyhow!("{flag}: {e}"))?;
-    }
-    Ok(())
-}
-
-/// The estimators a list of `graph[:Layout][@NAME=VALUE...]` names (option `flag`), each
-/// graph, named layout and constant checked, none named twice.
-pub fn estimator_specs(list: &str, flag: &str) -> Result<Vec<EstimatorSpec>> {
-    if list.split(',').all(|s| s.trim().is_empty()) {
-        bail!("{flag} names no estimator; give graphs or graph:Layout pairs, e.g. pt,bpt-lvc:LVC-BPTmk");
-    }
-    let specs = EstimatorSpec::parse_list(list)?;
-    for (i, spec) in specs.iter().enumerate() {
-        if specs[..i].contains(spec) {
-            bail!("{flag} names {spec} twice");
-        }
-        let graph = load_graph(&spec.graph).with_context(|| format!("{flag} {spec}"))?;
-        if let Some(layout) = &spec.layout {
-            named_layout(&graph, Some(layout)).with_context(|| format!("{flag} {spec}"))?;
-        }
-        parse_sets(&spec.sets, &graph, &format!("{flag} @"))?;
-    }
-    Ok(specs)
 }

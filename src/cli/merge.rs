@@ -29,7 +29,7 @@ pub fn merge(args: MergeArgs) -> Result<()> {
     for path in &args.films[1..] {
         merged.merge(&Reference::read(path)?, path)?;
     }
-    super::film::check_out(&args.out, args.force, None)?;
+    lightgraph::output::check_out(&args.out, args.force, None)?;
     merged.write(&args.out, "merge")?;
     let png = args.out.with_extension("png");
     lightgraph::output::write_png(&png, &merged.image(), args.exposure)?;

@@ -127,3 +127,107 @@ impl Cli {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::{Path, PathBuf};
+
+    /// The command modules: those [`super::Cli::run`] dispatches to (`name::function(a)` in
+    /// its match), read from this file.
+    fn command_modules(mod_rs: &str) -> Vec<String> {
+        let run = &mod_rs[mod_rs.find("pub fn run(self)").expect("Cli::run")..];
+        run.lines()
+            .filter_map(|l| {
+                l.split_once("=> ")?
+                    .1
+                    .split_once("::")
+                    .map(|(m, _)| m.trim().to_string())
+            })
+            .collect()
+    }
+
+    /// The files under `dir`, recursively.
+    fn files(dir: &Path) -> Vec<PathBuf> {
+        let mut out = Vec::new();
+        for entry in std::fs::read_dir(dir).expect("src/cli") {
+            let path = entry.expect("entry").path();
+            match path.is_dir() {
+                true => out.extend(files(&path)),
+                false => out.push(path),
+            }
+        }
+        out
+    }
+
+    /// The module path under `cli` of the file `rel` (relative to src/cli): `render/gpus.rs`
+    /// is [render, gpus], `render/mod.rs` [render], `mod.rs` [].
+    fn module_of(rel: &Path) -> Vec<String> {
+        let mut parts: Vec<String> = rel.iter().map(|p| p.to_string_lossy().into_owned()).collect();
+        let file = parts.pop().expect("a file name");
+        if file != "mod.rs" {
+            parts.push(file.trim_end_matches(".rs").to_string());
+        }
+        parts
+    }
+
+    /// The module directly under `cli` that a `use` line of module `module` names, if it
+    /// names one: `use super::...` (relative to the module), `use crate::cli::...` or
+    /// `use lightgraph::cli::...`.
+    fn used_module(module: &[String], line: &str) -> Option<String> {
+        let path = line.trim().trim_start_matches("pub ").strip_prefix("use ")?;
+        let mut at: Vec<String> = match path {
+            p if p.starts_with("crate::cli::") || p.starts_with("lightgraph::cli::") => Vec::new(),
+            p if p.starts_with("super::") => module.to_vec(),
+            _ => return None,
+        };
+        let rest = path
+            .trim_start_matches("crate::cli::")
+            .trim_start_matches("lightgraph::cli::");
+        let mut rest = rest;
+        while let Some(r) = rest.strip_prefix("super::") {
+            at.pop();
+            rest = r;
+        }
+        let first = rest
+            .split([':', ';', ',', '{', ' '])
+            .next()
+            .unwrap_or_default()
+            .to_string();
+        Some(at.first().cloned().unwrap_or(first))
+    }
+
+    /// No file under src/cli/ imports another command's module. The command modules are those
+    /// `Cli::run` dispatches to; a file belongs to the command whose module it is or is under
+    /// (`render/gpus.rs` to `render`), and `mod.rs` to none. Each `use` (or `pub use`) line
+    /// starting `use super::`, `use crate::cli::` or `use lightgraph::cli::` is resolved to
+    /// the module directly under `cli` it names; naming a command module other than the
+    /// file's own is an error. The shared helpers (`args`, `checks`, which re-exports
+    /// `lightgraph::run::checks`, `film`) are not commands and may be imported by any; only
+    /// `mod.rs`, which declares and dispatches to the commands, names them all.
+    #[test]
+    fn no_command_module_imports_another() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/cli");
+        let commands = command_modules(&std::fs::read_to_string(dir.join("mod.rs")).expect("mod.rs"));
+        assert!(commands.contains(&"render".to_string()), "{commands:?}");
+        let mut wrong = Vec::new();
+        for file in files(&dir) {
+            let rel = file.strip_prefix(&dir).expect("under src/cli");
+            let module = module_of(rel);
+            let Some(own) = module.first() else { continue };
+            let text = std::fs::read_to_string(&file).expect("a source file");
+            for line in text.lines() {
+                match used_module(&module, line) {
+                    Some(used) if &used != own && commands.contains(&used) => {
+                        wrong.push(format!("{}: {}", rel.display(), line.trim()));
+                    }
+                    _ => {}
+                }
+            }
+        }
+        assert!(
+            wrong.is_empty(),
+            "command modules importing another's:\n{}",
+            wrong.join("\n")
+        );
+    }
+}

@@ -7,6 +7,7 @@ use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::model::Scene;
 use lightgraph_scenes::{CompiledScene, parse_scene};
+use std::path::Path;
 use std::time::Instant;
 
 /// A scene loaded, validated and prepared for the GPU.
@@ -188,4 +189,13 @@ impl Scenes {
             .expect("loaded before use")
             .1
     }
+}
+
+/// Checks that `scene` (named by option `flag`) is a file or a built-in scene (loading it, and
+/// the errors of its content, come in its turn).
+pub fn find_scene(scene: &str, flag: &str) -> Result<()> {
+    if !Path::new(scene).is_file() {
+        crate::assets::scene_text(scene).map_err(|e| anyhow!("{flag}: {e}"))?;
+    }
+    Ok(())
 }

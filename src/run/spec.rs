@@ -2,6 +2,7 @@
 //! the run it loads ([`Run`]: the graph, its layout, the scene and the checked options, the
 //! measured constants once measured), from which every front end makes its sessions.
 
+use crate::reference::Reference;
 use crate::run::checks;
 use crate::run::graph::{load_graph, named_layout};
 use crate::run::measure::measure_constants;
@@ -93,6 +94,95 @@ impl RunSpec {
             constants,
             layout: self.overrides.clone(),
         })
+    }
+}
+
+/// The options of runs as a front end gives them, before defaults: the scene, image size,
+/// samples per frame and constants left out may come from a film or a reference
+/// ([`RunOptions::from_film`], [`RunOptions::from_reference`]); [`RunOptions::spec`] names a
+/// run of them.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Scene (None: [`DEFAULT_SCENE`]).
+    pub scene: Option<String>,
+    /// Image size (None: the scene's).
+    pub res: Option<(u32, u32)>,
+    /// Samples per pixel in each frame (None: 1).
+    pub spp: Option<u32>,
+    /// Longest path in segments (None: the scene's).
+    pub max_path_length: Option<u32>,
+    /// Constant settings, `NAME=VALUE`.
+    pub sets: Vec<String>,
+    /// Layout option overrides and compilation switches.
+    pub overrides: LayoutOverrides,
+    /// The acceleration structure.
+    pub bvh: BvhChoice,
+    /// GPU adapter (None: the default).
+    pub adapter: Option<String>,
+}
+
+impl RunOptions {
+    /// The scene named, or the default.
+    pub fn scene(&self) -> &str {
+        self.scene.as_deref().unwrap_or(DEFAULT_SCENE)
+    }
+
+    /// The run of these options with graph `graph`, layout `layout` (None: the graph's
+    /// default) and `seed`.
+    pub fn spec(&self, graph: &str, layout: Option<&str>, seed: u32) -> RunSpec {
+        RunSpec {
+            scene: self.scene().to_string(),
+            graph: graph.to_string(),
+            layout: layout.map(str::to_string),
+            res: self.res,
+            spp: self.spp.unwrap_or(1),
+            max_path_length: self.max_path_length,
+            sets: self.sets.clone(),
+            overrides: self.overrides.clone(),
+            bvh: self.bvh,
+            seed,
+            first_frame: 0,
+            adapter: self.adapter.clone(),
+        }
+    }
+
+    /// The session options of `graph` on `scene` with `seed` ([`RunSpec::options`]).
+    pub fn options(&self, scene: &LoadedScene, graph: &Graph, seed: u32) -> Result<SessionOptions> {
+        self.spec(&graph.name, None, seed).options(scene, graph)
+    }
+
+    /// Fills the scene, resolution and constants not given with those of `reference`.
+    pub fn from_reference(&mut self, reference: &Reference) {
+        let info = |k: &str| reference.info.get(k).cloned().unwrap_or_default();
+        self.scene.get_or_insert_with(|| info("scene"));
+        self.res.get_or_insert(reference.size);
+        if self.sets.is_empty() && self.max_path_length.is_none() {
+            self.sets = info("constants").split_whitespace().map(String::from).collect();
+        }
+    }
+
+    /// Fills the settings a resumed film has and these options, `graph` and `seed` do not
+    /// give: scene, graph, resolution, samples per frame, seed (default `default_seed`) and
+    /// constants (the measured ones too, so the resumed run renders the film's estimator).
+    /// Those given must match the film's: [`Reference::check_settings`] checks them.
+    pub fn from_film(
+        &mut self,
+        graph: &mut Option<String>,
+        seed: &mut Option<u32>,
+        default_seed: u32,
+        film: &Reference,
+    ) {
+        let info = |k: &str| film.info.get(k).cloned().unwrap_or_default();
+        self.scene.get_or_insert_with(|| info("scene"));
+        graph.get_or_insert_with(|| info("graph"));
+        self.res.get_or_insert(film.size);
+        self.spp
+            .get_or_insert_with(|| info("samples_per_frame").parse().unwrap_or(1));
+        seed.get_or_insert_with(|| info("seed").parse().unwrap_or(default_seed));
+        if self.sets.is_empty() && self.max_path_length.is_none() {
+            let words = format!("{} {}", info("constants"), info("measured"));
+            self.sets = words.split_whitespace().map(String::from).collect();
+        }
     }
 }
 

@@ -5,6 +5,7 @@
 //! ([`verdict`]) and sums the comparisons up ([`summary`]).
 
 pub mod layouts;
+pub mod render;
 pub mod summary;
 pub mod verdict;
 

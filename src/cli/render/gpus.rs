@@ -3,8 +3,8 @@
 
 use super::{RenderArgs, budget, progress_bar, write_film};
 use crate::cli::args::{reference_mean, si};
-use crate::cli::film::stopped_by_signal;
 use anyhow::Result;
+use lightgraph::interrupt::stopped_by_signal;
 use lightgraph::metrics::image_error;
 use lightgraph::multi::{Merging, Share, gpu_selectors, render_on_gpus};
 use lightgraph::reference::Reference;

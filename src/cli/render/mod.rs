@@ -7,15 +7,17 @@ mod gpus;
 mod mpi;
 
 use super::args::*;
-use super::film::{check_out, frames_left, settings_from_film, stopped_by_signal};
+use super::film::{frames_left, settings_from_film};
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::aov::{Aov, AovRender};
 use lightgraph::interrupt;
+use lightgraph::interrupt::stopped_by_signal;
 use lightgraph::metrics::image_error;
 use lightgraph::multi::Budget;
 use lightgraph::output;
+use lightgraph::output::check_out;
 use lightgraph::reference::{Reference, film_settings};
 use lightgraph::run::{LoadedScene, Run, RunSpec, Session};
 use lightgraph::tev::LiveView;
@@ -138,7 +140,7 @@ impl RenderArgs {
         match (resumed, &self.resume) {
             (Some(film), Some(path)) => {
                 film.check_settings(&info, path)?;
-                check_size(&film, path, size)?;
+                film.check_size(path, size)?;
                 Ok(film)
             }
             _ => Ok(Reference::new(size, info)),

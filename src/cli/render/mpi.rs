@@ -3,10 +3,10 @@
 
 use super::{RenderArgs, budget, progress_bar, write_film};
 use crate::cli::args::si;
-use crate::cli::film::stopped_by_signal;
 use anyhow::{Result, anyhow};
 use indicatif::ProgressBar;
 use lightgraph::cluster::{Outcome, place, rank_adapter, render_across};
+use lightgraph::interrupt::stopped_by_signal;
 use lightgraph::reference::Reference;
 use lightgraph::run::Run;
 use lightgraph_engine::ConstValue;
