@@ -414,3 +414,56 @@ fn persistent_thread_layouts_match_at_gpu_sizes() {
         assert_same_render(&a, &b, &format!("{persistent} vs {other} at {}x{}", size.0, size.1));
     }
 }
+
+#[test]
+fn a_render_without_a_layout_takes_the_graphs_layout_for_its_kind_of_adapter() {
+    // A copy of ppm whose adapter_layouts names PPMmk (a CWBVH layout, where the default
+    // PPMsk takes the BVH2) for lavapipe's kind of adapter.
+    let dir = crate::cli::temp_dir("adapter-layouts");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/graphs/ppm.ron")).unwrap();
+    let with = |entry: &str| {
+        let at = text.find("    default_layout:").expect("ppm.ron has a default layout");
+        format!("{}    adapter_layouts: {{ {entry} }},\n{}", &text[..at], &text[at..])
+    };
+    let graph = dir.join("ppm-cpu.ron");
+    std::fs::write(&graph, with("\"Cpu\": \"PPMmk\"")).unwrap();
+    let out = dir.join("x.exr");
+    let render = |graph: &str, layout: &[&str]| {
+        let mut args = vec![
+            "render",
+            "--graph",
+            graph,
+            "--scene",
+            "cornell-diffuse",
+            "--res",
+            "16x16",
+        ];
+        args.extend(["--frames", "1", "--out", out.to_str().unwrap(), "--force"]);
+        args.extend(layout);
+        let run = crate::cli::lightgraph(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr).to_string();
+        assert!(run.status.success(), "{stderr}");
+        stderr
+    };
+    let graph = graph.to_str().unwrap();
+    let taken = render(graph, &[]);
+    assert!(
+        taken.contains("layout PPMmk: the graph's default on Cpu adapters") && taken.contains("layout PPMmk |"),
+        "{taken}"
+    );
+    let named = render(graph, &["--layout", "PPMsk"]);
+    assert!(
+        named.contains("layout PPMsk |") && !named.contains("adapters"),
+        "{named}"
+    );
+    let stock = render("ppm", &[]);
+    assert!(stock.contains("layout PPMsk |"), "{stock}");
+    // A kind wgpu does not know is an error at its line.
+    let bad = dir.join("ppm-bad.ron");
+    std::fs::write(&bad, with("\"Gpu\": \"PPMmk\"")).unwrap();
+    let err = crate::cli::fails(&["explain", "--graph", bad.to_str().unwrap()]);
+    assert!(
+        err.contains("ppm-bad.ron:") && err.contains("'Gpu' is not a kind of adapter"),
+        "{err}"
+    );
+}
