@@ -112,7 +112,6 @@ fn apply(
         loop_bounds: ext.loop_bounds.unwrap_or(base.loop_bounds),
         layouts,
         default_layout: ext.default_layout.unwrap_or(base.default_layout),
-        adapter_layouts: ext.adapter_layouts.unwrap_or(base.adapter_layouts),
         coverage: ext.coverage.unwrap_or(base.coverage),
     };
     Ok((g, files))

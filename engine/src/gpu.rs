@@ -188,11 +188,6 @@ impl Gpu {
         }
     }
 
-    /// The kind of adapter, as a graph's `adapter_layouts` names it (`DiscreteGpu`, `Cpu`, ...).
-    pub fn kind(&self) -> String {
-        format!("{:?}", self.info.device_type)
-    }
-
     /// Whether the adapter is a CPU (lavapipe), whose "GPU" work shares the host's cores.
     pub fn is_cpu(&self) -> bool {
         self.info.device_type == wgpu::DeviceType::Cpu

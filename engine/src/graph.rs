@@ -101,8 +101,6 @@ pub struct Graph {
     pub layouts: BTreeMap<String, LayoutDecl>,
     /// The default layout.
     pub default_layout: String,
-    /// The default layout on an adapter of a kind, where it is not `default_layout`.
-    pub adapter_layouts: BTreeMap<String, String>,
     /// Item chains of the live passes.
     pub chains: Vec<Chain>,
     /// Phases in execution order.
@@ -140,7 +138,6 @@ impl Graph {
             measured: g.measured.clone(),
             layouts: g.layouts.clone(),
             default_layout: g.default_layout.clone(),
-            adapter_layouts: g.adapter_layouts.clone(),
             chains: Vec::new(),
             phases: Vec::new(),
             steps: Vec::new(),
@@ -167,12 +164,6 @@ impl Graph {
                 ),
             )
         })
-    }
-
-    /// The layout used when none is asked for on an adapter of kind `kind` ([`crate::Gpu::kind`]):
-    /// its entry in `adapter_layouts`, else the default layout.
-    pub fn default_layout_on(&self, kind: &str) -> &str {
-        self.adapter_layouts.get(kind).unwrap_or(&self.default_layout)
     }
 
     /// An error located at the first occurrence of `name` in the graph file.

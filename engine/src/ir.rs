@@ -71,20 +71,11 @@ pub struct GraphFile {
     pub layouts: BTreeMap<String, LayoutDecl>,
     /// The layout used when none is asked for.
     pub default_layout: String,
-    /// The layout used when none is asked for on an adapter of a kind (wgpu's device types:
-    /// `DiscreteGpu`, `IntegratedGpu`, `VirtualGpu`, `Cpu`, `Other`), where another layout than
-    /// the default was measured fastest there.
-    #[serde(default)]
-    pub adapter_layouts: BTreeMap<String, String>,
     /// What the graph estimates and what it cannot sample, as the application states them:
     /// the engine keeps them for the application's checks.
     #[serde(default)]
     pub coverage: Coverage,
 }
-
-/// The kinds of adapter a graph's `adapter_layouts` may name: wgpu's device types, as their
-/// `Debug` form writes them ([`crate::Gpu::kind`]).
-pub const ADAPTER_KINDS: [&str; 5] = ["DiscreteGpu", "IntegratedGpu", "VirtualGpu", "Cpu", "Other"];
 
 /// A graph's claims about its estimate, for the application: which quantity it estimates
 /// (graphs of one quantity may be compared) and which samples it cannot draw, each under an
@@ -273,9 +264,6 @@ pub struct ExtendingFile {
     /// Replaces the base's default layout.
     #[serde(default)]
     pub default_layout: Option<String>,
-    /// Replaces the base's layouts by adapter kind.
-    #[serde(default)]
-    pub adapter_layouts: Option<BTreeMap<String, String>>,
     /// Replaces the base's coverage.
     #[serde(default)]
     pub coverage: Option<Coverage>,

@@ -5,9 +5,7 @@
 use crate::error::{Error, Location, Result};
 use crate::expr::Expr;
 use crate::ids::{PassId, indexes};
-use crate::ir::{
-    ADAPTER_KINDS, CatalogFile, ConstValue, GraphFile, PassDecl, PassEntry, PerCall, ResourceDecl, Role, Scope,
-};
+use crate::ir::{CatalogFile, ConstValue, GraphFile, PassDecl, PassEntry, PerCall, ResourceDecl, Role, Scope};
 use crate::operator::{OpKind, Operator, is_u32_word, summed_type};
 use crate::vfs::Vfs;
 use std::collections::BTreeMap;
@@ -510,24 +508,6 @@ impl Declared {
                 &g.default_layout,
                 format!("default layout '{}' is not one of the layouts", g.default_layout),
             ));
-        }
-        self.check_adapter_layouts(file)
-    }
-
-    /// Each `adapter_layouts` entry names a kind of adapter and one of the layouts.
-    fn check_adapter_layouts(&self, file: &str) -> Result<()> {
-        for (kind, layout) in &self.file.adapter_layouts {
-            if !ADAPTER_KINDS.contains(&kind.as_str()) {
-                let why = format!(
-                    "adapter_layouts: '{kind}' is not a kind of adapter ({})",
-                    ADAPTER_KINDS.join(", ")
-                );
-                return Err(self.sources.at_name(file, kind, why));
-            }
-            if !self.file.layouts.contains_key(layout) {
-                let why = format!("adapter_layouts: layout '{layout}' for {kind} is not one of the layouts");
-                return Err(self.sources.at_name(file, layout, why));
-            }
         }
         Ok(())
     }

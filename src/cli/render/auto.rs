@@ -4,7 +4,7 @@
 use super::RenderArgs;
 use anyhow::Result;
 use lightgraph::layout_cache;
-use lightgraph::run::{Run, load_scene_with};
+use lightgraph::run::Run;
 use lightgraph_engine::Gpu;
 use lightgraph_engine::ir::LayoutDecl;
 
@@ -39,25 +39,6 @@ pub fn choose_layout(gpu: &Gpu, run: &Run, args: &RenderArgs) -> Result<Option<(
         true => tune_layout(gpu, run, args, key).map(Some),
         false => Ok(None),
     }
-}
-
-/// Without `--layout` and with nothing cached: the graph's layout for this kind of adapter
-/// where its `adapter_layouts` names one, the scene loaded again when that layout's BVH is
-/// another.
-pub fn take_adapter_default(gpu: &Gpu, run: &mut Run) -> Result<()> {
-    let kind = gpu.kind();
-    let name = run.graph.default_layout_on(&kind).to_string();
-    if name == run.layout {
-        return Ok(());
-    }
-    let decl = run.graph.layout(&name)?.clone();
-    let bvh = run.spec.bvh.for_layout(&name, &decl)?;
-    if bvh != run.bvh() {
-        run.scene = load_scene_with(&run.spec.scene, bvh)?;
-    }
-    eprintln!("layout {name}: the graph's default on {kind} adapters (its adapter_layouts; --layout NAME to choose)");
-    (run.layout, run.decl) = (name, decl);
-    Ok(())
 }
 
 /// What the layout cache keys a render's measurement by.
