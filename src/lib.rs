@@ -18,6 +18,7 @@ pub mod explain;
 pub mod fetch;
 pub mod interrupt;
 pub mod layout_cache;
+pub mod measured_layouts;
 pub mod metrics;
 pub mod multi;
 pub mod output;

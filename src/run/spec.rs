@@ -236,6 +236,18 @@ impl Run {
         Run::load(spec)
     }
 
+    /// The run in the layout called `name` instead, its scene loaded again when the layout's
+    /// BVH (as the spec chooses it) is another.
+    pub fn relayout(&mut self, name: &str) -> Result<()> {
+        let decl = self.graph.layout(name)?.clone();
+        let bvh = self.spec.bvh.for_layout(name, &decl)?;
+        if bvh != self.bvh() {
+            self.scene = load_scene_with(&self.spec.scene, bvh)?;
+        }
+        (self.layout, self.decl) = (name.to_string(), decl);
+        Ok(())
+    }
+
     /// The BVH the scene was loaded with.
     pub fn bvh(&self) -> BvhKind {
         self.scene.compiled.bvh_kind

@@ -414,3 +414,27 @@ fn persistent_thread_layouts_match_at_gpu_sizes() {
         assert_same_render(&a, &b, &format!("{persistent} vs {other} at {}x{}", size.0, size.1));
     }
 }
+
+#[test]
+fn a_run_takes_another_layout_with_that_layouts_bvh() {
+    use lightgraph_scenes::bvh::BvhKind;
+    // PPMsk's hint is the BVH2, PPMmk takes the CWBVH: the scene is loaded again, unless the
+    // spec names a BVH.
+    let spec = |bvh| lightgraph::run::RunSpec {
+        scene: "cornell-diffuse".into(),
+        graph: "ppm".into(),
+        res: Some((16, 16)),
+        bvh: lightgraph::run::BvhChoice(bvh),
+        ..Default::default()
+    };
+    let mut run = lightgraph::run::Run::load(&spec(None)).unwrap();
+    assert_eq!((run.layout.as_str(), run.bvh()), ("PPMsk", BvhKind::Bvh2));
+    run.relayout("PPMmk").unwrap();
+    assert_eq!((run.layout.as_str(), run.bvh()), ("PPMmk", BvhKind::Cwbvh));
+    assert_eq!(run.decl.kernels, run.graph.layouts["PPMmk"].kernels);
+    let mut named = lightgraph::run::Run::load(&spec(Some(BvhKind::Bvh2))).unwrap();
+    named.relayout("PPMmk").unwrap();
+    assert_eq!(named.bvh(), BvhKind::Bvh2);
+    let err = format!("{:#}", run.relayout("PPMxx").unwrap_err());
+    assert!(err.contains("unknown layout 'PPMxx'") && err.contains("PPMsk"), "{err}");
+}

@@ -3,8 +3,8 @@
 
 use super::RenderArgs;
 use anyhow::Result;
-use lightgraph::layout_cache;
 use lightgraph::run::Run;
+use lightgraph::{layout_cache, measured_layouts};
 use lightgraph_engine::Gpu;
 use lightgraph_engine::ir::LayoutDecl;
 
@@ -39,6 +39,25 @@ pub fn choose_layout(gpu: &Gpu, run: &Run, args: &RenderArgs) -> Result<Option<(
         true => tune_layout(gpu, run, args, key).map(Some),
         false => Ok(None),
     }
+}
+
+/// Without `--layout` and with nothing cached: the layout measured fastest for this built-in
+/// scene on this adapter (`lightgraph::measured_layouts`), where one was.
+pub fn take_measured_default(gpu: &Gpu, run: &mut Run) -> Result<()> {
+    let Some(m) = measured_layouts::find(&run.spec.graph, &run.spec.scene, &gpu.info.name) else {
+        return Ok(());
+    };
+    run.relayout(&m.layout)?;
+    eprintln!(
+        "layout {}: measured fastest for this scene on an {} ({:.1} against {:.1} Msamples/s for {}, {}; --layout NAME to choose)",
+        m.layout,
+        m.adapter,
+        m.rate / 1e6,
+        m.default_rate / 1e6,
+        run.graph.default_layout,
+        m.measured
+    );
+    Ok(())
 }
 
 /// What the layout cache keys a render's measurement by.

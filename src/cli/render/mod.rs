@@ -199,6 +199,8 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     let gpu = Gpu::new(run.spec.adapter.as_deref())?;
     if let Some((layout, decl)) = auto::choose_layout(&gpu, &run, &args)? {
         (run.layout, run.decl) = (layout, decl);
+    } else if args.layout.is_none() {
+        auto::take_measured_default(&gpu, &mut run)?;
     }
     // Measured once, so that the film records the value (shards must share it to merge).
     run.measure(&gpu)?;
