@@ -66,13 +66,14 @@ pub struct Tuning {
 }
 
 impl Tuning {
-    /// `budget` a layout, with up to four layouts prepared ahead on a GPU; none ahead on a CPU
+    /// `budget` a layout, with up to eight layouts prepared ahead on a GPU (one a core; eight
+    /// took Sponza's tuning from 22.2 to 19.6 s on an H100 against four); none ahead on a CPU
     /// adapter (lavapipe), where compiling beside a measurement would slow the measured device.
     pub fn for_gpu(gpu: &Gpu, budget: Duration) -> Tuning {
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
         Tuning {
             budget,
-            preparers: if gpu.is_cpu() { 0 } else { threads.clamp(1, 4) },
+            preparers: if gpu.is_cpu() { 0 } else { threads.clamp(1, 8) },
         }
     }
 }
