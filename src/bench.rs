@@ -3,10 +3,9 @@
 //! Markdown table, a CSV and a PNG plot.
 
 use crate::plot::{Axes, Series, line_plot};
-use crate::run::{LoadedScene, Session, SessionOptions};
+use crate::run::{Run, Session};
 use anyhow::{Context, Result};
-use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::{Gpu, Graph};
+use lightgraph_engine::Gpu;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::Path;
@@ -58,18 +57,9 @@ impl Measurement {
     }
 }
 
-/// Compiles `graph` in `layout` for `scene`, then [`measure_session`].
-pub fn measure(
-    gpu: &Gpu,
-    graph: &Graph,
-    layout: &str,
-    decl: LayoutDecl,
-    scene: &LoadedScene,
-    options: SessionOptions,
-    budget: Duration,
-) -> Result<Measurement> {
-    let session = Session::with_layout(gpu, graph, layout, decl, scene, options)?;
-    measure_session(session, layout, budget)
+/// Compiles `run` on `gpu` ([`Run::session`]), then [`measure_session`].
+pub fn measure(gpu: &Gpu, run: &Run, budget: Duration) -> Result<Measurement> {
+    measure_session(run.session(gpu)?, &run.layout, budget)
 }
 
 /// Renders one warm-up frame of `session` (of the layout called `layout`), then frames until

@@ -15,9 +15,9 @@ use crate::interrupt::Interrupted;
 use crate::metrics::{ImageError, image_error};
 use crate::plot::{Axes, Series, line_plot};
 use crate::reference::Reference;
-use crate::run::{Image, LoadedScene, Session, SessionOptions, load_graph, named_layout, parse_sets};
+use crate::run::{Image, Run, Session, load_graph, named_layout, parse_sets};
 use anyhow::{Context, Result, bail};
-use lightgraph_engine::{Gpu, Graph};
+use lightgraph_engine::Gpu;
 use std::fmt::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -155,26 +155,23 @@ impl RunBudget {
     }
 }
 
-/// Renders `graph` in `layout` (the run called `label`) for `budget` on its clock and samples
+/// Renders the run `job` (called `label`) for `budget` on its clock and samples
 /// its error against `reference` after the first frame, then at log-spaced times (see
 /// [`sample_times`]) and after the last frame; `progress` sees the clock, the latest error and
 /// the image it was measured on. With the set-up off the clock, a warm-up frame rendered and
 /// thrown away ([`Session::warm_up`]) is part of it. A signal ([`crate::interrupt`]) ends the
 /// run at its next batch of frames with [`Interrupted`]: a partial run is not comparable.
-#[allow(clippy::too_many_arguments)]
 pub fn run(
     gpu: &Gpu,
-    scene: &LoadedScene,
-    graph: &Graph,
-    (layout, label): (&str, String),
-    options: SessionOptions,
+    job: &Run,
+    label: String,
     budget: RunBudget,
     reference: &[[f32; 3]],
     per_decade: u32,
     mut progress: impl FnMut(f64, Option<&ErrorSample>, &[[f32; 3]]),
 ) -> Result<RunResult> {
     let started = Instant::now();
-    let mut session = Session::new(gpu, graph, layout, scene, options)?;
+    let mut session = job.session(gpu)?;
     if !budget.setup_on_clock {
         session.warm_up()?;
     }

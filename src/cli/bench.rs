@@ -4,7 +4,7 @@ use super::args::*;
 use super::checks::count;
 use anyhow::Result;
 use clap::Args;
-use lightgraph::run::{Scenes, load_graph};
+use lightgraph::run::{Run, Scenes, load_graph};
 use lightgraph_engine::{Gpu, Plan};
 use lightgraph_scenes::bvh::BvhKind;
 use std::path::PathBuf;
@@ -77,10 +77,10 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     let mut results = Vec::new();
     for (w, h, spp) in points {
         for ((name, decl), &kind) in layouts.iter().zip(&kinds) {
-            let scene = scenes.get(kind);
-            let mut opts = c.options(scene, &graph, 1)?;
-            (opts.width, opts.height, opts.samples_per_frame) = (w, h, spp);
-            match lightgraph::bench::measure(&gpu, &graph, name, decl.clone(), scene, opts, args.time) {
+            let spec = c.spec(&graph.name, Some(name), 1);
+            let mut run = Run::with_scene(&spec, graph.clone(), (name.clone(), decl.clone()), scenes.shared(kind))?;
+            (run.options.width, run.options.height, run.options.samples_per_frame) = (w, h, spp);
+            match lightgraph::bench::measure(&gpu, &run, args.time) {
                 Ok(m) => {
                     eprintln!(
                         "  {:>8.2} M paths  {:<20} {:>8.1} Mrays/s ({:>8.1} GPU) {:>8.1} Msamples/s {:>7.1} fps {:>8.1} MiB",

@@ -9,7 +9,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::compare::EstimatorSpec;
 use lightgraph::output::{write_exr, write_png};
-use lightgraph::run::{LoadedScene, Scenes, load_graph, named_layout, parse_sets};
+use lightgraph::run::{LoadedScene, Run as Loaded, Scenes, load_graph, named_layout, parse_sets};
 use lightgraph::study::scene_folders;
 use lightgraph::verify::batches::{Amount, Budget, RunBatches, render_batches};
 use lightgraph::verify::paths::{Kinds, describe, scene_kinds};
@@ -18,8 +18,10 @@ use lightgraph::verify::stats::{TestSettings, compare};
 use lightgraph::verify::{
     Claims, DEFAULT_ESTIMATORS, DEFAULT_SCENES, Outcome, PairResult, claims, expected_gaps, unconfirmed_gaps,
 };
+use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{Gpu, Graph};
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// The arguments of `lightgraph verify`.
@@ -304,8 +306,8 @@ fn render_runs(
     for (i, e) in estimators.iter().enumerate() {
         let decl = e.graph.layouts[&e.layout].clone();
         let kind = scenes.load_for(args.common.bvh, &e.layout, &decl)?;
-        let loaded = scenes.get(kind);
-        kinds.get_or_insert_with(|| scene_kinds(&loaded.compiled));
+        kinds.get_or_insert_with(|| scene_kinds(&scenes.get(kind).compiled));
+        let loaded = (decl, scenes.shared(kind));
         let run = render_run(args, gpu, loaded, e, i as u32).with_context(|| format!("estimator {}", e.label))?;
         let stem = args.out.join(folder).join(lightgraph::compare::file_stem(&e.label));
         write_exr(
@@ -359,13 +361,22 @@ fn compare_runs(
 
 /// Renders one estimator on a scene in batches, with a progress bar; `index` makes its seed
 /// differ from the other estimators'.
-fn render_run(args: &VerifyArgs, gpu: &Gpu, scene: &LoadedScene, e: &Estimator, index: u32) -> Result<Run> {
+fn render_run(
+    args: &VerifyArgs,
+    gpu: &Gpu,
+    (decl, scene): (LayoutDecl, Arc<LoadedScene>),
+    e: &Estimator,
+    index: u32,
+) -> Result<Run> {
     let seed = args.seed.wrapping_mul(1000).wrapping_add(index);
     let mut common = args.common.clone();
     common.set = own_sets(&args.common.set, &e.graph);
-    let mut opts = common.options(scene, &e.graph, seed)?;
-    opts.constants.extend(parse_sets(&e.spec.sets, &e.graph, "--graphs @")?);
-    let claims = claims(&e.graph, &opts.constants)?;
+    let spec = common.spec(&e.graph.name, Some(&e.layout), seed);
+    let mut run = Loaded::with_scene(&spec, e.graph.clone(), (e.layout.clone(), decl), scene)?;
+    run.options
+        .constants
+        .extend(parse_sets(&e.spec.sets, &e.graph, "--graphs @")?);
+    let (opts, claims) = (&run.options, claims(&e.graph, &run.options.constants)?);
     let bar = ProgressBar::new(args.batches as u64);
     bar.set_style(
         ProgressStyle::with_template("{prefix:>32} {bar:30} {pos}/{len} batches {msg} ETA {eta}")
@@ -374,18 +385,11 @@ fn render_run(args: &VerifyArgs, gpu: &Gpu, scene: &LoadedScene, e: &Estimator, 
     bar.set_prefix(e.label.clone());
     let start = std::time::Instant::now();
     let paths = (opts.width * opts.height * opts.samples_per_frame) as f64;
-    let result = render_batches(
-        gpu,
-        scene,
-        (&e.graph, &e.layout),
-        opts,
-        (args.budget(), args.block),
-        |done, frames| {
-            bar.set_position(done as u64);
-            let rate = paths * frames as f64 / start.elapsed().as_secs_f64();
-            bar.set_message(format!("{}samples/s", si(rate)));
-        },
-    )?;
+    let result = render_batches(gpu, &run, (args.budget(), args.block), |done, frames| {
+        bar.set_position(done as u64);
+        let rate = paths * frames as f64 / start.elapsed().as_secs_f64();
+        bar.set_message(format!("{}samples/s", si(rate)));
+    })?;
     bar.finish_with_message(format!(
         "{} frames, {}samples/s",
         result.frames,

@@ -7,12 +7,11 @@ use crate::compare::{EstimatorSpec, ReportContext, RunBudget, RunCurve, run, wri
 use crate::interrupt::{Interrupted, Signal};
 use crate::multi::gpu_selectors;
 use crate::reference::{Reference, constants_text};
-use crate::run::{RunOptions, Scenes, SessionOptions, load_graph, named_layout, parse_sets};
+use crate::run::{Run, RunOptions, Scenes, parse_sets};
 use crate::tev::LiveView;
 use anyhow::{Result, anyhow, bail};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
-use lightgraph_engine::{Gpu, Graph};
-use lightgraph_scenes::bvh::BvhKind;
+use lightgraph_engine::Gpu;
 use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Duration;
@@ -131,7 +130,7 @@ pub fn compare_with(
         run_count: runs.len(),
     };
     let report = |finished: &[RunCurve]| write_report(&args.out, &ctx, finished);
-    let (curves, signal) = run_all(gpus, scenes, &runs, args, &ref_mean, done, &report)?;
+    let (curves, signal) = run_all(gpus, &runs, args, &ref_mean, done, &report)?;
     let summary = report(&curves)?;
     match signal {
         Some(signal) if curves.len() < runs.len() => Err(Interrupted {
@@ -161,7 +160,8 @@ fn settings(args: &CompareSpec, reference: &Reference, jobs: &[Job], device: &st
         ("seed".to_string(), args.seed.to_string()),
         ("device".to_string(), device.to_string()),
     ];
-    for (label, _, layout, opts, kind) in jobs {
+    for (label, run) in jobs {
+        let (layout, kind, opts) = (&run.layout, run.bvh(), &run.options);
         settings.push((format!("run {label}"), format!("{layout} {kind:?} {opts:?}")));
     }
     settings
@@ -199,10 +199,8 @@ fn jobs(args: &CompareSpec, reference: &Reference, scenes: &mut Scenes) -> Resul
     let specs = EstimatorSpec::parse_list(&args.runs)?;
     let mut runs = Vec::new();
     for spec in &specs {
-        let graph = load_graph(&spec.graph)?;
-        let (layout, decl) = named_layout(&graph, spec.layout.as_deref())?;
-        let kind = scenes.load_for(c.bvh, &layout, &decl)?;
-        let opts = c.options(scenes.get(kind), &graph, args.seed)?;
+        let mut run = Run::load_in(&c.spec(&spec.graph, spec.layout.as_deref(), args.seed), scenes)?;
+        let opts = &run.options;
         if constants_text(&opts.constants) != info("constants") {
             bail!(
                 "{}: the reference was made with constants '{}', run {} would use '{}'",
@@ -214,13 +212,13 @@ fn jobs(args: &CompareSpec, reference: &Reference, scenes: &mut Scenes) -> Resul
         }
         reference.check_size(&args.reference, (opts.width, opts.height))?;
         // The run's own settings come after the check: they choose the estimator, not the image.
-        let mut opts = opts;
-        opts.constants.extend(parse_sets(&spec.sets, &graph, "--runs @")?);
-        let label = std::iter::once(format!("{}:{layout}", graph.name))
+        let own = parse_sets(&spec.sets, &run.graph, "--runs @")?;
+        run.options.constants.extend(own);
+        let label = std::iter::once(format!("{}:{}", run.graph.name, run.layout))
             .chain(spec.sets.iter().cloned())
             .collect::<Vec<_>>()
             .join("@");
-        runs.push((label, graph, layout, opts, kind));
+        runs.push((label, run));
     }
     Ok(runs)
 }
@@ -242,8 +240,8 @@ fn open_gpus(spec: &str) -> Result<Vec<Gpu>> {
     Ok(gpus)
 }
 
-/// One run of the comparison: its label, graph, layout, options and BVH.
-type Job = (String, Graph, String, SessionOptions, BvhKind);
+/// One run of the comparison: its label and the run (its scene shared with the others').
+type Job = (String, Run);
 
 /// Renders the runs of `jobs` not in `done`, each for `--time` on one of `gpus` (one thread
 /// per GPU, each taking the next run when its last one ends), with a progress bar per run,
@@ -252,7 +250,6 @@ type Job = (String, Graph, String, SessionOptions, BvhKind);
 /// is dropped. Returns the finished runs in the order of `jobs` and the signal, if one came.
 fn run_all(
     gpus: &[Gpu],
-    scenes: &Scenes,
     jobs: &[Job],
     args: &CompareSpec,
     reference: &[[f32; 3]],
@@ -292,7 +289,7 @@ fn run_all(
         for gpu in gpus {
             scope.spawn(|| {
                 while let Some(i) = take() {
-                    let outcome = run_one(gpu, scenes, &jobs[i], args, reference, &progress[i]).and_then(|curve| {
+                    let outcome = run_one(gpu, &jobs[i], args, reference, &progress[i]).and_then(|curve| {
                         let mut finished = finished.lock().expect("finished runs");
                         finished[i] = Some(curve);
                         report(&finished.iter().flatten().cloned().collect::<Vec<_>>())
@@ -324,19 +321,16 @@ fn run_all(
 /// images into `--out` and returns its curve.
 fn run_one(
     gpu: &Gpu,
-    scenes: &Scenes,
-    (label, graph, layout, opts, kind): &Job,
+    (label, job): &Job,
     args: &CompareSpec,
     reference: &[[f32; 3]],
     bar: &ProgressBar,
 ) -> Result<RunCurve> {
-    let mut view = LiveView::open(args.tev.as_deref(), label, (opts.width, opts.height));
+    let mut view = LiveView::open(args.tev.as_deref(), label, (job.options.width, job.options.height));
     let result = run(
         gpu,
-        scenes.get(*kind),
-        graph,
-        (layout, label.clone()),
-        opts.clone(),
+        job,
+        label.clone(),
         budget(args),
         reference,
         args.per_decade,

@@ -8,6 +8,7 @@ use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::model::Scene;
 use lightgraph_scenes::{CompiledScene, parse_scene};
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A scene loaded, validated and prepared for the GPU.
@@ -153,7 +154,7 @@ impl BvhChoice {
 /// different kinds).
 pub struct Scenes {
     name: String,
-    loaded: Vec<(BvhKind, LoadedScene)>,
+    loaded: Vec<(BvhKind, Arc<LoadedScene>)>,
 }
 
 impl Scenes {
@@ -170,7 +171,7 @@ impl Scenes {
     pub fn load_for(&mut self, bvh: BvhChoice, name: &str, decl: &LayoutDecl) -> Result<BvhKind> {
         let kind = bvh.for_layout(name, decl)?;
         if !self.loaded.iter().any(|(k, _)| *k == kind) {
-            self.loaded.push((kind, load_scene_with(&self.name, kind)?));
+            self.loaded.push((kind, Arc::new(load_scene_with(&self.name, kind)?)));
         }
         Ok(kind)
     }
@@ -182,6 +183,16 @@ impl Scenes {
 
     /// The scene with `kind`, which [`Scenes::load_for`] loaded.
     pub fn get(&self, kind: BvhKind) -> &LoadedScene {
+        self.entry(kind)
+    }
+
+    /// The scene with `kind`, which [`Scenes::load_for`] loaded, shared (for a
+    /// [`crate::run::Run`]).
+    pub fn shared(&self, kind: BvhKind) -> Arc<LoadedScene> {
+        Arc::clone(self.entry(kind))
+    }
+
+    fn entry(&self, kind: BvhKind) -> &Arc<LoadedScene> {
         &self
             .loaded
             .iter()

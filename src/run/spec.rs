@@ -7,12 +7,13 @@ use crate::run::checks;
 use crate::run::graph::{load_graph, named_layout};
 use crate::run::measure::measure_constants;
 use crate::run::options::{LayoutOverrides, SessionOptions, parse_sets};
-use crate::run::scene::{BvhChoice, LoadedScene, load_scene_with};
+use crate::run::scene::{BvhChoice, LoadedScene, Scenes, load_scene_with};
 use crate::run::session::Session;
 use anyhow::{Result, anyhow, bail};
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{ConstValue, Gpu, Graph};
 use lightgraph_scenes::bvh::BvhKind;
+use std::sync::Arc;
 
 /// The scene rendered when none is named.
 pub const DEFAULT_SCENE: &str = "cornell-mitsuba";
@@ -197,8 +198,9 @@ pub struct Run {
     pub layout: String,
     /// The layout.
     pub decl: LayoutDecl,
-    /// The scene, with the BVH the layout asks for.
-    pub scene: LoadedScene,
+    /// The scene, with the BVH the layout asks for (shared with the other runs of a command
+    /// that loaded it once: [`Run::load_in`]).
+    pub scene: Arc<LoadedScene>,
     /// The session options (measured constants among the constants once measured).
     pub options: SessionOptions,
 }
@@ -215,7 +217,28 @@ impl Run {
             true => spec.bvh.or_default(),
             false => spec.bvh.for_layout(&layout, &decl)?,
         };
-        let scene = load_scene_with(&spec.scene, kind)?;
+        let scene = Arc::new(load_scene_with(&spec.scene, kind)?);
+        Run::with_scene(spec, graph, (layout, decl), scene)
+    }
+
+    /// [`Run::load`] of a run with a named layout (or the graph's default) whose scene comes
+    /// from `scenes` (`spec`'s scene, loaded once per BVH kind among the runs of a command).
+    pub fn load_in(spec: &RunSpec, scenes: &mut Scenes) -> Result<Run> {
+        let graph = load_graph(&spec.graph)?;
+        let (layout, decl) = named_layout(&graph, spec.layout.as_deref())?;
+        let kind = scenes.load_for(spec.bvh, &layout, &decl)?;
+        let scene = scenes.shared(kind);
+        Run::with_scene(spec, graph, (layout, decl), scene)
+    }
+
+    /// The run `spec` names of `graph` in the layout `decl` (called `layout`) on `scene`, all
+    /// loaded already (the scene with the layout's BVH); checks the options.
+    pub fn with_scene(
+        spec: &RunSpec,
+        graph: Graph,
+        (layout, decl): (String, LayoutDecl),
+        scene: Arc<LoadedScene>,
+    ) -> Result<Run> {
         let options = spec.options(&scene, &graph)?;
         Ok(Run {
             spec: spec.clone(),
@@ -240,11 +263,16 @@ impl Run {
     /// BVH (as the spec chooses it) is another.
     pub fn relayout(&mut self, name: &str) -> Result<()> {
         let decl = self.graph.layout(name)?.clone();
-        let bvh = self.spec.bvh.for_layout(name, &decl)?;
-        if bvh != self.bvh() {
-            self.scene = load_scene_with(&self.spec.scene, bvh)?;
-        }
+        self.load_bvh(self.spec.bvh.for_layout(name, &decl)?)?;
         (self.layout, self.decl) = (name.to_string(), decl);
+        Ok(())
+    }
+
+    /// Loads the scene again with the BVH `bvh` unless it has it.
+    pub fn load_bvh(&mut self, bvh: BvhKind) -> Result<()> {
+        if bvh != self.bvh() {
+            self.scene = Arc::new(load_scene_with(&self.spec.scene, bvh)?);
+        }
         Ok(())
     }
 

@@ -3,10 +3,9 @@
 //! clock) and the one with the most camera samples per second runs in the study.
 
 use crate::bench::measure;
-use crate::run::{LoadedScene, SessionOptions};
+use crate::run::Run;
 use anyhow::{Result, bail};
-use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::{Gpu, Graph};
+use lightgraph_engine::Gpu;
 use std::time::Duration;
 
 /// One layout's measured rate on a scene, or why it could not be measured.
@@ -27,26 +26,21 @@ pub enum LayoutChoice {
     Measured(Vec<LayoutRate>),
 }
 
-/// One layout to measure: its name, its declaration and the scene loaded with its BVH.
-pub type Candidate<'a> = (&'a str, &'a LayoutDecl, &'a LoadedScene);
-
-/// Measures each candidate layout of `graph` with `options` for `budget` (after a warm-up
-/// frame); `progress` sees each rate as it is measured. A layout that fails is recorded with
-/// its error, not returned as one.
+/// Measures each candidate run (one layout of a graph each, with the scene loaded with its
+/// BVH) for `budget` (after a warm-up frame); `progress` sees each rate as it is measured. A
+/// layout that fails is recorded with its error, not returned as one.
 pub fn measure_layouts(
     gpu: &Gpu,
-    graph: &Graph,
-    candidates: &[Candidate],
-    options: &SessionOptions,
+    candidates: &[Run],
     budget: Duration,
     mut progress: impl FnMut(&LayoutRate),
 ) -> Vec<LayoutRate> {
     candidates
         .iter()
-        .map(|&(layout, decl, scene)| {
-            let measured = measure(gpu, graph, layout, decl.clone(), scene, options.clone(), budget);
+        .map(|run| {
+            let measured = measure(gpu, run, budget);
             let rate = LayoutRate {
-                layout: layout.to_string(),
+                layout: run.layout.clone(),
                 samples_per_second: measured.map(|m| m.samples_per_second()).map_err(|e| format!("{e:#}")),
             };
             progress(&rate);

@@ -10,8 +10,8 @@ use crate::output::si;
 use crate::reference::Reference;
 use crate::reference::render::{REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render};
 use crate::run::scene::find_scene;
-use crate::run::{DEFAULT_GRAPH, RunOptions, Scenes, load_graph, named_layout, parse_sets};
-use crate::study::layouts::{Candidate, Choices, LayoutChoice, choices_text, fastest, measure_layouts, parse_choices};
+use crate::run::{DEFAULT_GRAPH, Run, RunOptions, Scenes, load_graph, named_layout, parse_sets};
+use crate::study::layouts::{Choices, LayoutChoice, choices_text, fastest, measure_layouts, parse_choices};
 use crate::study::scene_folders;
 use crate::study::summary::{EstimatorRun, ReferenceNote, ReferenceSource, SceneRuns, StudyContext, write_summary};
 use anyhow::{Context, Result, bail};
@@ -306,19 +306,26 @@ fn choose_layout(
         .iter()
         .map(|(name, decl)| scenes.load_for(common.bvh, name, decl))
         .collect::<Result<Vec<_>>>()?;
-    let candidates: Vec<Candidate> = graph
+    let mut candidates = graph
         .layouts
         .iter()
         .zip(kinds)
-        .map(|((name, decl), kind)| (name.as_str(), decl, scenes.get(kind)))
-        .collect();
-    let scene = candidates.first().map(|c| c.2).context("the graph has no layout")?;
-    let mut opts = common.options(scene, &graph, args.seed)?;
-    opts.constants.extend(parse_sets(&spec.sets, &graph, "--estimators @")?);
+        .map(|((name, decl), kind)| {
+            let run = common.spec(&graph.name, Some(name), args.seed);
+            Run::with_scene(&run, graph.clone(), (name.clone(), decl.clone()), scenes.shared(kind))
+        })
+        .collect::<Result<Vec<Run>>>()?;
+    if candidates.is_empty() {
+        bail!("the graph has no layout");
+    }
+    let own = parse_sets(&spec.sets, &graph, "--estimators @")?;
+    for run in &mut candidates {
+        run.options.constants.extend(own.clone());
+    }
     let bar = ProgressBar::new(candidates.len() as u64);
     bar.set_style(ProgressStyle::with_template("{prefix:>24} {bar:30} {msg}").expect("valid template"));
     bar.set_prefix(format!("{spec}: layouts"));
-    let rates = measure_layouts(gpu, &graph, &candidates, &opts, args.layout_time, |rate| {
+    let rates = measure_layouts(gpu, &candidates, args.layout_time, |rate| {
         bar.inc(1);
         bar.set_message(match &rate.samples_per_second {
             Ok(v) => format!("{} {}samples/s", rate.layout, si(*v)),

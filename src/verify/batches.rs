@@ -4,10 +4,10 @@
 
 use super::stats::BlockBatches;
 use crate::reference::Reference;
-use crate::run::{Image, LoadedScene, Session, SessionOptions};
+use crate::run::{Image, Run, Session};
 use anyhow::{Result, bail};
+use lightgraph_engine::Gpu;
 use lightgraph_engine::runtime::MAX_BATCH;
-use lightgraph_engine::{Gpu, Graph};
 use std::time::{Duration, Instant};
 
 /// How much a run renders: a wall-clock time (set-up off the clock) or a number of frames,
@@ -43,21 +43,19 @@ pub struct RunBatches {
     pub rejected_samples: u64,
 }
 
-/// Renders `graph` in `layout` over `scene` for `budget`, in batches of blocks of `block`
-/// pixels; `progress` sees the batches and frames done.
+/// Renders `run` for `budget`, in batches of blocks of `block` pixels; `progress` sees the
+/// batches and frames done.
 pub fn render_batches(
     gpu: &Gpu,
-    scene: &LoadedScene,
-    (graph, layout): (&Graph, &str),
-    options: SessionOptions,
+    run: &Run,
     (budget, block): (Budget, u32),
     mut progress: impl FnMut(u32, u32),
 ) -> Result<RunBatches> {
     if budget.batches < 2 {
         bail!("verify needs at least 2 batches a run for a standard error");
     }
-    let size = (options.width, options.height);
-    let mut session = Session::new(gpu, graph, layout, scene, options)?;
+    let size = (run.options.width, run.options.height);
+    let mut session = run.session(gpu)?;
     let at_once = session.frames_at_once();
     let mut blocks = BlockBatches::new(size, block);
     // The run's f64 sums over every batch, for its image.

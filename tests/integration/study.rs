@@ -8,10 +8,11 @@ use crate::common::gpu;
 use crate::reference::reference;
 use lightgraph::compare::{RunBudget, run};
 use lightgraph::reference::Reference;
-use lightgraph::run::{load_graph, load_scene};
+use lightgraph::run::{Run, RunSpec, load_graph, load_scene};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Stdio};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Tiny images and short layout measurements.
@@ -322,16 +323,17 @@ fn an_interrupted_study_keeps_its_finished_runs_and_resumes_to_the_whole_table()
 fn a_runs_first_error_sample_is_a_frames_render_not_its_compile() {
     // LVC-BPT's pipelines take most of a second to compile on lavapipe, at their first
     // dispatch; a 16x16 frame takes milliseconds.
-    let scene = load_scene("cornell-glossy-sun").unwrap();
+    let scene = Arc::new(load_scene("cornell-glossy-sun").unwrap());
     let graph = load_graph("bpt-lvc").unwrap();
-    let options = crate::common::options((16, 16), 1, 7, &[], Default::default());
+    let decl = graph.layout("LVC-BPTsk").unwrap().clone();
+    let mut job = Run::with_scene(&RunSpec::default(), graph, ("LVC-BPTsk".into(), decl), scene).unwrap();
+    job.options = crate::common::options((16, 16), 1, 7, &[], Default::default());
     let budget = RunBudget {
         time: Duration::from_secs(1),
         setup_on_clock: false,
     };
     let black = vec![[0.0f32; 3]; 256];
-    let label = ("LVC-BPTsk", "bpt-lvc".to_string());
-    let result = run(gpu(), &scene, &graph, label, options, budget, &black, 6, |_, _, _| {}).unwrap();
+    let result = run(gpu(), &job, "bpt-lvc".to_string(), budget, &black, 6, |_, _, _| {}).unwrap();
     let curve = &result.curve;
     let (first, last) = (&curve.samples[0], curve.last());
     // The warm-up frame is in neither the counts nor the image.
