@@ -22,7 +22,7 @@ pub struct Key {
     pub size: (u32, u32),
     /// Samples per pixel a frame.
     pub spp: u32,
-    /// The BVH the scene was built with.
+    /// The BVH the render asks for: `auto` (the layout's choice) or the one `--bvh` names.
     pub bvh: String,
     /// The constants the render sets (the scene's and `--set`'s), as text.
     pub constants: BTreeMap<String, String>,
@@ -45,6 +45,10 @@ pub struct Entry {
     pub samples_per_second: f64,
     /// When it was measured (RFC 3339, UTC).
     pub measured: String,
+    /// The BVH it was measured with (`cwbvh`, `bvh2`), which a render taking it builds; none in
+    /// entries written before it was recorded.
+    #[serde(default)]
+    pub bvh: Option<String>,
 }
 
 /// The cache file.

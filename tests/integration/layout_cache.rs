@@ -10,11 +10,16 @@ use std::process::Command;
 /// `lightgraph render` of the ambient-occlusion graph on the diffuse box (2 frames) with the
 /// layout cache in `cache` and `extra` arguments; its stderr (the render must succeed).
 fn render(cache: &Path, extra: &[&str]) -> String {
+    render_graph(cache, "ao", extra)
+}
+
+/// [`render`] of `graph`.
+fn render_graph(cache: &Path, graph: &str, extra: &[&str]) -> String {
     let out = cache.join("render.exr");
     let base = [
         "render",
         "--graph",
-        "ao",
+        graph,
         "--scene",
         "cornell-diffuse",
         "--frames",
@@ -68,4 +73,29 @@ fn layout_auto_stores_its_winner_and_renders_of_the_same_key_take_it() {
     );
     assert!(broken.contains("graph ao layout AOsk |"), "{broken}");
     std::fs::remove_dir_all(&cache).ok();
+}
+
+#[test]
+fn a_winner_is_found_when_the_default_layout_hints_another_bvh() {
+    // A copy of ao whose default layout hints the BVH2: a render without --layout builds the
+    // BVH2, --layout auto measures on the CWBVH; the render still finds the winner (the key
+    // holds the BVH asked for, `auto`) and builds the BVH it was measured with.
+    let cache = temp_dir("layout-cache-bvh");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/graphs/ao.ron")).unwrap();
+    let fused = r#"kernels: [["ao_primary", "ao_occlusion"], ["accumulate"]],"#;
+    assert!(text.contains(fused));
+    let hinted = text.replacen(fused, &format!("{fused}\n            hints: {{\"bvh\": \"bvh2\"}},"), 1);
+    let graph = cache.join("ao-bvh2.ron");
+    std::fs::write(&graph, hinted).unwrap();
+    let graph = graph.to_str().unwrap();
+    let small = ["--res", "16x12"];
+    let measured = render_graph(&cache, graph, &[&small[..], &["--layout", "auto"]].concat());
+    assert!(measured.contains("stored in the layout cache"), "{measured}");
+    let plain = render_graph(&cache, graph, &small);
+    assert!(plain.contains("from the layout cache"), "{plain}");
+    let stored = std::fs::read_to_string(cache.join("layouts.ron")).unwrap();
+    assert!(
+        stored.contains(r#"bvh: "auto""#) && stored.contains(r#"bvh: Some("cwbvh")"#),
+        "{stored}"
+    );
 }

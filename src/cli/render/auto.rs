@@ -3,23 +3,34 @@
 
 use super::RenderArgs;
 use anyhow::Result;
-use lightgraph::run::Run;
+use lightgraph::run::{Run, parse_bvh};
 use lightgraph::{layout_cache, measured_layouts};
 use lightgraph_engine::Gpu;
 use lightgraph_engine::ir::LayoutDecl;
+use lightgraph_scenes::bvh::BvhKind;
 
-/// The layout of a render where it is not the run's own: none for a layout named with
-/// `--layout`; else the one `--layout auto` measured fastest for this render's key
-/// (`lightgraph::layout_cache`) unless `--retune`; else, without `--layout`, none (the graph's
+/// Puts into `run` the layout of a render where it is not the run's own, and says whether it
+/// did: not for a layout named with `--layout`; else the one `--layout auto` measured fastest
+/// for this render's key (`lightgraph::layout_cache`) unless `--retune`, with the scene loaded
+/// again for the BVH it was measured with; else, without `--layout`, none (the graph's
 /// default), and with `--layout auto`, the fastest measured now (and stored).
-pub fn choose_layout(gpu: &Gpu, run: &Run, args: &RenderArgs) -> Result<Option<(String, LayoutDecl)>> {
+pub fn choose_layout(gpu: &Gpu, run: &mut Run, args: &RenderArgs) -> Result<bool> {
     if args.layout.is_some() && !run.spec.auto_layout() {
-        return Ok(None);
+        return Ok(false);
     }
     let key = cache_key(gpu, run);
     if let Some(cached) = layout_cache::find(&key).filter(|_| !args.retune) {
         match lightgraph_engine::auto::check(&run.graph, &cached.name, &cached.layout) {
             Ok(()) => {
+                if let Some(bvh) = cached
+                    .bvh
+                    .as_deref()
+                    .map(parse_bvh)
+                    .transpose()
+                    .map_err(anyhow::Error::msg)?
+                {
+                    run.load_bvh(bvh)?;
+                }
                 eprintln!(
                     "layout {} from the layout cache ({:.1} Msamples/s when --layout auto measured it, {}; \
                      --layout NAME or --layout auto --retune to choose)",
@@ -27,7 +38,8 @@ pub fn choose_layout(gpu: &Gpu, run: &Run, args: &RenderArgs) -> Result<Option<(
                     cached.samples_per_second / 1e6,
                     cached.measured
                 );
-                return Ok(Some((cached.name, cached.layout)));
+                (run.layout, run.decl) = (cached.name, cached.layout);
+                return Ok(true);
             }
             Err(e) => eprintln!(
                 "warning: the cached layout {} no longer plans ({e}); not used",
@@ -35,10 +47,11 @@ pub fn choose_layout(gpu: &Gpu, run: &Run, args: &RenderArgs) -> Result<Option<(
             ),
         }
     }
-    match run.spec.auto_layout() {
-        true => tune_layout(gpu, run, args, key).map(Some),
-        false => Ok(None),
+    if !run.spec.auto_layout() {
+        return Ok(false);
     }
+    (run.layout, run.decl) = tune_layout(gpu, run, args, key)?;
+    Ok(true)
 }
 
 /// Without `--layout` and with nothing cached: the layout measured fastest for this built-in
@@ -60,6 +73,11 @@ pub fn take_measured_default(gpu: &Gpu, run: &mut Run) -> Result<()> {
     Ok(())
 }
 
+/// A BVH as the layout cache writes it (`cwbvh`, `bvh2`: what `--bvh` takes).
+fn bvh_name(kind: BvhKind) -> String {
+    format!("{kind:?}").to_lowercase()
+}
+
 /// What the layout cache keys a render's measurement by.
 fn cache_key(gpu: &Gpu, run: &Run) -> layout_cache::Key {
     let opts = &run.options;
@@ -68,7 +86,7 @@ fn cache_key(gpu: &Gpu, run: &Run) -> layout_cache::Key {
         scene: run.spec.scene.clone(),
         size: (opts.width, opts.height),
         spp: opts.samples_per_frame,
-        bvh: format!("{:?}", run.bvh()),
+        bvh: run.spec.bvh.0.map_or("auto".to_string(), bvh_name),
         constants: opts
             .constants
             .iter()
@@ -109,6 +127,7 @@ fn tune_layout(gpu: &Gpu, run: &Run, args: &RenderArgs, key: layout_cache::Key) 
         layout: best.decl.clone(),
         samples_per_second: best.score(),
         measured: layout_cache::now(),
+        bvh: Some(bvh_name(run.bvh())),
     };
     match layout_cache::store(entry) {
         Ok(path) => eprintln!("stored in the layout cache {}", path.display()),

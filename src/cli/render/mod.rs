@@ -197,9 +197,7 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     // The output is checked (after the inputs, whose errors come first) before the device opens.
     args.check_out()?;
     let gpu = Gpu::new(run.spec.adapter.as_deref())?;
-    if let Some((layout, decl)) = auto::choose_layout(&gpu, &run, &args)? {
-        (run.layout, run.decl) = (layout, decl);
-    } else if args.layout.is_none() {
+    if !auto::choose_layout(&gpu, &mut run, &args)? && args.layout.is_none() {
         auto::take_measured_default(&gpu, &mut run)?;
     }
     // Measured once, so that the film records the value (shards must share it to merge).
