@@ -88,6 +88,34 @@ fn header(program: &Program, out: &mut String) {
             let _ = writeln!(out, "  {}: {}", c.name, c.reason);
         }
     }
+    let derived: Vec<String> = g
+        .passes
+        .iter()
+        .filter_map(|p| {
+            let d = &p.decl;
+            let list = |l: &[String]| {
+                if l.is_empty() {
+                    "nothing".to_string()
+                } else {
+                    l.join(", ")
+                }
+            };
+            let mut parts = Vec::new();
+            if d.listed_reads.is_none() {
+                parts.push(format!("reads {}", list(&d.reads)));
+            }
+            if d.listed_writes.is_none() {
+                parts.push(format!("writes {}", list(&d.writes)));
+            }
+            (!parts.is_empty()).then(|| format!("  {}: {}", d.name, parts.join("; ")))
+        })
+        .collect();
+    if !derived.is_empty() {
+        let _ = writeln!(out, "derived from the WGSL (the passes leave them out):");
+        for line in derived {
+            let _ = writeln!(out, "{line}");
+        }
+    }
     if !g.parameters.is_empty() {
         let list: Vec<String> = g
             .parameters

@@ -514,11 +514,20 @@ pub struct PassDecl {
     pub function: Option<String>,
     /// How the pass takes part in its item's chain.
     pub role: Role,
-    /// Resources the pass (or what it calls) reads.
-    #[serde(default)]
+    /// Resources the pass (or what it calls) reads, as the file lists them (`reads`); `None`
+    /// when the file leaves them out: [`PassDecl::reads`] is then derived from the WGSL.
+    #[serde(default, rename = "reads")]
+    pub listed_reads: Option<Vec<String>>,
+    /// Resources the pass (or what it calls) writes, as the file lists them (`writes`); `None`
+    /// when the file leaves them out: [`PassDecl::writes`] is then derived from the WGSL.
+    #[serde(default, rename = "writes")]
+    pub listed_writes: Option<Vec<String>>,
+    /// Resources the pass reads: the listed ones, or those the specialisation derived from
+    /// naga's view of the pass function (empty until then).
+    #[serde(skip)]
     pub reads: Vec<String>,
-    /// Resources the pass (or what it calls) writes.
-    #[serde(default)]
+    /// Resources the pass writes: the listed ones, or the derived ones (as `reads`).
+    #[serde(skip)]
     pub writes: Vec<String>,
     /// Streams the pass emits items into.
     #[serde(default)]

@@ -12,11 +12,11 @@
 //!
 //! | stage | modules | what it does |
 //! |---|---|---|
-//! | leaf | `error`, `expr`, `ids`, `ir`, `limits`, `vfs` | errors, count expressions, typed indices, the RON declarations, shared limits and the target, the file system |
+//! | leaf | `error`, `expr`, `ids`, `ir`, `limits`, `vfs`, `wgsl` | errors, count expressions, typed indices, the RON declarations, shared limits and the target, the file system, WGSL sources (`#if` flags, naga with a source map) |
 //! | load | `operator`, `load`, `extend`, `graph` | the graph file with its bases, catalogs and includes, every name checked; chains and phases |
-//! | specialise | `specialize` | the constants' values, then culling: the live graph |
+//! | specialise | `derive`, `specialize` | the constants' values; the reads and writes that passes leave out, derived with naga from the WGSL with the flags; then culling: the live graph |
 //! | plan | `plan`, `auto` | a layout's kernels, roots and schedule, its fusion checked; every legal layout |
-//! | reflect | `wgsl`, `reflect`, `access` | the sources compiled together with naga: item words, what each pass touches of its item, each pass checked against its declaration |
+//! | reflect | `reflect`, `access` | the sources compiled together with naga: item words, what each pass touches of its item, each pass checked against its declaration |
 //! | resolve | `memory`, `scratch`, `resolve` | bindings, control words, sizes, domains, pools, capacities, operator scratch, lifetimes and shared memory |
 //! | generate | `codegen`, `internal`, `scan`, `radix`, `collective`, `program` | one WGSL module per kernel (passes, the engine's own, the operators'), validated with naga |
 //! | run | `gpu`, `runtime` | the device, buffers, pipelines and frames |
@@ -35,6 +35,7 @@ pub mod access;
 pub mod auto;
 pub mod codegen;
 pub mod collective;
+pub mod derive;
 pub mod error;
 pub mod explain;
 pub mod expr;

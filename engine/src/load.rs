@@ -128,6 +128,10 @@ pub struct Declared {
     pub entries: Vec<Entry>,
     /// Resources by name.
     pub resources: BTreeMap<String, ResourceDecl>,
+    /// Catalog resources that no pass lists but a pass that derives its reads or writes may
+    /// use (its catalog declares them): they join the live graph's resources where the
+    /// derivation finds a pass that uses them.
+    pub candidates: BTreeMap<String, ResourceDecl>,
     /// Counters, in order.
     pub counters: Vec<String>,
     /// Constants with their defaults.
@@ -275,6 +279,14 @@ pub fn declare(vfs: &Vfs, file: &str, source: GraphSource) -> Result<Declared> {
     for c in &parts.counters {
         origins.insert(c.clone(), file.to_string());
     }
+    let resources = parts.resources.into_parts(&mut origins);
+    let mut candidates = BTreeMap::new();
+    for (name, (r, origin)) in parts.candidates {
+        if !resources.contains_key(&name) {
+            origins.insert(name.clone(), origin);
+            candidates.insert(name, r);
+        }
+    }
     let declared = Declared {
         library: parts.library,
         passes,
@@ -282,7 +294,8 @@ pub fn declare(vfs: &Vfs, file: &str, source: GraphSource) -> Result<Declared> {
         entries,
         constants: parts.constants.into_parts(&mut origins),
         derived: parts.derived.into_parts(&mut origins),
-        resources: parts.resources.into_parts(&mut origins),
+        resources,
+        candidates,
         counters: parts.counters,
         checks: parts.checks,
         origins,
@@ -348,12 +361,30 @@ fn graph_entries(
             })?;
             Ok(Pass { decl, origin })
         };
-        let pass = match entry {
+        let mut pass = match entry {
             PassEntry::Use(name) => catalog_pass(name)?,
             PassEntry::UseWith(with) => {
                 let mut pass = catalog_pass(&with.name)?;
-                add_missing(&mut pass.decl.reads, &with.reads);
-                add_missing(&mut pass.decl.writes, &with.writes);
+                for (listed, more, field) in [
+                    (&mut pass.decl.listed_reads, &with.reads, "reads"),
+                    (&mut pass.decl.listed_writes, &with.writes, "writes"),
+                ] {
+                    match listed {
+                        Some(list) => add_missing(list, more),
+                        None if !more.is_empty() => {
+                            return Err(sources.at_name(
+                                file,
+                                &more[0],
+                                format!(
+                                    "UseWith of '{}' lists `{field}` ({}), but its catalog derives them from the WGSL (which sees what the graph's functions it calls use); leave `{field}` out",
+                                    with.name,
+                                    more.join(", ")
+                                ),
+                            ));
+                        }
+                        None => {}
+                    }
+                }
                 pass.decl.enabled = match (&pass.decl.enabled, &with.enabled) {
                     (Some(a), Some(b)) => Some(format!("({a}) && ({b})")),
                     (a, b) => a.clone().or_else(|| b.clone()),
@@ -366,6 +397,8 @@ fn graph_entries(
             },
             _ => unreachable!("operators are taken above"),
         };
+        pass.decl.reads = pass.decl.listed_reads.clone().unwrap_or_default();
+        pass.decl.writes = pass.decl.listed_writes.clone().unwrap_or_default();
         entries.push(Entry::Pass(passes.len()));
         passes.push(pass);
     }
@@ -401,6 +434,8 @@ struct Parts {
     constants: Merged<ConstValue>,
     derived: Merged<String>,
     resources: Merged<ResourceDecl>,
+    /// Catalog resources a pass that derives its reads or writes may use, with the catalog.
+    candidates: BTreeMap<String, (ResourceDecl, String)>,
     checks: Vec<ConstCheck>,
 }
 
@@ -413,6 +448,7 @@ impl Parts {
             constants: Merged::new(),
             derived: Merged::new(),
             resources: Merged::new(),
+            candidates: BTreeMap::new(),
             checks: Vec::new(),
         };
         for (name, v) in &g.constants {
@@ -449,7 +485,9 @@ impl Parts {
     }
 
     /// What pass `p` brings: its catalog's (or include's) library, counters, constants and
-    /// checks, the resources of it that the pass reads or writes, and the pass's own.
+    /// checks, the resources of it that the pass reads or writes, and the pass's own. When the
+    /// pass leaves `reads` or `writes` to be derived, the catalog's other resources become
+    /// candidates, which join the graph where the derivation finds a pass using them.
     fn add_pass(&mut self, p: &Pass, catalog: Option<&CatalogFile>, sources: &Sources) -> Result<()> {
         let d = &p.decl;
         if let Some(cat) = catalog {
@@ -468,6 +506,10 @@ impl Parts {
                 if d.reads.contains(name) || d.writes.contains(name) {
                     self.resources
                         .add(sources, "resource", name, r, Rank::Catalog, &p.origin)?;
+                } else if d.listed_reads.is_none() || d.listed_writes.is_none() {
+                    self.candidates
+                        .entry(name.clone())
+                        .or_insert_with(|| (r.clone(), p.origin.clone()));
                 }
             }
         }
@@ -750,7 +792,7 @@ impl Declared {
     }
 
     fn check_resources(&self, file: &str) -> Result<()> {
-        for (name, r) in &self.resources {
+        for (name, r) in self.resources.iter().chain(&self.candidates) {
             let err = |message: String| self.error_at_decl(file, name, message);
             if r.scope == Scope::External && r.count.is_some() {
                 return Err(err(format!(

@@ -7,6 +7,7 @@
 
 use crate::codegen::CodegenContext;
 use crate::collective::op_kernels;
+use crate::derive;
 use crate::error::{Error, Result};
 use crate::graph::Graph;
 use crate::ids::{OpId, PhaseId};
@@ -127,7 +128,7 @@ pub fn compile(
     COMPILES.with(|c| c.set(c.get() + 1));
     let mut constants = decl.constants.clone();
     constants.extend(spec.constants.iter().map(|(k, v)| (k.clone(), *v)));
-    let live = graph.specialize(&constants)?;
+    let live = graph.specialize_for(&constants, &spec.flags)?;
     let plan = Plan::with_decl(&live, layout, decl.clone())?;
     Program::generate(plan, spec, target)
 }
@@ -135,7 +136,7 @@ pub fn compile(
 impl Program {
     /// Reflects, resolves and generates the planned live graph `plan`.
     fn generate(plan: Plan, spec: &Specialization, target: &Target) -> Result<Program> {
-        let shared = reflect::sources(&plan, &spec.flags)?;
+        let shared = derive::sources(&plan.graph, &spec.flags)?;
         // Reflect: every source compiled together, with emits that do nothing.
         let begun = Resolved::for_reflection(&plan);
         let ctx = CodegenContext {

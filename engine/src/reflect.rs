@@ -5,11 +5,11 @@
 //! queues ([`crate::access`] finds which of them each pass touches).
 
 use crate::error::{Error, Result};
-use crate::ir::{ConstValue, Role};
+use crate::ir::Role;
 use crate::plan::Plan;
-use crate::wgsl::{ModuleSource, callees, preprocess};
+use crate::wgsl::{ModuleSource, callees};
 use naga::{Module, ScalarKind, TypeInner};
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeSet;
 
 /// One 32-bit word of a flattened item: how to reach it and what it holds.
 #[derive(Debug, Clone, PartialEq)]
@@ -163,33 +163,6 @@ pub fn reflect(
     let (module, info) = reflection.compile(capabilities)?;
     check_passes(plan, &module, &info)?;
     Ok(module)
-}
-
-/// The flags of `#if` lines: the host's, and every `Bool` constant that is true (a graph
-/// switches code in its library files with its own constants).
-fn flags_with_constants(flags: &BTreeSet<String>, constants: &BTreeMap<String, ConstValue>) -> BTreeSet<String> {
-    let on = constants.iter().filter(|(_, v)| matches!(v, ConstValue::Bool(true)));
-    flags.iter().cloned().chain(on.map(|(k, _)| k.clone())).collect()
-}
-
-/// The library and the pass sources of every declared pass of `plan` (a live pass may call
-/// functions a culled pass's file defines; what no kernel calls is shaken out later),
-/// preprocessed with `flags` and the graph's true `Bool` constants.
-pub fn sources(plan: &Plan, flags: &BTreeSet<String>) -> Result<Vec<(String, String)>> {
-    let flags = &flags_with_constants(flags, &plan.graph.constants);
-    let g = &plan.graph;
-    let mut files: Vec<String> = g.library.clone();
-    for p in &g.declared.passes {
-        if !files.contains(&p.decl.source) {
-            files.push(p.decl.source.clone());
-        }
-    }
-    let mut shared = Vec::new();
-    for f in &files {
-        let text = g.vfs.read(f).map_err(|e| g.error_at(f, e.to_string()))?;
-        shared.push((f.clone(), preprocess(f, &text, flags)?));
-    }
-    Ok(shared)
 }
 
 /// Checks every live pass function against its declaration: signature, resource use,

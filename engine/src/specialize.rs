@@ -32,18 +32,30 @@ impl Graph {
     /// Loads a graph from its text (`file` names it in errors). The live view is that of the
     /// default constants; [`Graph::specialize`] gives the view of others.
     pub fn from_text(vfs: &Vfs, file: &str, text: &str) -> Result<Graph> {
-        Graph::declare(vfs, file, text)?.specialize_view(&BTreeMap::new(), false)
+        Graph::declare(vfs, file, text)?.specialize_view(&BTreeMap::new(), &BTreeSet::new(), false)
     }
 
     /// The live view of the graph with `constants` (the graph's defaults overridden and
-    /// extended); every `enabled` condition must evaluate.
+    /// extended), reads and writes derived without host flags; every `enabled` condition must
+    /// evaluate.
     pub fn specialize(&self, constants: &BTreeMap<String, ConstValue>) -> Result<Graph> {
-        self.clone().specialize_view(constants, true)
+        self.specialize_for(constants, &BTreeSet::new())
+    }
+
+    /// The live view of the graph with `constants`, the reads and writes that passes leave out
+    /// derived from the WGSL preprocessed with `flags` (and the true `Bool` constants).
+    pub fn specialize_for(&self, constants: &BTreeMap<String, ConstValue>, flags: &BTreeSet<String>) -> Result<Graph> {
+        self.clone().specialize_view(constants, flags, true)
     }
 
     /// Recomputes the live view. When not `strict`, a condition naming a constant that is
     /// not known yet (a host constant such as `PATHS`) keeps its pass.
-    fn specialize_view(mut self, given: &BTreeMap<String, ConstValue>, strict: bool) -> Result<Graph> {
+    fn specialize_view(
+        mut self,
+        given: &BTreeMap<String, ConstValue>,
+        flags: &BTreeSet<String>,
+        strict: bool,
+    ) -> Result<Graph> {
         self.constants = self.declared.constants.clone();
         for (name, v) in given {
             if let Some(default) = self.declared.constants.get(name)
@@ -69,6 +81,8 @@ impl Graph {
         self.derive_constants(given, strict)?;
         let vars: BTreeMap<String, f64> = self.constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
         self.check_constants(&vars)?;
+        // What the passes that leave out their reads or writes use, before culling needs it.
+        self.derive_access(flags)?;
         // The whole declared structure, to cull on.
         self.passes = self.declared.passes.clone();
         self.ops = self.declared.ops.clone();

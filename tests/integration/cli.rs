@@ -290,14 +290,23 @@ fn use_with_an_unknown_pass_or_resource_is_an_error_at_its_line() {
     let err = render_graph_fails(&path);
     assert!(err.contains("unknown pass 'shadowz'"), "{err}");
     assert_at_line(&err, "use-with-pass.ron", &text, "\"shadowz\"");
-    // Reads it adds are checked as a catalog's are: a resource no file declares is an error.
+    // Writes it adds are checked as a catalog's are: a resource no file declares is an error.
     let (_, path) = pt_variant(
         "use-with-resource",
         "Use(\"shadow\")",
-        "UseWith(name: \"shadow\", reads: [\"no_such_buffer\"])",
+        "UseWith(name: \"shadow\", writes: [\"no_such_buffer\"])",
     );
     let err = render_graph_fails(&path);
-    assert!(err.contains("no_such_buffer"), "{err}");
+    assert!(err.contains("unknown resource 'no_such_buffer'"), "{err}");
+    // Reads of a catalog pass that derives its reads are not listed.
+    let (text, path) = pt_variant(
+        "use-with-derived",
+        "Use(\"shadow\")",
+        "UseWith(name: \"shadow\", reads: [\"film\"])",
+    );
+    let err = render_graph_fails(&path);
+    assert!(err.contains("its catalog derives them from the WGSL"), "{err}");
+    assert_at_line(&err, "use-with-derived.ron", &text, "[\"film\"]");
 }
 
 #[test]
