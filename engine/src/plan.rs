@@ -2,10 +2,11 @@
 //! is legal, and deriving the order kernels run in within each phase.
 
 use crate::error::Result;
+use crate::expr::Expr;
 use crate::graph::{ChainEntry, Graph};
 use crate::ids::{BoundaryId, ChainId, KernelId, PassId, PhaseId, indexes};
-use crate::ir::{LayoutDecl, LoopMode, Policy};
-use std::collections::BTreeSet;
+use crate::ir::{LayoutDecl, LoopMode, Policy, Role};
+use std::collections::{BTreeMap, BTreeSet};
 use std::ops::Range;
 
 /// What feeds a kernel its items.
@@ -306,10 +307,78 @@ impl Plan {
     }
 }
 
+/// Whether the graph's default constants, with the layout's, disable pass `p` of the declared
+/// graph (its `enabled` is 0 with them; a condition naming a constant they do not give is not).
+fn disabled_by_default(graph: &Graph, layout: &LayoutDecl, p: usize) -> bool {
+    let Some(condition) = &graph.declared.passes[p].decl.enabled else {
+        return false;
+    };
+    let vars: BTreeMap<String, f64> = graph
+        .declared
+        .constants
+        .iter()
+        .chain(&layout.constants)
+        .map(|(k, v)| (k.clone(), v.as_f64()))
+        .collect();
+    Expr::parse(condition).and_then(|e| e.eval(&vars)) == Ok(0.0)
+}
+
+/// The layout's kernels with the live passes it leaves out that the graph's default constants
+/// disable (another structure's passes, chosen by a constant) placed: a pass inside a chain
+/// right after the pass before it in its chain (as declared, culled or not) that a kernel
+/// lists, a pass that begins its chain (or follows none listed) in a kernel of its own, before
+/// the first kernel that lists a pass declared after it.
+fn placed_kernels(graph: &Graph, layout: &LayoutDecl) -> Vec<Vec<String>> {
+    let declared = &graph.declared.passes;
+    let order = |name: &str| declared.iter().position(|p| p.decl.name == name).unwrap_or(usize::MAX);
+    let consumers: BTreeSet<&str> = graph.streams.values().map(|s| s.to.as_str()).collect();
+    let entry = |q: usize| {
+        matches!(declared[q].decl.role, Role::Start { .. }) || consumers.contains(declared[q].decl.name.as_str())
+    };
+    let mut kernels = layout.kernels.clone();
+    for (i, p) in declared.iter().enumerate() {
+        let name = &p.decl.name;
+        let listed = |kernels: &[Vec<String>], n: &str| kernels.iter().any(|k| k.iter().any(|x| x == n));
+        if listed(&kernels, name) || graph.is_culled(name) || !disabled_by_default(graph, layout, i) {
+            continue;
+        }
+        let mut anchor = None;
+        if !entry(i) {
+            for q in (0..i).rev().filter(|&q| declared[q].decl.item == p.decl.item) {
+                if listed(&kernels, &declared[q].decl.name) {
+                    anchor = Some(&declared[q].decl.name);
+                    break;
+                }
+                if entry(q) {
+                    break;
+                }
+            }
+        }
+        match anchor {
+            Some(a) => {
+                let k = kernels
+                    .iter()
+                    .position(|k| k.contains(a))
+                    .expect("the anchor is listed");
+                let at = kernels[k].iter().position(|x| x == a).expect("the anchor is listed") + 1;
+                kernels[k].insert(at, name.clone());
+            }
+            None => {
+                let at = kernels
+                    .iter()
+                    .position(|k| k.iter().any(|x| order(x) > i && order(x) != usize::MAX))
+                    .unwrap_or(kernels.len());
+                kernels.insert(at, vec![name.clone()]);
+            }
+        }
+    }
+    kernels
+}
+
 fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Result<Vec<Vec<PassId>>> {
     let mut seen: BTreeSet<PassId> = BTreeSet::new();
     let mut groups = Vec::new();
-    for names in &layout.kernels {
+    for names in &placed_kernels(graph, layout) {
         let mut group = Vec::new();
         for name in names {
             if graph.declared.ops.iter().any(|o| o.name == *name) {
@@ -352,7 +421,7 @@ fn resolve_groups(graph: &Graph, layout_name: &str, layout: &LayoutDecl) -> Resu
             layout_name,
             layout_name,
             format!(
-                "layout '{layout_name}' puts pass '{name}' in no kernel; it is enabled, and a layout may leave out only the passes the constants disable"
+                "layout '{layout_name}' puts pass '{name}' in no kernel; it is enabled, and a layout may leave out only the passes the constants disable (those the graph's default constants disable are placed by their chain)"
             ),
         ));
     }
