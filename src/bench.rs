@@ -59,12 +59,12 @@ impl Measurement {
 
 /// Compiles `run` on `gpu` ([`Run::session`]), then [`measure_session`].
 pub fn measure(gpu: &Gpu, run: &Run, budget: Duration) -> Result<Measurement> {
-    measure_session(run.session(gpu)?, &run.layout, budget)
+    measure_session(&mut run.session(gpu)?, &run.layout, budget)
 }
 
 /// Renders one warm-up frame of `session` (of the layout called `layout`), then frames until
 /// `budget` has passed (at least one).
-pub fn measure_session(mut session: Session, layout: &str, budget: Duration) -> Result<Measurement> {
+pub fn measure_session(session: &mut Session, layout: &str, budget: Duration) -> Result<Measurement> {
     let options = &session.options;
     let (resolution, spp) = ((options.width, options.height), options.samples_per_frame);
     session.render_frame()?;

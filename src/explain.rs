@@ -1,10 +1,10 @@
 //! Explaining a graph (`lightgraph explain`, Python's `explain`): the kernels, schedule and
 //! resources of its layouts for a scene, or its outline.
 
-use crate::run::{RunOptions, Scenes, Session, load_graph, named_layout};
+use crate::run::{Run, RunOptions, Scenes, load_graph, named_layout};
 use anyhow::{Context, Result};
+use lightgraph_engine::Gpu;
 use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::{Gpu, compile};
 use lightgraph_scenes::bvh::BvhKind;
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -52,17 +52,10 @@ pub fn report(args: &ExplainSpec) -> Result<String> {
         .map(|(name, decl)| scenes.load_for(c.bvh, name, decl))
         .collect::<Result<_>>()?;
     let gpu = Gpu::new(c.adapter.as_deref()).ok();
-    let device = gpu.as_ref().map(|g| (crate::run::device_flags(g), g.target()));
-    let (device, mut target) = device.unwrap_or_default();
-    target.alias_transients = !c.overrides.separate_memory;
-    if c.overrides.no_subgroups {
-        target = target.without_subgroups();
-    }
-    let first = scenes.get(kinds[0]);
-    let opts = c.options(first, &graph, 1)?;
+    let device = gpu.as_ref().map(crate::run::device_flags).unwrap_or_default();
     features(
         &mut out,
-        &crate::run::kernel_flags(device.clone(), first, c.overrides.all_features),
+        &crate::run::kernel_flags(device, scenes.get(kinds[0]), c.overrides.all_features),
     )?;
     writeln!(
         out,
@@ -71,24 +64,23 @@ pub fn report(args: &ExplainSpec) -> Result<String> {
         graph.layouts.keys().cloned().collect::<Vec<_>>().join(", ")
     )?;
     for ((layout, decl), kind) in layouts.into_iter().zip(kinds) {
-        let scene = scenes.get(kind);
         writeln!(out, "layout {layout}: BVH {}", kind.name())?;
-        let flags = crate::run::kernel_flags(device.clone(), scene, c.overrides.all_features);
-        let spec = crate::run::specialization(&graph, &scene.scene, &opts, flags);
-        let camera = lightgraph_scenes::CompiledScene::camera(&scene.scene, opts.width, opts.height);
-        let externals = scene.compiled.resources(&camera);
-        let decl = opts.layout.apply(decl);
+        let spec = c.spec(&args.graph, Some(&layout), 1);
+        let run = Run::with_scene(&spec, graph.clone(), (layout, decl), scenes.shared(kind))?;
+        let (layout, opts) = (&run.layout, &run.options);
+        let camera = lightgraph_scenes::CompiledScene::camera(&run.scene.scene, opts.width, opts.height);
+        let externals = run.scene.compiled.resources(&camera);
         // A graph with measured constants (LVC-BPT's average light sub-path length) is
         // measured by a session first, so that the sizes shown are those a render allocates.
         let session = match &gpu {
-            Some(g) if !graph.measured.is_empty() => Some(Session::new(g, &graph, &layout, scene, opts.clone())?),
+            Some(g) if !graph.measured.is_empty() => Some(run.session(g)?),
             _ => None,
         };
         let compiled;
         let program = match &session {
             Some(s) => s.program(),
             None => {
-                compiled = compile(&graph, &layout, &decl, &spec, &target)?;
+                compiled = run.compile(gpu.as_ref())?;
                 &compiled
             }
         };

@@ -7,8 +7,8 @@
 use crate::bench::{Measurement, measure_session};
 use crate::run::{Run, Session};
 use anyhow::{Result, bail};
-use lightgraph_engine::Gpu;
 use lightgraph_engine::ir::{LayoutDecl, Policy, StateStorage};
+use lightgraph_engine::{Gpu, Program};
 use std::fmt::Write;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc;
@@ -22,6 +22,10 @@ pub struct Trial {
     pub decl: LayoutDecl,
     /// The measurement, or the error.
     pub result: Result<Measurement, String>,
+    /// The program the trial compiled, kept for the fastest trial only (after
+    /// [`autotune_with`]), so that a render in its layout takes it instead of compiling the
+    /// winner again ([`Run::take_tuned`]).
+    pub program: Option<Program>,
 }
 
 impl Trial {
@@ -87,6 +91,16 @@ const REFINED_POOL: u64 = 1 << 20;
 /// Layouts the refinement takes from the screening, fastest first.
 const REFINED_LAYOUTS: usize = 2;
 
+/// `--layout auto` of `run` on `gpu`: [`autotune`], then the fastest layout becomes the run's,
+/// with the program its trial compiled ([`Run::take_tuned`]), so that the render compiles
+/// nothing more. Returns the trials, fastest first (the winner's program moved into the run).
+pub fn tune(gpu: &Gpu, run: &mut Run, budget: Duration, report: impl FnMut(&Trial)) -> Result<Vec<Trial>> {
+    let mut trials = autotune(gpu, run, budget, report)?;
+    let best = &mut trials[0];
+    run.take_tuned(gpu, (best.name.clone(), best.decl.clone()), best.program.take());
+    Ok(trials)
+}
+
 /// [`autotune_with`] with [`Tuning::for_gpu`].
 pub fn autotune(gpu: &Gpu, run: &Run, budget: Duration, report: impl FnMut(&Trial)) -> Result<Vec<Trial>> {
     autotune_with(gpu, run, Tuning::for_gpu(gpu, budget), report)
@@ -94,8 +108,8 @@ pub fn autotune(gpu: &Gpu, run: &Run, budget: Duration, report: impl FnMut(&Tria
 
 /// Screens every legal layout of `run`'s graph for half the budget each, refines the two
 /// fastest over workgroup size and pool size (state in SoA) for the whole budget, and tries
-/// the fastest of all with the loop guards flipped; returns all trials, fastest first.
-/// `report` sees each trial as it finishes.
+/// the fastest of all with the loop guards flipped; returns all trials, fastest first, the
+/// first with its compiled program. `report` sees each trial as it finishes.
 pub fn autotune_with(gpu: &Gpu, run: &Run, tuning: Tuning, mut report: impl FnMut(&Trial)) -> Result<Vec<Trial>> {
     let graph = &run.graph;
     let base = graph.layouts[&graph.default_layout].clone();
@@ -113,17 +127,16 @@ pub fn autotune_with(gpu: &Gpu, run: &Run, tuning: Tuning, mut report: impl FnMu
         .into_iter()
         .map(|(name, decl)| (format!("{name} ({})", options_of(&decl)), decl))
         .collect();
-    let mut trials = measure_all(gpu, run, screened, tuning.budget / 2, tuning.preparers, &mut report);
-    trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
-    let refined = refinements(run, &trials)?;
-    trials.extend(measure_all(
+    let mut measuring = Measuring {
         gpu,
         run,
-        refined,
-        tuning.budget,
-        tuning.preparers,
-        &mut report,
-    ));
+        report: &mut report,
+        fastest: 0.0,
+    };
+    let mut trials = measuring.measure_all(screened, tuning.budget / 2, tuning.preparers);
+    trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
+    let refined = refinements(run, &trials)?;
+    trials.extend(measuring.measure_all(refined, tuning.budget, tuning.preparers));
     trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
     // The fastest once more with wgpu's loop guards the other way (LayoutDecl::loop_guards).
     let (name, decl) = (&trials[0].name, &trials[0].decl);
@@ -132,15 +145,12 @@ pub fn autotune_with(gpu: &Gpu, run: &Run, tuning: Tuning, mut report: impl FnMu
         ..decl.clone()
     };
     let label = format!("{} ({})", base_name(name), options_of(&flipped));
-    trials.extend(measure_all(
-        gpu,
-        run,
-        vec![(label, flipped)],
-        tuning.budget,
-        0,
-        &mut report,
-    ));
+    trials.extend(measuring.measure_all(vec![(label, flipped)], tuning.budget, 0));
     trials.sort_by(|a, b| b.score().total_cmp(&a.score()));
+    // Only the winner's program is wanted (a trial kept one when it was the fastest so far).
+    for trial in trials.iter_mut().skip(1) {
+        trial.program = None;
+    }
     Ok(trials)
 }
 
@@ -174,61 +184,77 @@ fn refinements(run: &Run, trials: &[Trial]) -> Result<Vec<(String, LayoutDecl)>>
     Ok(out)
 }
 
-/// Measures each of `layouts` for `budget` after one warm-up frame; `preparers` threads
-/// compile and instantiate the next ones meanwhile (at most `preparers` waiting), so that the
-/// measuring thread only measures. Trials in the order they were measured.
-fn measure_all(
-    gpu: &Gpu,
-    run: &Run,
-    layouts: Vec<(String, LayoutDecl)>,
-    budget: Duration,
-    preparers: usize,
-    report: &mut impl FnMut(&Trial),
-) -> Vec<Trial> {
-    let mut finish = |(name, decl): (String, LayoutDecl), session: Result<Session>| {
-        let result = session
-            .and_then(|s| measure_session(s, &name, budget))
-            .map_err(|e| format!("{e:#}"));
-        let trial = Trial { name, decl, result };
-        report(&trial);
-        trial
-    };
-    if preparers == 0 {
-        return layouts
-            .into_iter()
-            .map(|(name, decl)| {
-                let session = prepare(gpu, run, &name, &decl);
-                finish((name, decl), session)
-            })
-            .collect();
-    }
-    let next = AtomicUsize::new(0);
-    let (sender, prepared) = mpsc::sync_channel(preparers);
-    std::thread::scope(|scope| {
-        for _ in 0..preparers.min(layouts.len()) {
-            let (sender, next, layouts) = (sender.clone(), &next, &layouts);
-            scope.spawn(move || {
-                while let Some((name, decl)) = layouts.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    if sender
-                        .send((name.clone(), decl.clone(), prepare(gpu, run, name, decl)))
-                        .is_err()
-                    {
-                        break;
-                    }
-                }
-            });
-        }
-        drop(sender);
-        prepared
-            .iter()
-            .map(|(name, decl, session)| finish((name, decl), session))
-            .collect()
-    })
+/// The trials' measuring: the run, its GPU, who sees each trial, and the fastest rate so far.
+struct Measuring<'a, 'g, R> {
+    gpu: &'g Gpu,
+    run: &'a Run,
+    report: &'a mut R,
+    /// Samples per second of the fastest trial so far: a trial faster still keeps its program.
+    fastest: f64,
 }
 
-/// `run` compiled and instantiated on `gpu` in the layout `decl` (called `name`).
-fn prepare<'g>(gpu: &'g Gpu, run: &Run, name: &str, decl: &LayoutDecl) -> Result<Session<'g>> {
-    Session::with_layout(gpu, &run.graph, name, decl.clone(), &run.scene, run.options.clone())
+impl<R: FnMut(&Trial)> Measuring<'_, '_, R> {
+    /// Measures each of `layouts` for `budget` after one warm-up frame; `preparers` threads
+    /// compile and instantiate the next ones meanwhile (at most `preparers` waiting), so that
+    /// the measuring thread only measures. Trials in the order they were measured.
+    fn measure_all(&mut self, layouts: Vec<(String, LayoutDecl)>, budget: Duration, preparers: usize) -> Vec<Trial> {
+        let (gpu, run) = (self.gpu, self.run);
+        if preparers == 0 {
+            return layouts
+                .into_iter()
+                .map(|(name, decl)| {
+                    let session = run.session_in(gpu, &name, &decl);
+                    self.finish((name, decl), session, budget)
+                })
+                .collect();
+        }
+        let next = AtomicUsize::new(0);
+        let (sender, prepared) = mpsc::sync_channel(preparers);
+        std::thread::scope(|scope| {
+            for _ in 0..preparers.min(layouts.len()) {
+                let (sender, next, layouts) = (sender.clone(), &next, &layouts);
+                scope.spawn(move || {
+                    while let Some((name, decl)) = layouts.get(next.fetch_add(1, Ordering::Relaxed)) {
+                        if sender
+                            .send((name.clone(), decl.clone(), run.session_in(gpu, name, decl)))
+                            .is_err()
+                        {
+                            break;
+                        }
+                    }
+                });
+            }
+            drop(sender);
+            prepared
+                .iter()
+                .map(|(name, decl, session)| self.finish((name, decl), session, budget))
+                .collect()
+        })
+    }
+
+    /// The trial of the layout `decl` (called `name`) measured in `session` for `budget`,
+    /// with its program where it is the fastest so far; reported.
+    fn finish(&mut self, (name, decl): (String, LayoutDecl), session: Result<Session>, budget: Duration) -> Trial {
+        let mut program = None;
+        let result = session
+            .and_then(|mut s| {
+                let m = measure_session(&mut s, &name, budget)?;
+                if m.samples_per_second() > self.fastest {
+                    self.fastest = m.samples_per_second();
+                    program = Some(s.program().clone());
+                }
+                Ok(m)
+            })
+            .map_err(|e| format!("{e:#}"));
+        let trial = Trial {
+            name,
+            decl,
+            result,
+            program,
+        };
+        (self.report)(&trial);
+        trial
+    }
 }
 
 /// The tuner's table as Markdown, fastest first.

@@ -9,12 +9,11 @@ use crate::operator::{OpKind, summed_type};
 use crate::radix::Sort;
 use crate::resolve::{BufferRef, Resolved};
 use crate::scan::{Groups, Module, OpKernel, Scan, element_entry};
-use crate::scratch::SortShape;
 use std::fmt::Write;
 
 /// The kernels of operator `o` of `graph`, in the order they run, for `target`: subgroup
 /// operations where it has them, scans in tiles of `WORKGROUP * scan_items` elements, sorts in
-/// its [`SortShape`].
+/// the shape the resolve stage found for it ([`Resolved::sort_shape`]).
 pub fn op_kernels(graph: &Graph, o: OpId, resolved: &Resolved, target: &Target) -> Vec<OpKernel> {
     let (subgroups, items) = (target.subgroups(), target.scan_items);
     let op = &graph.ops[o.0];
@@ -101,7 +100,7 @@ pub fn op_kernels(graph: &Graph, o: OpId, resolved: &Resolved, target: &Target) 
                 counted,
                 subgroups,
                 items,
-                shape: SortShape::of(target),
+                shape: resolved.sort_shape,
                 overflow: resolved.control.op_overflow[&o],
             };
             sort.kernels(&prefix, resolved)

@@ -158,6 +158,8 @@ pub struct Resolved {
     pub op_elements: BTreeMap<OpId, u64>,
     /// Words of each operator's scratch buffers, by index of [`BufferRef::Scratch`].
     pub op_scratch: BTreeMap<OpId, Vec<u64>>,
+    /// How the target's radix sorts run (their scratch and their kernels follow it).
+    pub sort_shape: SortShape,
     /// Control word layout.
     pub control: ControlMap,
     /// Binding numbers of kernels.
@@ -258,6 +260,7 @@ impl Resolved {
             queue_capacity: BTreeMap::new(),
             op_elements: BTreeMap::new(),
             op_scratch: BTreeMap::new(),
+            sort_shape: SortShape::PORTABLE,
             control: control_map(plan),
             bindings: bindings(plan),
             memory: MemoryPlan::default(),
@@ -372,6 +375,7 @@ impl Resolved {
     /// Each operator's element count and scratch buffers.
     fn operators(&mut self, plan: &Plan, vars: &BTreeMap<String, f64>, target: &Target) -> Result<()> {
         let g = &plan.graph;
+        self.sort_shape = SortShape::of(target);
         for (o, op) in g.ops.iter().enumerate() {
             let o = OpId(o);
             let n = match (&op.domain, &op.kind) {
@@ -386,7 +390,7 @@ impl Resolved {
             self.op_elements.insert(o, n);
             let tile = (WORKGROUP * target.scan_items) as u64;
             self.op_scratch
-                .insert(o, scratch_words(&op.kind, n, tile, SortShape::of(target)));
+                .insert(o, scratch_words(&op.kind, n, tile, self.sort_shape));
         }
         Ok(())
     }

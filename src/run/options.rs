@@ -11,7 +11,7 @@ use lightgraph_scenes::model::{MisHeuristic, RussianRoulette, Scene};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Image size, sampling and seed of a session.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SessionOptions {
     /// Image width.
     pub width: u32,
@@ -29,7 +29,7 @@ pub struct SessionOptions {
 
 /// Options that override a layout's own (`--threads`, `--workgroup`, `--state`,
 /// `--loop-guards`).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct LayoutOverrides {
     /// Thread pool size of regeneration and compaction layouts.
     pub threads: Option<u64>,
@@ -53,9 +53,14 @@ pub struct LayoutOverrides {
 impl LayoutOverrides {
     /// The compilation target of `gpu` with these overrides.
     pub fn target(&self, gpu: &Gpu) -> lightgraph_engine::Target {
+        self.on_target(gpu.target())
+    }
+
+    /// `target` (a GPU's, or the default without one) with these overrides.
+    pub fn on_target(&self, target: lightgraph_engine::Target) -> lightgraph_engine::Target {
         let target = lightgraph_engine::Target {
             alias_transients: !self.separate_memory,
-            ..gpu.target()
+            ..target
         };
         match self.no_subgroups {
             true => target.without_subgroups(),

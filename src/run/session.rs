@@ -104,7 +104,35 @@ impl<'g> Session<'g> {
         let measured = measure_prepared(gpu, graph, layout, (&decl, &spec, &externals), &options)?;
         spec.constants.extend(measured);
         let program = compile(graph, layout, &decl, &spec, &options.layout.target(gpu))?;
-        let instance = Instance::new(gpu, program, &externals)
+        Self::instantiate(gpu, graph, layout, program, &externals, options)
+    }
+
+    /// Instantiates `program`, compiled already for `graph` in the layout `decl` (named
+    /// `layout`) on `scene` with `options` (measured constants among them), without compiling
+    /// it again: a layout the tuner measured ([`crate::run::Run::take_tuned`]).
+    pub(crate) fn of_program(
+        gpu: &'g Gpu,
+        graph: &Graph,
+        (layout, decl): (&str, LayoutDecl),
+        program: Program,
+        scene: &LoadedScene,
+        options: SessionOptions,
+    ) -> Result<Session<'g>> {
+        let Prepared { externals, .. } = prepare(gpu, graph, decl, scene, &options)?;
+        Self::instantiate(gpu, graph, layout, program, &externals, options)
+    }
+
+    /// A session of `program` (of `graph` in the layout called `layout`) with the scene's
+    /// resources `externals`.
+    fn instantiate(
+        gpu: &'g Gpu,
+        graph: &Graph,
+        layout: &str,
+        program: Program,
+        externals: &BTreeMap<String, Vec<u8>>,
+        options: SessionOptions,
+    ) -> Result<Session<'g>> {
+        let instance = Instance::new(gpu, program, externals)
             .with_context(|| format!("instantiating graph '{}' in layout '{layout}'", graph.name))?;
         Ok(Session {
             instance,

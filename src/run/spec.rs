@@ -6,12 +6,12 @@ use crate::reference::Reference;
 use crate::run::checks;
 use crate::run::graph::{load_graph, named_layout};
 use crate::run::measure::measure_constants;
-use crate::run::options::{LayoutOverrides, SessionOptions, parse_sets};
+use crate::run::options::{LayoutOverrides, SessionOptions, device_flags, kernel_flags, parse_sets, specialization};
 use crate::run::scene::{BvhChoice, LoadedScene, Scenes, load_scene_with};
 use crate::run::session::Session;
 use anyhow::{Result, anyhow, bail};
 use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::{ConstValue, Gpu, Graph};
+use lightgraph_engine::{ConstValue, Gpu, Graph, Program};
 use lightgraph_scenes::bvh::BvhKind;
 use std::sync::Arc;
 
@@ -203,6 +203,24 @@ pub struct Run {
     pub scene: Arc<LoadedScene>,
     /// The session options (measured constants among the constants once measured).
     pub options: SessionOptions,
+    /// The program of the run's layout compiled already, where the tuner measured it
+    /// ([`Run::take_tuned`]): the run's sessions instantiate it instead of compiling again.
+    compiled: Option<Compiled>,
+}
+
+/// A program compiled for a run, with what it was compiled for: a session takes it only while
+/// the run still names all of it.
+struct Compiled {
+    /// The layout's name and the layout (as Debug text: `LayoutDecl` has no equality).
+    layout: (String, String),
+    /// The scene (the run's own, not one loaded again for another BVH).
+    scene: Arc<LoadedScene>,
+    /// The options, measured constants included.
+    options: SessionOptions,
+    /// The adapter ([`Gpu::describe`]), whose target and features the program was compiled for.
+    adapter: String,
+    /// The program.
+    program: Program,
 }
 
 impl Run {
@@ -247,6 +265,7 @@ impl Run {
             decl,
             scene,
             options,
+            compiled: None,
         })
     }
 
@@ -312,18 +331,86 @@ impl Run {
         self.graph.measured.keys().all(|name| constants.contains_key(name))
     }
 
-    /// The run compiled and instantiated on `gpu`, at the run's first frame.
+    /// Takes the layout `name` (`decl`) that the tuner measured on `gpu` with this run's scene
+    /// and options, and the program its measurement compiled: the graph's measured constants
+    /// that program holds go into the options (the trial measured them in this layout), and
+    /// the run's sessions on `gpu` instantiate the program instead of compiling it again.
+    pub fn take_tuned(&mut self, gpu: &Gpu, (name, decl): (String, LayoutDecl), program: Option<Program>) {
+        self.compiled = program.map(|program| {
+            for measured in self.graph.measured.keys() {
+                if let Some(value) = program.constants().get(measured) {
+                    self.options.constants.entry(measured.clone()).or_insert(*value);
+                }
+            }
+            Compiled {
+                layout: (name.clone(), format!("{decl:?}")),
+                scene: self.scene.clone(),
+                options: self.options.clone(),
+                adapter: gpu.describe(),
+                program,
+            }
+        });
+        (self.layout, self.decl) = (name, decl);
+    }
+
+    /// The program compiled already for the run as it is now on `gpu`, if any.
+    fn compiled_for(&self, gpu: &Gpu) -> Option<&Program> {
+        let c = self.compiled.as_ref()?;
+        let same = c.layout == (self.layout.clone(), format!("{:?}", self.decl))
+            && Arc::ptr_eq(&c.scene, &self.scene)
+            && c.options == self.options
+            && c.adapter == gpu.describe();
+        same.then_some(&c.program)
+    }
+
+    /// The run compiled and instantiated on `gpu`, at the run's first frame (the program the
+    /// tuner compiled for it, where it still fits, instantiated without compiling again).
     pub fn session<'g>(&self, gpu: &'g Gpu) -> Result<Session<'g>> {
-        let mut session = Session::with_layout(
-            gpu,
-            &self.graph,
-            &self.layout,
-            self.decl.clone(),
-            &self.scene,
-            self.options.clone(),
-        )?;
+        let mut session = match self.compiled_for(gpu) {
+            Some(program) => Session::of_program(
+                gpu,
+                &self.graph,
+                (&self.layout, self.decl.clone()),
+                program.clone(),
+                &self.scene,
+                self.options.clone(),
+            )?,
+            None => self.session_in(gpu, &self.layout, &self.decl)?,
+        };
         session.first_frame =
             u32::try_from(self.spec.first_frame).map_err(|_| anyhow!("the first frame is past 2^32"))?;
         Ok(session)
+    }
+
+    /// The run's program for `gpu`'s target and features, or without a GPU for the default
+    /// target and no optional feature, compiled without measuring: measured constants the
+    /// options do not give keep their defaults (what `explain` shows without a GPU).
+    pub fn compile(&self, gpu: Option<&Gpu>) -> Result<Program> {
+        let (device, target) = gpu.map(|g| (device_flags(g), g.target())).unwrap_or_default();
+        let flags = kernel_flags(device, &self.scene, self.options.layout.all_features);
+        let spec = specialization(&self.graph, &self.scene.scene, &self.options, flags);
+        let decl = self.options.layout.apply(self.decl.clone());
+        let target = self.options.layout.on_target(target);
+        Ok(lightgraph_engine::compile(
+            &self.graph,
+            &self.layout,
+            &decl,
+            &spec,
+            &target,
+        )?)
+    }
+
+    /// The run compiled and instantiated on `gpu` in the layout `decl` (called `layout`)
+    /// instead of its own, at frame 0: a layout the tuner measures. The graph's measured
+    /// constants that the options do not give are measured first, in that layout.
+    pub fn session_in<'g>(&self, gpu: &'g Gpu, layout: &str, decl: &LayoutDecl) -> Result<Session<'g>> {
+        Session::with_layout(
+            gpu,
+            &self.graph,
+            layout,
+            decl.clone(),
+            &self.scene,
+            self.options.clone(),
+        )
     }
 }

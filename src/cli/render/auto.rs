@@ -6,7 +6,6 @@ use anyhow::Result;
 use lightgraph::run::{Run, parse_bvh};
 use lightgraph::{layout_cache, measured_layouts};
 use lightgraph_engine::Gpu;
-use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_scenes::bvh::BvhKind;
 
 /// Puts into `run` the layout of a render where it is not the run's own, and says whether it
@@ -50,7 +49,7 @@ pub fn choose_layout(gpu: &Gpu, run: &mut Run, args: &RenderArgs) -> Result<bool
     if !run.spec.auto_layout() {
         return Ok(false);
     }
-    (run.layout, run.decl) = tune_layout(gpu, run, args, key)?;
+    tune_layout(gpu, run, args, key)?;
     Ok(true)
 }
 
@@ -97,14 +96,15 @@ fn cache_key(gpu: &Gpu, run: &Run) -> layout_cache::Key {
     }
 }
 
-/// `--layout auto`: measures every legal layout of `graph`, writes the table beside the
-/// output, stores the fastest in the layout cache under `key`, and returns it.
-fn tune_layout(gpu: &Gpu, run: &Run, args: &RenderArgs, key: layout_cache::Key) -> Result<(String, LayoutDecl)> {
+/// `--layout auto`: measures every legal layout of `graph` and makes the fastest the run's
+/// (with the program its trial compiled: `lightgraph::tune::tune`), writes the table beside
+/// the output and stores the winner in the layout cache under `key`.
+fn tune_layout(gpu: &Gpu, run: &mut Run, args: &RenderArgs, key: layout_cache::Key) -> Result<()> {
     eprintln!(
         "--layout auto: measuring every legal layout of '{}' for {:?} each",
         run.graph.name, args.tune_time
     );
-    let trials = lightgraph::tune::autotune(gpu, run, args.tune_time, |t| {
+    let trials = lightgraph::tune::tune(gpu, run, args.tune_time, |t| {
         eprintln!("  {:>9.1} Msamples/s  {}", t.score() / 1e6, t.name);
     })?;
     let table = lightgraph::tune::table(&trials);
@@ -133,5 +133,5 @@ fn tune_layout(gpu: &Gpu, run: &Run, args: &RenderArgs, key: layout_cache::Key) 
         Ok(path) => eprintln!("stored in the layout cache {}", path.display()),
         Err(e) => eprintln!("warning: the winner is not stored: {e:#}"),
     }
-    Ok((best.name.clone(), best.decl.clone()))
+    Ok(())
 }
