@@ -12,15 +12,20 @@
 mod checks;
 
 use ::lightgraph::cli::Cli;
-use ::lightgraph::compare::render::{CompareSpec, PER_DECADE, compare as run_compare};
+use ::lightgraph::compare::RunBudget;
+use ::lightgraph::compare::render::{
+    COMPARE_OUT, COMPARE_TIME, CompareSpec, Comparison, PER_DECADE, compare as run_compare,
+};
 use ::lightgraph::explain::{ExplainSpec, report};
 use ::lightgraph::reference::Reference;
 use ::lightgraph::reference::render::{
     REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render as render_reference,
 };
-use ::lightgraph::run::{Run, RunOptions, RunSpec, Session as RenderSession};
+use ::lightgraph::run::{DEFAULT_SEED, Run, RunOptions, RunSpec, Session as RenderSession};
 use ::lightgraph::study::DEFAULT_ESTIMATORS;
-use ::lightgraph::study::render::{LAYOUT_TIME, StudySpec, study as run_study};
+use ::lightgraph::study::render::{
+    LAYOUT_TIME, REFERENCE_GRAPH, REFERENCE_TIME, STUDY_OUT, STUDY_TIME, StudySpec, study as run_study,
+};
 use lightgraph_engine::Gpu;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::create_exception;
@@ -404,8 +409,8 @@ fn reference<'py>(
 /// - baseline: the run the others' speed-ups are against (None: the first).
 /// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
 #[pyfunction]
-#[pyo3(signature = (reference, runs, time = 10.0, seed = 1, out = PathBuf::from("out/compare"), per_decade = 6,
-    baseline = None, adapter = None))]
+#[pyo3(signature = (reference, runs, time = COMPARE_TIME.as_secs_f64(), seed = DEFAULT_SEED as i64,
+    out = PathBuf::from(COMPARE_OUT), per_decade = PER_DECADE as i64, baseline = None, adapter = None))]
 #[allow(clippy::too_many_arguments)]
 fn compare(
     py: Python<'_>,
@@ -427,18 +432,29 @@ fn compare(
         },
         runs: runs.to_string(),
         reference,
-        time: Duration::from_secs_f64(time),
-        setup_on_clock: false,
         resume: false,
         baseline: baseline.map(str::to_string),
+        comparison: comparison(time, per_decade, seed, out),
+    };
+    py.detach(|| run_compare(spec)).map_err(err)
+}
+
+/// The comparison of runs of `seconds` each (set-up off the clock), `per_decade` error samples
+/// a decade, `seed`, written into `out`, on the options' adapter, as the CLI's defaults leave
+/// the rest.
+fn comparison(seconds: f64, per_decade: u32, seed: u32, out: PathBuf) -> Comparison {
+    Comparison {
+        budget: RunBudget {
+            time: Duration::from_secs_f64(seconds),
+            setup_on_clock: false,
+        },
         per_decade,
         seed,
         tev: None,
         out,
         exposure: 0.0,
         gpus: None,
-    };
-    py.detach(|| run_compare(spec)).map_err(err)
+    }
 }
 
 /// Runs `lightgraph study`: each estimator on each scene against a reference per scene,
@@ -457,8 +473,9 @@ fn compare(
 /// - out: the folder of the study.
 /// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
 #[pyfunction]
-#[pyo3(signature = (scenes, estimators = None, time = 20.0, reference_time = 120.0, reference_graph = "vcm",
-    res = None, seed = 1, out = PathBuf::from("out/study"), adapter = None))]
+#[pyo3(signature = (scenes, estimators = None, time = STUDY_TIME.as_secs_f64(),
+    reference_time = REFERENCE_TIME.as_secs_f64(), reference_graph = REFERENCE_GRAPH, res = None,
+    seed = DEFAULT_SEED as i64, out = PathBuf::from(STUDY_OUT), adapter = None))]
 #[allow(clippy::too_many_arguments)]
 fn study(
     py: Python<'_>,
@@ -483,8 +500,6 @@ fn study(
         },
         scenes,
         estimators: estimators.map_or_else(|| DEFAULT_ESTIMATORS.to_string(), |e| e.join(",")),
-        time: Duration::from_secs_f64(time),
-        setup_on_clock: false,
         resume: false,
         layout_time: LAYOUT_TIME,
         references: None,
@@ -493,12 +508,7 @@ fn study(
         reference_time: Duration::from_secs_f64(reference_time),
         reference_frames: None,
         reference_spp: None,
-        per_decade: PER_DECADE,
-        seed,
-        tev: None,
-        out,
-        exposure: 0.0,
-        gpus: None,
+        comparison: comparison(time, PER_DECADE, seed, out),
     };
     py.detach(|| run_study(spec)).map_err(err)
 }

@@ -3,17 +3,23 @@
 use super::checks::count;
 use anyhow::Result;
 use clap::Args;
+use lightgraph::compare::RunBudget;
 pub use lightgraph::compare::estimator_specs;
+use lightgraph::compare::render::{Comparison, PER_DECADE};
 pub use lightgraph::output::si;
 use lightgraph::reference::Reference;
 pub use lightgraph::run::scene::find_scene;
 use lightgraph::run::{
-    BvhChoice, DEFAULT_GRAPH, DEFAULT_SCENE, LayoutOverrides, LoadedScene, RunOptions, RunSpec, SessionOptions,
+    BvhChoice, DEFAULT_GRAPH, DEFAULT_SCENE, DEFAULT_SEED, LayoutOverrides, LoadedScene, RunOptions, RunSpec,
+    SessionOptions,
 };
 use lightgraph::tev::LiveView;
 use lightgraph_engine::Graph;
 use lightgraph_engine::ir::StateStorage;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::Duration;
 
 /// The live view option of the commands that render progressively.
 #[derive(Args, Clone)]
@@ -45,6 +51,50 @@ impl GraphArg {
     pub fn name(&self) -> &str {
         self.graph.as_deref().unwrap_or(DEFAULT_GRAPH)
     }
+}
+
+/// The options `compare` and `study` share, with one flag and default each; each command adds
+/// its budget, output folder and GPUs ([`CompareFlags::comparison`]).
+#[derive(Args, Clone)]
+pub struct CompareFlags {
+    /// Error samples per decade of time (log-spaced from the first frame to the end, at
+    /// least 12).
+    #[arg(long, default_value_t = PER_DECADE, value_parser = count::<u32>, allow_negative_numbers = true)]
+    pub per_decade: u32,
+    /// Seed of the runs' random streams (must differ from the reference's).
+    #[arg(long, default_value_t = DEFAULT_SEED)]
+    pub seed: u32,
+    #[command(flatten)]
+    pub tev: TevArg,
+    /// Exposure of the PNG previews in stops.
+    #[arg(long, default_value_t = 0.0)]
+    pub exposure: f32,
+}
+
+impl CompareFlags {
+    /// The comparison of these options with each run's `budget`, the output folder `out` and
+    /// the GPUs `gpus`.
+    pub fn comparison(self, budget: RunBudget, out: PathBuf, gpus: Option<String>) -> Comparison {
+        Comparison {
+            budget,
+            per_decade: self.per_decade,
+            seed: self.seed,
+            tev: self.tev.tev,
+            out,
+            exposure: self.exposure,
+            gpus,
+        }
+    }
+}
+
+/// A time as the command line takes it (`500ms`, `20s`, `2m`): the text of a default that a
+/// library constant gives (clap keeps defaults as `'static` text; each value's is made once).
+pub fn duration_text(time: Duration) -> &'static str {
+    static TEXTS: Mutex<BTreeMap<Duration, &'static str>> = Mutex::new(BTreeMap::new());
+    let mut texts = TEXTS.lock().unwrap_or_else(|e| e.into_inner());
+    texts
+        .entry(time)
+        .or_insert_with(|| Box::leak(humantime::format_duration(time).to_string().into_boxed_str()))
 }
 
 /// Options every rendering command takes.

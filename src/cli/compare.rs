@@ -4,7 +4,8 @@
 use super::args::*;
 use anyhow::Result;
 use clap::Args;
-use lightgraph::compare::render::CompareSpec;
+use lightgraph::compare::RunBudget;
+use lightgraph::compare::render::{COMPARE_OUT, COMPARE_TIME, CompareSpec};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -21,7 +22,7 @@ pub struct CompareArgs {
     #[arg(long)]
     pub reference: PathBuf,
     /// Wall-clock budget of each run.
-    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "10s")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = duration_text(COMPARE_TIME))]
     pub time: Duration,
     /// Count each run's set-up (pipeline creation, buffers, the first frame's compilation)
     /// on its budget; by default its clock starts after it and a warm-up frame (thrown away),
@@ -35,21 +36,11 @@ pub struct CompareArgs {
     /// The run the others are measured against [default: the first].
     #[arg(long)]
     pub baseline: Option<String>,
-    /// Error samples per decade of time (log-spaced from the first frame to the end, at
-    /// least 12).
-    #[arg(long, default_value_t = 6, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
-    pub per_decade: u32,
-    /// Seed of the runs' random streams (must differ from the reference's).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u32,
     #[command(flatten)]
-    pub tev: TevArg,
+    pub flags: CompareFlags,
     /// Output folder: curves.csv, rmse_vs_time.png, summary.md and each run's EXR and PNG.
-    #[arg(long, default_value = "out/compare")]
+    #[arg(long, default_value = COMPARE_OUT)]
     pub out: PathBuf,
-    /// Exposure of the PNG previews in stops.
-    #[arg(long, default_value_t = 0.0)]
-    pub exposure: f32,
     /// Run on several GPUs of one model at once, each taking the next run when its last one
     /// ends (every run still has `--time` on one GPU): `all`, the first N adapters, or a
     /// comma-separated list of adapter indices, PCI bus ids or names (`--adapter` is then
@@ -61,20 +52,17 @@ pub struct CompareArgs {
 impl CompareArgs {
     /// The comparison these arguments name.
     pub fn spec(self) -> CompareSpec {
+        let budget = RunBudget {
+            time: self.time,
+            setup_on_clock: self.setup_on_clock,
+        };
         CompareSpec {
             options: self.common.run_options(),
             runs: self.runs,
             reference: self.reference,
-            time: self.time,
-            setup_on_clock: self.setup_on_clock,
             resume: self.resume,
             baseline: self.baseline,
-            per_decade: self.per_decade,
-            seed: self.seed,
-            tev: self.tev.tev,
-            out: self.out,
-            exposure: self.exposure,
-            gpus: self.gpus,
+            comparison: self.flags.comparison(budget, self.out, self.gpus),
         }
     }
 }

@@ -130,7 +130,92 @@ impl Cli {
 
 #[cfg(test)]
 mod tests {
+    use super::{Cli, Command};
+    use crate::compare::render::{COMPARE_OUT, COMPARE_TIME, PER_DECADE};
+    use crate::run::DEFAULT_SEED;
+    use crate::study::render::{LAYOUT_TIME, REFERENCE_GRAPH, REFERENCE_TIME, STUDY_OUT, STUDY_TIME};
+    use std::collections::BTreeMap;
     use std::path::{Path, PathBuf};
+    use std::time::Duration;
+
+    /// The default of each keyword of `def NAME(` in Python's stub (python/lightgraph.pyi), as
+    /// written there.
+    fn stub_defaults(name: &str) -> BTreeMap<String, String> {
+        let stub = include_str!("../../python/lightgraph.pyi");
+        let def = &stub[stub.find(&format!("\ndef {name}(")).expect("the function in the stub")..];
+        let params = &def[..def.find(") ->").expect("its end")];
+        params
+            .lines()
+            .filter_map(|l| {
+                let (name, default) = l.trim().trim_end_matches(',').split_once(" = ")?;
+                Some((name.split(':').next()?.trim().to_string(), default.to_string()))
+            })
+            .collect()
+    }
+
+    /// A number of seconds as the stub writes it (`20.0`).
+    fn seconds(time: Duration) -> String {
+        format!("{:?}", time.as_secs_f64())
+    }
+
+    /// The library's constants are the defaults of `compare` and `study` on the command line
+    /// (which takes them from there) and in Python's stub (which repeats them, as a stub must).
+    #[test]
+    fn compare_and_study_defaults_come_from_the_library() {
+        let Command::Compare(compare) =
+            Cli::parse_from_args(["lightgraph", "compare", "--runs", "pt", "--reference", "r.exr"])
+                .unwrap()
+                .command
+        else {
+            panic!("compare")
+        };
+        let compare = compare.spec().comparison;
+        assert_eq!(compare.budget.time, COMPARE_TIME);
+        assert_eq!((compare.per_decade, compare.seed), (PER_DECADE, DEFAULT_SEED));
+        assert_eq!(compare.out, Path::new(COMPARE_OUT));
+        let Command::Study(study) = Cli::parse_from_args(["lightgraph", "study", "--scenes", "a"])
+            .unwrap()
+            .command
+        else {
+            panic!("study")
+        };
+        let study = study.spec();
+        assert_eq!((study.layout_time, study.reference_time), (LAYOUT_TIME, REFERENCE_TIME));
+        assert_eq!(study.reference_graph, REFERENCE_GRAPH);
+        let c = &study.comparison;
+        assert_eq!(
+            (c.budget.time, c.per_decade, c.seed),
+            (STUDY_TIME, PER_DECADE, DEFAULT_SEED)
+        );
+        assert_eq!(c.out, Path::new(STUDY_OUT));
+
+        let quoted = |s: &str| format!("\"{s}\"");
+        let compare = stub_defaults("compare");
+        assert_eq!(compare["time"], seconds(COMPARE_TIME));
+        assert_eq!(compare["seed"], DEFAULT_SEED.to_string());
+        assert_eq!(compare["out"], quoted(COMPARE_OUT));
+        assert_eq!(compare["per_decade"], PER_DECADE.to_string());
+        let study = stub_defaults("study");
+        assert_eq!(study["time"], seconds(STUDY_TIME));
+        assert_eq!(study["reference_time"], seconds(REFERENCE_TIME));
+        assert_eq!(study["reference_graph"], quoted(REFERENCE_GRAPH));
+        assert_eq!(study["seed"], DEFAULT_SEED.to_string());
+        assert_eq!(study["out"], quoted(STUDY_OUT));
+    }
+
+    /// A default time shows on the command line as it is typed there and reads back the same.
+    #[test]
+    fn default_times_read_back() {
+        for (time, text) in [
+            (LAYOUT_TIME, "500ms"),
+            (STUDY_TIME, "20s"),
+            (REFERENCE_TIME, "2m"),
+            (COMPARE_TIME, "10s"),
+        ] {
+            assert_eq!(super::args::duration_text(time), text);
+            assert_eq!(super::checks::duration(text), Ok(time));
+        }
+    }
 
     /// The command modules: those [`super::Cli::run`] dispatches to (`name::function(a)` in
     /// its match), read from this file.

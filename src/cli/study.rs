@@ -6,8 +6,9 @@
 use super::args::*;
 use anyhow::Result;
 use clap::Args;
+use lightgraph::compare::RunBudget;
 use lightgraph::study::DEFAULT_ESTIMATORS;
-use lightgraph::study::render::StudySpec;
+use lightgraph::study::render::{LAYOUT_TIME, REFERENCE_GRAPH, REFERENCE_TIME, STUDY_OUT, STUDY_TIME, StudySpec};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -26,7 +27,7 @@ pub struct StudyArgs {
     #[arg(long, default_value = DEFAULT_ESTIMATORS)]
     pub estimators: String,
     /// Wall-clock budget of each estimator on each scene (rendering: its set-up is off the clock unless `--setup-on-clock`).
-    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "20s")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = duration_text(STUDY_TIME))]
     pub time: Duration,
     /// Count each run's set-up (pipeline creation, buffers, the first frame's compilation)
     /// on its budget.
@@ -39,7 +40,7 @@ pub struct StudyArgs {
     pub resume: bool,
     /// Time each layout renders when the study measures a graph's layouts (after a warm-up
     /// frame, so pipeline creation is not measured).
-    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "500ms")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = duration_text(LAYOUT_TIME))]
     pub layout_time: Duration,
     /// Folder of the references, one per scene (`<folder>.exr`, the folder the scene's
     /// outputs get): used when there with enough samples, resumed when there with fewer,
@@ -47,13 +48,13 @@ pub struct StudyArgs {
     #[arg(long)]
     pub references: Option<PathBuf>,
     /// The graph that renders references.
-    #[arg(long, default_value = "vcm")]
+    #[arg(long, default_value = REFERENCE_GRAPH)]
     pub reference_graph: String,
     /// The layout that renders references (default: the reference graph's).
     #[arg(long)]
     pub reference_layout: Option<String>,
     /// Render seconds each reference must hold; one with fewer is resumed for the rest.
-    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "2m")]
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = duration_text(REFERENCE_TIME))]
     pub reference_time: Duration,
     /// Frames each reference must hold instead (for reproducible references and tests).
     #[arg(long, conflicts_with = "reference_time", value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
@@ -61,22 +62,12 @@ pub struct StudyArgs {
     /// Samples per pixel in each frame of references the study renders [default: --spp].
     #[arg(long, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub reference_spp: Option<u32>,
-    /// Error samples per decade of time (log-spaced from the first frame to the end, at
-    /// least 12).
-    #[arg(long, default_value_t = 6, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
-    pub per_decade: u32,
-    /// Seed of the runs' random streams (must differ from the references').
-    #[arg(long, default_value_t = 1)]
-    pub seed: u32,
     #[command(flatten)]
-    pub tev: TevArg,
+    pub flags: CompareFlags,
     /// Output folder: summary.md, summary.csv, layouts.csv, and per scene a folder with
     /// curves.csv, rmse_vs_time.png, summary.md and each run's EXR and PNG.
-    #[arg(long, default_value = "out/study")]
+    #[arg(long, default_value = STUDY_OUT)]
     pub out: PathBuf,
-    /// Exposure of the PNG previews in stops.
-    #[arg(long, default_value_t = 0.0)]
-    pub exposure: f32,
     /// Run on several GPUs of one model at once, as `compare --gpus` (references as
     /// `reference --gpus`; layouts are measured on the first).
     #[arg(long)]
@@ -86,12 +77,14 @@ pub struct StudyArgs {
 impl StudyArgs {
     /// The study these arguments name.
     pub fn spec(self) -> StudySpec {
+        let budget = RunBudget {
+            time: self.time,
+            setup_on_clock: self.setup_on_clock,
+        };
         StudySpec {
             options: self.common.run_options(),
             scenes: self.scenes,
             estimators: self.estimators,
-            time: self.time,
-            setup_on_clock: self.setup_on_clock,
             resume: self.resume,
             layout_time: self.layout_time,
             references: self.references,
@@ -100,12 +93,7 @@ impl StudyArgs {
             reference_time: self.reference_time,
             reference_frames: self.reference_frames,
             reference_spp: self.reference_spp,
-            per_decade: self.per_decade,
-            seed: self.seed,
-            tev: self.tev.tev,
-            out: self.out,
-            exposure: self.exposure,
-            gpus: self.gpus,
+            comparison: self.flags.comparison(budget, self.out, self.gpus),
         }
     }
 }

@@ -18,6 +18,10 @@ use std::time::Duration;
 
 /// Error samples per decade of time unless told.
 pub const PER_DECADE: u32 = 6;
+/// Each run's budget unless told.
+pub const COMPARE_TIME: Duration = Duration::from_secs(10);
+/// The folder of a comparison unless told.
+pub const COMPARE_OUT: &str = "out/compare";
 
 /// A comparison: runs of one scene against a reference, each for the same budget.
 #[derive(Clone)]
@@ -28,26 +32,34 @@ pub struct CompareSpec {
     pub runs: String,
     /// The reference EXR.
     pub reference: PathBuf,
-    /// Wall-clock budget of each run.
-    pub time: Duration,
-    /// Whether each run's set-up counts on its budget.
-    pub setup_on_clock: bool,
     /// Continue the comparison in `out`: the runs whose curves are there are not rendered
     /// again.
     pub resume: bool,
     /// The run the others are measured against (None: the first).
     pub baseline: Option<String>,
+    /// How the runs are rendered, sampled and written.
+    pub comparison: Comparison,
+}
+
+/// How the runs of a comparison are rendered, sampled and written: what `compare` and `study`
+/// (for each scene's comparison) share.
+#[derive(Debug, Clone)]
+pub struct Comparison {
+    /// Each run's budget.
+    pub budget: RunBudget,
     /// Error samples per decade of time.
     pub per_decade: u32,
-    /// Seed of the runs' random streams (must differ from the reference's).
+    /// Seed of the runs' random streams (must differ from the references').
     pub seed: u32,
     /// The tev address to stream each run's image to, if any.
     pub tev: Option<String>,
-    /// Output folder: curves.csv, rmse_vs_time.png, summary.md and each run's EXR and PNG.
+    /// Output folder: a comparison's curves.csv, rmse_vs_time.png, summary.md and each run's
+    /// EXR and PNG; a study's summary files and a comparison per scene.
     pub out: PathBuf,
     /// Exposure of the PNG previews in stops.
     pub exposure: f32,
-    /// The GPUs to run on at once, each taking the next run (None: the options' adapter).
+    /// The GPUs to run on at once, each taking the next run (None: the options' adapter; a
+    /// study measures layouts on the first).
     pub gpus: Option<String>,
 }
 
@@ -56,7 +68,7 @@ pub struct CompareSpec {
 pub fn compare(mut args: CompareSpec) -> Result<String> {
     let reference = Reference::read(&args.reference)?;
     args.options.from_reference(&reference);
-    let gpus = open_gpus_or_adapter(args.gpus.as_deref(), args.options.adapter.as_deref())?;
+    let gpus = open_gpus_or_adapter(args.comparison.gpus.as_deref(), args.options.adapter.as_deref())?;
     let mut scenes = Scenes::new(args.options.scene());
     let (summary, _) = compare_with(&args, &reference, &gpus, &mut scenes)?;
     Ok(summary)
@@ -98,20 +110,20 @@ pub fn compare_with(
     let settings = settings(args, reference, &runs, &device);
     let done = match args.resume {
         true => {
-            check_settings(&args.out, &settings)?;
+            check_settings(&args.comparison.out, &settings)?;
             let pixels = reference.size.0 as usize * reference.size.1 as usize;
-            finished_runs(&args.out, pixels)?
+            finished_runs(&args.comparison.out, pixels)?
         }
         false => Vec::new(),
     };
-    write_settings(&args.out, &settings)?;
+    write_settings(&args.comparison.out, &settings)?;
     eprintln!(
         "{} | scene {} (loaded in {:.2} s) | {} runs of {:?}{} | reference {} spp",
         gpus.iter().map(Gpu::describe).collect::<Vec<_>>().join("; "),
         c.scene(),
         scenes.load_seconds(),
         runs.len(),
-        args.time,
+        args.comparison.budget.time,
         match done.len() {
             0 => String::new(),
             n => format!(" ({n} done before)"),
@@ -123,13 +135,13 @@ pub fn compare_with(
         scene: c.scene(),
         device: &device,
         load_seconds: scenes.load_seconds(),
-        budget: budget(args),
+        budget: args.comparison.budget,
         reference_path: &args.reference,
         reference,
         baseline: labels[baseline],
         run_count: runs.len(),
     };
-    let report = |finished: &[RunCurve]| write_report(&args.out, &ctx, finished);
+    let report = |finished: &[RunCurve]| write_report(&args.comparison.out, &ctx, finished);
     let (curves, signal) = run_all(gpus, &runs, args, &ref_mean, done, &report)?;
     let summary = report(&curves)?;
     match signal {
@@ -140,7 +152,7 @@ pub fn compare_with(
                  the run in flight dropped; --resume continues",
                 curves.len(),
                 runs.len(),
-                args.out.display()
+                args.comparison.out.display()
             ),
         }
         .into()),
@@ -155,9 +167,9 @@ fn settings(args: &CompareSpec, reference: &Reference, jobs: &[Job], device: &st
         ("scene".to_string(), args.options.scene().to_string()),
         ("reference".to_string(), args.reference.display().to_string()),
         ("reference spp".to_string(), reference.samples_per_pixel().to_string()),
-        ("budget".to_string(), budget(args).describe()),
-        ("per decade".to_string(), args.per_decade.to_string()),
-        ("seed".to_string(), args.seed.to_string()),
+        ("budget".to_string(), args.comparison.budget.describe()),
+        ("per decade".to_string(), args.comparison.per_decade.to_string()),
+        ("seed".to_string(), args.comparison.seed.to_string()),
         ("device".to_string(), device.to_string()),
     ];
     for (label, run) in jobs {
@@ -180,12 +192,12 @@ pub fn check_reference(args: &CompareSpec, reference: &Reference) -> Result<()> 
             c.scene()
         );
     }
-    if info("seed") == args.seed.to_string() {
+    if info("seed") == args.comparison.seed.to_string() {
         bail!(
             "{}: the reference was rendered with seed {}, the seed of the runs: they would repeat its \
              random numbers and their error would look too small; pass another --seed",
             args.reference.display(),
-            args.seed
+            args.comparison.seed
         );
     }
     Ok(())
@@ -199,7 +211,10 @@ fn jobs(args: &CompareSpec, reference: &Reference, scenes: &mut Scenes) -> Resul
     let specs = EstimatorSpec::parse_list(&args.runs)?;
     let mut runs = Vec::new();
     for spec in &specs {
-        let mut run = Run::load_in(&c.spec(&spec.graph, spec.layout.as_deref(), args.seed), scenes)?;
+        let mut run = Run::load_in(
+            &c.spec(&spec.graph, spec.layout.as_deref(), args.comparison.seed),
+            scenes,
+        )?;
         let opts = &run.options;
         if constants_text(&opts.constants) != info("constants") {
             bail!(
@@ -268,7 +283,7 @@ fn run_all(
         .iter()
         .zip(&finished)
         .map(|((label, ..), curve)| {
-            let bar = bars.add(ProgressBar::new(args.time.as_millis() as u64));
+            let bar = bars.add(ProgressBar::new(args.comparison.budget.time.as_millis() as u64));
             bar.set_style(style.clone());
             bar.set_prefix(label.clone());
             if curve.is_some() {
@@ -326,14 +341,18 @@ fn run_one(
     reference: &[[f32; 3]],
     bar: &ProgressBar,
 ) -> Result<RunCurve> {
-    let mut view = LiveView::open(args.tev.as_deref(), label, (job.options.width, job.options.height));
+    let mut view = LiveView::open(
+        args.comparison.tev.as_deref(),
+        label,
+        (job.options.width, job.options.height),
+    );
     let result = run(
         gpu,
         job,
         label.clone(),
-        budget(args),
+        args.comparison.budget,
         reference,
-        args.per_decade,
+        args.comparison.per_decade,
         |t, e, image| {
             bar.set_position((t * 1e3) as u64);
             if let Some(e) = e {
@@ -352,14 +371,11 @@ fn run_one(
     if let Some(v) = &mut view {
         v.show(&result.image.mean);
     }
-    write_run_images(&args.out, args.options.scene(), &result, args.exposure)?;
+    write_run_images(
+        &args.comparison.out,
+        args.options.scene(),
+        &result,
+        args.comparison.exposure,
+    )?;
     Ok(result.curve)
-}
-
-/// Each run's budget.
-fn budget(args: &CompareSpec) -> RunBudget {
-    RunBudget {
-        time: args.time,
-        setup_on_clock: args.setup_on_clock,
-    }
 }

@@ -28,4 +28,4 @@ pub use options::{
 };
 pub use scene::{BvhChoice, LoadedScene, Scenes, load_scene, load_scene_with, parse_bvh};
 pub use session::{Accumulation, BATCH_TIME, Image, Session};
-pub use spec::{AUTO_LAYOUT, DEFAULT_GRAPH, DEFAULT_SCENE, Run, RunOptions, RunSpec};
+pub use spec::{AUTO_LAYOUT, DEFAULT_GRAPH, DEFAULT_SCENE, DEFAULT_SEED, Run, RunOptions, RunSpec};

@@ -19,6 +19,8 @@ use std::sync::Arc;
 pub const DEFAULT_SCENE: &str = "cornell-mitsuba";
 /// The graph used when none is named.
 pub const DEFAULT_GRAPH: &str = "pt";
+/// The seed of a run's random streams when none is given.
+pub const DEFAULT_SEED: u32 = 1;
 /// The layout name that asks a front end to measure the graph's layouts and take the fastest.
 pub const AUTO_LAYOUT: &str = "auto";
 
@@ -64,7 +66,7 @@ impl Default for RunSpec {
             sets: Vec::new(),
             overrides: LayoutOverrides::default(),
             bvh: BvhChoice::default(),
-            seed: 1,
+            seed: DEFAULT_SEED,
             first_frame: 0,
             adapter: None,
         }

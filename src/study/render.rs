@@ -2,9 +2,9 @@
 //! resumed or rendered), each estimator's layout (named or measured) and a comparison, and
 //! the summary of all of them.
 
-use crate::compare::render::{CompareSpec, check_reference, compare_with, open_gpus_or_adapter};
+use crate::compare::render::{CompareSpec, Comparison, check_reference, compare_with, open_gpus_or_adapter};
 use crate::compare::resume::{check_settings, resumable, write_settings};
-use crate::compare::{EstimatorSpec, RunBudget, estimator_specs};
+use crate::compare::{EstimatorSpec, estimator_specs};
 use crate::interrupt::Interrupted;
 use crate::output::si;
 use crate::reference::Reference;
@@ -30,10 +30,6 @@ pub struct StudySpec {
     /// The estimators, comma-separated `graph` or `graph:Layout`, each optionally with
     /// `@NAME=VALUE` constants of its own.
     pub estimators: String,
-    /// Wall-clock budget of each estimator on each scene.
-    pub time: Duration,
-    /// Whether each run's set-up counts on its budget.
-    pub setup_on_clock: bool,
     /// Continue the study in `out`: what is there is not rendered or measured again.
     pub resume: bool,
     /// Time each layout renders when a graph's layouts are measured.
@@ -50,22 +46,21 @@ pub struct StudySpec {
     pub reference_frames: Option<u32>,
     /// Samples per pixel in each frame of references the study renders (None: the options').
     pub reference_spp: Option<u32>,
-    /// Error samples per decade of time.
-    pub per_decade: u32,
-    /// Seed of the runs' random streams (must differ from the references').
-    pub seed: u32,
-    /// The tev address to stream each run's image to, if any.
-    pub tev: Option<String>,
-    /// Output folder: the summary files and a comparison per scene.
-    pub out: PathBuf,
-    /// Exposure of the PNG previews in stops.
-    pub exposure: f32,
-    /// The GPUs to run on at once (layouts are measured on the first).
-    pub gpus: Option<String>,
+    /// How each scene's runs are rendered, sampled and written (`out`: the summary files and
+    /// a comparison per scene; `gpus`: layouts are measured on the first).
+    pub comparison: Comparison,
 }
 
 /// The time each layout renders when a study measures a graph's layouts, unless told.
 pub const LAYOUT_TIME: Duration = Duration::from_millis(500);
+/// Each estimator's budget on each scene unless told.
+pub const STUDY_TIME: Duration = Duration::from_secs(20);
+/// The render time each reference must hold unless told.
+pub const REFERENCE_TIME: Duration = Duration::from_secs(120);
+/// The graph that renders a study's references unless told.
+pub const REFERENCE_GRAPH: &str = "vcm";
+/// The folder of a study unless told.
+pub const STUDY_OUT: &str = "out/study";
 
 /// Runs the study: every scene in turn (reference, layouts, comparison), the summary
 /// rewritten after each; returns the summary (Markdown).
@@ -85,7 +80,7 @@ pub fn study(args: StudySpec) -> Result<String> {
         let graph = load_graph(&args.reference_graph).context("--reference-graph")?;
         named_layout(&graph, args.reference_layout.as_deref()).context("--reference-layout")?;
     }
-    let gpus = open_gpus_or_adapter(args.gpus.as_deref(), args.options.adapter.as_deref())?;
+    let gpus = open_gpus_or_adapter(args.comparison.gpus.as_deref(), args.options.adapter.as_deref())?;
     let names: Vec<String> = estimators.iter().map(EstimatorSpec::to_string).collect();
     let device = match gpus.len() {
         1 => gpus[0].info.name.clone(),
@@ -93,19 +88,16 @@ pub fn study(args: StudySpec) -> Result<String> {
     };
     let ctx = StudyContext {
         device: &device,
-        budget: RunBudget {
-            time: args.time,
-            setup_on_clock: args.setup_on_clock,
-        },
+        budget: args.comparison.budget,
         layout_time: args.layout_time,
         estimators: &names,
         scene_count: args.scenes.len(),
     };
     let settings = settings(&args, &names);
     if args.resume {
-        check_settings(&args.out, &settings)?;
+        check_settings(&args.comparison.out, &settings)?;
     }
-    write_settings(&args.out, &settings)?;
+    write_settings(&args.comparison.out, &settings)?;
     let mut done = Vec::new();
     let mut summary = String::new();
     for (i, (scene, folder)) in args.scenes.iter().zip(&folders).enumerate() {
@@ -114,7 +106,7 @@ pub fn study(args: StudySpec) -> Result<String> {
         let runs = runs.map_err(|e| stopped(e, &args, done.len(), scene))?;
         done.push(runs);
         // After every scene, so that a study stopped early keeps what it measured.
-        summary = write_summary(&args.out, &ctx, &done)?;
+        summary = write_summary(&args.comparison.out, &ctx, &done)?;
     }
     Ok(summary)
 }
@@ -122,17 +114,13 @@ pub fn study(args: StudySpec) -> Result<String> {
 /// What a resumed study must share with the one it continues (each scene's comparison
 /// checks the rest: reference, size, constants, layouts).
 fn settings(args: &StudySpec, estimators: &[String]) -> Vec<(String, String)> {
-    let budget = RunBudget {
-        time: args.time,
-        setup_on_clock: args.setup_on_clock,
-    };
     [
         ("scenes", args.scenes.join(",")),
         ("estimators", estimators.join(",")),
-        ("budget", budget.describe()),
+        ("budget", args.comparison.budget.describe()),
         ("layout time", format!("{:?}", args.layout_time)),
-        ("per decade", args.per_decade.to_string()),
-        ("seed", args.seed.to_string()),
+        ("per decade", args.comparison.per_decade.to_string()),
+        ("seed", args.comparison.seed.to_string()),
     ]
     .map(|(k, v)| (k.to_string(), v))
     .to_vec()
@@ -148,7 +136,7 @@ fn stopped(error: anyhow::Error, args: &StudySpec, scenes_done: usize, scene: &s
         "{scenes_done} of {} scenes done (summary.md, summary.csv and layouts.csv in {}); scene {scene}: {}; \
          study --resume continues",
         args.scenes.len(),
-        args.out.display(),
+        args.comparison.out.display(),
         i.what
     );
     Interrupted { signal: i.signal, what }.into()
@@ -156,7 +144,9 @@ fn stopped(error: anyhow::Error, args: &StudySpec, scenes_done: usize, scene: &s
 
 /// `--references`, or `<out>/references`.
 fn references_dir(args: &StudySpec) -> PathBuf {
-    args.references.clone().unwrap_or_else(|| args.out.join("references"))
+    args.references
+        .clone()
+        .unwrap_or_else(|| args.comparison.out.join("references"))
 }
 
 /// The reference of the scene whose outputs go to `folder`.
@@ -195,7 +185,7 @@ fn study_scene(
         })
         .unzip();
     compare.runs = runs.iter().map(EstimatorSpec::to_string).collect::<Vec<_>>().join(",");
-    compare.resume = args.resume && resumable(&compare.out);
+    compare.resume = args.resume && resumable(&compare.comparison.out);
     let (_, results) = compare_with(&compare, &reference, gpus, &mut scenes)?;
     let runs = estimators
         .iter()
@@ -227,16 +217,12 @@ fn compare_args(args: &StudySpec, (scene, folder): (&str, &str), path: &Path) ->
         },
         runs: String::new(),
         reference: path.to_path_buf(),
-        time: args.time,
-        setup_on_clock: args.setup_on_clock,
         resume: false,
         baseline: None,
-        per_decade: args.per_decade,
-        seed: args.seed,
-        tev: args.tev.clone(),
-        out: args.out.join(folder),
-        exposure: args.exposure,
-        gpus: args.gpus.clone(),
+        comparison: Comparison {
+            out: args.comparison.out.join(folder),
+            ..args.comparison.clone()
+        },
     }
 }
 
@@ -264,7 +250,7 @@ fn choose_layouts(
     scenes: &mut Scenes,
     gpu: &Gpu,
 ) -> Result<Choices> {
-    let path = compare.out.join(CHOICES_FILE);
+    let path = compare.comparison.out.join(CHOICES_FILE);
     let before = match (args.resume, std::fs::read_to_string(&path)) {
         (true, Ok(text)) => parse_choices(&text).with_context(|| format!("reading {}", path.display()))?,
         _ => Vec::new(),
@@ -283,7 +269,8 @@ fn choose_layouts(
         let (layout, choice) = choose_layout(args, spec, &compare.options, scenes, gpu)?;
         chosen.push((name, layout, choice));
     }
-    std::fs::create_dir_all(&compare.out).with_context(|| format!("creating {}", compare.out.display()))?;
+    std::fs::create_dir_all(&compare.comparison.out)
+        .with_context(|| format!("creating {}", compare.comparison.out.display()))?;
     std::fs::write(&path, choices_text(&chosen)).with_context(|| format!("writing {}", path.display()))?;
     Ok(chosen)
 }
@@ -311,7 +298,7 @@ fn choose_layout(
         .iter()
         .zip(kinds)
         .map(|((name, decl), kind)| {
-            let run = common.spec(&graph.name, Some(name), args.seed);
+            let run = common.spec(&graph.name, Some(name), args.comparison.seed);
             Run::with_scene(&run, graph.clone(), (name.clone(), decl.clone()), scenes.shared(kind))
         })
         .collect::<Result<Vec<Run>>>()?;
@@ -415,9 +402,9 @@ fn reference_spec(
         out: path.to_path_buf(),
         force: false,
         checkpoint: REFERENCE_CHECKPOINT,
-        exposure: args.exposure,
+        exposure: args.comparison.exposure,
         first_frame: None,
-        gpus: args.gpus.clone(),
+        gpus: args.comparison.gpus.clone(),
         tev: None,
     }
 }
