@@ -195,6 +195,45 @@ impl Graph {
         {
             return Ok(());
         }
+        let key = flags_with_constants(flags, &self.constants);
+        let known = self
+            .derivations
+            .lock()
+            .expect("no derivation panicked")
+            .get(&key)
+            .cloned();
+        match known {
+            Some(lists) => {
+                for (p, (reads, writes)) in self.declared.passes.iter_mut().zip(lists) {
+                    (p.decl.reads, p.decl.writes) = (reads, writes);
+                }
+            }
+            None => {
+                self.derive_uses(flags)?;
+                let lists = self
+                    .declared
+                    .passes
+                    .iter()
+                    .map(|p| (p.decl.reads.clone(), p.decl.writes.clone()))
+                    .collect();
+                self.derivations
+                    .lock()
+                    .expect("no derivation panicked")
+                    .insert(key, lists);
+            }
+        }
+        for p in &self.declared.passes {
+            for r in p.decl.reads.iter().chain(&p.decl.writes) {
+                if let Some(decl) = self.declared.candidates.get(r) {
+                    self.resources.insert(r.clone(), decl.clone());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Fills the lists passes leave out from naga's view of the sources with `flags`.
+    fn derive_uses(&mut self, flags: &BTreeSet<String>) -> Result<()> {
         let (module, info) = compile_all(self, flags)?;
         let resources: Vec<(naga::Handle<naga::GlobalVariable>, &str)> = module
             .global_variables
@@ -223,13 +262,6 @@ impl Graph {
             }
             if p.decl.listed_writes.is_none() {
                 p.decl.writes = with(&|u| u.contains(GlobalUse::WRITE));
-            }
-        }
-        for p in &self.declared.passes {
-            for r in p.decl.reads.iter().chain(&p.decl.writes) {
-                if let Some(decl) = self.declared.candidates.get(r) {
-                    self.resources.insert(r.clone(), decl.clone());
-                }
             }
         }
         Ok(())

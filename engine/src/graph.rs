@@ -11,6 +11,7 @@ use crate::operator::{Domain, Operator};
 use crate::vfs::Vfs;
 use petgraph::graph::{DiGraph, NodeIndex};
 use std::collections::{BTreeMap, BTreeSet};
+use std::sync::{Arc, Mutex};
 
 pub use crate::load::parse_ron;
 
@@ -66,6 +67,11 @@ pub struct Culled {
     pub reason: String,
 }
 
+/// The reads and writes of every declared pass, derived or listed, by the flags (the host's
+/// and the true `Bool` constants) they were derived with (the specialise stage): a graph's views
+/// (a compile per layout, each specialised anew) derive once per set of flags.
+pub(crate) type Derivations = Arc<Mutex<BTreeMap<BTreeSet<String>, Vec<(Vec<String>, Vec<String>)>>>>;
+
 /// A loaded, validated frame graph with the live view of its constants.
 #[derive(Debug, Clone)]
 pub struct Graph {
@@ -113,6 +119,8 @@ pub struct Graph {
     pub dead_streams: Vec<String>,
     /// The file system the graph's sources come from.
     pub vfs: Vfs,
+    /// The reads and writes derived for each set of flags, shared by the graph's views.
+    pub(crate) derivations: Derivations,
 }
 
 impl Graph {
@@ -144,6 +152,7 @@ impl Graph {
             culled: Vec::new(),
             dead_streams: Vec::new(),
             vfs: vfs.clone(),
+            derivations: Default::default(),
             declared,
         };
         graph.chains = graph.build_chains()?;
