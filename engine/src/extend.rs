@@ -4,7 +4,7 @@
 //! Errors point into the file that declared the offending name: an edit's into the extending
 //! file, a base's own into the base.
 
-use crate::error::Result;
+use crate::error::{Location, Result};
 use crate::ir::{ExtendingFile, GraphFile, LayoutDecl, LayoutEdit, PassEdit, PassEntry};
 use crate::load::{GraphSource, Sources, parse_ron};
 use crate::vfs::Vfs;
@@ -51,8 +51,9 @@ fn resolve_in(
 ) -> Result<(GraphFile, Vec<String>)> {
     sources.add(file, text);
     let ext = match parse_written(file, text)? {
-        Written::Whole(g) => {
+        Written::Whole(mut g) => {
             let files = vec![file.to_string(); g.passes.len()];
+            kernels_from(&mut g.layouts, file, sources)?;
             return Ok((*g, files));
         }
         Written::Extending(ext) => ext,
@@ -92,7 +93,8 @@ fn apply(
         edit_passes(&mut entries, edit, file, &ext.extends, sources)?;
     }
     let (passes, files): (Vec<PassEntry>, Vec<String>) = entries.into_iter().unzip();
-    let layouts = edit_layouts(&base, ext.layouts, file, &ext.extends, sources)?;
+    let mut layouts = edit_layouts(&base, ext.layouts, file, &ext.extends, sources)?;
+    kernels_from(&mut layouts, file, sources)?;
     let g = GraphFile {
         name: ext.name.unwrap_or(base.name),
         description: ext.description.unwrap_or(base.description),
@@ -151,6 +153,40 @@ fn edit_passes(
     let new = new.into_iter().map(|e| (e, file.to_string()));
     let range = if remove { at..at + 1 } else { at + offset..at + offset };
     entries.splice(range, new);
+    Ok(())
+}
+
+/// The kernels of the layouts of `file` (`layouts`, those of a base already filled) that take
+/// them from another layout (`kernels_from`): one of `layouts` with kernels of its own.
+fn kernels_from(layouts: &mut BTreeMap<String, LayoutDecl>, file: &str, sources: &Sources) -> Result<()> {
+    let written = layouts.clone();
+    for (name, decl) in layouts.iter_mut() {
+        let Some(from) = decl.kernels_from.take() else {
+            continue;
+        };
+        let error = |message: String| crate::error::Error::Invalid {
+            at: Location::of_name_under_key(file, sources.text(file), name, &from),
+            message: format!("layout '{name}': {message}"),
+        };
+        if !decl.kernels.is_empty() {
+            return Err(error(format!("gives both `kernels` and `kernels_from: \"{from}\"`")));
+        }
+        decl.kernels = match written.get(&from) {
+            Some(other) if other.kernels_from.is_none() => other.kernels.clone(),
+            Some(_) => {
+                return Err(error(format!(
+                    "takes its kernels from '{from}', which takes its own from another layout; name that one"
+                )));
+            }
+            None => {
+                let known: Vec<&str> = written.keys().map(|s| s.as_str()).collect();
+                return Err(error(format!(
+                    "takes its kernels from '{from}', which is no layout of this graph (layouts: {})",
+                    known.join(", ")
+                )));
+            }
+        };
+    }
     Ok(())
 }
 

@@ -737,7 +737,13 @@ pub struct LayoutDecl {
     #[serde(default)]
     pub description: String,
     /// Fusion groups: each inner list of passes becomes one kernel.
+    #[serde(default)]
     pub kernels: Vec<Vec<String>>,
+    /// Instead of `kernels`: the layout of the same file whose fusion groups this one takes
+    /// (a layout that differs from another in its other fields only). Filled in when the file
+    /// is read, so a loaded layout always has its kernels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kernels_from: Option<String>,
     /// Item state layout between split kernels.
     #[serde(default)]
     pub state: StateStorage,
@@ -820,6 +826,7 @@ impl Default for LayoutDecl {
         LayoutDecl {
             description: String::new(),
             kernels: Vec::new(),
+            kernels_from: None,
             state: StateStorage::default(),
             workgroup_size: default_workgroup(),
             max_items_in_flight: None,

@@ -1,6 +1,7 @@
 //! Layouts need not list the passes the graph's default constants disable (another structure's
 //! passes, chosen by a constant): set on, such a pass is placed by its chain, inside the kernel
-//! of the pass before it or in a kernel of its own, as a layout listing it there would.
+//! of the pass before it or in a kernel of its own, as a layout listing it there would. A
+//! layout may take its kernels from another (`kernels_from`).
 
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{ConstValue, Graph, Layer, Plan, Vfs};
@@ -16,6 +17,11 @@ fn side(it: ptr<function, Item>, index: u32) -> bool { out[index] += 1u; return 
 
 /// The graph with the layouts `layouts` (RON map entries).
 fn graph(layouts: &str) -> Graph {
+    loaded(layouts).unwrap()
+}
+
+/// The graph with the layouts `layouts`, or the error loading it, with its text.
+fn loaded(layouts: &str) -> lightgraph_engine::Result<Graph> {
     let text = format!(
         r#"(
     name: "modes",
@@ -36,7 +42,7 @@ fn graph(layouts: &str) -> Graph {
     let dir = std::env::temp_dir().join(format!("lightgraph-placement-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("m.wgsl"), WGSL).unwrap();
-    Graph::from_text(&Vfs::new(vec![Layer::Dir(dir)]), "modes.ron", &text).unwrap()
+    Graph::from_text(&Vfs::new(vec![Layer::Dir(dir)]), "modes.ron", &text)
 }
 
 /// The kernels of layout `name` with `MODE`: each one's name and passes.
@@ -90,4 +96,32 @@ fn a_pass_enabled_by_default_must_still_be_listed() {
         e.contains("layout 'listed' puts pass 'a' in no kernel; it is enabled"),
         "{e}"
     );
+}
+
+#[test]
+fn a_layout_takes_its_kernels_from_another() {
+    let g = graph(
+        r#""listed": (kernels: [["make"], ["a", "finish"]], loops: Host),
+           "same": (kernels_from: "listed", loops: Host, workgroup_size: 32)"#,
+    );
+    assert_eq!(g.layout("same").unwrap().kernels, g.layout("listed").unwrap().kernels);
+    assert_eq!(g.layout("same").unwrap().workgroup_size, 32);
+    assert_eq!(kernels(&g, "same", 1), kernels(&g, "listed", 1));
+    for (layouts, message) in [
+        (
+            r#""listed": (kernels: [["make", "a", "finish"]]), "both": (kernels: [["make"]], kernels_from: "listed")"#,
+            "layout 'both': gives both `kernels` and `kernels_from: \"listed\"`",
+        ),
+        (
+            r#""listed": (kernels: [["make", "a", "finish"]]), "lost": (kernels_from: "listd")"#,
+            "layout 'lost': takes its kernels from 'listd', which is no layout of this graph (layouts: listed, lost)",
+        ),
+        (
+            r#""listed": (kernels_from: "other"), "other": (kernels_from: "listed")"#,
+            "takes its own from another layout",
+        ),
+    ] {
+        let e = loaded(layouts).unwrap_err().to_string();
+        assert!(e.starts_with("modes.ron:") && e.contains(message), "{e}");
+    }
 }
