@@ -6,8 +6,11 @@
 # primitives/s, geometry bytes, from the render's header), then PT (default layout) for
 # SECONDS_EACH (default 5) and the trace-only rates (graphs/trace.ron, 20 frames). Above
 # BIG copies (default 40) only the CWBVH and PT run: each load of such a scene
-# takes minutes. A scene that does not fit the GPU's limits ends with the error naming them. On the GPU machine from the
-# repo root with carry [".gpu"] after `../shared/tools/gpu-bundle.sh --scene CrytekSponza`:
+# takes minutes. Geometry larger than one storage binding is split over several buffers
+# (scenes/src/split.rs); with SPLIT_AT=BYTES the sizes up to BIG also run split at that many
+# bytes a binding (`--max-binding`), to measure what the split costs. A scene that does not fit
+# the GPU's limits ends with the error naming them. On the GPU machine from the repo root with
+# carry [".gpu"] after `../shared/tools/gpu-bundle.sh --scene CrytekSponza`:
 #   bash bench/traversal/large.sh                 COPIES="1 4" BVHS=cwbvh RES=64x36 for a quick look
 set -uo pipefail
 source "$(dirname "$0")/../common.sh"
@@ -24,12 +27,15 @@ for copies in ${COPIES:-1 4 40 400}; do
   for bvh in ${BVHS:-cwbvh bvh2}; do
     big=$((copies > ${BIG:-40}))
     [ "$big" = 1 ] && [ "$bvh" != cwbvh ] && continue
-    echo "== $copies copies, $bvh"
-    lg render --graph pt --scene "$scene" --bvh "$bvh" --res "${RES:-1280x720}" --time "${SECONDS_EACH:-5}s" \
-      --out "$out/pt.exr" --force 2>&1 | grep -E "primitives|frames,|rror" | sed 's/^.*| scene/scene/; s/| graph.*$//'
-    [ "$big" = 1 ] && continue
-    lg render --graph trace --scene "$scene" --bvh "$bvh" --res "${RES:-1280x720}" --frames 20 \
-      --out "$out/trace.exr" --force >"$out/trace.log" 2>&1 || grep -m1 rror "$out/trace.log"
-    grep -E "^per frame|^GPU time per frame" "$out/trace.log"
+    for split in "" ${SPLIT_AT:+--max-binding=$SPLIT_AT}; do
+      [ "$big" = 1 ] && [ -n "$split" ] && continue
+      echo "== $copies copies, $bvh $split"
+      lg render --graph pt --scene "$scene" --bvh "$bvh" --res "${RES:-1280x720}" --time "${SECONDS_EACH:-5}s" \
+        $split --out "$out/pt.exr" --force 2>&1 | grep -E "primitives|frames,|rror" | sed 's/^.*| scene/scene/; s/| graph.*$//'
+      [ "$big" = 1 ] && continue
+      lg render --graph trace --scene "$scene" --bvh "$bvh" --res "${RES:-1280x720}" --frames 20 \
+        $split --out "$out/trace.exr" --force >"$out/trace.log" 2>&1 || grep -m1 rror "$out/trace.log"
+      grep -E "^per frame|^GPU time per frame" "$out/trace.log"
+    done
   done
 done

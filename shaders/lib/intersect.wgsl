@@ -78,20 +78,20 @@ fn alpha_solid(p: PrimitiveFields, index: u32, uv: vec2<f32>) -> bool {
 
 // Texture coordinates on primitive `index` at barycentrics `uv` ((0, 0) without attributes).
 fn surface_tex(index: u32, uv: vec2<f32>) -> vec2<f32> {
-    if (index >= arrayLength(&attributes)) {
+    if (index >= attribute_count()) {
         return vec2<f32>(0.0);
     }
-    let a = attributes[index];
+    let a = attribute_at(index);
     return (1.0 - uv.x - uv.y) * a.uv0 + uv.x * a.uv1 + uv.y * a.uv2;
 }
 
 // The shading normal of primitive `index` at barycentrics `uv`: its interpolated vertex
 // normals, turned to the side of the geometric normal `ng`; `ng` without vertex normals.
 fn shading_normal(index: u32, uv: vec2<f32>, ng: vec3<f32>) -> vec3<f32> {
-    if (index >= arrayLength(&attributes)) {
+    if (index >= attribute_count()) {
         return ng;
     }
-    let a = attributes[index];
+    let a = attribute_at(index);
     if ((a.flags & ATTRIBUTE_NORMALS) == 0u) {
         return ng;
     }
@@ -109,6 +109,54 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     return select(1.0 / d, big, abs(d) < tiny);
 }
 
+// ---- geometry split over several bindings (SPLIT_GEOMETRY, set by the host for scenes
+// larger than one storage binding, scenes/src/split.rs): chunks of the first chunk's length,
+// the last shorter, the chunks past the data empty ----
+#if SPLIT_GEOMETRY
+
+// Primitive `i`, from its chunk.
+fn primitive_words(i: u32) -> Primitive {
+    let n = arrayLength(&primitives);
+    if (i < n) {
+        return primitives[i];
+    }
+    if (i < 2u * n) {
+        return primitives_1[i - n];
+    }
+    if (i < 3u * n) {
+        return primitives_2[i - 2u * n];
+    }
+    return primitives_3[i - 3u * n];
+}
+
+// Primitive `i`, unpacked into its fields.
+fn primitive_at(i: u32) -> PrimitiveFields {
+    let p = primitive_words(i);
+    return PrimitiveFields(bitcast<vec3<f32>>(p.w0.xyz), p.w0.w, bitcast<vec3<f32>>(p.w1.xyz), bitcast<i32>(p.w1.w), bitcast<vec3<f32>>(p.w2.xyz), p.w2.w);
+}
+
+// How many primitives have attributes: all or none.
+fn attribute_count() -> u32 {
+    return arrayLength(&attributes) + arrayLength(&attributes_1) + arrayLength(&attributes_2) + arrayLength(&attributes_3);
+}
+
+// The attributes of primitive `i` (below `attribute_count()`), from its chunk.
+fn attribute_at(i: u32) -> TriangleAttributes {
+    let n = arrayLength(&attributes);
+    if (i < n) {
+        return attributes[i];
+    }
+    if (i < 2u * n) {
+        return attributes_1[i - n];
+    }
+    if (i < 3u * n) {
+        return attributes_2[i - 2u * n];
+    }
+    return attributes_3[i - 3u * n];
+}
+
+#else
+
 // Primitive `i`, loaded as three 16-byte words and unpacked into its fields.
 fn primitive_at(i: u32) -> PrimitiveFields {
     let w0 = primitives[i].w0;
@@ -116,6 +164,19 @@ fn primitive_at(i: u32) -> PrimitiveFields {
     let w2 = primitives[i].w2;
     return PrimitiveFields(bitcast<vec3<f32>>(w0.xyz), w0.w, bitcast<vec3<f32>>(w1.xyz), bitcast<i32>(w1.w), bitcast<vec3<f32>>(w2.xyz), w2.w);
 }
+
+// How many primitives have attributes: all or none.
+fn attribute_count() -> u32 {
+    return arrayLength(&attributes);
+}
+
+// The attributes of primitive `i` (below `attribute_count()`).
+fn attribute_at(i: u32) -> TriangleAttributes {
+    return attributes[i];
+}
+
+#endif
+// ---- end of split geometry ----
 
 fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: ptr<function, Hit>) {
 #if TRACE_STATS

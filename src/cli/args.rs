@@ -156,6 +156,11 @@ pub struct Common {
     /// the layout's `loop_guards`, which is off in the layouts measured faster without them.
     #[arg(long, value_parser = parse_on_off)]
     pub loop_guards: Option<bool>,
+    /// Bind at most BYTES of a scene buffer at once, below the adapter's limit: geometry
+    /// larger than that is split over several buffers, as a scene too large for one storage
+    /// binding is (to test or measure the split on a small scene).
+    #[arg(long, value_name = "BYTES")]
+    pub max_binding: Option<u64>,
 }
 
 impl Common {
@@ -180,6 +185,7 @@ impl Common {
                 separate_memory: self.separate_memory,
                 no_subgroups: self.no_subgroups,
                 loop_guards: self.loop_guards,
+                max_binding: self.max_binding,
             },
             bvh: self.bvh,
             adapter: self.adapter.clone(),

@@ -15,17 +15,18 @@ pub fn load_graph(name: &str) -> Result<Graph> {
 }
 
 /// Every true `Bool` constant of a graph is a preprocessor flag too (docs/graphs.md): one named
-/// like a flag the host sets (a scene feature, the BVH's, the device's) would switch that code
+/// like a flag the host sets (a scene feature, the BVH's, split geometry's, the device's) would switch that code
 /// on or off behind the host's back, so it is an error at its declaration.
 fn check_constant_names(graph: &Graph) -> Result<()> {
     let mut host = lightgraph_scenes::features::all();
     host.extend(lightgraph_scenes::bvh::BvhKind::Cwbvh.flag().map(String::from));
     host.insert(FLOAT32_ATOMIC_FLAG.to_string());
+    host.insert(lightgraph_scenes::split::FLAG.to_string());
     match graph.declared.constants.keys().find(|k| host.contains(*k)) {
         Some(name) => Err(graph
             .error_at_decl(
                 name,
-                format!("constant '{name}' has the name of a flag the host sets for the kernels (a scene feature, the BVH's or the device's): rename it"),
+                format!("constant '{name}' has the name of a flag the host sets for the kernels (a scene feature, the BVH's, split geometry's or the device's): rename it"),
             )
             .into()),
         None => Ok(()),

@@ -7,7 +7,7 @@ use crate::run::scene::LoadedScene;
 use anyhow::{Context, Result, anyhow, bail};
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{ConstValue, Gpu, Graph, Instance, Specialization, compile};
-use lightgraph_scenes::CompiledScene;
+use lightgraph_scenes::{CompiledScene, split};
 use std::collections::BTreeMap;
 
 /// What a session is compiled from: the layout (with the options' overrides), the
@@ -34,41 +34,65 @@ pub(crate) fn prepare(
         bail!("{paths} paths per frame is more than 2^32; use fewer samples per frame");
     }
     let decl = options.layout.apply(decl);
-    let flags = kernel_flags(device_flags(gpu), scene, options.layout.all_features);
-    let spec = specialization(graph, &scene.scene, options, flags);
+    let mut flags = kernel_flags(device_flags(gpu), scene, options.layout.all_features);
     let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
     // The scene offers every scene resource; a graph takes those it declares.
     let mut externals = scene.compiled.resources(&camera);
+    let limit = adapter_binding_limit(gpu);
+    let chunk_limit = options.layout.max_binding.map_or(limit, |m| m.min(limit));
+    if split::split(&mut externals, chunk_limit).map_err(|e| too_large(gpu, scene, chunk_limit, e))? {
+        flags.insert(split::FLAG.to_string());
+    }
     externals.retain(|name, _| {
         graph
             .resources
             .get(name)
             .is_some_and(|r| r.scope == lightgraph_engine::ir::Scope::External)
     });
-    check_scene_fits(gpu, scene, &externals)?;
+    check_scene_fits(gpu, scene, limit, &externals)?;
+    let spec = specialization(graph, &scene.scene, options, flags);
     Ok(Prepared { decl, spec, externals })
 }
 
-/// An error naming the scene's size where one of its buffers is larger than `gpu` binds or
-/// holds in one buffer (its triangles, BVH nodes, textures...), before any is made.
-fn check_scene_fits(gpu: &Gpu, scene: &LoadedScene, externals: &BTreeMap<String, Vec<u8>>) -> Result<()> {
-    let limit = gpu
-        .limits
+/// The most bytes of a buffer `gpu` binds at once: what it binds in one storage buffer and
+/// holds in one buffer.
+fn adapter_binding_limit(gpu: &Gpu) -> u64 {
+    gpu.limits
         .max_storage_buffer_binding_size
-        .min(gpu.limits.max_buffer_size);
-    let mib = |bytes: u64| bytes as f64 / 1048576.0;
+        .min(gpu.limits.max_buffer_size)
+}
+
+/// An error naming the scene's size where one of its buffers is larger than `gpu` binds or
+/// holds in one buffer (its BVH nodes, textures...; its geometry split beforehand), before
+/// any is made.
+fn check_scene_fits(gpu: &Gpu, scene: &LoadedScene, limit: u64, externals: &BTreeMap<String, Vec<u8>>) -> Result<()> {
     if let Some((name, size)) = largest_over(externals, limit) {
-        bail!(
-            "the scene is too large for this GPU: its '{name}' buffer takes {:.1} MiB ({} primitives, a BVH of {:.1} MiB), more than the {:.1} MiB the adapter binds in one storage buffer (max_storage_buffer_binding_size {}, max_buffer_size {})",
-            mib(size),
-            scene.compiled.primitives.len(),
-            mib(scene.compiled.bvh.len() as u64),
-            mib(limit),
-            gpu.limits.max_storage_buffer_binding_size,
-            gpu.limits.max_buffer_size,
-        );
+        let mib = |bytes: u64| bytes as f64 / 1048576.0;
+        return Err(too_large(
+            gpu,
+            scene,
+            limit,
+            format!(
+                "its '{name}' buffer takes {:.1} MiB, more than the {:.1} MiB bound at once",
+                mib(size),
+                mib(limit)
+            ),
+        ));
     }
     Ok(())
+}
+
+/// The error of a scene too large for `gpu`: `why`, the scene's size and the adapter's limits.
+fn too_large(gpu: &Gpu, scene: &LoadedScene, limit: u64, why: impl std::fmt::Display) -> anyhow::Error {
+    let mib = |bytes: u64| bytes as f64 / 1048576.0;
+    anyhow!(
+        "the scene is too large for this GPU: {why} ({} primitives, a BVH of {:.1} MiB; at most {:.1} MiB bound at once: max_storage_buffer_binding_size {}, max_buffer_size {})",
+        scene.compiled.primitives.len(),
+        mib(scene.compiled.bvh.len() as u64),
+        mib(limit),
+        gpu.limits.max_storage_buffer_binding_size,
+        gpu.limits.max_buffer_size,
+    )
 }
 
 /// The largest of `buffers` (name and bytes) over `limit` bytes, if any.

@@ -48,6 +48,9 @@ pub struct LayoutOverrides {
     pub no_subgroups: bool,
     /// Whether the pass kernels keep wgpu's loop guards (the layout's `loop_guards`).
     pub loop_guards: Option<bool>,
+    /// Bind at most this many bytes of a scene buffer at once (`--max-binding`), below the
+    /// adapter's limit: a small scene's geometry splits as a large one's does.
+    pub max_binding: Option<u64>,
 }
 
 impl LayoutOverrides {

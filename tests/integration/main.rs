@@ -32,6 +32,7 @@ mod scenes;
 mod shading;
 mod shards;
 mod specialize;
+mod split;
 mod stress;
 mod study;
 mod subgroups;
