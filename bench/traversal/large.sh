@@ -3,9 +3,10 @@
 # Crytek Sponza placed on a grid of COPIES copies (default "1 4 40 400": 0.26, 1.05, 10.5 and
 # 105 M triangles; `gltf_instances: [Grid(...)]`, 40 m apart along x and z), the camera of
 # `sponza` in the first copy. For each size and BVH: the scene's load and BVH build (time,
-# primitives/s, geometry bytes, from the render's header), then PT (default layout) for
-# SECONDS_EACH (default 5) and the trace-only rates (graphs/trace.ron, 20 frames). Above
-# BIG copies (default 40) only the CWBVH and PT run: each load of such a scene
+# primitives/s, geometry bytes, from the render's header), then each of GRAPHS (default pt;
+# each in its default layout) for SECONDS_EACH (default 5) and, unless TRACE=0, the trace-only
+# rates (graphs/trace.ron, 20 frames). Above BIG copies (default 40) only the CWBVH and GRAPHS
+# run: each load of such a scene
 # takes minutes. Geometry larger than one storage binding is split over several buffers
 # (scenes/src/split.rs); with SPLIT_AT=BYTES the sizes up to BIG also run split at that many
 # bytes a binding (`--max-binding`), to measure what the split costs. A scene that does not fit
@@ -30,9 +31,11 @@ for copies in ${COPIES:-1 4 40 400}; do
     for split in "" ${SPLIT_AT:+--max-binding=$SPLIT_AT}; do
       [ "$big" = 1 ] && [ -n "$split" ] && continue
       echo "== $copies copies, $bvh $split"
-      lg render --graph pt --scene "$scene" --bvh "$bvh" --res "${RES:-1280x720}" --time "${SECONDS_EACH:-5}s" \
-        $split --out "$out/pt.exr" --force 2>&1 | grep -E "primitives|frames,|rror" | sed 's/^.*| scene/scene/; s/| graph.*$//'
-      [ "$big" = 1 ] && continue
+      for graph in ${GRAPHS:-pt}; do
+        lg render --graph "$graph" --scene "$scene" --bvh "$bvh" --res "${RES:-1280x720}" --time "${SECONDS_EACH:-5}s" \
+          $split --out "$out/$graph.exr" --force 2>&1 | grep -E "primitives|frames,|rror" | sed 's/^.*| scene/scene/'
+      done
+      [ "$big" = 1 ] || [ "${TRACE:-1}" = 0 ] && continue
       lg render --graph trace --scene "$scene" --bvh "$bvh" --res "${RES:-1280x720}" --frames 20 \
         $split --out "$out/trace.exr" --force >"$out/trace.log" 2>&1 || grep -m1 rror "$out/trace.log"
       grep -E "^per frame|^GPU time per frame" "$out/trace.log"
