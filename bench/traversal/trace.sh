@@ -2,8 +2,7 @@
 # Trace-only rates (docs/performance.md, "Trace-only rates"; issue 43, item 1): graphs/trace.ron
 # on SCENES (default sponza) at 1280x720 with SPP camera rays a pixel (default "1 4"), with each
 # BVH, each workgroup size of WORKGROUPS (default 64) and the CWBVH child loop unrolled and by
-# bit scan (CWBVH_CHILD_SCAN false, true), and unless POSTPONE=0 with primitive tests postponed
-# (CWBVH_POSTPONE), FRAMES frames a run (default 60; the rays are made
+# bit scan (CWBVH_CHILD_SCAN false, true), FRAMES frames a run (default 60; the rays are made
 # in the first and cast in every one). A line per run: Mrays/s of camera, ambient-occlusion
 # and diffuse-bounce rays over their kernel's GPU time, and the rays a frame. Then PT's
 # default render of each scene for its rays/s (wall-clock and over GPU time). On the GPU machine
@@ -38,16 +37,9 @@ for scene in ${SCENES:-sponza}; do
         trace_rates "$scene ${spp}spp $bvh wg $wg" --scene "$scene" --spp "$spp" --bvh "$bvh" --workgroup "$wg"
         [ "$bvh" = cwbvh ] && trace_rates "$scene ${spp}spp $bvh wg $wg child scan" --scene "$scene" --spp "$spp" \
           --bvh "$bvh" --workgroup "$wg" --set CWBVH_CHILD_SCAN=true
-        [ "$bvh" = cwbvh ] && [ "${POSTPONE:-1}" = 1 ] && trace_rates "$scene ${spp}spp $bvh wg $wg postponed" \
-          --scene "$scene" --spp "$spp" --bvh "$bvh" --workgroup "$wg" --set CWBVH_POSTPONE=true
       done
     done
   done
   echo "== $scene: PT, default layout"
   lg render --graph pt --scene "$scene" --res ${RES:-1280x720} --time 5s --out "$out/pt.exr" --force 2>&1 | grep -E "frames,|rror"
-  if [ "${POSTPONE:-1}" = 1 ]; then
-    echo "== $scene: PT, default layout, CWBVH_POSTPONE"
-    lg render --graph pt --scene "$scene" --res ${RES:-1280x720} --time 5s --set CWBVH_POSTPONE=true \
-      --out "$out/pt.exr" --force 2>&1 | grep -E "frames,|rror"
-  fi
 done

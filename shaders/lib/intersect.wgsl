@@ -212,12 +212,7 @@ fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: 
 // primitive group (x: first primitive, y: bit k set for primitive x + k still to test). Each
 // level pushes at most one group, so the stack needs the tree's depth less one (the host
 // builds no deeper trees than this, scenes/src/cwbvh.rs MAX_DEPTH).
-// Postponed primitive groups (CWBVH_POSTPONE) take a second entry a level at most.
-#if CWBVH_POSTPONE
-const BVH_STACK_SIZE: u32 = 64u;
-#else
 const BVH_STACK_SIZE: u32 = 32u;
-#endif
 
 // Node `i`, loaded as five 16-byte words and unpacked into its fields.
 fn cwbvh_node(i: u32) -> CwbvhNode {
@@ -331,19 +326,6 @@ fn cwbvh_intersect_children(n: CwbvhNode, o: vec3<f32>, inv_d: vec3<f32>, oct_in
     return hits;
 }
 
-#if CWBVH_POSTPONE
-// Whether a ray with primitives to test (`has`) puts them off: the postponing of Ylitie et
-// al. (2017, section 4): while fewer than a fifth of the subgroup's active rays have primitives
-// to test, those few go on down the tree and test them later with the others.
-fn cwbvh_postpone(has: bool) -> bool {
-    let want = subgroupBallot(has);
-    let lanes = subgroupBallot(true);
-    let n_want = countOneBits(want.x) + countOneBits(want.y) + countOneBits(want.z) + countOneBits(want.w);
-    let n_active = countOneBits(lanes.x) + countOneBits(lanes.y) + countOneBits(lanes.z) + countOneBits(lanes.w);
-    return has && 5u * n_want < n_active;
-}
-#endif
-
 // The closest hit along o + t d, t in (0, t_max), or with `any_hit` the first hit found.
 fn cwbvh_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
     var hit = Hit(t_max, 0u, vec2<f32>(0.0), false);
@@ -356,14 +338,6 @@ fn cwbvh_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
     var nodes = vec2<u32>(0u, 0x80000000u);
     var prims = vec2<u32>(0u, 0u);
     loop {
-#if CWBVH_POSTPONE
-        // A postponed primitive group waits on the stack, marked by bit 31 of its first index.
-        if (cwbvh_postpone(prims.y != 0u) && (nodes.y & 0xff000000u) != 0u) {
-            stack[sp] = vec2<u32>(prims.x | 0x80000000u, prims.y);
-            sp += 1u;
-            prims.y = 0u;
-        }
-#endif
         // The last node's leaves first: their hits shorten the ray for its inner children.
         while (prims.y != 0u) {
             let k = firstTrailingBit(prims.y);
@@ -379,13 +353,6 @@ fn cwbvh_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
             }
             sp -= 1u;
             nodes = stack[sp];
-#if CWBVH_POSTPONE
-            if ((nodes.x & 0x80000000u) != 0u) {
-                prims = vec2<u32>(nodes.x & 0x7fffffffu, nodes.y);
-                nodes = vec2<u32>(0u);
-                continue;
-            }
-#endif
         }
         // Visit the group's nearest child; the rest of the group waits on the stack.
         let bit = firstLeadingBit(nodes.y);

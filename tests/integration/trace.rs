@@ -4,7 +4,7 @@
 //! frames (three frames give one frame's image), and the two BVHs find the same hits.
 
 use crate::common::{data, render};
-use lightgraph::run::{LoadedScene, load_scene_with};
+use lightgraph::run::load_scene_with;
 use lightgraph_scenes::bvh::BvhKind;
 
 #[test]
@@ -83,37 +83,4 @@ fn trace_stats_count_nodes_and_tests_and_change_no_result() {
         c["tests_primary"] >= c["rays_occlusion"],
         "{c:?}: a camera ray that hit tested the sphere"
     );
-}
-
-/// CWBVH_POSTPONE (primitive tests put off while few of a subgroup's rays have any) changes
-/// the order of the work, not what a ray finds: the same hits, so the same picture, while the
-/// rays visit more nodes (counted with TRACE_STATS: a postponed test no longer shortens the
-/// ray before the nodes after it), which shows that tests were put off. Path tracing with it
-/// renders the same image and rays, to float rounding.
-#[test]
-fn postponed_primitive_tests_find_the_same_hits() {
-    use crate::common::assert_same_render;
-    use lightgraph_engine::ConstValue;
-    // The glTF Cornell box: 36 triangles, a CWBVH of more than one level.
-    let file = data("scenes/gltf-cornell.ron");
-    let text = std::fs::read_to_string(&file).unwrap();
-    let scene = LoadedScene::parse(file.to_str().unwrap(), &text, BvhKind::Cwbvh, Some(&data(""))).unwrap();
-    let on = |stats: bool, postpone: bool| {
-        [
-            ("TRACE_STATS", ConstValue::Bool(stats)),
-            ("CWBVH_POSTPONE", ConstValue::Bool(postpone)),
-        ]
-    };
-    let plain = render(&scene, "trace", "Trace", (48, 36), 2, 1, 9, &on(true, false));
-    let postponed = render(&scene, "trace", "Trace", (48, 36), 2, 1, 9, &on(true, true));
-    assert_eq!(plain.image.mean, postponed.image.mean, "postponing changed the hits");
-    let (c, p) = (&plain.counters, &postponed.counters);
-    let nodes = |c: &std::collections::BTreeMap<String, u64>| c["nodes_primary"] + c["nodes_ao"] + c["nodes_diffuse"];
-    eprintln!("nodes visited: {} plain, {} postponed", nodes(c), nodes(p));
-    assert!(nodes(p) > nodes(c), "no primitive test was put off");
-    let pt = |postpone: bool| {
-        let constants = [("CWBVH_POSTPONE", ConstValue::Bool(postpone))];
-        render(&scene, "pt", "NaivePTsk", (24, 24), 2, 2, 42, &constants)
-    };
-    assert_same_render(&pt(false), &pt(true), "NaivePTsk with CWBVH_POSTPONE against without");
 }
