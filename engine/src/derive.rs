@@ -137,9 +137,9 @@ fn unknown_constant(e: &Error) -> Option<String> {
 
 /// What `graph`'s WGSL looks like to naga with `flags`: every source compiled together with the
 /// declarations (resources and candidates all writable, so that a store the lists do not show
-/// yet compiles)
-/// and emits that do nothing. A constant not known yet (`PIXELS` before the host gives it) is
-/// declared as a `u32`, as the host's constants are.
+/// yet compiles) and emits that do nothing. A constant not known yet (`PIXELS` before the host
+/// gives it, in the default constants' view or a view of some constants only) is declared as a
+/// `u32`, as the host's are; where it is not one, the compile fails.
 fn compile_all(graph: &Graph, flags: &BTreeSet<String>) -> Result<(naga::Module, naga::valid::ModuleInfo)> {
     let shared = sources(graph, flags)?;
     let parameters: Vec<(String, ConstValue)> = graph.parameters.iter().map(|(k, v)| (k.clone(), *v)).collect();
@@ -156,11 +156,11 @@ fn compile_all(graph: &Graph, flags: &BTreeSet<String>) -> Result<(naga::Module,
         declarations.push_str(&resource_declaration(name, r, i as u32, true));
     }
     let emits = stub_emits(graph);
-    let mut placeholders = String::new();
+    let mut unknown = String::new();
     for _ in 0..=MAX_PLACEHOLDERS {
         let mut src = ModuleSource::default();
         src.push("<generated declarations>", &declarations);
-        src.push("<constants not known yet>", &placeholders);
+        src.push("<constants not known yet>", &unknown);
         for (f, text) in &shared {
             src.push(f, text);
         }
@@ -169,7 +169,7 @@ fn compile_all(graph: &Graph, flags: &BTreeSet<String>) -> Result<(naga::Module,
             Ok(compiled) => return Ok(compiled),
             Err(e) => match unknown_constant(&e) {
                 Some(name) if !graph.constants.contains_key(&name) => {
-                    let _ = writeln!(placeholders, "const {name}: u32 = 1u;");
+                    let _ = writeln!(unknown, "const {name}: u32 = 1u;");
                 }
                 _ => return Err(e),
             },

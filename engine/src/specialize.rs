@@ -82,7 +82,13 @@ impl Graph {
         let vars: BTreeMap<String, f64> = self.constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
         self.check_constants(&vars)?;
         // What the passes that leave out their reads or writes use, before culling needs it.
-        self.derive_access(flags)?;
+        // The default constants' view may not compile yet (a host constant of another type
+        // than a placeholder's); it then culls nothing that depends on what passes use.
+        let derived = match self.derive_access(flags) {
+            Ok(()) => true,
+            Err(_) if !strict => false,
+            Err(e) => return Err(e),
+        };
         // The whole declared structure, to cull on.
         self.passes = self.declared.passes.clone();
         self.ops = self.declared.ops.clone();
@@ -90,8 +96,10 @@ impl Graph {
         let mut culled: BTreeMap<Node, String> = self.disabled(&vars, strict)?;
         self.cull_orphans(&mut culled);
         self.keep_live(&culled);
-        self.cull_unread(&mut culled)?;
-        self.keep_live(&culled);
+        if derived {
+            self.cull_unread(&mut culled)?;
+            self.keep_live(&culled);
+        }
         self.culled = self
             .declared
             .entries
@@ -107,7 +115,7 @@ impl Graph {
                 })
             })
             .collect();
-        self.check_live()?;
+        self.check_live(derived)?;
         Ok(self)
     }
 
@@ -337,8 +345,9 @@ impl Graph {
         Ok(())
     }
 
-    /// An error, not a black image: a graph with nothing left, or an output nothing writes.
-    fn check_live(&self) -> Result<()> {
+    /// An error, not a black image: a graph with nothing left, or an output nothing writes
+    /// (when what the passes write is known).
+    fn check_live(&self, writes_known: bool) -> Result<()> {
         let why = |names: &mut dyn Iterator<Item = &str>| -> String {
             let reasons: Vec<String> = names
                 .filter_map(|n| self.culled.iter().find(|c| c.name == n))
@@ -357,7 +366,7 @@ impl Graph {
                 format!("every pass of graph '{}' is culled{}", self.name, why(&mut all)),
             ));
         }
-        for o in &self.outputs {
+        for o in self.outputs.iter().filter(|_| writes_known) {
             let written = self.passes.iter().any(|p| p.decl.writes.contains(o))
                 || self.ops.iter().any(|op| op.writes().contains(&o.as_str()));
             if !written {

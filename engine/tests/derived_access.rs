@@ -203,3 +203,31 @@ fn a_catalog_resource_joins_where_a_derived_pass_uses_it() {
         "{e}"
     );
 }
+
+#[test]
+fn a_graph_whose_wgsl_needs_a_constant_only_the_program_gives_still_loads() {
+    // `SCALE` is an f32 the host gives: the default constants' view cannot compile the WGSL
+    // (a constant it does not know is taken for a u32), so it derives nothing and culls
+    // nothing by it; a view that knows SCALE derives.
+    let wgsl = "struct Item { index: u32, value: u32 }
+fn make(it: ptr<function, Item>, index: u32) -> bool { *it = Item(index, u32(f32(source[index]) * SCALE)); return true; }
+fn store(it: ptr<function, Item>) -> bool { out[(*it).index] = (*it).value; return false; }
+";
+    let text = graph_text("", "", "\"out\"");
+    let vfs = folder("later", &[("derive.ron", &text), ("derive.wgsl", wgsl)]);
+    let graph = Graph::load(&vfs, "derive.ron").unwrap();
+    assert!(graph.culled.is_empty(), "{:?}", graph.culled);
+    // Before any view derived (a derivation is kept per set of flags, whatever the values).
+    let e = graph
+        .specialize_for(&BTreeMap::new(), &flags(&[]))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("derive.wgsl:2:"),
+        "a view of every constant but SCALE reports the WGSL's error: {e}"
+    );
+    let scale = [("SCALE".to_string(), ConstValue::F32(0.5))].into();
+    let live = graph.specialize_for(&scale, &flags(&[])).unwrap();
+    assert_eq!(lists(&live, "make"), (strings(&["source"]), vec![]));
+    assert_eq!(lists(&live, "store"), (vec![], strings(&["out"])));
+}

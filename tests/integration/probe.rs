@@ -26,19 +26,14 @@ pub fn scene(text: &str) -> LoadedScene {
 }
 
 /// The graph file of a probe: `pt`'s library, counters and resources, plus `probe_in`,
-/// `out` and the pass.
+/// `out` and the pass, whose reads are derived from its WGSL (a scene resource it does not
+/// use, or uses only under a flag that is off, is neither bound nor asked for).
 fn graph_text(pt: &Graph) -> String {
     let mut s = String::from("(\n    name: \"probe\",\n    library: [\n");
     for file in &pt.library {
         let _ = writeln!(s, "        {file:?},");
     }
-    s.push_str("    ],\n    passes: [Pass(name: \"probe\", item: \"ProbeItem\", source: \"probe/probe.wgsl\", role: Start(over: \"N\"), reads: [");
-    for (name, r) in &pt.resources {
-        if r.scope == Scope::External {
-            let _ = write!(s, "{name:?}, ");
-        }
-    }
-    s.push_str("\"probe_in\"], writes: [\"out\"])],\n    resources: {\n");
+    s.push_str("    ],\n    passes: [Pass(name: \"probe\", item: \"ProbeItem\", source: \"probe/probe.wgsl\", role: Start(over: \"N\"), writes: [\"out\"])],\n    resources: {\n");
     for (name, r) in &pt.resources {
         let scope = match r.scope {
             Scope::External => "External",
