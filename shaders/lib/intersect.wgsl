@@ -109,63 +109,62 @@ fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     return select(1.0 / d, big, abs(d) < tiny);
 }
 
+// Primitive fields from the three 16-byte words of a `Primitive`.
+fn primitive_fields(w0: vec4<u32>, w1: vec4<u32>, w2: vec4<u32>) -> PrimitiveFields {
+    return PrimitiveFields(bitcast<vec3<f32>>(w0.xyz), w0.w, bitcast<vec3<f32>>(w1.xyz), bitcast<i32>(w1.w), bitcast<vec3<f32>>(w2.xyz), w2.w);
+}
+
 // ---- geometry split over several bindings (SPLIT_GEOMETRY, set by the host for scenes
 // larger than one storage binding, scenes/src/split.rs): chunks of the first chunk's length,
-// the last shorter, the chunks past the data empty ----
+// the last shorter, the chunks past the data empty (each bound as one zero element) ----
 #if SPLIT_GEOMETRY
 
-// Primitive `i`, from its chunk.
-fn primitive_words(i: u32) -> Primitive {
-    let n = arrayLength(&primitives);
-    if (i < n) {
-        return primitives[i];
-    }
-    if (i < 2u * n) {
-        return primitives_1[i - n];
-    }
-    if (i < 3u * n) {
-        return primitives_2[i - 2u * n];
-    }
-    return primitives_3[i - 3u * n];
+// The chunk (0 to 3) of element `i` of a resource split in chunks of `n` elements, and the
+// element's index in it.
+fn split_index(i: u32, n: u32) -> vec2<u32> {
+    let k = select(0u, 1u, i >= n) + select(0u, 1u, i >= 2u * n) + select(0u, 1u, i >= 3u * n);
+    return vec2<u32>(k, i - k * n);
 }
 
-// Primitive `i`, unpacked into its fields.
+// Primitive `i`, from its chunk, unpacked into its fields.
 fn primitive_at(i: u32) -> PrimitiveFields {
-    let p = primitive_words(i);
-    return PrimitiveFields(bitcast<vec3<f32>>(p.w0.xyz), p.w0.w, bitcast<vec3<f32>>(p.w1.xyz), bitcast<i32>(p.w1.w), bitcast<vec3<f32>>(p.w2.xyz), p.w2.w);
+    let c = split_index(i, arrayLength(&primitives));
+    var p: Primitive;
+    switch c.x {
+        case 0u: { p = primitives[c.y]; }
+        case 1u: { p = primitives_1[c.y]; }
+        case 2u: { p = primitives_2[c.y]; }
+        default: { p = primitives_3[c.y]; }
+    }
+    return primitive_fields(p.w0, p.w1, p.w2);
 }
 
-// How many primitives have attributes: all or none.
+// Primitives `i` below this may have attributes (all primitives, or none: empty chunks hold
+// one zero element each, which reads as no normals and texture coordinates 0).
 fn attribute_count() -> u32 {
     return arrayLength(&attributes) + arrayLength(&attributes_1) + arrayLength(&attributes_2) + arrayLength(&attributes_3);
 }
 
 // The attributes of primitive `i` (below `attribute_count()`), from its chunk.
 fn attribute_at(i: u32) -> TriangleAttributes {
-    let n = arrayLength(&attributes);
-    if (i < n) {
-        return attributes[i];
+    let c = split_index(i, arrayLength(&attributes));
+    switch c.x {
+        case 0u: { return attributes[c.y]; }
+        case 1u: { return attributes_1[c.y]; }
+        case 2u: { return attributes_2[c.y]; }
+        default: { return attributes_3[c.y]; }
     }
-    if (i < 2u * n) {
-        return attributes_1[i - n];
-    }
-    if (i < 3u * n) {
-        return attributes_2[i - 2u * n];
-    }
-    return attributes_3[i - 3u * n];
 }
 
 #else
 
 // Primitive `i`, loaded as three 16-byte words and unpacked into its fields.
 fn primitive_at(i: u32) -> PrimitiveFields {
-    let w0 = primitives[i].w0;
-    let w1 = primitives[i].w1;
-    let w2 = primitives[i].w2;
-    return PrimitiveFields(bitcast<vec3<f32>>(w0.xyz), w0.w, bitcast<vec3<f32>>(w1.xyz), bitcast<i32>(w1.w), bitcast<vec3<f32>>(w2.xyz), w2.w);
+    return primitive_fields(primitives[i].w0, primitives[i].w1, primitives[i].w2);
 }
 
-// How many primitives have attributes: all or none.
+// Primitives `i` below this have attributes (all primitives, or none: an empty buffer holds
+// one zero element, which reads as no normals and texture coordinates 0).
 fn attribute_count() -> u32 {
     return arrayLength(&attributes);
 }

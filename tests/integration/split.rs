@@ -45,7 +45,7 @@ fn render(
         .program()
         .kernels
         .iter()
-        .any(|k| k.source.text().contains("fn primitive_words"));
+        .any(|k| k.source.text().contains("fn split_index"));
     let rendered = Rendered {
         image: session.image()?,
         counters: session.counters.clone(),
