@@ -2,8 +2,9 @@
 # Trace-only rates (docs/performance.md, "Trace-only rates"; issue 43, item 1): graphs/trace.ron
 # on SCENES (default sponza) at 1280x720 with SPP camera rays a pixel (default "1 4"), with each
 # BVH, each workgroup size of WORKGROUPS (default 64) and the CWBVH child loop unrolled and by
-# bit scan (CWBVH_CHILD_SCAN false, true), FRAMES frames a run (default 60; the rays are made
-# in the first and cast in every one). A line per run: Mrays/s of camera, ambient-occlusion
+# bit scan (CWBVH_CHILD_SCAN false, true), with SORT set also the diffuse rays sorted by
+# direction first and by origin first (TRACE_SORT), FRAMES frames a run (default 60; the rays
+# are made in the first and cast in every one). A line per run: Mrays/s of camera, ambient-occlusion
 # and diffuse-bounce rays over their kernel's GPU time, and the rays a frame. Then PT's
 # default render of each scene for its rays/s (wall-clock and over GPU time). On the GPU machine
 # from the repo root with carry [".gpu"] after `../shared/tools/gpu-bundle.sh --scene CrytekSponza`:
@@ -37,6 +38,12 @@ for scene in ${SCENES:-sponza}; do
         trace_rates "$scene ${spp}spp $bvh wg $wg" --scene "$scene" --spp "$spp" --bvh "$bvh" --workgroup "$wg"
         [ "$bvh" = cwbvh ] && trace_rates "$scene ${spp}spp $bvh wg $wg child scan" --scene "$scene" --spp "$spp" \
           --bvh "$bvh" --workgroup "$wg" --set CWBVH_CHILD_SCAN=true
+        if [ -n "${SORT:-}" ]; then
+          trace_rates "$scene ${spp}spp $bvh wg $wg diffuse sorted, direction first" --scene "$scene" --spp "$spp" \
+            --bvh "$bvh" --workgroup "$wg" --set TRACE_SORT=true
+          trace_rates "$scene ${spp}spp $bvh wg $wg diffuse sorted, origin first" --scene "$scene" --spp "$spp" \
+            --bvh "$bvh" --workgroup "$wg" --set TRACE_SORT=true --set TRACE_SORT_ORIGIN_FIRST=true
+        fi
       done
     done
   done

@@ -158,6 +158,17 @@ struct TriangleAttributes {
 
 const ATTRIBUTE_NORMALS: u32 = 1u;
 
+// The 10 low bits of `v` spread to every third bit (bits 0, 3, ..., 27): one axis of a Morton
+// code, which interleaves them with the other axes' (shifted by 1 and 2).
+fn morton_spread(v: u32) -> u32 {
+    var x = v & 0x3ffu;
+    x = (x | (x << 16u)) & 0x030000ffu;
+    x = (x | (x << 8u)) & 0x0300f00fu;
+    x = (x | (x << 4u)) & 0x030c30c3u;
+    x = (x | (x << 2u)) & 0x09249249u;
+    return x;
+}
+
 // The octahedral code of a unit vector: snorm16 x, y (Meyer et al. 2010).
 fn encode_octahedral(v: vec3<f32>) -> u32 {
     let p = v.xy / (abs(v.x) + abs(v.y) + abs(v.z));

@@ -56,7 +56,7 @@ struct KdNode {
 fn kd_encode(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     (*p).index = index;
     let c = kd_cell(pm_staging[index].position, kd_scale());
-    kd_codes[index] = kd_spread(c.x) | (kd_spread(c.y) << 1u) | (kd_spread(c.z) << 2u);
+    kd_codes[index] = morton_spread(c.x) | (morton_spread(c.y) << 1u) | (morton_spread(c.z) << 2u);
     kd_index[index] = index;
     return false;
 }
@@ -100,17 +100,7 @@ fn kd_cell(position: vec3<f32>, scale: f32) -> vec3<u32> {
     return vec3<u32>(clamp(c, vec3<f32>(0.0), vec3<f32>(KD_AXIS_CELLS - 1.0)));
 }
 
-// The 10 bits of `v` to every third bit.
-fn kd_spread(v: u32) -> u32 {
-    var x = v & 0x3ffu;
-    x = (x | (x << 16u)) & 0x030000ffu;
-    x = (x | (x << 8u)) & 0x0300f00fu;
-    x = (x | (x << 4u)) & 0x030c30c3u;
-    x = (x | (x << 2u)) & 0x09249249u;
-    return x;
-}
-
-// Every third bit of `v` (from bit 0) into 10 bits: the inverse of kd_spread.
+// Every third bit of `v` (from bit 0) into 10 bits: the inverse of morton_spread (shaders/lib/scene.wgsl).
 fn kd_compact(v: u32) -> u32 {
     var x = v & 0x09249249u;
     x = (x | (x >> 2u)) & 0x030c30c3u;

@@ -3,7 +3,8 @@
 // of the index (rays of `trace_make`, made once) and stores one word of the result, the hit
 // distance of a closest-hit ray (-1 for none) or 1 / 0 for an occluded / open any-hit ray.
 // A missing ray (t_max 0) stores -1 and counts nothing. With TRACE_STATS each also counts the
-// nodes its rays visit and the primitives they test (nodes_*, tests_*).
+// nodes its rays visit and the primitives they test (nodes_*, tests_*). With TRACE_SORT
+// `trace_diffuse`'s index i casts the diffuse ray `trace_order[i]`, in the order of their keys.
 
 fn trace_closest_into(slot: u32) {
     let ray = trace_rays[slot];
@@ -40,7 +41,11 @@ fn trace_ao(s: ptr<function, TraceItem>, index: u32) -> bool {
 }
 
 fn trace_diffuse(s: ptr<function, TraceItem>, index: u32) -> bool {
+#if TRACE_SORT
+    let slot = 2u * PATHS + trace_order[index];
+#else
     let slot = 2u * PATHS + index;
+#endif
     if (trace_rays[slot].t_max > 0.0) {
         count(COUNTER_RAYS_DIFFUSE, 1u);
     }

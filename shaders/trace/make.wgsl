@@ -2,7 +2,8 @@
 // passes trace every frame, three per index: the camera ray through a jittered point of a
 // pixel (pixels in 8x8 tiles, as PT's), and at its hit an ambient-occlusion ray (length
 // TRACE_AO_LENGTH times the scene's bounding radius) and a diffuse-bounce ray (unbounded),
-// both cosine-distributed about the normal facing the camera. Later frames leave them.
+// both cosine-distributed about the normal facing the camera. Later frames leave them. With
+// TRACE_SORT it also keys the diffuse ray for `trace_sort` (below).
 
 fn trace_make(s: ptr<function, TraceItem>, index: u32) -> bool {
     if (frame.index != 0u) {
@@ -26,5 +27,25 @@ fn trace_make(s: ptr<function, TraceItem>, index: u32) -> bool {
     }
     trace_rays[PATHS + index] = ao;
     trace_rays[2u * PATHS + index] = diffuse;
+#if TRACE_SORT
+    trace_keys[index] = trace_sort_key(diffuse);
+    trace_order[index] = index;
+#endif
     return false;
+}
+
+// With TRACE_SORT: a ray's sort key, its direction's octahedral code (5 bits an axis,
+// interleaved) and its origin's cell in the scene's bounding cube (6 bits an axis, as a Morton
+// code), direction first unless TRACE_SORT_ORIGIN_FIRST; a missing ray sorts last.
+fn trace_sort_key(r: TraceRay) -> u32 {
+    if (r.t_max <= 0.0) {
+        return 0xffffffffu;
+    }
+    let cube = (r.origin - scene.center) / (2.0 * scene.radius) + 0.5;
+    let c = vec3<u32>(clamp(cube * 64.0, vec3<f32>(0.0), vec3<f32>(63.0)));
+    let origin = morton_spread(c.x) | (morton_spread(c.y) << 1u) | (morton_spread(c.z) << 2u);
+    let e = unpack2x16snorm(encode_octahedral(r.direction)) * 0.5 + 0.5;
+    let d = vec2<u32>(clamp(e * 32.0, vec2<f32>(0.0), vec2<f32>(31.0)));
+    let direction = morton_spread(d.x) | (morton_spread(d.y) << 1u);
+    return select((direction << 18u) | origin, (origin << 14u) | direction, TRACE_SORT_ORIGIN_FIRST);
 }
