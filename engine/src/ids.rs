@@ -1,15 +1,20 @@
 //! Typed indices of the things the stages hand to one another: passes, operators, chains,
-//! phases, kernels and compaction boundaries. Each indexes its own table, so a chain index
-//! cannot be used to look up a pass: the module that defines an item says which id indexes it
-//! (`indexes!`), so that this leaf module names none of them.
+//! phases, kernels, compaction boundaries, resources and streams. Each indexes its own table,
+//! so a chain index cannot be used to look up a pass: the module that defines an item says
+//! which id indexes it (`indexes!`), so that this leaf module names none of them. Resources
+//! and streams are interned at load; their ids have no `Display`, so that what a report or an
+//! error prints of them is their name, never their number.
 
 use std::fmt;
 
 macro_rules! typed_id {
-    ($(#[$doc:meta])* $name:ident) => {
+    ($(#[$doc:meta])* $name:ident, named) => {
         $(#[$doc])*
         #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
         pub struct $name(pub usize);
+    };
+    ($(#[$doc:meta])* $name:ident) => {
+        typed_id!($(#[$doc])* $name, named);
 
         impl fmt::Display for $name {
             fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -62,4 +67,15 @@ typed_id!(
 typed_id!(
     /// A compaction boundary: an index into [`crate::Plan::boundaries`].
     BoundaryId
+);
+typed_id!(
+    /// A resource of the live graph: an index into [`crate::Graph::resources`], interned in
+    /// name order where the live graph is built.
+    ResourceId,
+    named
+);
+typed_id!(
+    /// A stream: an index into [`crate::Graph::streams`], interned in name order at load.
+    StreamId,
+    named
 );
