@@ -5,7 +5,7 @@
 use crate::access::Access;
 use crate::derive::{SLOT_DECLARATION, constant_declarations, frame_record, resource_declaration, stub_emits};
 use crate::graph::Graph;
-use crate::ids::{ChainId, KernelId};
+use crate::ids::{ChainId, KernelId, StreamId};
 use crate::ir::{Scope, StateStorage};
 use crate::limits::FRAME_BINDING;
 use crate::plan::{Plan, Root};
@@ -124,10 +124,11 @@ impl CodegenContext<'_> {
         // Writable: a pass or operator writes it, it holds atomics, or it is transient (its
         // memory is shared, so every binding of it is read-write).
         let written = g.written_resources();
-        for (name, r) in &g.resources {
-            let writable = r.scope == Scope::Transient || r.ty.contains("atomic") || written.contains(name);
-            let binding = self.binding(&BufferRef::Resource(name.clone()));
-            s.push_str(&resource_declaration(name, r, binding, writable));
+        for id in g.resource_ids() {
+            let r = &g.resources[id];
+            let writable = r.decl.scope == Scope::Transient || r.decl.ty.contains("atomic") || written.contains(&id);
+            let binding = self.binding(&BufferRef::Resource(id));
+            s.push_str(&resource_declaration(&r.name, &r.decl, binding, writable));
         }
         s
     }
@@ -251,25 +252,25 @@ impl CodegenContext<'_> {
     }
 
     /// Queues kernel `k` touches: emitted into, or consumed.
-    fn kernel_queues(&self, k: KernelId) -> Vec<String> {
-        let mut queues: Vec<String> = self.plan.queued_emits(k);
-        if let Root::Queue(q) = &self.plan.kernels[k].root {
-            queues.push(q.clone());
+    fn kernel_queues(&self, k: KernelId) -> Vec<StreamId> {
+        let mut queues: Vec<StreamId> = self.plan.queued_emits(k);
+        if let Root::Queue(q) = self.plan.kernels[k].root {
+            queues.push(q);
         }
         queues
     }
 
     /// Capacity, binding and item load/store of each queue in `queues`.
-    fn queue_storage(&self, queues: &[String]) -> String {
+    fn queue_storage(&self, queues: &[StreamId]) -> String {
         let mut s = String::new();
-        for q in queues {
-            let item = &self.graph().streams[q].item;
+        for &id in queues {
+            let (q, item) = (&self.graph().streams[id].name, &self.graph().streams[id].decl.item);
             let cap = format!("LG_CAP_{}", q.to_uppercase());
-            let _ = writeln!(s, "const {cap}: u32 = {}u;", self.resolved.queue_capacity[q]);
+            let _ = writeln!(s, "const {cap}: u32 = {}u;", self.resolved.queue_capacity[&id]);
             let _ = writeln!(
                 s,
                 "@group(0) @binding({}) var<storage, read_write> lg_queue_{q}: array<u32>;",
-                self.binding(&BufferRef::Queue(q.clone()))
+                self.binding(&BufferRef::Queue(id))
             );
             s.push_str(&self.load_store(&format!("queue_{q}"), &format!("lg_queue_{q}"), item, &cap));
         }
@@ -277,29 +278,30 @@ impl CodegenContext<'_> {
     }
 
     /// Emit functions: direct calls for fused consumers, appends for queues, no-ops otherwise.
-    fn emit_functions(&self, k: KernelId, queues: &[String]) -> String {
+    fn emit_functions(&self, k: KernelId, queues: &[StreamId]) -> String {
         let g = self.graph();
         let kp = &self.plan.kernels[k];
         let mut s = String::new();
-        for (name, st) in &g.streams {
+        for id in g.stream_ids() {
+            let (name, st) = (&g.streams[id].name, &g.streams[id].decl);
             let fused = kp
                 .fused_chains
                 .iter()
-                .find(|&&fc| g.chains[fc].entry == crate::graph::ChainEntry::Stream(name.clone()));
+                .find(|&&fc| g.chains[fc].entry == crate::graph::ChainEntry::Stream(id));
             if let Some(&fc) = fused {
                 let _ = writeln!(s, "fn lg_chain_{fc}(item: {}) {{\n    var it = item;", st.item);
                 s.push_str(&self.run_passes(fc, 0..g.chains[fc].passes.len(), true, ""));
                 s.push_str("}\n");
                 let _ = writeln!(s, "fn emit_{name}(item: {}) {{ lg_chain_{fc}(item); }}", st.item);
-            } else if queues.contains(name) && !matches!(&kp.root, Root::Queue(q) if q == name) {
-                let counter = format!("lg_control[{}]", self.resolved.control.queue_append[name]);
+            } else if queues.contains(&id) && kp.root != Root::Queue(id) {
+                let counter = format!("lg_control[{}]", self.resolved.control.queue_append[&id]);
                 let _ = writeln!(
                     s,
                     "fn emit_{name}(item: {}) {{\n{}    if (lg_slot < LG_CAP_{}) {{ lg_store_queue_{name}(lg_slot, item); }} else {{ atomicAdd(&lg_control[{}], 1u); }}\n}}",
                     st.item,
                     claim_slot(&counter, self.subgroup_appends),
                     name.to_uppercase(),
-                    self.resolved.control.queue_overflow[name]
+                    self.resolved.control.queue_overflow[&id]
                 );
             } else {
                 let _ = writeln!(s, "fn emit_{name}(item: {}) {{}}", st.item);
@@ -390,7 +392,7 @@ impl CodegenContext<'_> {
         let mut s = String::from("fn lg_run(lg_i: u32) {\n    lg_slot = lg_i;\n");
         match &kp.root {
             Root::Queue(q) => {
-                let _ = writeln!(s, "    var it = lg_load_queue_{q}(lg_i);");
+                let _ = writeln!(s, "    var it = lg_load_queue_{}(lg_i);", self.graph().streams[*q].name);
                 s.push_str(&self.run_passes(c, kp.segment.clone(), true, ""));
             }
             Root::Boundary => {

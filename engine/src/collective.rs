@@ -3,7 +3,7 @@
 //! sort, the gather, and the radix sort ([`crate::radix`]).
 
 use crate::graph::Graph;
-use crate::ids::OpId;
+use crate::ids::{OpId, ResourceId};
 use crate::limits::{Target, WORKGROUP};
 use crate::operator::{OpKind, summed_type};
 use crate::radix::Sort;
@@ -16,10 +16,10 @@ use std::fmt::Write;
 /// the shape the resolve stage found for it ([`Resolved::sort_shape`]).
 pub fn op_kernels(graph: &Graph, o: OpId, resolved: &Resolved, target: &Target) -> Vec<OpKernel> {
     let (subgroups, items) = (target.subgroups(), target.scan_items);
-    let op = &graph.ops[o.0];
-    let counted = op.domain.as_ref().and_then(|d| d.counted.as_deref());
-    let words = |r: &str| resolved.sizes[r].element_bytes / 4;
-    let resource = |r: &String| BufferRef::Resource(r.clone());
+    let op = &graph.ops[o];
+    let counted = op.domain.as_ref().and_then(|d| d.counted);
+    let words = |r: &ResourceId| resolved.sizes[*r].element_bytes / 4;
+    let resource = |r: &ResourceId| BufferRef::Resource(*r);
     let element = Groups::elements(WORKGROUP as u64);
     let prefix = format!("lg_op{}", o.0);
     match &op.kind {
@@ -78,7 +78,7 @@ pub fn op_kernels(graph: &Graph, o: OpId, resolved: &Resolved, target: &Target) 
         OpKind::Scan { input, output } => {
             let scan = Scan {
                 o,
-                element: summed_type(&graph.resources[input].ty).expect("the load checks a scan's elements"),
+                element: summed_type(&graph.resources[*input].decl.ty).expect("the load checks a scan's elements"),
                 input: resource(input),
                 output: resource(output),
                 partials: 0,
@@ -94,8 +94,8 @@ pub fn op_kernels(graph: &Graph, o: OpId, resolved: &Resolved, target: &Target) 
         OpKind::Sort { keys, values, bits } => {
             let sort = Sort {
                 o,
-                keys,
-                values: values.as_deref(),
+                keys: *keys,
+                values: *values,
                 bits: *bits,
                 counted,
                 subgroups,
@@ -117,7 +117,7 @@ fn scatter_kernel(
     sorted: [BufferRef; 3],
     moved: Option<(BufferRef, u32)>,
     output: BufferRef,
-    counted: Option<&str>,
+    counted: Option<ResourceId>,
     overflow: u32,
 ) -> OpKernel {
     let mut m = Module::new(true);
@@ -162,7 +162,13 @@ fn moved_words(w: u32) -> (&'static str, u32) {
 /// from the place its index names, written in order, one thread per moved word (16-byte
 /// vectors as the scatter's), so that a warp's stores are contiguous and the threads of one
 /// element read its words together. An index past the input is counted as skipped.
-fn gather_kernel(prefix: &str, buffers: [BufferRef; 3], counted: Option<&str>, w: u32, overflow: u32) -> OpKernel {
+fn gather_kernel(
+    prefix: &str,
+    buffers: [BufferRef; 3],
+    counted: Option<ResourceId>,
+    w: u32,
+    overflow: u32,
+) -> OpKernel {
     let mut m = Module::new(true);
     let [indices, input, output] = buffers;
     let (word, w) = moved_words(w);

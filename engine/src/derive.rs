@@ -89,8 +89,8 @@ pub fn resource_declaration(name: &str, r: &ResourceDecl, binding: u32, writable
 /// Emit functions that do nothing: enough to type-check the passes.
 pub fn stub_emits(graph: &Graph) -> String {
     let mut s = String::new();
-    for (name, st) in &graph.streams {
-        let _ = writeln!(s, "fn emit_{name}(item: {}) {{}}", st.item);
+    for st in &graph.streams {
+        let _ = writeln!(s, "fn emit_{}(item: {}) {{}}", st.name, st.decl.item);
     }
     s
 }
@@ -151,8 +151,9 @@ fn compile_all(graph: &Graph, flags: &BTreeSet<String>) -> Result<(naga::Module,
         .declared
         .candidates
         .iter()
-        .filter(|(n, _)| !graph.resources.contains_key(*n));
-    for (i, (name, r)) in graph.resources.iter().chain(candidates).enumerate() {
+        .filter(|(n, _)| !graph.resource_by_name.contains_key(*n));
+    let live = graph.resources.iter().map(|r| (&r.name, &r.decl));
+    for (i, (name, r)) in live.chain(candidates).enumerate() {
         declarations.push_str(&resource_declaration(name, r, i as u32, true));
     }
     let emits = stub_emits(graph);
@@ -186,7 +187,7 @@ impl Graph {
     /// nothing; the reflect stage reports it. A candidate resource (a catalog's that no pass
     /// lists) that a pass uses joins the graph's resources.
     pub(crate) fn derive_access(&mut self, flags: &BTreeSet<String>) -> Result<()> {
-        self.resources = self.declared.resources.clone();
+        self.intern_resources(self.used_declarations());
         if self
             .declared
             .passes
@@ -222,14 +223,21 @@ impl Graph {
                     .insert(key, lists);
             }
         }
+        self.intern_resources(self.used_declarations());
+        Ok(())
+    }
+
+    /// The declared resources, and the candidates some declared pass reads or writes.
+    fn used_declarations(&self) -> BTreeMap<String, ResourceDecl> {
+        let mut resources = self.declared.resources.clone();
         for p in &self.declared.passes {
             for r in p.decl.reads.iter().chain(&p.decl.writes) {
                 if let Some(decl) = self.declared.candidates.get(r) {
-                    self.resources.insert(r.clone(), decl.clone());
+                    resources.insert(r.clone(), decl.clone());
                 }
             }
         }
-        Ok(())
+        resources
     }
 
     /// Fills the lists passes leave out from naga's view of the sources with `flags`.
@@ -239,7 +247,7 @@ impl Graph {
             .global_variables
             .iter()
             .filter_map(|(h, v)| v.name.as_deref().map(|n| (h, n)))
-            .filter(|(_, n)| self.resources.contains_key(*n) || self.declared.candidates.contains_key(*n))
+            .filter(|(_, n)| self.resource_by_name.contains_key(*n) || self.declared.candidates.contains_key(*n))
             .collect();
         for p in &mut self.declared.passes {
             let Some((h, _)) = module

@@ -27,11 +27,11 @@ fn steps_text(program: &Program, steps: &[Step], indent: usize, out: &mut String
                 let _ = writeln!(out, "{pad}run {}", program.plan.kernels[*k].name);
             }
             Step::Drain(q) => {
-                let k = program.plan.consumer_kernel(q);
+                let k = program.plan.consumer_kernel(*q);
                 let _ = writeln!(
                     out,
-                    "{pad}drain queue '{q}' -> {} (indirect)",
-                    program.plan.kernels[k].name
+                    "{pad}drain queue '{}' -> {} (indirect)",
+                    program.plan.graph.streams[*q].name, program.plan.kernels[k].name
                 );
             }
             Step::Loop { chain, body } => {
@@ -145,10 +145,9 @@ fn frame(program: &Program, out: &mut String) {
                     })
                     .collect();
                 let d = &program.resolved.domains[ph.0];
-                let counted = d
-                    .counted
-                    .as_ref()
-                    .map_or(String::new(), |c| format!(" (counted on the GPU by '{c}')"));
+                let counted = d.counted.map_or(String::new(), |c| {
+                    format!(" (counted on the GPU by '{}')", g.resources[c].name)
+                });
                 let _ = writeln!(
                     out,
                     "  {s}: phase {ph}: {}{counted} items in chunks of {}: {}",
@@ -164,11 +163,9 @@ fn frame(program: &Program, out: &mut String) {
             FrameStep::Op(o) => {
                 let op = &g.ops[o];
                 let n = program.resolved.op_elements[&o];
-                let counted = op
-                    .domain
-                    .as_ref()
-                    .and_then(|d| d.counted.as_ref())
-                    .map_or(String::new(), |c| format!(" (at most; counted on the GPU by '{c}')"));
+                let counted = op.domain.as_ref().and_then(|d| d.counted).map_or(String::new(), |c| {
+                    format!(" (at most; counted on the GPU by '{}')", g.resources[c].name)
+                });
                 let kernels: Vec<&str> = program.ops[o.0].kernels.iter().map(|(k, _)| k.name.as_str()).collect();
                 let _ = writeln!(
                     out,
@@ -199,7 +196,7 @@ fn kernels(program: &Program, out: &mut String) {
             }
             Root::Start => "start (one thread per item)".to_string(),
             Root::State => "state buffer (one thread per slot)".to_string(),
-            Root::Queue(q) => format!("queue '{q}' (indirect)"),
+            Root::Queue(q) => format!("queue '{}' (indirect)", g.streams[*q].name),
             Root::Boundary => format!(
                 "boundary {} (indirect, compacted)",
                 kp.input.map_or(0, |p| p.boundary.0)
@@ -244,8 +241,9 @@ fn resources(program: &Program, externals: &dyn Fn(&str) -> Option<u64>, out: &m
     let g = &plan.graph;
     let r = &program.resolved;
     let _ = writeln!(out, "\nresources:");
-    for (name, decl) in &g.resources {
-        let size = &r.sizes[name];
+    for id in g.resource_ids() {
+        let (name, decl) = (&g.resources[id].name, &g.resources[id].decl);
+        let size = &r.sizes[id];
         let (count, bytes) = match size.count {
             Some(c) => (c.to_string(), Some(c * size.element_bytes as u64)),
             None => ("from scene".to_string(), externals(name)),
@@ -256,7 +254,7 @@ fn resources(program: &Program, externals: &dyn Fn(&str) -> Option<u64>, out: &m
                 let life = r
                     .memory
                     .lifetimes
-                    .get(&BufferRef::Resource(name.clone()))
+                    .get(&BufferRef::Resource(id))
                     .map_or("unused".to_string(), |l| {
                         format!("{} .. {}", step_name(program, l.first), step_name(program, l.last))
                     });
@@ -267,7 +265,7 @@ fn resources(program: &Program, externals: &dyn Fn(&str) -> Option<u64>, out: &m
             }
             Scope::External => "external".to_string(),
         };
-        let unused = if r.used.contains(name) {
+        let unused = if r.used.contains(&id) {
             ""
         } else {
             " (unused: not allocated)"

@@ -1,10 +1,13 @@
 //! A loaded frame graph: its declarations, and the live view the current constants leave of
 //! it (see [`crate::specialize`]): item chains, phases, and the frame's steps (phases and
-//! operators in order). Every error names the file and position of the offending name.
+//! operators in order). Resources and streams are interned to typed ids where the live graph
+//! is built ([`Graph::resources`], [`Graph::streams`]); their names serve the edges: errors,
+//! reports and the host's lookups ([`Graph::resource_id`]). Every error names the file and
+//! position of the offending name.
 
 use crate::error::{Error, Result};
 use crate::extend::resolve;
-use crate::ids::{ChainId, OpId, PassId, PhaseId, indexes};
+use crate::ids::{ChainId, OpId, PassId, PhaseId, ResourceId, StreamId, indexes};
 use crate::ir::{ConstValue, LayoutDecl, MeasuredDecl, ResourceDecl, Role, StreamDecl};
 use crate::load::{Declared, Pass, declare};
 use crate::operator::{Domain, Operator};
@@ -19,9 +22,9 @@ pub use crate::load::parse_ron;
 #[derive(Debug, Clone, PartialEq)]
 pub enum ChainEntry {
     /// Its first pass is a start pass creating items over a domain.
-    Start(Domain),
-    /// Its first pass consumes the named stream.
-    Stream(String),
+    Start(Domain<ResourceId>),
+    /// Its first pass consumes the stream.
+    Stream(StreamId),
 }
 
 /// An item chain: the passes one item runs through, in order. Steps come first; a group of
@@ -48,6 +51,37 @@ pub struct Phase {
 
 indexes!(ChainId => Chain);
 indexes!(PhaseId => Phase);
+
+/// A resource of the live graph: its name (for errors, reports and the host) and declaration.
+#[derive(Debug, Clone)]
+pub struct Resource {
+    /// Its name.
+    pub name: String,
+    /// Its declaration.
+    pub decl: ResourceDecl,
+}
+
+/// A stream of the graph: its name (for errors and reports) and declaration.
+#[derive(Debug, Clone)]
+pub struct Stream {
+    /// Its name.
+    pub name: String,
+    /// Its declaration.
+    pub decl: StreamDecl,
+}
+
+indexes!(ResourceId => Resource);
+indexes!(StreamId => Stream);
+
+/// Declarations by name interned in name order: the table an id indexes, and each name's id.
+fn intern<I, D, T>(
+    decls: BTreeMap<String, D>,
+    id: fn(usize) -> I,
+    item: fn(String, D) -> T,
+) -> (Vec<T>, BTreeMap<String, I>) {
+    let ids = decls.keys().enumerate().map(|(i, n)| (n.clone(), id(i))).collect();
+    (decls.into_iter().map(|(n, d)| item(n, d)).collect(), ids)
+}
 
 /// One step of a frame: a phase of passes, or a collective operator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -88,11 +122,16 @@ pub struct Graph {
     /// Live passes.
     pub passes: Vec<Pass>,
     /// Live operators.
-    pub ops: Vec<Operator>,
-    /// Resources by name.
-    pub resources: BTreeMap<String, ResourceDecl>,
-    /// Streams by name.
-    pub streams: BTreeMap<String, StreamDecl>,
+    pub ops: Vec<Operator<ResourceId>>,
+    /// The live graph's resources, in name order, by id.
+    pub resources: Vec<Resource>,
+    /// The id of each resource's name: for the edges (parsing, errors, the host's lookups,
+    /// [`Graph::resource_id`]).
+    pub(crate) resource_by_name: BTreeMap<String, ResourceId>,
+    /// Streams, in name order, by id.
+    pub streams: Vec<Stream>,
+    /// The id of each stream's name ([`Graph::stream_id`]).
+    pub(crate) stream_by_name: BTreeMap<String, StreamId>,
     /// Counter names.
     pub counters: Vec<String>,
     /// Constants: the graph's defaults, overridden and extended by the specialisation.
@@ -116,7 +155,7 @@ pub struct Graph {
     /// Passes and operators left out, with the reason.
     pub culled: Vec<Culled>,
     /// Streams whose consumer was culled (emits into them do nothing).
-    pub dead_streams: Vec<String>,
+    pub dead_streams: Vec<StreamId>,
     /// The file system the graph's sources come from.
     pub vfs: Vfs,
     /// The reads and writes derived for each set of flags, shared by the graph's views.
@@ -130,15 +169,18 @@ impl Graph {
     pub(crate) fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Graph> {
         let declared = declare(vfs, file, resolve(vfs, file, text)?)?;
         let g = &declared.file;
+        let g_streams = g.streams.clone();
         let mut graph = Graph {
             name: g.name.clone(),
             description: g.description.clone(),
             file: file.to_string(),
             library: declared.library.clone(),
-            passes: declared.passes.clone(),
-            ops: declared.ops.clone(),
-            resources: declared.resources.clone(),
-            streams: g.streams.clone(),
+            passes: Vec::new(),
+            ops: Vec::new(),
+            resources: Vec::new(),
+            resource_by_name: BTreeMap::new(),
+            streams: Vec::new(),
+            stream_by_name: BTreeMap::new(),
             counters: declared.counters.clone(),
             constants: declared.constants.clone(),
             parameters: g.parameters.clone(),
@@ -155,9 +197,56 @@ impl Graph {
             derivations: Default::default(),
             declared,
         };
+        (graph.streams, graph.stream_by_name) = intern(g_streams, StreamId, |name, decl| Stream { name, decl });
+        for p in &mut graph.declared.passes {
+            p.emits = p.decl.emits.iter().map(|s| graph.stream_by_name[s]).collect();
+        }
+        graph.intern_resources(graph.declared.resources.clone());
+        graph.passes = graph.declared.passes.clone();
+        graph.ops = graph.live_ops(&graph.declared.ops);
         graph.chains = graph.build_chains()?;
         graph.phases = graph.build_phases()?;
         Ok(graph)
+    }
+
+    /// Interns `resources` (the live graph's) in name order, and gives every declared pass the
+    /// ids of the resources it reads and writes.
+    pub(crate) fn intern_resources(&mut self, resources: BTreeMap<String, ResourceDecl>) {
+        (self.resources, self.resource_by_name) = intern(resources, ResourceId, |name, decl| Resource { name, decl });
+        let ids = |names: &[String]| -> Vec<ResourceId> { names.iter().map(|n| self.resource_by_name[n]).collect() };
+        for p in &mut self.declared.passes {
+            (p.reads, p.writes) = (ids(&p.decl.reads), ids(&p.decl.writes));
+        }
+    }
+
+    /// `ops` (declared ones) with their resources named by the live graph's ids.
+    pub(crate) fn live_ops(&self, ops: &[Operator]) -> Vec<Operator<ResourceId>> {
+        ops.iter().map(|op| op.map(&|n| self.resource_by_name[n])).collect()
+    }
+
+    /// The id of the resource called `name`, if the live graph has it.
+    pub fn resource_id(&self, name: &str) -> Option<ResourceId> {
+        self.resource_by_name.get(name).copied()
+    }
+
+    /// The live resource called `name`.
+    pub fn resource(&self, name: &str) -> Option<&Resource> {
+        self.resource_id(name).map(|r| &self.resources[r])
+    }
+
+    /// The ids of the live resources, in name order.
+    pub fn resource_ids(&self) -> impl Iterator<Item = ResourceId> + use<> {
+        (0..self.resources.len()).map(ResourceId)
+    }
+
+    /// The id of the stream called `name`.
+    pub fn stream_id(&self, name: &str) -> Option<StreamId> {
+        self.stream_by_name.get(name).copied()
+    }
+
+    /// The ids of the streams, in name order.
+    pub fn stream_ids(&self) -> impl Iterator<Item = StreamId> + use<> {
+        (0..self.streams.len()).map(StreamId)
     }
 
     /// The layout called `name`; an unknown name is an error that lists the graph's layouts.
@@ -197,15 +286,15 @@ impl Graph {
 
     /// Resources some declared pass or operator writes, culled ones included (the sources
     /// of culled passes still take part in compiling, so their stores must be legal).
-    pub fn written_resources(&self) -> BTreeSet<String> {
-        let mut out: BTreeSet<String> = self
+    pub fn written_resources(&self) -> BTreeSet<ResourceId> {
+        let mut out: BTreeSet<ResourceId> = self
             .declared
             .passes
             .iter()
-            .flat_map(|p| p.decl.writes.iter().cloned())
+            .flat_map(|p| p.writes.iter().copied())
             .collect();
         for op in &self.declared.ops {
-            out.extend(op.writes().iter().map(|s| s.to_string()));
+            out.extend(op.writes().into_iter().map(|r| self.resource_by_name[r]));
         }
         out
     }
@@ -263,7 +352,7 @@ impl Graph {
     }
 
     /// The domain of phase `ph`: its start chain's.
-    pub fn phase_domain(&self, ph: PhaseId) -> &Domain {
+    pub fn phase_domain(&self, ph: PhaseId) -> &Domain<ResourceId> {
         match &self.chains[self.phases[ph].chains[0]].entry {
             ChainEntry::Start(d) => d,
             ChainEntry::Stream(_) => unreachable!("phases begin with a start chain"),
@@ -272,19 +361,19 @@ impl Graph {
 
     /// Resources the nodes of frame step `s` read or write (counters of GPU-counted domains
     /// included).
-    pub fn step_resources(&self, s: usize) -> BTreeSet<String> {
+    pub fn step_resources(&self, s: usize) -> BTreeSet<ResourceId> {
         let mut out = BTreeSet::new();
         match self.steps[s] {
             FrameStep::Phase(ph) => {
                 for p in self.phase_passes(ph) {
-                    let d = &self.passes[p].decl;
-                    out.extend(d.reads.iter().chain(&d.writes).cloned());
+                    let p = &self.passes[p];
+                    out.extend(p.reads.iter().chain(&p.writes).copied());
                 }
-                out.extend(self.phase_domain(ph).counted.iter().cloned());
+                out.extend(self.phase_domain(ph).counted);
             }
             FrameStep::Op(o) => {
                 let op = &self.ops[o];
-                out.extend(op.reads().iter().chain(op.writes().iter()).map(|s| s.to_string()));
+                out.extend(op.reads().into_iter().chain(op.writes()).copied());
             }
         }
         out
@@ -292,16 +381,16 @@ impl Graph {
 
     /// A resource written in phase `a` and read in phase `b`, if any (the reason a barrier
     /// separates them).
-    pub fn barrier_resource(&self, a: PhaseId, b: PhaseId) -> Option<String> {
+    pub fn barrier_resource(&self, a: PhaseId, b: PhaseId) -> Option<ResourceId> {
         let (pa, pb) = (self.phase_passes(a), self.phase_passes(b));
         for &x in &pa {
             for &y in &pb {
-                let (x, y) = (&self.passes[x].decl, &self.passes[y].decl);
-                if let Some(r) = x.writes.iter().find(|r| y.reads.contains(r) || y.writes.contains(r)) {
-                    return Some(r.clone());
+                let (x, y) = (&self.passes[x], &self.passes[y]);
+                if let Some(&r) = x.writes.iter().find(|r| y.reads.contains(r) || y.writes.contains(r)) {
+                    return Some(r);
                 }
-                if let Some(r) = y.writes.iter().find(|r| x.reads.contains(r)) {
-                    return Some(r.clone());
+                if let Some(&r) = y.writes.iter().find(|r| x.reads.contains(r)) {
+                    return Some(r);
                 }
             }
         }
@@ -313,6 +402,7 @@ impl Graph {
         let (a, b) = (a.min(b), a.max(b));
         let (sa, sb) = (self.step_of_phase(a), self.step_of_phase(b));
         if let Some(r) = self.barrier_resource(a, b) {
+            let r = &self.resources[r].name;
             return format!("the later phase needs all of '{r}' from the earlier one (a global barrier)");
         }
         match self.steps[sa..sb].iter().find_map(|s| match s {
@@ -327,7 +417,7 @@ impl Graph {
     /// The dependency graph of the live passes and operators: passes, operators and
     /// resources as nodes; edges for writes, reads, item flow along chains and stream emits.
     pub fn dependency_graph(&self) -> (DiGraph<String, String>, BTreeMap<String, NodeIndex>) {
-        dependency_graph(&self.passes, &self.ops, &self.chains, &self.resources, &self.streams)
+        dependency_graph(self)
     }
 
     /// Graphviz DOT text of the dependency graph.
@@ -338,11 +428,14 @@ impl Graph {
 
     /// The chains of the live passes, in order of their entries.
     pub(crate) fn build_chains(&self) -> Result<Vec<Chain>> {
-        let stream_into: BTreeMap<&str, &str> = self.streams.iter().map(|(n, s)| (s.to.as_str(), n.as_str())).collect();
+        let stream_into: BTreeMap<&str, StreamId> = self
+            .stream_ids()
+            .map(|s| (self.streams[s].decl.to.as_str(), s))
+            .collect();
         let mut chains: Vec<Chain> = Vec::new();
         for (i, p) in self.passes.iter().enumerate() {
             let d = &p.decl;
-            let fed_by = self.streams.iter().filter(|(_, s)| s.to == d.name).count();
+            let fed_by = self.streams.iter().filter(|s| s.decl.to == d.name).count();
             if fed_by > 1 {
                 return Err(self.error_at(
                     &d.name,
@@ -352,11 +445,9 @@ impl Graph {
             let new_entry = match &d.role {
                 Role::Start { over, counted } => Some(ChainEntry::Start(Domain {
                     over: crate::expr::Expr::parse(over).map_err(|e| self.error_in_pass(p, over, e))?,
-                    counted: counted.clone(),
+                    counted: counted.as_deref().map(|c| self.counter_id(p, c)).transpose()?,
                 })),
-                _ => stream_into
-                    .get(d.name.as_str())
-                    .map(|s| ChainEntry::Stream(s.to_string())),
+                _ => stream_into.get(d.name.as_str()).map(|&s| ChainEntry::Stream(s)),
             };
             if let Some(entry) = new_entry {
                 let loop_start = (d.role == Role::Loop).then_some(0);
@@ -393,12 +484,20 @@ impl Graph {
         Ok(chains)
     }
 
+    /// The id of resource `counter` that start pass `p` is counted by.
+    fn counter_id(&self, p: &Pass, counter: &str) -> Result<ResourceId> {
+        self.resource_id(counter).ok_or_else(|| {
+            let message = format!("'{}' is counted by unknown resource '{counter}'", p.decl.name);
+            self.error_in_pass(p, counter, message)
+        })
+    }
+
     /// The phases of the chains: each start chain with the chains its streams reach.
     pub(crate) fn build_phases(&self) -> Result<Vec<Phase>> {
-        let consumer_chain = |stream: &str| -> Option<ChainId> {
+        let consumer_chain = |stream: StreamId| -> Option<ChainId> {
             self.chains
                 .iter()
-                .position(|c| c.entry == ChainEntry::Stream(stream.to_string()))
+                .position(|c| c.entry == ChainEntry::Stream(stream))
                 .map(ChainId)
         };
         let mut owner: BTreeMap<ChainId, usize> = BTreeMap::new();
@@ -413,10 +512,11 @@ impl Graph {
             let mut stack = vec![(c, vec![c])];
             while let Some((cur, path)) = stack.pop() {
                 for &p in &self.chains[cur].passes {
-                    for s in &self.passes[p].decl.emits {
+                    for &s in &self.passes[p].emits {
                         let Some(next) = consumer_chain(s) else {
                             continue;
                         };
+                        let s = &self.streams[s].name;
                         if path.contains(&next) {
                             return Err(self.error_at(
                                 s,
@@ -444,9 +544,10 @@ impl Graph {
             phases.push(Phase { chains: members });
         }
         for (c, chain) in self.chains.iter().enumerate() {
-            if let ChainEntry::Stream(s) = &chain.entry
+            if let ChainEntry::Stream(s) = chain.entry
                 && !phases.iter().any(|ph| ph.chains.contains(&ChainId(c)))
             {
+                let s = &self.streams[s].name;
                 return Err(self.error_at(s, format!("stream '{s}' is emitted by no pass")));
             }
         }
@@ -454,51 +555,51 @@ impl Graph {
     }
 }
 
-fn dependency_graph(
-    passes: &[Pass],
-    ops: &[Operator],
-    chains: &[Chain],
-    resources: &BTreeMap<String, ResourceDecl>,
-    streams: &BTreeMap<String, StreamDecl>,
-) -> (DiGraph<String, String>, BTreeMap<String, NodeIndex>) {
+/// The dependency graph of `g`'s live passes and operators (see [`Graph::dependency_graph`]),
+/// its nodes keyed by kind and name.
+fn dependency_graph(g: &Graph) -> (DiGraph<String, String>, BTreeMap<String, NodeIndex>) {
+    let (passes, chains) = (&g.passes, &g.chains);
     let mut dg: DiGraph<String, String> = DiGraph::new();
     let mut nodes = BTreeMap::new();
     let mut node = |dg: &mut DiGraph<String, String>, key: String| {
         let n = dg.add_node(key.clone());
         nodes.insert(key, n);
     };
-    for r in resources.keys() {
-        node(&mut dg, format!("resource:{r}"));
+    for r in &g.resources {
+        node(&mut dg, format!("resource:{}", r.name));
     }
     for p in passes {
         node(&mut dg, format!("pass:{}", p.decl.name));
     }
-    for o in ops {
+    for o in &g.ops {
         node(&mut dg, format!("op:{}", o.name));
     }
-    let reads_writes = |dg: &mut DiGraph<String, String>, n: NodeIndex, reads: Vec<&str>, writes: Vec<&str>| {
-        for r in writes {
-            dg.add_edge(n, nodes[&format!("resource:{r}")], "writes".into());
-        }
-        for r in reads {
-            dg.add_edge(nodes[&format!("resource:{r}")], n, "reads".into());
-        }
-    };
+    let resource = |r: &ResourceId| nodes[&format!("resource:{}", g.resources[*r].name)];
+    let reads_writes =
+        |dg: &mut DiGraph<String, String>, n: NodeIndex, reads: Vec<&ResourceId>, writes: Vec<&ResourceId>| {
+            for r in writes {
+                dg.add_edge(n, resource(r), "writes".into());
+            }
+            for r in reads {
+                dg.add_edge(resource(r), n, "reads".into());
+            }
+        };
     for p in passes {
         let d = &p.decl;
         let n = nodes[&format!("pass:{}", d.name)];
-        let mut reads: Vec<&str> = d.reads.iter().map(|s| s.as_str()).collect();
+        let mut reads: Vec<&ResourceId> = p.reads.iter().collect();
         if let Role::Start { counted: Some(c), .. } = &d.role {
-            reads.push(c);
+            reads.push(&g.resource_by_name[c]);
         }
-        reads_writes(&mut dg, n, reads, d.writes.iter().map(|s| s.as_str()).collect());
-        for s in &d.emits {
-            if let Some(to) = nodes.get(&format!("pass:{}", streams[s].to)) {
-                dg.add_edge(n, *to, format!("emits {s}"));
+        reads_writes(&mut dg, n, reads, p.writes.iter().collect());
+        for &s in &p.emits {
+            let s = &g.streams[s];
+            if let Some(to) = nodes.get(&format!("pass:{}", s.decl.to)) {
+                dg.add_edge(n, *to, format!("emits {}", s.name));
             }
         }
     }
-    for o in ops {
+    for o in &g.ops {
         reads_writes(&mut dg, nodes[&format!("op:{}", o.name)], o.reads(), o.writes());
     }
     for chain in chains {

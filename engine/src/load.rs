@@ -4,7 +4,7 @@
 
 use crate::error::{Error, Location, Result};
 use crate::expr::Expr;
-use crate::ids::{PassId, indexes};
+use crate::ids::{PassId, ResourceId, StreamId, indexes};
 use crate::ir::{CatalogFile, ConstValue, GraphFile, PassDecl, PassEntry, PerCall, ResourceDecl, Role, Scope};
 use crate::operator::{OpKind, Operator, is_u32_word, summed_type};
 use crate::vfs::Vfs;
@@ -86,16 +86,34 @@ impl Sources {
     }
 }
 
-/// A pass of a loaded graph, with the file it was declared in.
+/// A pass of a loaded graph, with the file it was declared in and the ids of the resources
+/// and streams its declaration names (interned where the graph is built, [`crate::Graph`]).
 #[derive(Debug, Clone)]
 pub struct Pass {
     /// The declaration.
     pub decl: PassDecl,
     /// The file (virtual path) that declares it: a catalog or the graph.
     pub origin: String,
+    /// The resources it reads (`decl.reads`, interned).
+    pub reads: Vec<ResourceId>,
+    /// The resources it writes (`decl.writes`, interned).
+    pub writes: Vec<ResourceId>,
+    /// The streams it emits into (`decl.emits`, interned).
+    pub emits: Vec<StreamId>,
 }
 
 impl Pass {
+    /// A pass declared by `decl` in `origin`, not interned yet.
+    fn new(decl: PassDecl, origin: &str) -> Pass {
+        Pass {
+            decl,
+            origin: origin.to_string(),
+            reads: Vec::new(),
+            writes: Vec::new(),
+            emits: Vec::new(),
+        }
+    }
+
     /// The WGSL function implementing the pass.
     pub fn function(&self) -> &str {
         self.decl.function.as_deref().unwrap_or(&self.decl.name)
@@ -359,7 +377,7 @@ fn graph_entries(
                     ),
                 )
             })?;
-            Ok(Pass { decl, origin })
+            Ok(Pass::new(decl, &origin))
         };
         let mut pass = match entry {
             PassEntry::Use(name) => catalog_pass(name)?,
@@ -391,10 +409,7 @@ fn graph_entries(
                 };
                 pass
             }
-            PassEntry::Pass(decl) => Pass {
-                decl: decl.clone(),
-                origin: file.to_string(),
-            },
+            PassEntry::Pass(decl) => Pass::new(decl.clone(), file),
             _ => unreachable!("operators are taken above"),
         };
         pass.decl.reads = pass.decl.listed_reads.clone().unwrap_or_default();

@@ -2,29 +2,30 @@
 //! the `Count` and `Scatter` steps of a counting sort, and `Sort` (a stable radix sort). Each runs over a whole buffer, so
 //! it is a barrier: it never shares a kernel with a pass, and it runs between the phases
 //! declared before and after it. Their kernels are written once in the engine
-//! ([`crate::collective`]).
+//! ([`crate::collective`]). A declared operator names its resources (`R = String`); the live
+//! graph's name them by [`ResourceId`], interned where the live graph is built.
 
 use crate::expr::Expr;
-use crate::ids::{OpId, indexes};
+use crate::ids::{OpId, ResourceId, indexes};
 use crate::ir::{ConstValue, PassEntry};
 
-/// Where a start pass or an operator runs.
+/// Where a start pass or an operator runs; `R` names resources (a name, or an id).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Domain {
+pub struct Domain<R = String> {
     /// The elements, or with `counted` the most there can be (evaluated on the host, per
     /// frame when it names parameters).
     pub over: Expr,
     /// A resource whose first `u32` holds the element count, read on the GPU.
-    pub counted: Option<String>,
+    pub counted: Option<R>,
 }
 
-/// What an operator does, with the buffers it touches.
+/// What an operator does, with the buffers it touches; `R` names resources (a name, or an id).
 #[derive(Debug, Clone, PartialEq)]
-pub enum OpKind {
+pub enum OpKind<R = String> {
     /// Fills elements `first .. first + over` of `buffer` with `value`.
     Clear {
         /// The buffer.
-        buffer: String,
+        buffer: R,
         /// The 32-bit word written.
         value: ConstValue,
         /// First element.
@@ -33,69 +34,114 @@ pub enum OpKind {
     /// `output[i] = input[0] + ... + input[i - 1]`, of `u32` words or of `f32`s.
     Scan {
         /// The summed elements.
-        input: String,
+        input: R,
         /// The sums, of the input's type (may be `input`).
-        output: String,
+        output: R,
     },
     /// `slots[i] = counts[keys[i]]++`.
     Count {
         /// Buckets.
-        keys: String,
+        keys: R,
         /// Bucket counters.
-        counts: String,
+        counts: R,
         /// Slots in the buckets.
-        slots: String,
+        slots: R,
     },
     /// `output[offsets[keys[i]] + slots[i]] = input[i]`, or `= i` without an input.
     Scatter {
         /// Buckets.
-        keys: String,
+        keys: R,
         /// Slots in the buckets.
-        slots: String,
+        slots: R,
         /// First place of each bucket.
-        offsets: String,
+        offsets: R,
         /// Elements; `None` moves each element's index.
-        input: Option<String>,
+        input: Option<R>,
         /// Sorted elements (or their indices).
-        output: String,
+        output: R,
     },
     /// `output[i] = input[indices[i]]`.
     Gather {
         /// Each element's place in `input`.
-        indices: String,
+        indices: R,
         /// Elements.
-        input: String,
+        input: R,
         /// The elements in the order of `indices`.
-        output: String,
+        output: R,
     },
     /// Stable ascending sort of `keys` by their low `bits` bits, `values` (if any) moved
     /// alongside.
     Sort {
         /// The `u32` keys, sorted in place.
-        keys: String,
+        keys: R,
         /// The `u32` values, if any.
-        values: Option<String>,
+        values: Option<R>,
         /// Low bits sorted by, 1 to 32.
         bits: u32,
     },
 }
 
-/// A collective operator of a graph.
+impl<R> OpKind<R> {
+    /// The kind with its resources named by `f` of their names here.
+    fn map<S>(&self, f: &impl Fn(&R) -> S) -> OpKind<S> {
+        match self {
+            OpKind::Clear { buffer, value, first } => OpKind::Clear {
+                buffer: f(buffer),
+                value: *value,
+                first: first.clone(),
+            },
+            OpKind::Scan { input, output } => OpKind::Scan {
+                input: f(input),
+                output: f(output),
+            },
+            OpKind::Count { keys, counts, slots } => OpKind::Count {
+                keys: f(keys),
+                counts: f(counts),
+                slots: f(slots),
+            },
+            OpKind::Scatter {
+                keys,
+                slots,
+                offsets,
+                input,
+                output,
+            } => OpKind::Scatter {
+                keys: f(keys),
+                slots: f(slots),
+                offsets: f(offsets),
+                input: input.as_ref().map(f),
+                output: f(output),
+            },
+            OpKind::Gather { indices, input, output } => OpKind::Gather {
+                indices: f(indices),
+                input: f(input),
+                output: f(output),
+            },
+            OpKind::Sort { keys, values, bits } => OpKind::Sort {
+                keys: f(keys),
+                values: values.as_ref().map(f),
+                bits: *bits,
+            },
+        }
+    }
+}
+
+/// A collective operator of a graph; `R` names resources (a name, or an id).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Operator {
+pub struct Operator<R = String> {
     /// Its name (unique among passes and operators).
     pub name: String,
     /// What it does.
-    pub kind: OpKind,
+    pub kind: OpKind<R>,
     /// Its elements; `None` for a `Clear` of the whole buffer.
-    pub domain: Option<Domain>,
+    pub domain: Option<Domain<R>>,
     /// Constant condition, as written; culled when it is 0.
     pub enabled: Option<String>,
     /// The file that declares it.
     pub origin: String,
 }
 
-indexes!(OpId => Operator);
+indexes!(OpId => Operator<ResourceId>);
 
 impl Operator {
     /// The operator of a graph entry, or `None` for a pass entry. An error gives the text
@@ -180,6 +226,23 @@ impl Operator {
             origin: origin.to_string(),
         })
     }
+}
+
+impl<R> Operator<R> {
+    /// The operator with its resources named by `f` of their names here (the live graph's
+    /// ids of a declared operator's names).
+    pub fn map<S>(&self, f: &impl Fn(&R) -> S) -> Operator<S> {
+        Operator {
+            name: self.name.clone(),
+            kind: self.kind.map(f),
+            domain: self.domain.as_ref().map(|d| Domain {
+                over: d.over.clone(),
+                counted: d.counted.as_ref().map(f),
+            }),
+            enabled: self.enabled.clone(),
+            origin: self.origin.clone(),
+        }
+    }
 
     /// What the operator is, in words.
     pub fn describe(&self) -> &'static str {
@@ -194,8 +257,8 @@ impl Operator {
     }
 
     /// Resources it reads (its GPU counter included).
-    pub fn reads(&self) -> Vec<&str> {
-        let mut out: Vec<&str> = match &self.kind {
+    pub fn reads(&self) -> Vec<&R> {
+        let mut out: Vec<&R> = match &self.kind {
             OpKind::Clear { .. } => vec![],
             OpKind::Scan { input, .. } => vec![input],
             OpKind::Count { keys, counts, .. } => vec![keys, counts],
@@ -205,36 +268,32 @@ impl Operator {
                 offsets,
                 input,
                 ..
-            } => [keys, slots, offsets]
-                .into_iter()
-                .chain(input)
-                .map(String::as_str)
-                .collect(),
+            } => [keys, slots, offsets].into_iter().chain(input).collect(),
             OpKind::Gather { indices, input, .. } => vec![indices, input],
-            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).map(String::as_str).collect(),
+            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).collect(),
         };
-        if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
+        if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_ref()) {
             out.push(c);
         }
         out
     }
 
     /// Resources it writes.
-    pub fn writes(&self) -> Vec<&str> {
+    pub fn writes(&self) -> Vec<&R> {
         match &self.kind {
             OpKind::Clear { buffer, .. } => vec![buffer],
             OpKind::Scan { output, .. } => vec![output],
             OpKind::Count { counts, slots, .. } => vec![counts, slots],
             OpKind::Scatter { output, .. } | OpKind::Gather { output, .. } => vec![output],
-            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).map(String::as_str).collect(),
+            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).collect(),
         }
     }
 
     /// Every resource it touches, with what its elements must be: `u32` words for keys,
     /// slots, counts and sorted values, `u32` words or `f32` for scans (input and output
     /// alike, which the load checks apart).
-    pub fn buffers(&self) -> Vec<(&str, Elements)> {
-        let mut out: Vec<(&str, Elements)> = match &self.kind {
+    pub fn buffers(&self) -> Vec<(&R, Elements)> {
+        let mut out: Vec<(&R, Elements)> = match &self.kind {
             OpKind::Clear { buffer, .. } => vec![(buffer, Elements::Any)],
             OpKind::Scan { input, output } => vec![(input, Elements::Summed), (output, Elements::Summed)],
             OpKind::Count { keys, counts, slots } => {
@@ -247,13 +306,9 @@ impl Operator {
                 input,
                 output,
             } => {
-                let mut out = vec![
-                    (keys.as_str(), Elements::U32),
-                    (slots, Elements::U32),
-                    (offsets, Elements::U32),
-                ];
+                let mut out = vec![(keys, Elements::U32), (slots, Elements::U32), (offsets, Elements::U32)];
                 match input {
-                    Some(input) => out.extend([(input.as_str(), Elements::Any), (output, Elements::Any)]),
+                    Some(input) => out.extend([(input, Elements::Any), (output, Elements::Any)]),
                     None => out.push((output, Elements::U32)),
                 }
                 out
@@ -265,13 +320,9 @@ impl Operator {
                     (output, Elements::Any),
                 ]
             }
-            OpKind::Sort { keys, values, .. } => [keys]
-                .into_iter()
-                .chain(values)
-                .map(|r| (r.as_str(), Elements::U32))
-                .collect(),
+            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).map(|r| (r, Elements::U32)).collect(),
         };
-        if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_deref()) {
+        if let Some(c) = self.domain.as_ref().and_then(|d| d.counted.as_ref()) {
             out.push((c, Elements::U32));
         }
         out

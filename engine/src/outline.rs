@@ -3,6 +3,7 @@
 //! (the host's, such as scene data, left out), before any layout decides kernels.
 
 use crate::graph::{Chain, ChainEntry, FrameStep, Graph};
+use crate::ids::ResourceId;
 use crate::ir::{Role, Scope};
 use std::fmt::Write;
 
@@ -30,7 +31,7 @@ pub fn outline(graph: &Graph) -> String {
                     format!("{}.", s + 1),
                     op.describe(),
                     op.name,
-                    access(graph, &op.reads(), &op.writes())
+                    access(graph, op.reads().into_iter(), op.writes().into_iter())
                 );
             }
         }
@@ -54,7 +55,12 @@ fn chain(graph: &Graph, chain: &Chain, lead: &str, out: &mut String) {
                 .map_or(String::new(), |c| format!(" (as many as '{c}' counts)"));
             format!("for each of {over} {}{counted}:", chain.item)
         }
-        (ChainEntry::Stream(stream), _) => format!("for each {} emitted into '{stream}':", chain.item),
+        (ChainEntry::Stream(stream), _) => {
+            format!(
+                "for each {} emitted into '{}':",
+                chain.item, graph.streams[*stream].name
+            )
+        }
         (ChainEntry::Start(_), _) => format!("for each {}:", chain.item),
     };
     let _ = writeln!(out, "{lead:>3} {head}");
@@ -83,20 +89,23 @@ fn pass(graph: &Graph, p: crate::ids::PassId, depth: usize, out: &mut String) {
         d.name,
         pass.function(),
         d.source,
-        access(graph, &d.reads, &d.writes)
+        access(graph, pass.reads.iter(), pass.writes.iter())
     );
 }
 
 /// What a step reads and writes of the graph's own resources, as " < a, b > c".
-fn access<S: AsRef<str>>(graph: &Graph, reads: &[S], writes: &[S]) -> String {
-    let own = |list: &[S]| -> Vec<String> {
-        list.iter()
-            .map(|r| r.as_ref())
-            .filter(|r| graph.resources.get(*r).is_none_or(|d| d.scope != Scope::External))
-            .map(str::to_string)
+fn access<'a>(
+    graph: &Graph,
+    reads: impl Iterator<Item = &'a ResourceId>,
+    writes: impl Iterator<Item = &'a ResourceId>,
+) -> String {
+    let own = |list: &mut dyn Iterator<Item = &'a ResourceId>| -> Vec<&str> {
+        list.map(|&r| &graph.resources[r])
+            .filter(|r| r.decl.scope != Scope::External)
+            .map(|r| r.name.as_str())
             .collect()
     };
-    let (r, w) = (own(reads), own(writes));
+    let (r, w) = (own(&mut { reads }), own(&mut { writes }));
     let mut s = String::new();
     if !r.is_empty() {
         let _ = write!(s, "  < {}", r.join(", "));

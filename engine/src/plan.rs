@@ -4,7 +4,7 @@
 use crate::error::Result;
 use crate::expr::Expr;
 use crate::graph::{ChainEntry, Graph};
-use crate::ids::{BoundaryId, ChainId, KernelId, PassId, PhaseId, indexes};
+use crate::ids::{BoundaryId, ChainId, KernelId, PassId, PhaseId, StreamId, indexes};
 use crate::ir::{LayoutDecl, LoopMode, Policy, Role};
 use std::collections::{BTreeMap, BTreeSet};
 use std::ops::Range;
@@ -15,7 +15,7 @@ pub enum Root {
     /// A start pass: one invocation per index of the current chunk.
     Start,
     /// A stream's queue: one invocation per queued item, dispatched indirectly.
-    Queue(String),
+    Queue(StreamId),
     /// The chain's state buffer: one invocation per slot, items stored by an earlier kernel.
     State,
     /// A compaction boundary: one invocation per item queued there, dispatched indirectly.
@@ -86,7 +86,7 @@ pub enum Step {
     /// Run a kernel over the chunk's items or slots.
     Run(KernelId),
     /// Run the consumer kernel of a queued stream over its queue, then empty the queue.
-    Drain(String),
+    Drain(StreamId),
     /// Repeat the body while items of the chain are alive.
     Loop {
         /// The chain whose items are counted.
@@ -112,7 +112,7 @@ pub struct Plan {
     /// Chains whose items are stored in state buffers between kernels.
     pub stored_chains: BTreeSet<ChainId>,
     /// Streams carried by queues (their consumers run in kernels of their own).
-    pub queued_streams: BTreeSet<String>,
+    pub queued_streams: BTreeSet<StreamId>,
     /// Compaction boundaries.
     pub boundaries: Vec<Boundary>,
 }
@@ -161,15 +161,9 @@ impl Plan {
         }
         let boundaries = apply_policy(graph, layout_name, &layout, &mut kernels)?;
         // Queue-fed chains need a kernel of their own.
-        let queued_streams: BTreeSet<String> = kernels
+        let queued_streams: BTreeSet<StreamId> = kernels
             .iter()
-            .filter_map(|k| {
-                if let Root::Queue(s) = &k.root {
-                    Some(s.clone())
-                } else {
-                    None
-                }
-            })
+            .filter_map(|k| if let Root::Queue(s) = k.root { Some(s) } else { None })
             .collect();
         // Chains kept in slots between dispatches: split under Naive or Regeneration, or one
         // regenerating kernel that runs one loop iteration per dispatch.
@@ -209,12 +203,12 @@ impl Plan {
     }
 
     /// Streams emitted by the passes of kernel `k` that travel through queues.
-    pub fn queued_emits(&self, k: KernelId) -> Vec<String> {
-        let mut out: Vec<String> = Vec::new();
+    pub fn queued_emits(&self, k: KernelId) -> Vec<StreamId> {
+        let mut out: Vec<StreamId> = Vec::new();
         for p in self.kernel_passes(k) {
-            for s in &self.graph.passes[p].decl.emits {
+            for s in &self.graph.passes[p].emits {
                 if self.queued_streams.contains(s) && !out.contains(s) {
-                    out.push(s.clone());
+                    out.push(*s);
                 }
             }
         }
@@ -222,11 +216,11 @@ impl Plan {
     }
 
     /// The kernel consuming the queue of `stream`.
-    pub fn consumer_kernel(&self, stream: &str) -> KernelId {
+    pub fn consumer_kernel(&self, stream: StreamId) -> KernelId {
         KernelId(
             self.kernels
                 .iter()
-                .position(|k| k.root == Root::Queue(stream.to_string()))
+                .position(|k| k.root == Root::Queue(stream))
                 .expect("queued streams have a consumer kernel"),
         )
     }
@@ -245,16 +239,18 @@ impl Plan {
             let chain = &self.graph.chains[kp.chain];
             let Some(ls) = chain.loop_start else { continue };
             for &p in &chain.passes[ls.max(kp.segment.start)..kp.segment.end] {
-                for s in &self.graph.passes[p].decl.emits {
+                for s in &self.graph.passes[p].emits {
                     if self.queued_streams.contains(s) {
                         let pass = &self.graph.passes[p].decl.name;
+                        let s = &self.graph.streams[*s];
                         return Err(self.graph.error_in_layout(
                             layout_name,
                             pass,
                             format!(
                                 "layout '{layout_name}': loop pass '{pass}' emits '{s}' inside the loop of kernel {}, so the queue of '{s}' \
                                  would have no bound; fuse its consumer '{}' into that kernel or use loops: Host",
-                                self.kernels[k].name, self.graph.streams[s].to
+                                self.kernels[k].name, s.decl.to,
+                                s = s.name
                             ),
                         ));
                     }
@@ -300,8 +296,8 @@ impl Plan {
     fn drains_after(&self, k: KernelId) -> Vec<Step> {
         let mut out = Vec::new();
         for s in self.queued_emits(k) {
-            out.push(Step::Drain(s.clone()));
-            out.extend(self.drains_after(self.consumer_kernel(&s)));
+            out.push(Step::Drain(s));
+            out.extend(self.drains_after(self.consumer_kernel(s)));
         }
         out
     }
@@ -331,7 +327,7 @@ fn disabled_by_default(graph: &Graph, layout: &LayoutDecl, p: usize) -> bool {
 fn placed_kernels(graph: &Graph, layout: &LayoutDecl) -> Vec<Vec<String>> {
     let declared = &graph.declared.passes;
     let order = |name: &str| declared.iter().position(|p| p.decl.name == name).unwrap_or(usize::MAX);
-    let consumers: BTreeSet<&str> = graph.streams.values().map(|s| s.to.as_str()).collect();
+    let consumers: BTreeSet<&str> = graph.streams.iter().map(|s| s.decl.to.as_str()).collect();
     let entry = |q: usize| {
         matches!(declared[q].decl.role, Role::Start { .. }) || consumers.contains(declared[q].decl.name.as_str())
     };
@@ -550,8 +546,9 @@ impl KernelCheck<'_> {
                 ChainEntry::Stream(s) => {
                     let producers: Vec<PassId> = (0..graph.passes.len())
                         .map(PassId)
-                        .filter(|&p| graph.passes[p].decl.emits.contains(s))
+                        .filter(|&p| graph.passes[p].emits.contains(s))
                         .collect();
+                    let s = &graph.streams[*s].name;
                     let inside = producers.iter().filter(|&&p| in_group(p)).count();
                     if inside > 0 && inside < producers.len() {
                         return Err(graph.error_in_layout(self.layout_name, s, format!("{describe}: stream '{s}' has producers inside and outside this kernel; its consumer must run in a kernel of its own")));
@@ -596,12 +593,13 @@ impl KernelCheck<'_> {
         } else {
             match &chain.entry {
                 ChainEntry::Start(_) => Root::Start,
-                ChainEntry::Stream(s) => Root::Queue(s.clone()),
+                ChainEntry::Stream(s) => Root::Queue(*s),
             }
         };
-        if let Root::Queue(s) = &root
+        if let Root::Queue(s) = root
             && segment.len() != chain.passes.len()
         {
+            let s = &self.graph.streams[s].name;
             return Err(self.graph.error_in_layout(
                 self.layout_name,
                 s,

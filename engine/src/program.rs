@@ -10,7 +10,7 @@ use crate::collective::op_kernels;
 use crate::derive;
 use crate::error::{Error, Result};
 use crate::graph::Graph;
-use crate::ids::{OpId, PhaseId};
+use crate::ids::{OpId, PhaseId, StreamId};
 use crate::internal::{ArgsKernel, CommitKernel, DomainKernel, fold_kernel, roll_kernel, zero_kernel};
 use crate::ir::{ConstValue, LayoutDecl};
 use crate::limits::Target;
@@ -86,7 +86,7 @@ pub struct Program {
     /// Pass kernels, in plan order.
     pub kernels: Vec<KernelModule>,
     /// Argument kernels of queued streams, by stream.
-    pub args: BTreeMap<String, KernelModule>,
+    pub args: BTreeMap<StreamId, KernelModule>,
     /// Commit kernels of each boundary: resetting and adding.
     pub commits: Vec<[KernelModule; 2]>,
     /// Kernels that zero a control word (or move it to the word a regeneration gate reads),
@@ -259,23 +259,23 @@ impl Internal<'_> {
         (self.resolved.queue_capacity.len() + b) as u32
     }
 
-    fn args(&self) -> Result<BTreeMap<String, KernelModule>> {
+    fn args(&self) -> Result<BTreeMap<StreamId, KernelModule>> {
         let mut out = BTreeMap::new();
-        for (i, q) in self.plan.queued_streams.iter().enumerate() {
-            let name = format!("lg_args_{q}");
+        for (i, &q) in self.plan.queued_streams.iter().enumerate() {
+            let name = format!("lg_args_{}", self.plan.graph.streams[q].name);
             let wgsl = ArgsKernel {
                 name: &name,
                 control_binding: self.binding(&BufferRef::Control),
                 args_binding: self.binding(&BufferRef::Args),
-                count_word: self.resolved.control.queue_count[q],
-                append_word: self.resolved.control.queue_append[q],
-                capacity: self.resolved.queue_capacity[q],
+                count_word: self.resolved.control.queue_count[&q],
+                append_word: self.resolved.control.queue_append[&q],
+                capacity: self.resolved.queue_capacity[&q],
                 args_offset: 3 * i as u32,
                 workgroup: self.plan.layout.workgroup_size,
                 max_groups: self.target.max_workgroups_per_dimension,
             }
             .wgsl();
-            out.insert(q.clone(), self.compile(&name, &wgsl)?);
+            out.insert(q, self.compile(&name, &wgsl)?);
         }
         Ok(out)
     }
@@ -330,11 +330,7 @@ impl Internal<'_> {
         let first_slot = self.resolved.queue_capacity.len() + self.plan.boundaries.len();
         let mut out = BTreeMap::new();
         for (i, (&ph, &word)) in self.resolved.control.domain.iter().enumerate() {
-            let counter = g
-                .phase_domain(ph)
-                .counted
-                .clone()
-                .expect("counted phases have a counter");
+            let counter = g.phase_domain(ph).counted.expect("counted phases have a counter");
             let name = format!("lg_domain_{ph}");
             let wgsl = DomainKernel {
                 name: &name,

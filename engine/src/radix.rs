@@ -13,7 +13,7 @@
 mod ballots;
 mod counts;
 
-use crate::ids::OpId;
+use crate::ids::{OpId, ResourceId};
 use crate::limits::WORKGROUP;
 use crate::resolve::{BufferRef, Resolved};
 use crate::scan::{Groups, Module, OpKernel, Scan, element_entry};
@@ -21,17 +21,17 @@ use crate::scratch::{HISTOGRAMS, KEYS, PARTIALS, SortShape, VALUES};
 use std::fmt::Write;
 
 /// A sort to generate.
-pub(crate) struct Sort<'a> {
+pub(crate) struct Sort {
     /// The operator.
     pub o: OpId,
     /// Its keys.
-    pub keys: &'a str,
+    pub keys: ResourceId,
     /// Its values, if any.
-    pub values: Option<&'a str>,
+    pub values: Option<ResourceId>,
     /// Low bits sorted by.
     pub bits: u32,
     /// The resource counting its elements on the GPU.
-    pub counted: Option<&'a str>,
+    pub counted: Option<ResourceId>,
     /// Whether to use subgroup operations.
     pub subgroups: bool,
     /// Elements per thread of the histogram scans.
@@ -46,15 +46,12 @@ pub(crate) struct Sort<'a> {
 /// One side of the ping-pong: keys, and values when the sort has them.
 type Side = (BufferRef, Option<BufferRef>);
 
-impl Sort<'_> {
+impl Sort {
     /// The kernels: per pass, the digit histograms, their scan and the scatter; then the copy
     /// back when the last pass wrote the scratch.
     pub fn kernels(&self, prefix: &str, resolved: &Resolved) -> Vec<OpKernel> {
         let levels = resolved.op_scratch[&self.o].len() - PARTIALS;
-        let operand: Side = (
-            BufferRef::Resource(self.keys.to_string()),
-            self.values.map(|v| BufferRef::Resource(v.to_string())),
-        );
+        let operand: Side = (BufferRef::Resource(self.keys), self.values.map(BufferRef::Resource));
         let scratch: Side = (
             BufferRef::Scratch(self.o, KEYS),
             self.values.map(|_| BufferRef::Scratch(self.o, VALUES)),
@@ -95,7 +92,7 @@ impl Sort<'_> {
     }
 
     /// The exclusive scan of the histograms, in place, with `levels` of partial sums.
-    fn scan(&self, levels: usize) -> Scan<'_> {
+    fn scan(&self, levels: usize) -> Scan {
         let histograms = BufferRef::Scratch(self.o, HISTOGRAMS);
         let (tile, radix) = (self.shape.tile(), self.shape.radix());
         Scan {

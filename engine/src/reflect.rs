@@ -229,16 +229,16 @@ fn check_passes(plan: &Plan, module: &naga::Module, info: &naga::valid::ModuleIn
                     d.source, d.name, p.origin
                 )));
             }
-            if !g.resources.contains_key(name) {
+            let Some(r) = g.resource_id(name) else {
                 continue;
-            }
-            if uses.contains(naga::valid::GlobalUse::WRITE) && !d.writes.iter().any(|w| w == name) {
+            };
+            if uses.contains(naga::valid::GlobalUse::WRITE) && !p.writes.contains(&r) {
                 return Err(Error::Shader(format!(
                     "{}: pass '{}' writes resource '{name}' but does not declare it in `writes` ({})",
                     d.source, d.name, p.origin
                 )));
             }
-            if !uses.is_empty() && !d.reads.iter().chain(d.writes.iter()).any(|w| w == name) {
+            if !uses.is_empty() && !p.reads.iter().chain(&p.writes).any(|&w| w == r) {
                 return Err(Error::Shader(format!(
                     "{}: pass '{}' reads resource '{name}' but does not declare it in `reads` ({})",
                     d.source, d.name, p.origin
@@ -249,8 +249,9 @@ fn check_passes(plan: &Plan, module: &naga::Module, info: &naga::valid::ModuleIn
             .iter()
             .filter_map(|&c| module.functions[c].name.clone())
             .collect();
-        for s in g.streams.keys() {
-            if called.contains(&format!("emit_{s}")) && !d.emits.contains(s) {
+        for id in g.stream_ids() {
+            let s = &g.streams[id].name;
+            if called.contains(&format!("emit_{s}")) && !p.emits.contains(&id) {
                 return Err(Error::Shader(format!(
                     "{}: pass '{}' calls emit_{s} but does not declare `emits: [\"{s}\"]` ({})",
                     d.source, d.name, p.origin

@@ -6,7 +6,7 @@ use crate::access::Access;
 use crate::error::Result;
 use crate::expr::Expr;
 use crate::graph::{ChainEntry, FrameStep};
-use crate::ids::{BoundaryId, ChainId, KernelId, OpId, PhaseId};
+use crate::ids::{BoundaryId, ChainId, KernelId, OpId, PhaseId, ResourceId, StreamId, indexes};
 use crate::ir::{ConstValue, PerCall, Scope};
 use crate::limits::{Target, WORKGROUP};
 use crate::memory::{Lifetime, MemoryPlan, Request};
@@ -42,13 +42,13 @@ pub enum BufferRef {
     /// Indirect dispatch arguments.
     Args,
     /// A graph resource.
-    Resource(String),
+    Resource(ResourceId),
     /// The state buffer of a stored chain.
     State(ChainId),
     /// The alive flags of a stored chain.
     Alive(ChainId),
     /// The queue of a stream.
-    Queue(String),
+    Queue(StreamId),
     /// The compaction boundary a kernel reads (bound to one of the physical buffers).
     BoundaryIn,
     /// The compaction boundary a kernel appends to.
@@ -65,10 +65,10 @@ impl BufferRef {
     pub fn describe(&self, plan: &Plan) -> String {
         let g = &plan.graph;
         match self {
-            BufferRef::Resource(r) => r.clone(),
+            BufferRef::Resource(r) => g.resources[*r].name.clone(),
             BufferRef::State(c) => format!("state of {} (chain {c})", g.chains[*c].item),
             BufferRef::Alive(c) => format!("alive flags of {} (chain {c})", g.chains[*c].item),
-            BufferRef::Queue(q) => format!("queue '{q}'"),
+            BufferRef::Queue(q) => format!("queue '{}'", g.streams[*q].name),
             BufferRef::Boundary(b, side) => {
                 format!("boundary {b}.{side} of {}", g.chains[plan.boundaries[*b].chain].item)
             }
@@ -82,11 +82,11 @@ impl BufferRef {
 #[derive(Debug, Clone, Default)]
 pub struct ControlMap {
     /// Items in a stream's queue.
-    pub queue_count: BTreeMap<String, u32>,
+    pub queue_count: BTreeMap<StreamId, u32>,
     /// Items emitted into a stream's queue since its last commit.
-    pub queue_append: BTreeMap<String, u32>,
+    pub queue_append: BTreeMap<StreamId, u32>,
     /// Items a stream's queue had no room for.
-    pub queue_overflow: BTreeMap<String, u32>,
+    pub queue_overflow: BTreeMap<StreamId, u32>,
     /// Items of a stored chain alive after the last loop iteration.
     pub alive: BTreeMap<ChainId, u32>,
     /// The next item index of a regenerating chain.
@@ -117,13 +117,15 @@ pub struct ResourceSize {
     pub count: Option<u64>,
 }
 
+indexes!(ResourceId => ResourceSize);
+
 /// The items a phase runs over.
 #[derive(Debug, Clone)]
 pub struct PhaseDomain {
     /// Count expression (per frame when it names parameters), or with `counted` the most.
     pub over: Expr,
     /// The resource counting the items on the GPU.
-    pub counted: Option<String>,
+    pub counted: Option<ResourceId>,
     /// `over` with the default parameters (what buffers are sized for).
     pub default: u64,
     /// Most items per chunk.
@@ -138,10 +140,10 @@ pub struct Resolved {
     pub constants: BTreeMap<String, ConstValue>,
     /// Parameters with their defaults, in frame-record order.
     pub parameters: Vec<(String, ConstValue)>,
-    /// Resource sizes.
-    pub sizes: BTreeMap<String, ResourceSize>,
+    /// Resource sizes, by id.
+    pub sizes: Vec<ResourceSize>,
     /// Resources some live pass or operator touches, and the outputs: the ones allocated.
-    pub used: BTreeSet<String>,
+    pub used: BTreeSet<ResourceId>,
     /// Words per item of stored chains and queued streams, by item type.
     pub words: BTreeMap<String, Vec<Word>>,
     /// Words of its item each pass of a stored chain may read and write, by pass function.
@@ -153,7 +155,7 @@ pub struct Resolved {
     /// Slots of stored chains.
     pub state_capacity: BTreeMap<ChainId, u64>,
     /// Capacity of queues.
-    pub queue_capacity: BTreeMap<String, u64>,
+    pub queue_capacity: BTreeMap<StreamId, u64>,
     /// Elements of each operator with the default parameters (the most a counted one runs).
     pub op_elements: BTreeMap<OpId, u64>,
     /// Words of each operator's scratch buffers, by index of [`BufferRef::Scratch`].
@@ -167,7 +169,7 @@ pub struct Resolved {
     /// Memory of every engine-allocated buffer, and the lifetimes of the transient ones.
     pub memory: MemoryPlan<BufferRef>,
     /// Transient resources set to zero before each frame step, by step.
-    pub clears: BTreeMap<usize, Vec<String>>,
+    pub clears: BTreeMap<usize, Vec<ResourceId>>,
     /// The most loop iterations an item of a chain runs, where the graph bounds them.
     pub loop_bounds: BTreeMap<ChainId, u32>,
 }
@@ -181,11 +183,11 @@ fn bindings(plan: &Plan) -> BTreeMap<BufferRef, u32> {
         BufferRef::Totals,
         BufferRef::Args,
     ];
-    refs.extend(g.resources.keys().map(|r| BufferRef::Resource(r.clone())));
+    refs.extend(g.resource_ids().map(BufferRef::Resource));
     for &c in &plan.stored_chains {
         refs.extend([BufferRef::State(c), BufferRef::Alive(c)]);
     }
-    refs.extend(plan.queued_streams.iter().map(|q| BufferRef::Queue(q.clone())));
+    refs.extend(plan.queued_streams.iter().map(|&q| BufferRef::Queue(q)));
     if !plan.boundaries.is_empty() {
         refs.extend([BufferRef::BoundaryIn, BufferRef::BoundaryOut]);
     }
@@ -201,10 +203,10 @@ fn control_map(plan: &Plan) -> ControlMap {
         next += 1;
         next - 1
     };
-    for q in &plan.queued_streams {
-        control.queue_count.insert(q.clone(), word());
-        control.queue_append.insert(q.clone(), word());
-        control.queue_overflow.insert(q.clone(), word());
+    for &q in &plan.queued_streams {
+        control.queue_count.insert(q, word());
+        control.queue_append.insert(q, word());
+        control.queue_overflow.insert(q, word());
     }
     for &c in &plan.stored_chains {
         control.alive.insert(c, word());
@@ -250,7 +252,7 @@ impl Resolved {
         Resolved {
             constants: plan.graph.constants.clone(),
             parameters: plan.graph.parameters.iter().map(|(k, v)| (k.clone(), *v)).collect(),
-            sizes: BTreeMap::new(),
+            sizes: Vec::new(),
             used: BTreeSet::new(),
             words: BTreeMap::new(),
             access: BTreeMap::new(),
@@ -325,9 +327,9 @@ impl Resolved {
             {
                 per_item_bytes = 4 * w.len() as u64;
             }
-            for (q, f) in &fanout {
+            for (&q, f) in &fanout {
                 if g.phase_of_chain(plan.kernels[plan.consumer_kernel(q)].chain) == ph {
-                    per_item_bytes = per_item_bytes.max(4 * self.words[&g.streams[q].item].len() as u64 * f);
+                    per_item_bytes = per_item_bytes.max(4 * self.words[&g.streams[q].decl.item].len() as u64 * f);
                 }
             }
             // A boundary buffer holds BOUNDARY_HEADER bytes before its items.
@@ -350,7 +352,7 @@ impl Resolved {
             };
             self.domains.push(PhaseDomain {
                 over: domain.over.clone(),
-                counted: domain.counted.clone(),
+                counted: domain.counted,
                 default,
                 chunk,
             });
@@ -364,9 +366,9 @@ impl Resolved {
         self.state_capacity = plan.stored_chains.iter().map(|&c| (c, slots(c, self))).collect();
         self.queue_capacity = fanout
             .iter()
-            .map(|(q, f)| {
+            .map(|(&q, f)| {
                 let ph = g.phase_of_chain(plan.kernels[plan.consumer_kernel(q)].chain);
-                (q.clone(), f * slots(g.phases[ph].chains[0], self))
+                (q, f * slots(g.phases[ph].chains[0], self))
             })
             .collect();
         Ok(())
@@ -383,7 +385,7 @@ impl Resolved {
                     .over
                     .count(vars)
                     .map_err(|e| g.error_at(&op.name, format!("operator '{}': {e}", op.name)))?,
-                (None, OpKind::Clear { buffer, .. }) => self.elements(buffer),
+                (None, OpKind::Clear { buffer, .. }) => self.elements(*buffer),
                 (None, _) => unreachable!("only Clear may omit its domain"),
             };
             self.check_operator_fits(plan, o, n, vars)?;
@@ -396,40 +398,41 @@ impl Resolved {
     }
 
     /// Elements of a resource (external ones: unknown until the host supplies them, so 0).
-    fn elements(&self, name: &str) -> u64 {
-        self.sizes[name].count.unwrap_or(0)
+    fn elements(&self, r: ResourceId) -> u64 {
+        self.sizes[r].count.unwrap_or(0)
     }
 
     /// An operator's elements must fit the buffers it reads and writes per element.
     fn check_operator_fits(&self, plan: &Plan, o: OpId, n: u64, vars: &BTreeMap<String, f64>) -> Result<()> {
         let g = &plan.graph;
         let op = &g.ops[o];
-        let per_element: Vec<&str> = match &op.kind {
+        let per_element: Vec<&ResourceId> = match &op.kind {
             OpKind::Clear { buffer, first, value } => {
+                let (buffer, name) = (*buffer, &g.resources[*buffer].name);
                 let first = match first {
                     Some(e) => e
                         .count(vars)
                         .map_err(|e| g.error_at(&op.name, format!("operator '{}': first: {e}", op.name)))?,
                     None => 0,
                 };
-                if first + n > self.elements(buffer) && self.sizes[buffer.as_str()].count.is_some() {
+                if first + n > self.elements(buffer) && self.sizes[buffer].count.is_some() {
                     return Err(g.error_at(
                         &op.name,
                         format!(
-                            "operator '{}' clears elements {first}..{} of '{buffer}', which has {}",
+                            "operator '{}' clears elements {first}..{} of '{name}', which has {}",
                             op.name,
                             first + n,
                             self.elements(buffer)
                         ),
                     ));
                 }
-                if value.bits() != 0 && self.sizes[buffer.as_str()].element_bytes != 4 {
+                if value.bits() != 0 && self.sizes[buffer].element_bytes != 4 {
                     return Err(g.error_at(
                         &op.name,
                         format!(
-                            "operator '{}' fills '{buffer}' with a non-zero word, but its elements are {} bytes; only 4-byte elements can be filled with a value",
+                            "operator '{}' fills '{name}' with a non-zero word, but its elements are {} bytes; only 4-byte elements can be filled with a value",
                             op.name,
-                            self.sizes[buffer.as_str()].element_bytes
+                            self.sizes[buffer].element_bytes
                         ),
                     ));
                 }
@@ -437,15 +440,14 @@ impl Resolved {
             }
             OpKind::Scan { input, output } => vec![input, output],
             OpKind::Count { keys, slots, .. } => vec![keys, slots],
-            OpKind::Scatter { keys, slots, input, .. } => {
-                [keys, slots].into_iter().chain(input).map(String::as_str).collect()
-            }
+            OpKind::Scatter { keys, slots, input, .. } => [keys, slots].into_iter().chain(input).collect(),
             OpKind::Gather { indices, output, .. } => vec![indices, output],
-            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).map(String::as_str).collect(),
+            OpKind::Sort { keys, values, .. } => [keys].into_iter().chain(values).collect(),
         };
-        for b in per_element {
+        for &b in per_element {
             let have = self.elements(b);
             if self.sizes[b].count.is_some() && have < n {
+                let b = &g.resources[b].name;
                 return Err(g.error_at(
                     &op.name,
                     format!("operator '{}' runs over {n} elements but '{b}' holds {have}", op.name),
@@ -470,19 +472,18 @@ impl Resolved {
             let s = g.step_of_phase(ph);
             Some(Lifetime { first: s, last: s })
         };
-        for (name, r) in &g.resources {
-            if r.scope == Scope::External || !self.used.contains(name) {
+        for r in g.resource_ids() {
+            let scope = g.resources[r].decl.scope;
+            if scope == Scope::External || !self.used.contains(&r) {
                 continue;
             }
-            let size = &self.sizes[name];
+            let size = &self.sizes[r];
             let bytes = size.element_bytes as u64 * size.count.unwrap_or(1).max(1);
-            let lifetime = match r.scope {
-                Scope::Transient => {
-                    lifetime_of(&mut (0..g.steps.len()).filter(|&s| g.step_resources(s).contains(name)))
-                }
+            let lifetime = match scope {
+                Scope::Transient => lifetime_of(&mut (0..g.steps.len()).filter(|&s| g.step_resources(s).contains(&r))),
                 _ => None,
             };
-            out.insert(BufferRef::Resource(name.clone()), Request { bytes, lifetime });
+            out.insert(BufferRef::Resource(r), Request { bytes, lifetime });
         }
         for (&c, &cap) in &self.state_capacity {
             let life = phase_life(g.phase_of_chain(c));
@@ -502,12 +503,12 @@ impl Resolved {
                 },
             );
         }
-        for (q, &cap) in &self.queue_capacity {
+        for (&q, &cap) in &self.queue_capacity {
             let c = plan.kernels[plan.consumer_kernel(q)].chain;
             out.insert(
-                BufferRef::Queue(q.clone()),
+                BufferRef::Queue(q),
                 Request {
-                    bytes: 4 * self.words[&g.streams[q].item].len() as u64 * cap,
+                    bytes: 4 * self.words[&g.streams[q].decl.item].len() as u64 * cap,
                     lifetime: phase_life(g.phase_of_chain(c)),
                 },
             );
@@ -556,7 +557,9 @@ impl Resolved {
                 );
                 let g = &plan.graph;
                 return Err(match b {
-                    BufferRef::Resource(name) => g.error_at_decl(name, format!("{message}; make its count smaller")),
+                    BufferRef::Resource(r) => {
+                        g.error_at_decl(&g.resources[*r].name, format!("{message}; make its count smaller"))
+                    }
                     _ => g.error_in_layout(
                         &plan.layout_name,
                         &plan.layout_name,
@@ -577,14 +580,12 @@ impl Resolved {
     }
 
     /// Transient resources declared `clear: true`, by the step that first uses them.
-    fn transient_clears(&self, plan: &Plan) -> BTreeMap<usize, Vec<String>> {
-        let mut out: BTreeMap<usize, Vec<String>> = BTreeMap::new();
-        for (name, r) in &plan.graph.resources {
-            if !r.clear {
-                continue;
-            }
-            if let Some(life) = self.memory.lifetimes.get(&BufferRef::Resource(name.clone())) {
-                out.entry(life.first).or_default().push(name.clone());
+    fn transient_clears(&self, plan: &Plan) -> BTreeMap<usize, Vec<ResourceId>> {
+        let g = &plan.graph;
+        let mut out: BTreeMap<usize, Vec<ResourceId>> = BTreeMap::new();
+        for r in g.resource_ids().filter(|&r| g.resources[r].decl.clear) {
+            if let Some(life) = self.memory.lifetimes.get(&BufferRef::Resource(r)) {
+                out.entry(life.first).or_default().push(r);
             }
         }
         out
@@ -601,24 +602,20 @@ impl Resolved {
 }
 
 /// Resources the live passes and operators touch, and the outputs.
-fn used_resources(plan: &Plan) -> BTreeSet<String> {
+fn used_resources(plan: &Plan) -> BTreeSet<ResourceId> {
     let g = &plan.graph;
-    let mut used: BTreeSet<String> = g.outputs.iter().cloned().collect();
+    let mut used: BTreeSet<ResourceId> = g.outputs.iter().filter_map(|o| g.resource_id(o)).collect();
     for s in 0..g.steps.len() {
         used.extend(g.step_resources(s));
     }
     used
 }
 
-/// Element size and count of every resource.
-fn resource_sizes(
-    plan: &Plan,
-    reflection: &naga::Module,
-    vars: &BTreeMap<String, f64>,
-) -> Result<BTreeMap<String, ResourceSize>> {
+/// Element size and count of every resource, by id.
+fn resource_sizes(plan: &Plan, reflection: &naga::Module, vars: &BTreeMap<String, f64>) -> Result<Vec<ResourceSize>> {
     let g = &plan.graph;
-    let mut sizes = BTreeMap::new();
-    for (name, r) in &g.resources {
+    let mut sizes = Vec::new();
+    for crate::graph::Resource { name, decl: r } in &g.resources {
         let element_bytes = reflect::element_size(reflection, name)
             .ok_or_else(|| g.error_at_decl(name, format!("resource '{name}': cannot lay out type '{}'", r.ty)))?;
         let count = match (&r.count, r.scope) {
@@ -630,7 +627,7 @@ fn resource_sizes(
             ),
             (None, _) => Some(1),
         };
-        sizes.insert(name.clone(), ResourceSize { element_bytes, count });
+        sizes.push(ResourceSize { element_bytes, count });
     }
     Ok(sizes)
 }
@@ -644,7 +641,7 @@ fn item_words(plan: &Plan, reflection: &naga::Module) -> Result<BTreeMap<String,
         .iter()
         .chain(plan.boundaries.iter().map(|b| &b.chain))
         .map(|&c| &g.chains[c].item);
-    for item in pooled_items.chain(plan.queued_streams.iter().map(|q| &g.streams[q].item)) {
+    for item in pooled_items.chain(plan.queued_streams.iter().map(|&q| &g.streams[q].decl.item)) {
         words.insert(
             item.clone(),
             reflect::flatten(reflection, item).map_err(|e| g.error_at(item, e))?,
@@ -699,10 +696,11 @@ fn pass_access(
 }
 
 /// Each stream's per_call, evaluated with the constants.
-fn stream_per_call(plan: &Plan, vars: &BTreeMap<String, f64>) -> Result<BTreeMap<String, u64>> {
+fn stream_per_call(plan: &Plan, vars: &BTreeMap<String, f64>) -> Result<BTreeMap<StreamId, u64>> {
     let g = &plan.graph;
     let mut per_call = BTreeMap::new();
-    for (name, s) in &g.streams {
+    for id in g.stream_ids() {
+        let (name, s) = (&g.streams[id].name, &g.streams[id].decl);
         let n = match &s.per_call {
             PerCall::Number(n) => *n as u64,
             PerCall::Expr(e) => Expr::parse(e)
@@ -712,14 +710,14 @@ fn stream_per_call(plan: &Plan, vars: &BTreeMap<String, f64>) -> Result<BTreeMap
         if n == 0 {
             return Err(g.error_at(name, format!("stream '{name}': per_call {} is 0", s.per_call)));
         }
-        per_call.insert(name.clone(), n);
+        per_call.insert(id, n);
     }
     Ok(per_call)
 }
 
 /// Queue items per invocation of a phase's root kernels (fan-out), producers first.
-fn queue_fanout(plan: &Plan, per_call: &BTreeMap<String, u64>) -> BTreeMap<String, u64> {
-    let mut fanout: BTreeMap<String, u64> = BTreeMap::new();
+fn queue_fanout(plan: &Plan, per_call: &BTreeMap<StreamId, u64>) -> BTreeMap<StreamId, u64> {
+    let mut fanout: BTreeMap<StreamId, u64> = BTreeMap::new();
     for _ in 0..=plan.kernels.len() {
         for k in plan.kernel_ids() {
             let per_invocation = match &plan.kernels[k].root {
@@ -740,13 +738,13 @@ fn queue_fanout(plan: &Plan, per_call: &BTreeMap<String, u64>) -> BTreeMap<Strin
 
 /// For kernel `k`, the queued streams it emits into and how many items one invocation can
 /// emit into each (per_call times the calls of producing passes per invocation).
-fn emits_per_invocation(plan: &Plan, k: KernelId, per_call: &BTreeMap<String, u64>) -> Vec<(String, u64)> {
+fn emits_per_invocation(plan: &Plan, k: KernelId, per_call: &BTreeMap<StreamId, u64>) -> Vec<(StreamId, u64)> {
     let g = &plan.graph;
     let kp = &plan.kernels[k];
     // Calls of each chain per invocation: the root chain once; fused chains per emit.
     let mut calls: BTreeMap<ChainId, u64> = BTreeMap::new();
     calls.insert(kp.chain, 1);
-    let mut out: BTreeMap<String, u64> = BTreeMap::new();
+    let mut out: BTreeMap<StreamId, u64> = BTreeMap::new();
     let mut pending = vec![kp.chain];
     while let Some(c) = pending.pop() {
         let n = calls[&c];
@@ -756,14 +754,14 @@ fn emits_per_invocation(plan: &Plan, k: KernelId, per_call: &BTreeMap<String, u6
             0..g.chains[c].passes.len()
         };
         for &p in &g.chains[c].passes[range] {
-            for s in &g.passes[p].decl.emits {
-                let per = per_call[s] * n;
-                if plan.queued_streams.contains(s) {
-                    *out.entry(s.clone()).or_insert(0) += per;
+            for &s in &g.passes[p].emits {
+                let per = per_call[&s] * n;
+                if plan.queued_streams.contains(&s) {
+                    *out.entry(s).or_insert(0) += per;
                 } else if let Some(&fc) = kp
                     .fused_chains
                     .iter()
-                    .find(|&&fc| g.chains[fc].entry == ChainEntry::Stream(s.clone()))
+                    .find(|&&fc| g.chains[fc].entry == ChainEntry::Stream(s))
                 {
                     *calls.entry(fc).or_insert(0) += per;
                     pending.push(fc);

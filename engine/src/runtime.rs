@@ -10,7 +10,7 @@ mod recorder;
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
-use crate::ids::PhaseId;
+use crate::ids::{PhaseId, ResourceId, StreamId};
 use crate::ir::ConstValue;
 use crate::program::Program;
 use crate::resolve::BufferRef;
@@ -75,7 +75,7 @@ struct Kernels {
     /// Pass kernels, in plan order.
     passes: Vec<Kernel>,
     /// Argument kernels of queued streams, with the byte offset of their arguments.
-    args: BTreeMap<String, (Kernel, u64)>,
+    args: BTreeMap<StreamId, (Kernel, u64)>,
     /// Commit kernels of boundaries, resetting and adding (one bind group per physical
     /// buffer), with the byte offset of their arguments.
     commits: Vec<([Kernel; 2], u64)>,
@@ -101,7 +101,7 @@ pub struct Instance<'g> {
     parameters: BTreeMap<String, ParameterSource>,
     frames: frames::FrameState,
     /// GPU copies of resources taken by [`Instance::snapshot`].
-    snapshots: BTreeMap<String, wgpu::Buffer>,
+    snapshots: BTreeMap<ResourceId, wgpu::Buffer>,
 }
 
 impl<'g> Instance<'g> {
@@ -129,7 +129,8 @@ impl<'g> Instance<'g> {
 
     /// Element count of an external resource, as supplied.
     pub fn external_count(&self, name: &str) -> Option<u64> {
-        self.buffers.external_counts.get(name).copied()
+        let id = self.program.plan.graph.resource_id(name)?;
+        self.buffers.external_counts.get(&id).copied()
     }
 
     /// The default of parameter `name`, or an error listing the parameters.
@@ -203,15 +204,16 @@ impl<'g> Instance<'g> {
             .collect()
     }
 
-    fn resource(&self, name: &str) -> Result<Slot> {
+    /// The id and the slot of the allocated resource `name`.
+    fn resource(&self, name: &str) -> Result<(ResourceId, Slot)> {
         let g = &self.program.plan.graph;
-        if !g.resources.contains_key(name) {
+        let Some(id) = g.resource_id(name) else {
             return Err(Error::Runtime(format!("graph '{}' has no resource '{name}'", g.name)));
-        }
+        };
         self.buffers
             .slots
-            .get(&BufferRef::Resource(name.to_string()))
-            .copied()
+            .get(&BufferRef::Resource(id))
+            .map(|&slot| (id, slot))
             .ok_or_else(|| {
                 Error::Runtime(format!(
                     "resource '{name}' of graph '{}' is not allocated: no live pass or operator uses it",
@@ -223,7 +225,7 @@ impl<'g> Instance<'g> {
     /// Reads a resource's bytes back to the host (a transient one holds what its last use
     /// in the last frame left, unless memory it shares was written since).
     pub fn read(&self, name: &str) -> Result<Vec<u8>> {
-        let slot = self.resource(name)?;
+        let (_, slot) = self.resource(name)?;
         let size = slot.size.next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
         let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("resource readback"),
@@ -246,7 +248,7 @@ impl<'g> Instance<'g> {
 
     /// Overwrites a resource's bytes (from the start).
     pub fn write(&self, name: &str, bytes: &[u8]) -> Result<()> {
-        let slot = self.resource(name)?;
+        let (_, slot) = self.resource(name)?;
         if bytes.len() as u64 > slot.size {
             return Err(Error::Runtime(format!(
                 "{} bytes do not fit resource '{name}' ({} bytes)",
@@ -264,7 +266,7 @@ impl<'g> Instance<'g> {
     /// for [`Instance::restore`]: inputs that an operator changes in place are put back
     /// between runs without a host upload. A later snapshot of the name replaces it.
     pub fn snapshot(&mut self, name: &str) -> Result<()> {
-        let slot = self.resource(name)?;
+        let (id, slot) = self.resource(name)?;
         let copy = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("resource snapshot"),
             size: slot.size,
@@ -274,17 +276,17 @@ impl<'g> Instance<'g> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(self.buffers.buffer(slot), slot.offset, &copy, 0, slot.size);
         self.gpu.queue.submit([encoder.finish()]);
-        self.snapshots.insert(name.to_string(), copy);
+        self.snapshots.insert(id, copy);
         Ok(())
     }
 
     /// Puts resource `name`'s last [`Instance::snapshot`] back, on the GPU (queued before the
     /// next frame).
     pub fn restore(&self, name: &str) -> Result<()> {
-        let slot = self.resource(name)?;
+        let (id, slot) = self.resource(name)?;
         let copy = self
             .snapshots
-            .get(name)
+            .get(&id)
             .ok_or_else(|| Error::Runtime(format!("resource '{name}' has no snapshot to restore")))?;
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(copy, 0, self.buffers.buffer(slot), slot.offset, slot.size);
@@ -294,7 +296,7 @@ impl<'g> Instance<'g> {
 
     /// Sets a resource to zero.
     pub fn clear(&self, name: &str) -> Result<()> {
-        let slot = self.resource(name)?;
+        let (_, slot) = self.resource(name)?;
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(self.buffers.buffer(slot), slot.offset, Some(slot.size));
         self.gpu.queue.submit([encoder.finish()]);

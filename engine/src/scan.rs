@@ -8,7 +8,7 @@
 //! when every subgroup of the workgroup is full (checked in the kernel); otherwise, and without
 //! subgroups, a scan in workgroup memory.
 
-use crate::ids::OpId;
+use crate::ids::{OpId, ResourceId};
 use crate::limits::{FRAME_BINDING, WORKGROUP};
 use crate::resolve::BufferRef;
 use std::fmt::Write;
@@ -98,10 +98,10 @@ impl Module {
     }
 
     /// `fn lg_n() -> u32`: the operator's elements, from the record or its GPU counter.
-    pub fn element_count(&mut self, counted: Option<&str>) {
+    pub fn element_count(&mut self, counted: Option<ResourceId>) {
         match counted {
             Some(c) => {
-                self.bind("lg_counter", "array<u32>", BufferRef::Resource(c.to_string()));
+                self.bind("lg_counter", "array<u32>", BufferRef::Resource(c));
                 self.text
                     .push_str("fn lg_n() -> u32 { return min(lg_counter[0], frame.count); }\n");
             }
@@ -128,7 +128,7 @@ pub(crate) fn element_entry(name: &str) -> String {
 }
 
 /// A scan to generate.
-pub(crate) struct Scan<'a> {
+pub(crate) struct Scan {
     /// The operator it belongs to (whose scratch holds the partial sums).
     pub o: OpId,
     /// The WGSL type of the elements and their sums: `u32` (wrapping) or `f32`.
@@ -146,14 +146,14 @@ pub(crate) struct Scan<'a> {
     /// As [`Groups::per_tile`], for level 0.
     pub per_tile: Option<(u64, u64)>,
     /// The resource counting the operator's elements on the GPU.
-    pub counted: Option<&'a str>,
+    pub counted: Option<ResourceId>,
     /// Whether to use subgroup operations.
     pub subgroups: bool,
     /// Elements per thread.
     pub items: u32,
 }
 
-impl Scan<'_> {
+impl Scan {
     fn tile(&self) -> u64 {
         (WORKGROUP * self.items) as u64
     }

@@ -106,7 +106,7 @@ pub const PARTIALS: usize = 3;
 /// values (the other side of the ping-pong; none without values), the digit histograms of its
 /// tiles, and the levels of their scan. Scans run in tiles of `scan_tile` elements; sorts in
 /// the `sort` shape.
-pub fn scratch_words(kind: &OpKind, n: u64, scan_tile: u64, sort: SortShape) -> Vec<u64> {
+pub fn scratch_words<R>(kind: &OpKind<R>, n: u64, scan_tile: u64, sort: SortShape) -> Vec<u64> {
     match kind {
         OpKind::Scan { .. } => scan_levels(n, scan_tile),
         OpKind::Sort { values, .. } => {
@@ -121,7 +121,7 @@ pub fn scratch_words(kind: &OpKind, n: u64, scan_tile: u64, sort: SortShape) -> 
 }
 
 /// What scratch buffer `index` of an operator of `kind` holds, for reports.
-pub fn scratch_name(kind: &OpKind, index: usize) -> String {
+pub fn scratch_name<R>(kind: &OpKind<R>, index: usize) -> String {
     match (kind, index) {
         (OpKind::Sort { .. }, KEYS) => "sort keys".to_string(),
         (OpKind::Sort { .. }, VALUES) => "sort values".to_string(),

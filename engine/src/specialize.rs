@@ -91,7 +91,7 @@ impl Graph {
         };
         // The whole declared structure, to cull on.
         self.passes = self.declared.passes.clone();
-        self.ops = self.declared.ops.clone();
+        self.ops = self.live_ops(&self.declared.ops);
         self.chains = self.build_chains()?;
         let mut culled: BTreeMap<Node, String> = self.disabled(&vars, strict)?;
         self.cull_orphans(&mut culled);
@@ -248,10 +248,11 @@ impl Graph {
                         "its chain begins at '{}', which is culled",
                         self.declared.passes[entry].decl.name
                     ))
-                } else if let ChainEntry::Stream(s) = &chain.entry {
+                } else if let ChainEntry::Stream(s) = chain.entry {
                     let producers: Vec<usize> = (0..self.declared.passes.len())
-                        .filter(|&p| self.declared.passes[p].decl.emits.contains(s))
+                        .filter(|&p| self.declared.passes[p].emits.contains(&s))
                         .collect();
+                    let s = &self.streams[s].name;
                     producers
                         .iter()
                         .all(|p| culled.contains_key(&Node::Pass(*p)))
@@ -282,15 +283,14 @@ impl Graph {
             .filter(|i| !culled.contains_key(&Node::Op(*i)))
             .collect();
         self.passes = live_pass.iter().map(|&i| d.passes[i].clone()).collect();
-        self.ops = live_op.iter().map(|&i| d.ops[i].clone()).collect();
+        let ops: Vec<_> = live_op.iter().map(|&i| d.ops[i].clone()).collect();
+        self.ops = self.live_ops(&ops);
         self.chains = self.build_chains().expect("a subset of valid chains is valid");
         self.phases = self.build_phases().expect("a subset of valid phases is valid");
         let live_names: BTreeSet<&str> = self.passes.iter().map(|p| p.decl.name.as_str()).collect();
         self.dead_streams = self
-            .streams
-            .iter()
-            .filter(|(_, s)| !live_names.contains(s.to.as_str()))
-            .map(|(n, _)| n.clone())
+            .stream_ids()
+            .filter(|&s| !live_names.contains(self.streams[s].decl.to.as_str()))
             .collect();
         let mut steps = Vec::new();
         for e in &self.declared.entries {
@@ -367,8 +367,12 @@ impl Graph {
             ));
         }
         for o in self.outputs.iter().filter(|_| writes_known) {
+            let id = self.resource_id(o);
             let written = self.passes.iter().any(|p| p.decl.writes.contains(o))
-                || self.ops.iter().any(|op| op.writes().contains(&o.as_str()));
+                || self
+                    .ops
+                    .iter()
+                    .any(|op| op.writes().into_iter().any(|&r| Some(r) == id));
             if !written {
                 let mut writers = self
                     .declared
@@ -380,7 +384,7 @@ impl Graph {
                         self.declared
                             .ops
                             .iter()
-                            .filter(|op| op.writes().contains(&o.as_str()))
+                            .filter(|op| op.writes().contains(&o))
                             .map(|op| op.name.as_str()),
                     );
                 let file = self.declared.sources.declaring(&self.file, o);

@@ -47,7 +47,11 @@ fn run(layout: &str, target: &Target, per: u32) -> Frame {
         target.subgroups(),
         "{layout}: appends aggregate per subgroup exactly where the target has subgroups"
     );
-    let capacity = program.resolved.queue_capacity["parts"];
+    let capacity = program.resolved.queue_capacity[&program
+        .plan
+        .graph
+        .stream_id("parts")
+        .expect("the graph has stream parts")];
     let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
     let result = instance.run_frame(0, 0).map(|s| s.counters).map_err(|e| e.to_string());
     let seen = bytemuck::pod_collect_to_vec(&instance.read("seen").unwrap());

@@ -182,9 +182,15 @@ fn per_call_expressions_size_queues_from_constants() {
     };
     // 100 items per chunk, each emitting at most per_call walks into the queue.
     let number = compile("1", 64).unwrap();
-    assert_eq!(number.resolved.queue_capacity["done"], 100);
+    assert_eq!(
+        number.resolved.queue_capacity[&number.plan.graph.stream_id("done").unwrap()],
+        100
+    );
     let expr = compile("\"BINS / 32 + 1\"", 64).unwrap();
-    assert_eq!(expr.resolved.queue_capacity["done"], 300);
+    assert_eq!(
+        expr.resolved.queue_capacity[&expr.plan.graph.stream_id("done").unwrap()],
+        300
+    );
     let e = compile("\"BINS - 64\"", 64)
         .expect_err("per_call 0 is refused")
         .to_string();

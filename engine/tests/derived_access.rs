@@ -109,11 +109,12 @@ fn a_resource_used_only_under_a_flag_that_is_off_is_not_bound() {
             flags: flags(names),
         };
         let program = compile(&graph, "fused", &decl, &spec, &Target::default()).unwrap();
-        let used = program.resolved.used.contains("extra");
+        let extra = program.plan.graph.resource_id("extra");
+        let used = extra.is_some_and(|r| program.resolved.used.contains(&r));
         let binds = program.kernels.iter().any(|k| {
             k.uses
                 .iter()
-                .any(|u| u.buffer == lightgraph_engine::resolve::BufferRef::Resource("extra".into()))
+                .any(|u| extra.is_some_and(|r| u.buffer == lightgraph_engine::resolve::BufferRef::Resource(r)))
         });
         (used, binds, report(&program, &|_| None))
     };
@@ -188,7 +189,7 @@ fn a_catalog_resource_joins_where_a_derived_pass_uses_it() {
     };
     let vfs = |name: &str, text: &str| folder(name, &[("g.ron", text), ("cat.ron", catalog), ("derive.wgsl", WGSL)]);
     let g = Graph::load(&vfs("catalog", &graph("Use(\"make\")")), "g.ron").unwrap();
-    let names = |g: &Graph| g.resources.keys().cloned().collect::<Vec<_>>();
+    let names = |g: &Graph| g.resources.iter().map(|r| r.name.clone()).collect::<Vec<_>>();
     assert_eq!(names(&g), strings(&["out", "source"]));
     let with_extra = g.specialize_for(&BTreeMap::new(), &flags(&["EXTRA"])).unwrap();
     assert_eq!(names(&with_extra), strings(&["extra", "out", "source"]));

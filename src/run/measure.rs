@@ -45,9 +45,8 @@ pub(crate) fn prepare(
     }
     externals.retain(|name, _| {
         graph
-            .resources
-            .get(name)
-            .is_some_and(|r| r.scope == lightgraph_engine::ir::Scope::External)
+            .resource(name)
+            .is_some_and(|r| r.decl.scope == lightgraph_engine::ir::Scope::External)
     });
     check_scene_fits(gpu, scene, limit, &externals)?;
     let spec = specialization(graph, &scene.scene, options, flags);

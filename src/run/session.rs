@@ -296,12 +296,14 @@ impl<'g> Session<'g> {
     pub fn memory_bytes(&self) -> u64 {
         let program = self.instance.program();
         let external: u64 = program
-            .resolved
-            .sizes
+            .plan
+            .graph
+            .resources
             .iter()
-            .filter_map(|(name, size)| {
+            .zip(&program.resolved.sizes)
+            .filter_map(|(r, size)| {
                 self.instance
-                    .external_count(name)
+                    .external_count(&r.name)
                     .map(|n| n * size.element_bytes as u64)
             })
             .sum();

@@ -339,7 +339,7 @@ fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes, child_scan: bool
     let mut externals: BTreeMap<String, Vec<u8>> = compiled
         .resources(&CompiledScene::camera(&scene, 1, 1))
         .into_iter()
-        .filter(|(k, _)| graph.resources.contains_key(k))
+        .filter(|(k, _)| graph.resource_id(k).is_some())
         .collect();
     externals.insert("rays".into(), bytemuck::cast_slice(&rays).to_vec());
     let mut instance = Instance::new(gpu(), program, &externals).unwrap();

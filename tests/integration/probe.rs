@@ -11,6 +11,7 @@
 
 use crate::common::gpu;
 use lightgraph::run::{LoadedScene, device_flags, kernel_flags, load_graph};
+use lightgraph_engine::graph::Resource;
 use lightgraph_engine::ir::Scope;
 use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Specialization, Vfs, compile};
 use lightgraph_scenes::CompiledScene;
@@ -34,7 +35,7 @@ fn graph_text(pt: &Graph) -> String {
         let _ = writeln!(s, "        {file:?},");
     }
     s.push_str("    ],\n    passes: [Pass(name: \"probe\", item: \"ProbeItem\", source: \"probe/probe.wgsl\", role: Start(over: \"N\"), writes: [\"out\"])],\n    resources: {\n");
-    for (name, r) in &pt.resources {
+    for Resource { name, decl: r } in &pt.resources {
         let scope = match r.scope {
             Scope::External => "External",
             Scope::Persistent => "Persistent",
@@ -110,7 +111,7 @@ fn run(
         compile(&graph, "fused", &graph.layouts["fused"], &spec, &gpu().target()).unwrap_or_else(|e| panic!("{e}"));
     let camera = CompiledScene::camera(&scene.scene, 1, 1);
     let mut externals = scene.compiled.resources(&camera);
-    externals.retain(|name, _| graph.resources.get(name).is_some_and(|r| r.scope == Scope::External));
+    externals.retain(|name, _| graph.resource(name).is_some_and(|r| r.decl.scope == Scope::External));
     let input: &[[f32; 4]] = if input.is_empty() { &[[0.0; 4]] } else { input };
     externals.insert("probe_in".to_string(), bytemuck::cast_slice(input).to_vec());
     let mut instance = Instance::new(gpu(), program, &externals).unwrap();

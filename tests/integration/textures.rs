@@ -171,7 +171,7 @@ fn surface_queries(
     let mut externals: BTreeMap<String, Vec<u8>> = compiled
         .resources(&CompiledScene::camera(scene, 1, 1))
         .into_iter()
-        .filter(|(k, _)| graph.resources.contains_key(k))
+        .filter(|(k, _)| graph.resource_id(k).is_some())
         .collect();
     let words: Vec<[f32; 4]> = queries
         .iter()

@@ -3,6 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::Gpu;
+use crate::ids::ResourceId;
 use crate::ir::Scope;
 use crate::program::Program;
 use crate::resolve::BufferRef;
@@ -26,7 +27,7 @@ pub struct Buffers {
     /// Where each logical buffer lives.
     pub slots: BTreeMap<BufferRef, Slot>,
     /// Element counts of the external resources, as supplied.
-    pub external_counts: BTreeMap<String, u64>,
+    pub external_counts: BTreeMap<ResourceId, u64>,
 }
 
 const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
@@ -120,18 +121,19 @@ impl Buffers {
     fn upload_externals(&mut self, gpu: &Gpu, program: &Program, externals: &BTreeMap<String, Vec<u8>>) -> Result<()> {
         let g = &program.plan.graph;
         for name in externals.keys() {
-            if g.resources.get(name).is_none_or(|r| r.scope != Scope::External) {
+            if g.resource(name).is_none_or(|r| r.decl.scope != Scope::External) {
                 return Err(Error::Runtime(format!(
                     "data given for '{name}', which graph '{}' has no external resource of that name",
                     g.name
                 )));
             }
         }
-        for (name, r) in &g.resources {
-            if r.scope != Scope::External || !program.resolved.used.contains(name) {
+        for id in g.resource_ids() {
+            let (name, r) = (&g.resources[id].name, &g.resources[id].decl);
+            if r.scope != Scope::External || !program.resolved.used.contains(&id) {
                 continue;
             }
-            let elem = program.resolved.sizes[name].element_bytes as u64;
+            let elem = program.resolved.sizes[id].element_bytes as u64;
             let bytes = externals.get(name).ok_or_else(|| {
                 Error::Runtime(format!(
                     "graph '{}' needs external resource '{name}' ({}), which was not supplied",
@@ -145,7 +147,7 @@ impl Buffers {
                     r.ty
                 )));
             }
-            self.external_counts.insert(name.clone(), bytes.len() as u64 / elem);
+            self.external_counts.insert(id, bytes.len() as u64 / elem);
             let slot = self.make(
                 gpu,
                 &format!("resource '{name}'"),
@@ -154,7 +156,7 @@ impl Buffers {
                 true,
             )?;
             gpu.queue.write_buffer(&self.gpu[slot.buffer], 0, bytes);
-            self.slots.insert(BufferRef::Resource(name.clone()), slot);
+            self.slots.insert(BufferRef::Resource(id), slot);
         }
         Ok(())
     }

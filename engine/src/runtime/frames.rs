@@ -406,7 +406,7 @@ impl Instance<'_> {
         }
         Ok(match &op.kind {
             OpKind::Clear { buffer, first, .. } => {
-                let w = resolved.sizes[buffer].element_bytes as u64 / 4;
+                let w = resolved.sizes[*buffer].element_bytes as u64 / 4;
                 let first = first.as_ref().map_or(Ok(0), |e| e.count(vars)).map_err(fail)?;
                 (first * w, n, n * w)
             }
@@ -416,8 +416,8 @@ impl Instance<'_> {
 
     /// Zeroes the transient resources declared `clear: true` whose lifetime starts at `step`.
     fn clear_transients(&self, rec: &mut Recorder, step: usize) {
-        for name in self.program.resolved.clears.get(&step).into_iter().flatten() {
-            let slot = self.buffers.slot(&BufferRef::Resource(name.clone()));
+        for &r in self.program.resolved.clears.get(&step).into_iter().flatten() {
+            let slot = self.buffers.slot(&BufferRef::Resource(r));
             rec.clear(self.buffers.buffer(slot), slot.offset, slot.size);
         }
     }
@@ -578,7 +578,7 @@ impl Instance<'_> {
                 Step::Drain(q) => {
                     let (args, offset) = &self.kernels.args[q];
                     self.dispatch(rec, args, record, Dispatch::Single);
-                    let k = self.program.plan.consumer_kernel(q);
+                    let k = self.program.plan.consumer_kernel(*q);
                     self.dispatch(rec, &self.kernels.passes[k.0], record, Dispatch::Indirect(*offset));
                 }
                 Step::Loop { chain, body } => self.run_loop(rec, *chain, body, record, i)?,
@@ -851,11 +851,11 @@ impl Instance<'_> {
     fn check_overflows(&self, words: &[u32]) -> Result<()> {
         let control = &self.program.resolved.control;
         let g = &self.program.plan.graph;
-        for (q, &w) in &control.queue_overflow {
+        for (&q, &w) in &control.queue_overflow {
             if words[w as usize] > 0 {
                 return Err(Error::Runtime(format!(
-                    "queue '{q}' overflowed by {} items: a pass emits more than the stream's per_call ({}) declares",
-                    words[w as usize], g.streams[q].per_call
+                    "queue '{}' overflowed by {} items: a pass emits more than the stream's per_call ({}) declares",
+                    g.streams[q].name, words[w as usize], g.streams[q].decl.per_call
                 )));
             }
         }

@@ -188,12 +188,7 @@ pub fn build(gpu: &Gpu, program: &Program, buffers: &Buffers) -> Result<Kernels>
         .queued_streams
         .iter()
         .enumerate()
-        .map(|(i, q)| {
-            (
-                q.clone(),
-                (b.kernel(&program.args[q], &[&identity], false), 12 * i as u64),
-            )
-        })
+        .map(|(i, &q)| (q, (b.kernel(&program.args[&q], &[&identity], false), 12 * i as u64)))
         .collect();
     let mut commits = Vec::new();
     for (i, boundary) in program.plan.boundaries.iter().enumerate() {
