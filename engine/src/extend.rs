@@ -5,7 +5,7 @@
 //! file, a base's own into the base.
 
 use crate::error::{Location, Result};
-use crate::ir::{ExtendingFile, GraphFile, LayoutDecl, LayoutEdit, PassEdit, PassEntry};
+use crate::ir::{ExtendingFile, GraphFile, LayoutEdit, LayoutWritten, PassEdit, PassEntry};
 use crate::load::{GraphSource, Sources, parse_ron};
 use crate::vfs::Vfs;
 use std::collections::BTreeMap;
@@ -53,7 +53,7 @@ fn resolve_in(
     let ext = match parse_written(file, text)? {
         Written::Whole(mut g) => {
             let files = vec![file.to_string(); g.passes.len()];
-            kernels_from(&mut g.layouts, file, sources)?;
+            likes(&mut g.layouts, file, sources)?;
             return Ok((*g, files));
         }
         Written::Extending(ext) => ext,
@@ -93,8 +93,7 @@ fn apply(
         edit_passes(&mut entries, edit, file, &ext.extends, sources)?;
     }
     let (passes, files): (Vec<PassEntry>, Vec<String>) = entries.into_iter().unzip();
-    let mut layouts = edit_layouts(&base, ext.layouts, file, &ext.extends, sources)?;
-    kernels_from(&mut layouts, file, sources)?;
+    let layouts = edit_layouts(&base, ext.layouts, file, &ext.extends, sources)?;
     let g = GraphFile {
         name: ext.name.unwrap_or(base.name),
         description: ext.description.unwrap_or(base.description),
@@ -156,48 +155,62 @@ fn edit_passes(
     Ok(())
 }
 
-/// The kernels of the layouts of `file` (`layouts`, those of a base already filled) that take
-/// them from another layout (`kernels_from`): one of `layouts` with kernels of its own.
-fn kernels_from(layouts: &mut BTreeMap<String, LayoutDecl>, file: &str, sources: &Sources) -> Result<()> {
-    let written = layouts.clone();
-    for (name, decl) in layouts.iter_mut() {
-        let Some(from) = decl.kernels_from.take() else {
-            continue;
+/// The layouts of `file` (`layouts`, those of a base already resolved) that are `like` another
+/// of `layouts`, given that one's fields where they give none; a layout may be like one that is
+/// like a third.
+fn likes(layouts: &mut BTreeMap<String, LayoutWritten>, file: &str, sources: &Sources) -> Result<()> {
+    loop {
+        let pending: Vec<(String, String)> = layouts
+            .iter()
+            .filter_map(|(name, l)| l.like.clone().map(|from| (name.clone(), from)))
+            .collect();
+        let Some((name, from)) = pending
+            .iter()
+            .find(|(_, from)| layouts.get(from).is_some_and(|l| l.like.is_none()))
+        else {
+            return match pending.first() {
+                None => Ok(()),
+                Some((name, from)) => Err(unresolved_like(layouts, name, from, file, sources)),
+            };
         };
-        let error = |message: String| crate::error::Error::Invalid {
-            at: Location::of_name_under_key(file, sources.text(file), name, &from),
-            message: format!("layout '{name}': {message}"),
-        };
-        if !decl.kernels.is_empty() {
-            return Err(error(format!("gives both `kernels` and `kernels_from: \"{from}\"`")));
-        }
-        decl.kernels = match written.get(&from) {
-            Some(other) if other.kernels_from.is_none() => other.kernels.clone(),
-            Some(_) => {
-                return Err(error(format!(
-                    "takes its kernels from '{from}', which takes its own from another layout; name that one"
-                )));
-            }
-            None => {
-                let known: Vec<&str> = written.keys().map(|s| s.as_str()).collect();
-                return Err(error(format!(
-                    "takes its kernels from '{from}', which is no layout of this graph (layouts: {})",
-                    known.join(", ")
-                )));
-            }
-        };
+        let base = layouts[from].clone();
+        let written = layouts.remove(name).expect("a pending layout");
+        layouts.insert(name.clone(), written.over(&base));
     }
-    Ok(())
 }
 
-/// The base's layouts as the extending `file`'s `edits` leave them.
+/// The error of layout `name`, like `from`: no layout, or the start of a cycle of likes.
+fn unresolved_like(
+    layouts: &BTreeMap<String, LayoutWritten>,
+    name: &str,
+    from: &str,
+    file: &str,
+    sources: &Sources,
+) -> crate::error::Error {
+    let message = if layouts.contains_key(from) {
+        format!("layout '{name}': is like '{from}', and the likes from there go round a cycle")
+    } else {
+        let known: Vec<&str> = layouts.keys().map(|s| s.as_str()).collect();
+        format!(
+            "layout '{name}': is like '{from}', which is no layout of this graph (layouts: {})",
+            known.join(", ")
+        )
+    };
+    crate::error::Error::Invalid {
+        at: Location::of_name_under_key(file, sources.text(file), name, from),
+        message,
+    }
+}
+
+/// The base's layouts as the extending `file`'s `edits` leave them, `like`s resolved before the
+/// removals.
 fn edit_layouts(
     base: &GraphFile,
     edits: BTreeMap<String, LayoutEdit>,
     file: &str,
     base_file: &str,
     sources: &Sources,
-) -> Result<BTreeMap<String, LayoutDecl>> {
+) -> Result<BTreeMap<String, LayoutWritten>> {
     let mut layouts = base.layouts.clone();
     let missing = |name: &str| {
         let known: Vec<&str> = base.layouts.keys().map(|s| s.as_str()).collect();
@@ -210,6 +223,7 @@ fn edit_layouts(
             ),
         )
     };
+    let mut removed = Vec::new();
     for (name, edit) in edits {
         match edit {
             LayoutEdit::Layout(decl) => {
@@ -219,10 +233,13 @@ fn edit_layouts(
                 let decl = base.layouts.get(&from).ok_or_else(|| missing(&from))?;
                 layouts.insert(name, decl.clone());
             }
-            LayoutEdit::Remove => {
-                layouts.remove(&name).ok_or_else(|| missing(&name))?;
-            }
+            LayoutEdit::Remove => removed.push(name),
         }
+    }
+    // A layout may be like one of the base's that this file removes.
+    likes(&mut layouts, file, sources)?;
+    for name in removed {
+        layouts.remove(&name).ok_or_else(|| missing(&name))?;
     }
     Ok(layouts)
 }

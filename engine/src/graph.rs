@@ -186,7 +186,7 @@ impl Graph {
             parameters: g.parameters.clone(),
             outputs: g.outputs.clone(),
             measured: g.measured.clone(),
-            layouts: g.layouts.clone(),
+            layouts: g.layouts.iter().map(|(n, l)| (n.clone(), l.decl())).collect(),
             default_layout: g.default_layout.clone(),
             chains: Vec::new(),
             phases: Vec::new(),

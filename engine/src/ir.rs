@@ -67,8 +67,8 @@ pub struct GraphFile {
     /// an item still alive after them is an error when the batch is read back.
     #[serde(default)]
     pub loop_bounds: BTreeMap<String, String>,
-    /// Named kernel layouts.
-    pub layouts: BTreeMap<String, LayoutDecl>,
+    /// Named kernel layouts, as written (a layout may be `like` another).
+    pub layouts: BTreeMap<String, LayoutWritten>,
     /// The layout used when none is asked for.
     pub default_layout: String,
     /// What the graph estimates and what it cannot sample, as the application states them:
@@ -287,7 +287,7 @@ pub enum PassEdit {
 #[derive(Debug, Clone, Deserialize)]
 pub enum LayoutEdit {
     /// `Layout(kernels: [...], ...)`: a layout declared here, new or replacing the base's.
-    Layout(LayoutDecl),
+    Layout(LayoutWritten),
     /// `From("name")`: a copy of the base's layout `name`.
     From(String),
     /// `Remove`: the base's layout leaves.
@@ -739,11 +739,6 @@ pub struct LayoutDecl {
     /// Fusion groups: each inner list of passes becomes one kernel.
     #[serde(default)]
     pub kernels: Vec<Vec<String>>,
-    /// Instead of `kernels`: the layout of the same file whose fusion groups this one takes
-    /// (a layout that differs from another in its other fields only). Filled in when the file
-    /// is read, so a loaded layout always has its kernels.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub kernels_from: Option<String>,
     /// Item state layout between split kernels.
     #[serde(default)]
     pub state: StateStorage,
@@ -826,7 +821,6 @@ impl Default for LayoutDecl {
         LayoutDecl {
             description: String::new(),
             kernels: Vec::new(),
-            kernels_from: None,
             state: StateStorage::default(),
             workgroup_size: default_workgroup(),
             max_items_in_flight: None,
@@ -837,6 +831,81 @@ impl Default for LayoutDecl {
             hints: BTreeMap::new(),
             constants: BTreeMap::new(),
             loop_guards: default_loop_guards(),
+        }
+    }
+}
+
+/// A layout as a graph file writes it: the fields it gives, and the layout it is `like`, whose
+/// fields it takes where it gives none (resolved when the file is read, see
+/// [`LayoutWritten::over`]); a field given by neither takes [`LayoutDecl`]'s default.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LayoutWritten {
+    /// Another layout of the graph (or of the graph it extends) this one differs from.
+    pub like: Option<String>,
+    /// [`LayoutDecl::description`].
+    pub description: Option<String>,
+    /// [`LayoutDecl::kernels`].
+    pub kernels: Option<Vec<Vec<String>>>,
+    /// [`LayoutDecl::state`].
+    pub state: Option<StateStorage>,
+    /// [`LayoutDecl::workgroup_size`].
+    pub workgroup_size: Option<u32>,
+    /// [`LayoutDecl::max_items_in_flight`].
+    pub max_items_in_flight: Option<u64>,
+    /// [`LayoutDecl::loops`].
+    pub loops: Option<LoopMode>,
+    /// [`LayoutDecl::policy`].
+    pub policy: Option<Policy>,
+    /// [`LayoutDecl::threads`].
+    pub threads: Option<u64>,
+    /// [`LayoutDecl::regenerate_at`].
+    pub regenerate_at: Option<f32>,
+    /// [`LayoutDecl::hints`].
+    pub hints: Option<BTreeMap<String, String>>,
+    /// [`LayoutDecl::constants`].
+    pub constants: Option<BTreeMap<String, ConstValue>>,
+    /// [`LayoutDecl::loop_guards`].
+    pub loop_guards: Option<bool>,
+}
+
+impl LayoutWritten {
+    /// This layout with each field it does not give taken from `base` (a whole field: a map
+    /// given here replaces the base's), no longer `like` anything.
+    pub fn over(self, base: &LayoutWritten) -> LayoutWritten {
+        LayoutWritten {
+            like: None,
+            description: self.description.or_else(|| base.description.clone()),
+            kernels: self.kernels.or_else(|| base.kernels.clone()),
+            state: self.state.or(base.state),
+            workgroup_size: self.workgroup_size.or(base.workgroup_size),
+            max_items_in_flight: self.max_items_in_flight.or(base.max_items_in_flight),
+            loops: self.loops.or(base.loops),
+            policy: self.policy.or(base.policy),
+            threads: self.threads.or(base.threads),
+            regenerate_at: self.regenerate_at.or(base.regenerate_at),
+            hints: self.hints.or_else(|| base.hints.clone()),
+            constants: self.constants.or_else(|| base.constants.clone()),
+            loop_guards: self.loop_guards.or(base.loop_guards),
+        }
+    }
+
+    /// The layout, with [`LayoutDecl`]'s defaults for the fields it does not give.
+    pub fn decl(&self) -> LayoutDecl {
+        let d = LayoutDecl::default();
+        LayoutDecl {
+            description: self.description.clone().unwrap_or(d.description),
+            kernels: self.kernels.clone().unwrap_or(d.kernels),
+            state: self.state.unwrap_or(d.state),
+            workgroup_size: self.workgroup_size.unwrap_or(d.workgroup_size),
+            max_items_in_flight: self.max_items_in_flight.or(d.max_items_in_flight),
+            loops: self.loops.unwrap_or(d.loops),
+            policy: self.policy.unwrap_or(d.policy),
+            threads: self.threads.or(d.threads),
+            regenerate_at: self.regenerate_at.or(d.regenerate_at),
+            hints: self.hints.clone().unwrap_or(d.hints),
+            constants: self.constants.clone().unwrap_or(d.constants),
+            loop_guards: self.loop_guards.unwrap_or(d.loop_guards),
         }
     }
 }

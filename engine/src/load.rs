@@ -941,7 +941,7 @@ impl Declared {
     /// A layout's constants are constants of the graph, of their declared type.
     fn check_layout_constants(&self, file: &str) -> Result<()> {
         for (layout, decl) in &self.file.layouts {
-            for (c, v) in &decl.constants {
+            for (c, v) in decl.constants.iter().flatten() {
                 match self.constants.get(c) {
                     Some(d) if d.wgsl_type() == v.wgsl_type() => {}
                     Some(d) => {

@@ -35,6 +35,7 @@ const EXTENDING: &str = r#"(
     layouts: {
         "halves": Layout(kernels: [["seed", "step", "record"], ["summarize"]], workgroup_size: 32),
         "fused_again": From("fused"),
+        "fused_narrow": Layout(like: "fused", workgroup_size: 16),
         "two_entries": Remove,
     },
 )
@@ -66,6 +67,9 @@ fn an_extending_graph_overrides_constants_passes_and_layouts() {
     assert!(graph.layouts.contains_key("fused") && !graph.layouts.contains_key("two_entries"));
     assert_eq!(Plan::new(&graph, "halves").unwrap().layout.workgroup_size, 32);
     Plan::new(&graph, "fused_again").unwrap();
+    // A layout like the base's: its kernels, this file's workgroup size.
+    assert_eq!(graph.layouts["fused_narrow"].kernels, graph.layouts["fused"].kernels);
+    assert_eq!(Plan::new(&graph, "fused_narrow").unwrap().layout.workgroup_size, 16);
 }
 
 #[test]

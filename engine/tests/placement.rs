@@ -1,7 +1,7 @@
 //! Layouts need not list the passes the graph's default constants disable (another structure's
 //! passes, chosen by a constant): set on, such a pass is placed by its chain, inside the kernel
 //! of the pass before it or in a kernel of its own, as a layout listing it there would. A
-//! layout may take its kernels from another (`kernels_from`).
+//! layout may be `like` another, taking that one's fields where it gives none.
 
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{ConstValue, Graph, Layer, Plan, Vfs};
@@ -99,26 +99,36 @@ fn a_pass_enabled_by_default_must_still_be_listed() {
 }
 
 #[test]
-fn a_layout_takes_its_kernels_from_another() {
+fn a_layout_like_another_takes_the_fields_it_does_not_give() {
     let g = graph(
-        r#""listed": (kernels: [["make"], ["a", "finish"]], loops: Host),
-           "same": (kernels_from: "listed", loops: Host, workgroup_size: 32)"#,
+        r#""listed": (kernels: [["make"], ["a", "finish"]], loops: Host, threads: 256, loop_guards: false),
+           "same": (like: "listed", workgroup_size: 32),
+           "third": (like: "same", kernels: [["make", "a", "finish"]], loops: InKernel)"#,
     );
-    assert_eq!(g.layout("same").unwrap().kernels, g.layout("listed").unwrap().kernels);
-    assert_eq!(g.layout("same").unwrap().workgroup_size, 32);
+    let (listed, same, third) = (
+        g.layout("listed").unwrap(),
+        g.layout("same").unwrap(),
+        g.layout("third").unwrap(),
+    );
+    assert_eq!(same.kernels, listed.kernels);
+    assert_eq!((same.workgroup_size, listed.workgroup_size), (32, 64));
+    assert_eq!((same.threads, same.loop_guards), (Some(256), false));
     assert_eq!(kernels(&g, "same", 1), kernels(&g, "listed", 1));
+    // Through a like of a like: its own kernels and loops, the rest from both before it.
+    assert_eq!(third.kernels, vec![vec!["make", "a", "finish"]]);
+    assert_eq!(
+        (third.workgroup_size, third.threads, third.loop_guards),
+        (32, Some(256), false)
+    );
+    assert!(matches!(third.loops, lightgraph_engine::ir::LoopMode::InKernel));
     for (layouts, message) in [
         (
-            r#""listed": (kernels: [["make", "a", "finish"]]), "both": (kernels: [["make"]], kernels_from: "listed")"#,
-            "layout 'both': gives both `kernels` and `kernels_from: \"listed\"`",
+            r#""listed": (kernels: [["make", "a", "finish"]]), "lost": (like: "listd")"#,
+            "layout 'lost': is like 'listd', which is no layout of this graph (layouts: listed, lost)",
         ),
         (
-            r#""listed": (kernels: [["make", "a", "finish"]]), "lost": (kernels_from: "listd")"#,
-            "layout 'lost': takes its kernels from 'listd', which is no layout of this graph (layouts: listed, lost)",
-        ),
-        (
-            r#""listed": (kernels_from: "other"), "other": (kernels_from: "listed")"#,
-            "takes its own from another layout",
+            r#""listed": (like: "other"), "other": (like: "listed")"#,
+            "go round a cycle",
         ),
     ] {
         let e = loaded(layouts).unwrap_err().to_string();

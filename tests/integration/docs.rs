@@ -56,7 +56,7 @@ fn the_examples_of_the_graph_guide_render() {
     }
     // The graph that extends `ao`: its constants, its layouts.
     let wide = dir.join("lab/ao-wide.ron");
-    for layout in ["stored", "fused_again"] {
+    for layout in ["stored", "stored_wide", "fused_again"] {
         let r = render(&scene, wide.to_str().unwrap(), layout, (w, h), 2, 2, 3, &[]);
         assert_eq!(
             r.counters["rays_occlusion"],
