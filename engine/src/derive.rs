@@ -176,7 +176,10 @@ fn compile_all(graph: &Graph, flags: &BTreeSet<String>) -> Result<(naga::Module,
             },
         }
     }
-    unreachable!("a module names fewer than {MAX_PLACEHOLDERS} unknown constants, or fails otherwise")
+    Err(Error::Shader(format!(
+        "graph '{}': its WGSL names more than {MAX_PLACEHOLDERS} constants that are neither the graph's nor the host's",
+        graph.name
+    )))
 }
 
 impl Graph {

@@ -232,3 +232,28 @@ fn store(it: ptr<function, Item>) -> bool { out[(*it).index] = (*it).value; retu
     assert_eq!(lists(&live, "make"), (strings(&["source"]), vec![]));
     assert_eq!(lists(&live, "store"), (vec![], strings(&["out"])));
 }
+
+#[test]
+fn wgsl_naming_too_many_unknown_constants_is_an_error_not_a_panic() {
+    // Each unknown upper-case name is taken for a host constant and declared as a u32, one a
+    // compile; past the limit (64) the derivation stops with an error naming the graph.
+    let names: Vec<String> = (0..70).map(|i| format!("K{i}")).collect();
+    let wgsl = format!(
+        "struct Item {{ index: u32, value: u32 }}
+fn make(it: ptr<function, Item>, index: u32) -> bool {{ *it = Item(index, source[index] + {}); return true; }}
+fn store(it: ptr<function, Item>) -> bool {{ out[(*it).index] = (*it).value; return false; }}
+",
+        names.join(" + ")
+    );
+    let text = graph_text("", "", "\"out\"");
+    let vfs = folder("unknowns", &[("derive.ron", &text), ("derive.wgsl", &wgsl)]);
+    let graph = Graph::load(&vfs, "derive.ron").unwrap();
+    let e = graph
+        .specialize_for(&BTreeMap::new(), &flags(&[]))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("graph 'derive': its WGSL names more than 64 constants"),
+        "{e}"
+    );
+}
