@@ -465,8 +465,8 @@ fn a_layout_naming_an_unknown_pass_or_option_is_refused() {
     assert!(err.contains("unknown pass 'shade'") && err.contains("'Odd'"), "{err}");
     let (text, path) = pt_variant(
         "layout-option",
-        "            loops: Host,\n            policy: Compaction,",
-        "            loops: Host,\n            polcy: Compaction,",
+        "            like: \"RegenerationPTmk2\",\n            policy: Compaction,",
+        "            like: \"RegenerationPTmk2\",\n            polcy: Compaction,",
     );
     let err = render_graph_fails(&path);
     assert!(err.contains("polcy"), "{err}");
