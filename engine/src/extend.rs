@@ -174,8 +174,8 @@ fn likes(layouts: &mut BTreeMap<String, LayoutWritten>, file: &str, sources: &So
             };
         };
         let base = layouts[from].clone();
-        let written = layouts.remove(name).expect("a pending layout");
-        layouts.insert(name.clone(), written.over(&base));
+        let layout = layouts.get_mut(name).expect("a pending layout");
+        *layout = std::mem::take(layout).over(&base);
     }
 }
 

@@ -205,24 +205,40 @@ fn a_catalog_resource_joins_where_a_derived_pass_uses_it() {
     );
 }
 
+/// The test graph whose `make` stores the WGSL expression `value` (of `source` and `index`) and
+/// whose `store` writes it out, loaded from a folder of its own.
+fn with_value(name: &str, value: &str) -> Graph {
+    let wgsl = format!(
+        "struct Item {{ index: u32, value: u32 }}
+fn make(it: ptr<function, Item>, index: u32) -> bool {{ *it = Item(index, {value}); return true; }}
+fn store(it: ptr<function, Item>) -> bool {{ out[(*it).index] = (*it).value; return false; }}
+"
+    );
+    let text = graph_text("", "", "\"out\"");
+    Graph::load(
+        &folder(name, &[("derive.ron", &text), ("derive.wgsl", &wgsl)]),
+        "derive.ron",
+    )
+    .unwrap()
+}
+
+/// The error of specialising `graph` with no constants given and no flags.
+fn default_view_error(graph: &Graph) -> String {
+    graph
+        .specialize_for(&BTreeMap::new(), &flags(&[]))
+        .unwrap_err()
+        .to_string()
+}
+
 #[test]
 fn a_graph_whose_wgsl_needs_a_constant_only_the_program_gives_still_loads() {
     // `SCALE` is an f32 the host gives: the default constants' view cannot compile the WGSL
     // (a constant it does not know is taken for a u32), so it derives nothing and culls
     // nothing by it; a view that knows SCALE derives.
-    let wgsl = "struct Item { index: u32, value: u32 }
-fn make(it: ptr<function, Item>, index: u32) -> bool { *it = Item(index, u32(f32(source[index]) * SCALE)); return true; }
-fn store(it: ptr<function, Item>) -> bool { out[(*it).index] = (*it).value; return false; }
-";
-    let text = graph_text("", "", "\"out\"");
-    let vfs = folder("later", &[("derive.ron", &text), ("derive.wgsl", wgsl)]);
-    let graph = Graph::load(&vfs, "derive.ron").unwrap();
+    let graph = with_value("later", "u32(f32(source[index]) * SCALE)");
     assert!(graph.culled.is_empty(), "{:?}", graph.culled);
     // Before any view derived (a derivation is kept per set of flags, whatever the values).
-    let e = graph
-        .specialize_for(&BTreeMap::new(), &flags(&[]))
-        .unwrap_err()
-        .to_string();
+    let e = default_view_error(&graph);
     assert!(
         e.contains("derive.wgsl:2:"),
         "a view of every constant but SCALE reports the WGSL's error: {e}"
@@ -238,20 +254,8 @@ fn wgsl_naming_too_many_unknown_constants_is_an_error_not_a_panic() {
     // Each unknown upper-case name is taken for a host constant and declared as a u32, one a
     // compile; past the limit (64) the derivation stops with an error naming the graph.
     let names: Vec<String> = (0..70).map(|i| format!("K{i}")).collect();
-    let wgsl = format!(
-        "struct Item {{ index: u32, value: u32 }}
-fn make(it: ptr<function, Item>, index: u32) -> bool {{ *it = Item(index, source[index] + {}); return true; }}
-fn store(it: ptr<function, Item>) -> bool {{ out[(*it).index] = (*it).value; return false; }}
-",
-        names.join(" + ")
-    );
-    let text = graph_text("", "", "\"out\"");
-    let vfs = folder("unknowns", &[("derive.ron", &text), ("derive.wgsl", &wgsl)]);
-    let graph = Graph::load(&vfs, "derive.ron").unwrap();
-    let e = graph
-        .specialize_for(&BTreeMap::new(), &flags(&[]))
-        .unwrap_err()
-        .to_string();
+    let graph = with_value("unknowns", &format!("source[index] + {}", names.join(" + ")));
+    let e = default_view_error(&graph);
     assert!(
         e.contains("graph 'derive': its WGSL names more than 64 constants"),
         "{e}"
