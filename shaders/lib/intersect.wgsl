@@ -213,6 +213,13 @@ fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: 
 // builds no deeper trees than this, scenes/src/cwbvh.rs MAX_DEPTH).
 const BVH_STACK_SIZE: u32 = 32u;
 
+#if BVH_SHARED_STACK
+// With BVH_SHARED_STACK the stacks of a workgroup's threads live in workgroup memory instead of
+// each thread's private array: entry k of the thread at lane l is at k LG_WORKGROUP_SIZE + l, so
+// a warp's pushes and pops at one depth touch consecutive words (16 KiB at 64 threads).
+var<workgroup> bvh_stack: array<vec2<u32>, BVH_STACK_SIZE * LG_WORKGROUP_SIZE>;
+#endif
+
 // Node `i`, loaded as five 16-byte words and unpacked into its fields.
 fn cwbvh_node(i: u32) -> CwbvhNode {
 #if TRACE_STATS
@@ -331,7 +338,9 @@ fn cwbvh_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
     let inv_d = safe_inverse(d);
     let pos = inv_d >= vec3<f32>(0.0);
     let oct_inv = select(0u, 4u, pos.x) | select(0u, 2u, pos.y) | select(0u, 1u, pos.z);
+#if !BVH_SHARED_STACK
     var stack: array<vec2<u32>, BVH_STACK_SIZE>;
+#endif
     var sp = 0u;
     // The root alone: bit 31 with an empty imask visits node 0 whatever the octant.
     var nodes = vec2<u32>(0u, 0x80000000u);
@@ -351,7 +360,11 @@ fn cwbvh_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
                 break;
             }
             sp -= 1u;
+#if BVH_SHARED_STACK
+            nodes = bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane];
+#else
             nodes = stack[sp];
+#endif
         }
         // Visit the group's nearest child; the rest of the group waits on the stack.
         let bit = firstLeadingBit(nodes.y);
@@ -359,7 +372,11 @@ fn cwbvh_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
         let index = nodes.x + countOneBits(nodes.y & ((1u << slot) - 1u));
         nodes.y &= ~(1u << bit);
         if ((nodes.y & 0xff000000u) != 0u) {
+#if BVH_SHARED_STACK
+            bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane] = nodes;
+#else
             stack[sp] = nodes;
+#endif
             sp += 1u;
         }
         let n = cwbvh_node(index);
@@ -396,11 +413,18 @@ fn intersect_box(o: vec3<f32>, inv_d: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>, t
 // builds no deeper trees than this, scenes/src/bvh.rs MAX_DEPTH).
 const BVH_STACK_SIZE: u32 = 64u;
 
+#if BVH_SHARED_STACK
+// The stacks in workgroup memory, laid out as the CWBVH's (above).
+var<workgroup> bvh_stack: array<u32, BVH_STACK_SIZE * LG_WORKGROUP_SIZE>;
+#endif
+
 // The closest hit along o + t d, t in (0, t_max).
 fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
     var hit = Hit(t_max, 0u, vec2<f32>(0.0), false);
     let inv_d = safe_inverse(d);
+#if !BVH_SHARED_STACK
     var stack: array<u32, BVH_STACK_SIZE>;
+#endif
     var sp = 0u;
     var node = 0u;
     loop {
@@ -427,7 +451,11 @@ fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
         if (go_left && go_right) {
             let left_first = t_left <= t_right;
             node = select(n.right_first, n.left_first, left_first);
+#if BVH_SHARED_STACK
+            bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane] = select(n.left_first, n.right_first, left_first);
+#else
             stack[sp] = select(n.left_first, n.right_first, left_first);
+#endif
             sp += 1u;
         } else if (go_left) {
             node = n.left_first;
@@ -438,7 +466,11 @@ fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
                 break;
             }
             sp -= 1u;
+#if BVH_SHARED_STACK
+            node = bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane];
+#else
             node = stack[sp];
+#endif
         }
     }
     return hit;
@@ -448,7 +480,9 @@ fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
 fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
     var hit = Hit(t_max, 0u, vec2<f32>(0.0), false);
     let inv_d = safe_inverse(d);
+#if !BVH_SHARED_STACK
     var stack: array<u32, BVH_STACK_SIZE>;
+#endif
     var sp = 0u;
     var node = 0u;
     loop {
@@ -480,7 +514,11 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
         }
         if (go_left && go_right) {
             node = n.left_first;
+#if BVH_SHARED_STACK
+            bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane] = n.right_first;
+#else
             stack[sp] = n.right_first;
+#endif
             sp += 1u;
         } else if (go_left) {
             node = n.left_first;
@@ -491,7 +529,11 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
                 break;
             }
             sp -= 1u;
+#if BVH_SHARED_STACK
+            node = bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane];
+#else
             node = stack[sp];
+#endif
         }
     }
     return false;
