@@ -4,7 +4,8 @@
 # BVH, each workgroup size of WORKGROUPS (default 64) and the CWBVH child loop unrolled and by
 # bit scan (CWBVH_CHILD_SCAN false, true), with SORT set also the diffuse rays sorted by
 # direction first and by origin first (TRACE_SORT), with SHARED set also the traversal's stacks
-# in workgroup memory (BVH_SHARED_STACK, and PT's render with it), FRAMES frames a run (default 60; the rays
+# in workgroup memory (BVH_SHARED_STACK, and PT's render with it), for each K of PER_THREAD
+# (e.g. "2 4 8") also K diffuse rays a thread (TRACE_RAYS_PER_THREAD), FRAMES frames a run (default 60; the rays
 # are made in the first and cast in every one). A line per run: Mrays/s of camera, ambient-occlusion
 # and diffuse-bounce rays over their kernel's GPU time, and the rays a frame. Then PT's
 # default render of each scene for its rays/s (wall-clock and over GPU time). On the GPU machine
@@ -41,6 +42,10 @@ for scene in ${SCENES:-sponza}; do
           --bvh "$bvh" --workgroup "$wg" --set CWBVH_CHILD_SCAN=true
         [ -n "${SHARED:-}" ] && trace_rates "$scene ${spp}spp $bvh wg $wg stack in workgroup memory" --scene "$scene" \
           --spp "$spp" --bvh "$bvh" --workgroup "$wg" --set BVH_SHARED_STACK=true
+        for k in ${PER_THREAD:-}; do
+          trace_rates "$scene ${spp}spp $bvh wg $wg $k diffuse rays a thread" --scene "$scene" --spp "$spp" \
+            --bvh "$bvh" --workgroup "$wg" --set TRACE_RAYS_PER_THREAD="$k"
+        done
         if [ -n "${SORT:-}" ]; then
           trace_rates "$scene ${spp}spp $bvh wg $wg diffuse sorted, direction first" --scene "$scene" --spp "$spp" \
             --bvh "$bvh" --workgroup "$wg" --set TRACE_SORT=true
