@@ -3,9 +3,7 @@
 # on SCENES (default sponza) at 1280x720 with SPP camera rays a pixel (default "1 4"), with each
 # BVH, each workgroup size of WORKGROUPS (default 64) and the CWBVH child loop unrolled and by
 # bit scan (CWBVH_CHILD_SCAN false, true), with SORT set also the diffuse rays sorted by
-# direction first and by origin first (TRACE_SORT), with SHARED set also the traversal's stacks
-# in workgroup memory (BVH_SHARED_STACK, and PT's render with it), for each K of PER_THREAD
-# (e.g. "2 4 8") also K diffuse rays a thread (TRACE_RAYS_PER_THREAD), FRAMES frames a run (default 60; the rays
+# direction first and by origin first (TRACE_SORT), FRAMES frames a run (default 60; the rays
 # are made in the first and cast in every one). A line per run: Mrays/s of camera, ambient-occlusion
 # and diffuse-bounce rays over their kernel's GPU time, and the rays a frame. Then PT's
 # default render of each scene for its rays/s (wall-clock and over GPU time). On the GPU machine
@@ -40,12 +38,6 @@ for scene in ${SCENES:-sponza}; do
         trace_rates "$scene ${spp}spp $bvh wg $wg" --scene "$scene" --spp "$spp" --bvh "$bvh" --workgroup "$wg"
         [ "$bvh" = cwbvh ] && trace_rates "$scene ${spp}spp $bvh wg $wg child scan" --scene "$scene" --spp "$spp" \
           --bvh "$bvh" --workgroup "$wg" --set CWBVH_CHILD_SCAN=true
-        [ -n "${SHARED:-}" ] && trace_rates "$scene ${spp}spp $bvh wg $wg stack in workgroup memory" --scene "$scene" \
-          --spp "$spp" --bvh "$bvh" --workgroup "$wg" --set BVH_SHARED_STACK=true
-        for k in ${PER_THREAD:-}; do
-          trace_rates "$scene ${spp}spp $bvh wg $wg $k diffuse rays a thread" --scene "$scene" --spp "$spp" \
-            --bvh "$bvh" --workgroup "$wg" --set TRACE_RAYS_PER_THREAD="$k"
-        done
         if [ -n "${SORT:-}" ]; then
           trace_rates "$scene ${spp}spp $bvh wg $wg diffuse sorted, direction first" --scene "$scene" --spp "$spp" \
             --bvh "$bvh" --workgroup "$wg" --set TRACE_SORT=true
@@ -57,9 +49,4 @@ for scene in ${SCENES:-sponza}; do
   done
   echo "== $scene: PT, default layout"
   lg render --graph pt --scene "$scene" --res ${RES:-1280x720} --time 5s --out "$out/pt.exr" --force 2>&1 | grep -E "frames,|rror"
-  if [ -n "${SHARED:-}" ]; then
-    echo "== $scene: PT, default layout, stacks in workgroup memory"
-    lg render --graph pt --scene "$scene" --res ${RES:-1280x720} --time 5s --out "$out/pt.exr" --force \
-      --set BVH_SHARED_STACK=true 2>&1 | grep -E "frames,|rror"
-  fi
 done

@@ -112,11 +112,6 @@ impl CodegenContext<'_> {
         s.push_str(SLOT_DECLARATION);
         let _ = writeln!(
             s,
-            "const LG_WORKGROUP_SIZE: u32 = {}u;",
-            self.plan.layout.workgroup_size
-        );
-        let _ = writeln!(
-            s,
             "@group(0) @binding({}) var<storage, read_write> lg_counters: array<atomic<u32>>;",
             self.binding(&BufferRef::Counters)
         );
@@ -599,7 +594,7 @@ impl CodegenContext<'_> {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "@compute @workgroup_size({wg})\nfn {}(@builtin(workgroup_id) lg_wid: vec3<u32>, @builtin(num_workgroups) lg_nwg: vec3<u32>, @builtin(local_invocation_index) lg_lid: u32) {{\n{parameters}    lg_lane = lg_lid;\n    let lg_i = (lg_wid.y * lg_nwg.x + lg_wid.x) * {wg}u + lg_lid;\n    if (lg_i < {limit}) {{ lg_run(lg_i); }}",
+            "@compute @workgroup_size({wg})\nfn {}(@builtin(workgroup_id) lg_wid: vec3<u32>, @builtin(num_workgroups) lg_nwg: vec3<u32>, @builtin(local_invocation_index) lg_lid: u32) {{\n{parameters}    let lg_i = (lg_wid.y * lg_nwg.x + lg_wid.x) * {wg}u + lg_lid;\n    if (lg_i < {limit}) {{ lg_run(lg_i); }}",
             kp.name
         );
         if !self.graph().counters.is_empty() {

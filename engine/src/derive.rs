@@ -17,9 +17,8 @@ use std::fmt::Write;
 
 /// `lg_slot`, which passes may read: the slot the thread's item holds in its chain's state
 /// buffer (below `ITEM_SLOTS`, which a resource's count may use) in kernels of a chain stored
-/// between kernels; the thread's index in others. And `lg_lane`, the thread's index in its
-/// workgroup (below `LG_WORKGROUP_SIZE`), for per-thread data in workgroup memory.
-pub const SLOT_DECLARATION: &str = "var<private> lg_slot: u32;\nvar<private> lg_lane: u32;\n";
+/// between kernels; the thread's index in others.
+pub const SLOT_DECLARATION: &str = "var<private> lg_slot: u32;\n";
 
 /// The most constants not known yet (host constants, in the default constants' view) that a
 /// derivation declares as `u32` placeholders before it gives up.

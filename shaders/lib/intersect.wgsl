@@ -213,13 +213,6 @@ fn intersect_primitive(o: vec3<f32>, d: vec3<f32>, index: u32, t_max: f32, hit: 
 // builds no deeper trees than this, scenes/src/cwbvh.rs MAX_DEPTH).
 const BVH_STACK_SIZE: u32 = 32u;
 
-#if BVH_SHARED_STACK
-// With BVH_SHARED_STACK the stacks of a workgroup's threads live in workgroup memory instead of
-// each thread's private array: entry k of the thread at lane l is at k LG_WORKGROUP_SIZE + l, so
-// a warp's pushes and pops at one depth touch consecutive words (16 KiB at 64 threads).
-var<workgroup> bvh_stack: array<vec2<u32>, BVH_STACK_SIZE * LG_WORKGROUP_SIZE>;
-#endif
-
 // Node `i`, loaded as five 16-byte words and unpacked into its fields.
 fn cwbvh_node(i: u32) -> CwbvhNode {
 #if TRACE_STATS
@@ -332,93 +325,49 @@ fn cwbvh_intersect_children(n: CwbvhNode, o: vec3<f32>, inv_d: vec3<f32>, oct_in
     return hits;
 }
 
-// A ray's walk down the CWBVH, one node a step: `cwbvh_trace` runs it to its end, and a
-// kernel may interleave walks of several rays (the trace benchmark's TRACE_RAYS_PER_THREAD).
-// `nodes` and `prims` are the node group and the primitive group (above), `sp` the stack's
-// depth.
-struct CwbvhWalk {
-    o: vec3<f32>,
-    d: vec3<f32>,
-    inv_d: vec3<f32>,
-    // Bit 2, 1, 0 set for a non-negative x, y, z direction.
-    oct_inv: u32,
-    any_hit: bool,
-    hit: Hit,
-    nodes: vec2<u32>,
-    prims: vec2<u32>,
-    sp: u32,
-#if !BVH_SHARED_STACK
-    stack: array<vec2<u32>, BVH_STACK_SIZE>,
-#endif
-}
-
-// Starts `w` on o + t d, t in (0, t_max): the closest hit, or with `any_hit` the first found.
-fn cwbvh_walk_start(w: ptr<function, CwbvhWalk>, o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) {
-    (*w).o = o;
-    (*w).d = d;
-    (*w).inv_d = safe_inverse(d);
-    let pos = (*w).inv_d >= vec3<f32>(0.0);
-    (*w).oct_inv = select(0u, 4u, pos.x) | select(0u, 2u, pos.y) | select(0u, 1u, pos.z);
-    (*w).any_hit = any_hit;
-    (*w).hit = Hit(t_max, 0u, vec2<f32>(0.0), false);
-    // The root alone: bit 31 with an empty imask visits node 0 whatever the octant.
-    (*w).nodes = vec2<u32>(0u, 0x80000000u);
-    (*w).prims = vec2<u32>(0u, 0u);
-    (*w).sp = 0u;
-}
-
-// One step of `w`: the last node's primitives (their hits shorten the ray for its inner
-// children), then the next node's children. False when the walk has ended (`hit` is final).
-fn cwbvh_walk_step(w: ptr<function, CwbvhWalk>) -> bool {
-    var hit = (*w).hit;
-    while ((*w).prims.y != 0u) {
-        let k = firstTrailingBit((*w).prims.y);
-        (*w).prims.y &= (*w).prims.y - 1u;
-        intersect_primitive((*w).o, (*w).d, (*w).prims.x + k, hit.t, &hit);
-        if ((*w).any_hit && hit.found) {
-            (*w).hit = hit;
-            return false;
-        }
-    }
-    (*w).hit = hit;
-    if (((*w).nodes.y & 0xff000000u) == 0u) {
-        if ((*w).sp == 0u) {
-            return false;
-        }
-        (*w).sp -= 1u;
-#if BVH_SHARED_STACK
-        (*w).nodes = bvh_stack[(*w).sp * LG_WORKGROUP_SIZE + lg_lane];
-#else
-        (*w).nodes = (*w).stack[(*w).sp];
-#endif
-    }
-    // Visit the group's nearest child; the rest of the group waits on the stack.
-    let bit = firstLeadingBit((*w).nodes.y);
-    let slot = (bit - 24u) ^ (*w).oct_inv;
-    let index = (*w).nodes.x + countOneBits((*w).nodes.y & ((1u << slot) - 1u));
-    (*w).nodes.y &= ~(1u << bit);
-    if (((*w).nodes.y & 0xff000000u) != 0u) {
-#if BVH_SHARED_STACK
-        bvh_stack[(*w).sp * LG_WORKGROUP_SIZE + lg_lane] = (*w).nodes;
-#else
-        (*w).stack[(*w).sp] = (*w).nodes;
-#endif
-        (*w).sp += 1u;
-    }
-    let n = cwbvh_node(index);
-    let hits = cwbvh_intersect_children(n, (*w).o, (*w).inv_d, (*w).oct_inv, (*w).hit.t);
-    (*w).nodes = vec2<u32>(n.child_base, (hits & 0xff000000u) | (n.e_imask >> 24u));
-    (*w).prims = vec2<u32>(n.primitive_base, hits & 0x00ffffffu);
-    return true;
-}
-
 // The closest hit along o + t d, t in (0, t_max), or with `any_hit` the first hit found.
 fn cwbvh_trace(o: vec3<f32>, d: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
-    var w: CwbvhWalk;
-    cwbvh_walk_start(&w, o, d, t_max, any_hit);
-    while (cwbvh_walk_step(&w)) {
+    var hit = Hit(t_max, 0u, vec2<f32>(0.0), false);
+    let inv_d = safe_inverse(d);
+    let pos = inv_d >= vec3<f32>(0.0);
+    let oct_inv = select(0u, 4u, pos.x) | select(0u, 2u, pos.y) | select(0u, 1u, pos.z);
+    var stack: array<vec2<u32>, BVH_STACK_SIZE>;
+    var sp = 0u;
+    // The root alone: bit 31 with an empty imask visits node 0 whatever the octant.
+    var nodes = vec2<u32>(0u, 0x80000000u);
+    var prims = vec2<u32>(0u, 0u);
+    loop {
+        // The last node's leaves first: their hits shorten the ray for its inner children.
+        while (prims.y != 0u) {
+            let k = firstTrailingBit(prims.y);
+            prims.y &= prims.y - 1u;
+            intersect_primitive(o, d, prims.x + k, hit.t, &hit);
+            if (any_hit && hit.found) {
+                return hit;
+            }
+        }
+        if ((nodes.y & 0xff000000u) == 0u) {
+            if (sp == 0u) {
+                break;
+            }
+            sp -= 1u;
+            nodes = stack[sp];
+        }
+        // Visit the group's nearest child; the rest of the group waits on the stack.
+        let bit = firstLeadingBit(nodes.y);
+        let slot = (bit - 24u) ^ oct_inv;
+        let index = nodes.x + countOneBits(nodes.y & ((1u << slot) - 1u));
+        nodes.y &= ~(1u << bit);
+        if ((nodes.y & 0xff000000u) != 0u) {
+            stack[sp] = nodes;
+            sp += 1u;
+        }
+        let n = cwbvh_node(index);
+        let hits = cwbvh_intersect_children(n, o, inv_d, oct_inv, hit.t);
+        nodes = vec2<u32>(n.child_base, (hits & 0xff000000u) | (n.e_imask >> 24u));
+        prims = vec2<u32>(n.primitive_base, hits & 0x00ffffffu);
     }
-    return w.hit;
+    return hit;
 }
 
 // The closest hit along o + t d, t in (0, t_max).
@@ -447,18 +396,11 @@ fn intersect_box(o: vec3<f32>, inv_d: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>, t
 // builds no deeper trees than this, scenes/src/bvh.rs MAX_DEPTH).
 const BVH_STACK_SIZE: u32 = 64u;
 
-#if BVH_SHARED_STACK
-// The stacks in workgroup memory, laid out as the CWBVH's (above).
-var<workgroup> bvh_stack: array<u32, BVH_STACK_SIZE * LG_WORKGROUP_SIZE>;
-#endif
-
 // The closest hit along o + t d, t in (0, t_max).
 fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
     var hit = Hit(t_max, 0u, vec2<f32>(0.0), false);
     let inv_d = safe_inverse(d);
-#if !BVH_SHARED_STACK
     var stack: array<u32, BVH_STACK_SIZE>;
-#endif
     var sp = 0u;
     var node = 0u;
     loop {
@@ -485,11 +427,7 @@ fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
         if (go_left && go_right) {
             let left_first = t_left <= t_right;
             node = select(n.right_first, n.left_first, left_first);
-#if BVH_SHARED_STACK
-            bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane] = select(n.left_first, n.right_first, left_first);
-#else
             stack[sp] = select(n.left_first, n.right_first, left_first);
-#endif
             sp += 1u;
         } else if (go_left) {
             node = n.left_first;
@@ -500,11 +438,7 @@ fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
                 break;
             }
             sp -= 1u;
-#if BVH_SHARED_STACK
-            node = bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane];
-#else
             node = stack[sp];
-#endif
         }
     }
     return hit;
@@ -514,9 +448,7 @@ fn trace_closest(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> Hit {
 fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
     var hit = Hit(t_max, 0u, vec2<f32>(0.0), false);
     let inv_d = safe_inverse(d);
-#if !BVH_SHARED_STACK
     var stack: array<u32, BVH_STACK_SIZE>;
-#endif
     var sp = 0u;
     var node = 0u;
     loop {
@@ -548,11 +480,7 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
         }
         if (go_left && go_right) {
             node = n.left_first;
-#if BVH_SHARED_STACK
-            bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane] = n.right_first;
-#else
             stack[sp] = n.right_first;
-#endif
             sp += 1u;
         } else if (go_left) {
             node = n.left_first;
@@ -563,11 +491,7 @@ fn trace_any(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
                 break;
             }
             sp -= 1u;
-#if BVH_SHARED_STACK
-            node = bvh_stack[sp * LG_WORKGROUP_SIZE + lg_lane];
-#else
             node = stack[sp];
-#endif
         }
     }
     return false;

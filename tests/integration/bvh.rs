@@ -269,51 +269,28 @@ enum Shapes {
     Deep,
 }
 
-/// The stacks in each thread's private array and in workgroup memory (`BVH_SHARED_STACK`).
 #[test]
 fn gpu_bvh2_traversal_matches_brute_force() {
     for shapes in [Shapes::Random, Shapes::AxisAligned, Shapes::Deep] {
-        for shared_stack in [false, true] {
-            traversal_matches_brute_force(
-                BvhKind::Bvh2,
-                shapes,
-                Traversal {
-                    child_scan: false,
-                    shared_stack,
-                },
-            );
-        }
+        traversal_matches_brute_force(BvhKind::Bvh2, shapes, false);
     }
 }
 
 /// Both of the CWBVH's child loops: the loop of eight slots and the bit scan over the occupied
-/// ones (`CWBVH_CHILD_SCAN`); and the stacks in workgroup memory (`BVH_SHARED_STACK`).
+/// ones (`CWBVH_CHILD_SCAN`).
 #[test]
 fn gpu_cwbvh_traversal_matches_brute_force() {
     for shapes in [Shapes::Random, Shapes::AxisAligned, Shapes::Deep] {
-        for (child_scan, shared_stack) in [(false, false), (true, false), (false, true)] {
-            traversal_matches_brute_force(
-                BvhKind::Cwbvh,
-                shapes,
-                Traversal {
-                    child_scan,
-                    shared_stack,
-                },
-            );
+        for child_scan in [false, true] {
+            traversal_matches_brute_force(BvhKind::Cwbvh, shapes, child_scan);
         }
     }
 }
 
-/// The traversal's options: the constants `CWBVH_CHILD_SCAN` and `BVH_SHARED_STACK`.
-#[derive(Debug, Clone, Copy)]
-struct Traversal {
-    child_scan: bool,
-    shared_stack: bool,
-}
-
-/// Traces 4096 rays through a BVH of `kind` over `shapes` on the GPU with the traversal's
-/// options and compares with brute force; the BVH must be within the traversal's stack.
-fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes, options: Traversal) {
+/// Traces 4096 rays through a BVH of `kind` over `shapes` on the GPU (the CWBVH's children
+/// visited by bit scan if `child_scan`) and compares with brute force; the BVH must be within
+/// the traversal's stack.
+fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes, child_scan: bool) {
     let mut rng = Rng(0x9E3779B97F4A7C15);
     let n = 4096usize;
     let (scene, queries) = if shapes == Shapes::Deep {
@@ -347,8 +324,7 @@ fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes, options: Travers
     let spec = Specialization {
         constants: [
             ("QUERIES".to_string(), ConstValue::U32(n as u32)),
-            ("CWBVH_CHILD_SCAN".to_string(), ConstValue::Bool(options.child_scan)),
-            ("BVH_SHARED_STACK".to_string(), ConstValue::Bool(options.shared_stack)),
+            ("CWBVH_CHILD_SCAN".to_string(), ConstValue::Bool(child_scan)),
         ]
         .into_iter()
         .collect(),
@@ -420,7 +396,7 @@ fn traversal_matches_brute_force(kind: BvhKind, shapes: Shapes, options: Travers
         assert_eq!(r[2] == 1.0, cpu_any, "ray {i}: any-hit below {t_any}");
     }
     eprintln!(
-        "{kind:?} (depth {}, {options:?}), {shapes:?} shapes, {n} rays: {hits} closest hits, {any_hits} any-hits, {ambiguous} skipped as ambiguous (ties {}, edges {}, f32-ill-conditioned {}, at the any-hit limit {})",
+        "{kind:?} (depth {}, child scan {child_scan}), {shapes:?} shapes, {n} rays: {hits} closest hits, {any_hits} any-hits, {ambiguous} skipped as ambiguous (ties {}, edges {}, f32-ill-conditioned {}, at the any-hit limit {})",
         compiled.bvh_depth, reasons[0], reasons[1], reasons[2], reasons[3]
     );
     // About 2.5% of random rays meet a surface at so grazing an angle that f32 cannot give

@@ -107,29 +107,3 @@ fn sorted_diffuse_rays_find_the_same_hits() {
         );
     }
 }
-
-/// TRACE_RAYS_PER_THREAD casts several diffuse rays a thread (on the CWBVH interleaved in one
-/// loop of walk steps, on the BVH2 one after another) without changing which ray finds what:
-/// the same image, pixel for pixel, and the same rays counted, with a ray count that the
-/// threads do not divide.
-#[test]
-fn several_diffuse_rays_a_thread_find_the_same_hits() {
-    use lightgraph_engine::ConstValue;
-    for kind in [BvhKind::Cwbvh, BvhKind::Bvh2] {
-        let scene = load_scene_with("cornell-glossy-point", kind).unwrap();
-        let plain = render(&scene, "trace", "Trace", (48, 36), 1, 1, 9, &[]);
-        assert!(plain.counters["rays_diffuse"] > 0);
-        for k in [3, 8] {
-            let set = [("TRACE_RAYS_PER_THREAD", ConstValue::U32(k))];
-            let several = render(&scene, "trace", "Trace", (48, 36), 1, 1, 9, &set);
-            assert_eq!(
-                plain.counters["rays_diffuse"], several.counters["rays_diffuse"],
-                "{kind:?}, {k} rays a thread"
-            );
-            assert_eq!(
-                plain.image.mean, several.image.mean,
-                "{kind:?}: {k} rays a thread changed the image"
-            );
-        }
-    }
-}
