@@ -3,15 +3,13 @@
 //! engine enumerates; per-frame parameters changed between frames without recompiling.
 
 use lightgraph_engine::ir::LayoutDecl;
-use lightgraph_engine::{ConstValue, Gpu, Graph, Instance, Layer, Specialization, Vfs, compile};
+use lightgraph_engine::{ConstValue, Graph, Instance, Layer, Specialization, Vfs, compile};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
-use std::sync::OnceLock;
 
-fn gpu() -> &'static Gpu {
-    static GPU: OnceLock<Gpu> = OnceLock::new();
-    GPU.get_or_init(|| Gpu::new(None).expect("a GPU adapter (install mesa-vulkan-drivers for lavapipe)"))
-}
+#[path = "common/gpu.rs"]
+mod gpu_common;
+use gpu_common::{gpu, program};
 
 fn load(file: &str) -> Graph {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
@@ -122,15 +120,7 @@ fn operators_build_a_bucket_table_over_a_counted_domain_in_every_layout() {
 #[test]
 fn parameters_change_between_frames_without_recompiling() {
     let g = load("params.ron");
-    let program = compile(
-        &g,
-        "fused",
-        &g.layouts["fused"],
-        &Specialization::default(),
-        &gpu().target(),
-    )
-    .unwrap();
-    let mut instance = Instance::new(gpu(), program, &BTreeMap::new()).unwrap();
+    let mut instance = Instance::new(gpu(), program(&g, "fused"), &BTreeMap::new()).unwrap();
     let values = |instance: &Instance| -> Vec<f32> { bytemuck::pod_collect_to_vec(&instance.read("values").unwrap()) };
     instance.run_frame(0, 0).unwrap();
     let v = values(&instance);

@@ -8,8 +8,11 @@ use crate::gpu::Gpu;
 use crate::plan::{Port, Side};
 use crate::program::{BindingUse, KernelModule, Program, RuntimeChecks};
 use crate::resolve::BufferRef;
+use std::any::Any;
 use std::borrow::Cow;
+use std::cell::RefCell;
 use std::collections::BTreeMap;
+use std::panic::AssertUnwindSafe;
 
 /// Maps a kernel's virtual boundary bindings to physical buffers.
 type Resolve = Box<dyn Fn(&BufferRef) -> BufferRef>;
@@ -61,6 +64,8 @@ struct Builder<'a> {
     buffers: &'a Buffers,
     frame_layout: &'a wgpu::BindGroupLayout,
     timed_names: Vec<String>,
+    /// The kernel being built, named by an error if its translation panics.
+    current: &'a RefCell<String>,
 }
 
 impl Builder<'_> {
@@ -68,6 +73,7 @@ impl Builder<'_> {
     /// bindings to physical buffers; `timed` kernels get a timing slot.
     fn kernel(&mut self, module: &KernelModule, resolves: &[&dyn Fn(&BufferRef) -> BufferRef], timed: bool) -> Kernel {
         let name = &module.name;
+        self.current.replace(name.clone());
         let group0: Vec<&BindingUse> = module.uses.iter().filter(|u| !u.uniform).collect();
         let uses_frame = module.uses.iter().any(|u| u.uniform);
         let entries: Vec<wgpu::BindGroupLayoutEntry> = group0
@@ -157,8 +163,39 @@ impl Builder<'_> {
     }
 }
 
-/// Every kernel of `program` as a pipeline bound to `buffers`.
+/// Every kernel of `program` as a pipeline bound to `buffers`. naga validated every module,
+/// but its translation to the driver's language can still panic on a construct it mishandles:
+/// that is an error naming the kernel, not a crash.
 pub fn build(gpu: &Gpu, program: &Program, buffers: &Buffers) -> Result<Kernels> {
+    let current = RefCell::new(String::new());
+    std::panic::catch_unwind(AssertUnwindSafe(|| build_kernels(gpu, program, buffers, &current))).unwrap_or_else(
+        |panic| {
+            Err(translation_error(
+                &program.plan.layout_name,
+                &current.borrow(),
+                panic.as_ref(),
+            ))
+        },
+    )
+}
+
+/// The error of a kernel whose translation panicked with `panic`.
+fn translation_error(layout: &str, kernel: &str, panic: &(dyn Any + Send)) -> Error {
+    let message = panic
+        .downcast_ref::<&str>()
+        .map(|m| m.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "no message".into());
+    Error::Shader(format!(
+        "layout '{layout}', kernel '{kernel}': naga panicked translating it for the driver ({message}). \
+         That is a bug of naga's, not an error in the WGSL, which validated; one known trigger is \
+         passing a pointer to a field reached through a pointer parameter on to another function \
+         (`f(&(*p).field)`): pass a local copy of the field and store it back"
+    ))
+}
+
+/// [`build`]'s work, naming the kernel it builds in `current`.
+fn build_kernels(gpu: &Gpu, program: &Program, buffers: &Buffers, current: &RefCell<String>) -> Result<Kernels> {
     let device = &gpu.device;
     let frame_layout = frame_layout(device);
     let mut b = Builder {
@@ -166,6 +203,7 @@ pub fn build(gpu: &Gpu, program: &Program, buffers: &Buffers) -> Result<Kernels>
         buffers,
         frame_layout: &frame_layout,
         timed_names: Vec::new(),
+        current,
     };
     let identity = |r: &BufferRef| r.clone();
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);

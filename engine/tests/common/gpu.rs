@@ -1,7 +1,9 @@
-//! Shared by the engine's GPU tests (included by path): one adapter per test binary, and its
-//! compilation targets with and without subgroup operations.
+//! Shared by the engine's GPU tests (included by path): one adapter per test binary, its
+//! compilation targets with and without subgroup operations, and a layout compiled for it.
+// Each test binary uses what it needs of these.
+#![allow(dead_code)]
 
-use lightgraph_engine::{Gpu, Target};
+use lightgraph_engine::{Gpu, Graph, Program, Specialization, Target, compile};
 use std::sync::OnceLock;
 
 /// The adapter (lavapipe in CI).
@@ -18,4 +20,16 @@ pub fn targets() -> Vec<(&'static str, Target)> {
         out.push(("no subgroups", with.without_subgroups()));
     }
     out
+}
+
+/// `layout` of `graph` compiled for the adapter with the graph's own constants.
+pub fn program(graph: &Graph, layout: &str) -> Program {
+    compile(
+        graph,
+        layout,
+        &graph.layouts[layout],
+        &Specialization::default(),
+        &gpu().target(),
+    )
+    .unwrap()
 }
