@@ -169,6 +169,11 @@ fn morton_spread(v: u32) -> u32 {
     return x;
 }
 
+// The Morton code of a cell of a 3D grid (10 bits an axis): x, y, z interleaved from bit 0.
+fn morton_code(c: vec3<u32>) -> u32 {
+    return morton_spread(c.x) | (morton_spread(c.y) << 1u) | (morton_spread(c.z) << 2u);
+}
+
 // The octahedral code of a unit vector: snorm16 x, y (Meyer et al. 2010).
 fn encode_octahedral(v: vec3<f32>) -> u32 {
     let p = v.xy / (abs(v.x) + abs(v.y) + abs(v.z));

@@ -56,7 +56,7 @@ struct KdNode {
 fn kd_encode(p: ptr<function, PhotonSlot>, index: u32) -> bool {
     (*p).index = index;
     let c = kd_cell(pm_staging[index].position, kd_scale());
-    kd_codes[index] = morton_spread(c.x) | (morton_spread(c.y) << 1u) | (morton_spread(c.z) << 2u);
+    kd_codes[index] = morton_code(c);
     kd_index[index] = index;
     return false;
 }

@@ -43,7 +43,7 @@ fn trace_sort_key(r: TraceRay) -> u32 {
     }
     let cube = (r.origin - scene.center) / (2.0 * scene.radius) + 0.5;
     let c = vec3<u32>(clamp(cube * 64.0, vec3<f32>(0.0), vec3<f32>(63.0)));
-    let origin = morton_spread(c.x) | (morton_spread(c.y) << 1u) | (morton_spread(c.z) << 2u);
+    let origin = morton_code(c);
     let e = unpack2x16snorm(encode_octahedral(r.direction)) * 0.5 + 0.5;
     let d = vec2<u32>(clamp(e * 32.0, vec2<f32>(0.0), vec2<f32>(31.0)));
     let direction = morton_spread(d.x) | (morton_spread(d.y) << 1u);
