@@ -220,8 +220,10 @@ impl Graph {
     }
 
     /// `ops` (declared ones) with their resources named by the live graph's ids.
-    pub(crate) fn live_ops(&self, ops: &[Operator]) -> Vec<Operator<ResourceId>> {
-        ops.iter().map(|op| op.map(&|n| self.resource_by_name[n])).collect()
+    pub(crate) fn live_ops<'a>(&self, ops: impl IntoIterator<Item = &'a Operator>) -> Vec<Operator<ResourceId>> {
+        ops.into_iter()
+            .map(|op| op.map(&|n| self.resource_by_name[n]))
+            .collect()
     }
 
     /// The id of the resource called `name`, if the live graph has it.

@@ -472,6 +472,7 @@ impl Resolved {
             let s = g.step_of_phase(ph);
             Some(Lifetime { first: s, last: s })
         };
+        let step_resources: Vec<BTreeSet<ResourceId>> = (0..g.steps.len()).map(|s| g.step_resources(s)).collect();
         for r in g.resource_ids() {
             let scope = g.resources[r].decl.scope;
             if scope == Scope::External || !self.used.contains(&r) {
@@ -480,7 +481,7 @@ impl Resolved {
             let size = &self.sizes[r];
             let bytes = size.element_bytes as u64 * size.count.unwrap_or(1).max(1);
             let lifetime = match scope {
-                Scope::Transient => lifetime_of(&mut (0..g.steps.len()).filter(|&s| g.step_resources(s).contains(&r))),
+                Scope::Transient => lifetime_of(&mut (0..g.steps.len()).filter(|&s| step_resources[s].contains(&r))),
                 _ => None,
             };
             out.insert(BufferRef::Resource(r), Request { bytes, lifetime });

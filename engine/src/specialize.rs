@@ -283,8 +283,7 @@ impl Graph {
             .filter(|i| !culled.contains_key(&Node::Op(*i)))
             .collect();
         self.passes = live_pass.iter().map(|&i| d.passes[i].clone()).collect();
-        let ops: Vec<_> = live_op.iter().map(|&i| d.ops[i].clone()).collect();
-        self.ops = self.live_ops(&ops);
+        self.ops = self.live_ops(live_op.iter().map(|&i| &d.ops[i]));
         self.chains = self.build_chains().expect("a subset of valid chains is valid");
         self.phases = self.build_phases().expect("a subset of valid phases is valid");
         let live_names: BTreeSet<&str> = self.passes.iter().map(|p| p.decl.name.as_str()).collect();
