@@ -257,17 +257,19 @@ pub struct GpuLight {
     pub pad2: f32,
 }
 
-/// One entry of the light-selection alias table (`AliasEntry` in WGSL, Walker's alias method):
-/// slot `i` keeps light `i` with probability `threshold` and otherwise gives its alias, light
-/// `other`; `pmf` is the probability with which light `i` is picked overall.
+/// One entry of the light-selection alias table (`AliasEntry` in WGSL, Walker's alias method
+/// in integers, [`crate::alias`]): of the 2^24 values of a pick's random bits, the slot `i` gets
+/// 2^24 / slots; `keep` of them pick light `i`, the others light `other`; `pmf` is the
+/// probability with which light `i` is picked overall (entries past the last light: 0).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct GpuAliasEntry {
-    /// Probability of keeping this slot's own light.
-    pub threshold: f32,
+    /// How many of the slot's values keep its own light.
+    pub keep: u32,
     /// The light picked otherwise (the alias; `alias` is a WGSL keyword).
     pub other: u32,
-    /// Probability of picking light `i` (the slot's own), for MIS.
+    /// Probability of picking light `i` (the slot's own), for MIS: a whole number of values
+    /// over 2^24, exact in f32.
     pub pmf: f32,
 }
 

@@ -388,7 +388,8 @@ pub struct CompiledScene {
     pub lights: Vec<GpuLight>,
     /// Each light's estimated power (luminance of its emitted flux, see [`light_power`]).
     pub light_power: Vec<f64>,
-    /// The alias table that picks lights in proportion to `light_power`.
+    /// The alias table that picks lights in proportion to `light_power` (padded to a power of
+    /// two entries).
     pub light_alias: Vec<GpuAliasEntry>,
     /// The environment map's size and rotation (width 0 when the scene has none).
     pub environment: GpuEnvironment,
@@ -475,7 +476,7 @@ impl CompiledScene {
             .iter()
             .map(|l| light_power(l, radius as f64, mean_env_luminance))
             .collect();
-        let light_alias = alias::build(&light_power);
+        let light_alias = alias::build(&light_power)?;
         let (env_texels, env_cdf) = match sky.distribution {
             Some(d) => (d.texels, d.cdf),
             None => (vec![[0.0; 4]], vec![0.0, 1.0]),

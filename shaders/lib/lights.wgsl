@@ -20,13 +20,16 @@ struct LightPick {
 }
 
 // Picks a light (the scene has at least one) with probability proportional to its power,
-// from one uniform number: its integer part in [0, num_lights) picks a slot of the alias
-// table, its fraction whether the slot keeps its own light or gives its other light.
+// from 24 bits of one uniform number: the top ones pick one of the alias table's slots (the
+// lights padded to a power of two), the others whether the slot keeps its own light or gives
+// its other light. Each light is picked for a whole number of the 2^24 values, and that number
+// over 2^24 is its `pmf`, exactly (scenes/src/alias.rs).
 fn pick_light(u: f32) -> LightPick {
-    let x = u * f32(scene.num_lights);
-    let slot = min(u32(x), scene.num_lights - 1u);
+    let bits = min(u32(u * 16777216.0), 16777215u);
+    let shift = countLeadingZeros(scene.num_lights - 1u) - 8u;
+    let slot = bits >> shift;
     let entry = light_alias[slot];
-    let index = select(entry.other, slot, x - f32(slot) < entry.threshold);
+    let index = select(entry.other, slot, (bits & ((1u << shift) - 1u)) < entry.keep);
     return LightPick(index, light_alias[index].pmf);
 }
 

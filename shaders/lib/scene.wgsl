@@ -214,10 +214,11 @@ struct Light {
     pad2: f32,
 }
 
-// Light selection by Walker's alias method: slot i keeps light i with probability
-// `threshold`, else gives light `other`; `pmf` is light i's overall pick probability.
+// Light selection by Walker's alias method in integers: of the 2^24 values of a pick, slot i
+// gets 2^24 / slots, `keep` of which pick light i and the rest light `other`; `pmf` is light
+// i's overall pick probability (exact: a whole number of values over 2^24).
 struct AliasEntry {
-    threshold: f32,
+    keep: u32,
     other: u32,
     pmf: f32,
 }

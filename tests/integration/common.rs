@@ -99,6 +99,33 @@ pub fn render_with_layout(
     }
 }
 
+/// Renders `scene` with `graph` in `layout` (`size` pixels, one sample per pixel a frame,
+/// `constants`) in `batches` batches of `frames` frames from seed `seed`: each batch's
+/// per-pixel mean, batch by batch (the method of batch means: their spread is the standard
+/// error whatever the correlation between pixels, which the light tracers have).
+pub fn render_batches(
+    scene: &LoadedScene,
+    (graph, layout): (&str, &str),
+    size: (u32, u32),
+    (batches, frames): (u32, u32),
+    seed: u32,
+    constants: &[(&str, ConstValue)],
+) -> Vec<Vec<[f64; 3]>> {
+    let graph = load_graph(graph).unwrap();
+    let options = options(size, 1, seed, constants, Default::default());
+    let mut session = Session::new(gpu(), &graph, layout, scene, options).unwrap();
+    (0..batches)
+        .map(|_| {
+            for _ in 0..frames {
+                session.render_frame().unwrap();
+            }
+            let taken = session.take_accumulation().unwrap();
+            let n = taken.frames as f64;
+            taken.sum.iter().map(|s| [0, 1, 2].map(|c| s[c] as f64 / n)).collect()
+        })
+        .collect()
+}
+
 /// [`render_with_layout`] with the layout's own options.
 #[allow(clippy::too_many_arguments)]
 pub fn render(

@@ -204,7 +204,7 @@ fn check_scene_structs(module: &naga::Module, kind: BvhKind) {
             position, kind, e1, inv_area, e2, cos_inner, normal, cos_outer, radiance, pad2
         ]
     );
-    check!("AliasEntry", GpuAliasEntry, [threshold, other, pmf]);
+    check!("AliasEntry", GpuAliasEntry, [keep, other, pmf]);
     check!(
         "Environment",
         GpuEnvironment,
