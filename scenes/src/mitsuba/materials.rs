@@ -58,6 +58,10 @@ pub struct Materials {
 /// The name of a diffuse grey (reflectance 0.5) that shapes without a bsdf get.
 pub const DEFAULT: &str = "mitsuba:default";
 
+/// The name of the black diffuse that emitting shapes without a bsdf get (Mitsuba's default
+/// bsdf of an emitter: reflectance 0).
+pub const DEFAULT_EMITTER: &str = "mitsuba:default-emitter";
+
 impl Materials {
     /// The name of the material of bsdf `node` (a `<bsdf>` element), converting it on first
     /// use.
@@ -76,13 +80,15 @@ impl Materials {
         Ok(name)
     }
 
-    /// The default material's name, adding it on first use.
-    pub fn default_name(&mut self) -> String {
-        self.materials.entry(DEFAULT.to_string()).or_insert(Material {
-            diffuse: [0.5; 3],
+    /// The name of the material a shape without a bsdf gets, adding it on first use: as in
+    /// Mitsuba, a diffuse grey, or black on a shape that emits (an emitter does not reflect).
+    pub fn default_name(&mut self, emits: bool) -> String {
+        let (name, reflectance) = if emits { (DEFAULT_EMITTER, 0.0) } else { (DEFAULT, 0.5) };
+        self.materials.entry(name.to_string()).or_insert(Material {
+            diffuse: [reflectance; 3],
             ..Default::default()
         });
-        DEFAULT.to_string()
+        name.to_string()
     }
 
     fn bsdf<'a, 'i>(&mut self, ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>, depth: u32) -> Result<Material> {
