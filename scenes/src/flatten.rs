@@ -4,7 +4,7 @@
 use crate::MAX_COORDINATE;
 use crate::environment::{self, TexelLayout};
 use crate::gpu::{self, GpuEnvironment, GpuLight, GpuPrimitive, GpuTriangleAttributes, light_kind, primitive_kind};
-use crate::model::{self, Light, Scene, Shape};
+use crate::model::{self, Light, Scene, Shape, SpotFalloff};
 use bytemuck::Zeroable;
 use glam::Vec3;
 use std::collections::BTreeMap;
@@ -173,8 +173,13 @@ pub(crate) fn push_scene_lights(lights: &[Light], out: &mut Vec<GpuLight>) -> Re
                 intensity,
                 inner_cone_degrees,
                 outer_cone_degrees,
+                falloff,
             } => {
                 l.kind = light_kind::SPOT;
+                l.e2[0] = match falloff {
+                    SpotFalloff::Smooth => 0.0,
+                    SpotFalloff::Linear => 1.0,
+                };
                 l.position = *position;
                 l.e1 = v3(*direction).normalize_or_zero().into();
                 l.radiance = *intensity;

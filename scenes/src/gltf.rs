@@ -8,7 +8,7 @@
 //! the perspective cameras the scene's nodes place, and the KHR_lights_punctual lights of its
 //! nodes ([`punctual_light`]). Other extensions the file uses are reported as warnings.
 
-use crate::model::{Camera, FovAxis, Light, Look, Material, Pbr, Rgb, Shape};
+use crate::model::{Camera, FovAxis, Light, Look, Material, Pbr, Rgb, Shape, SpotFalloff};
 use crate::texture::{PbrTextures, Texture, TextureRef, Wrap};
 use glam::{Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -347,6 +347,7 @@ fn punctual_light(light: &gltf::khr_lights_punctual::Light, transform: &Mat4) ->
                 intensity: value,
                 inner_cone_degrees: inner_cone_angle.to_degrees(),
                 outer_cone_degrees: outer_cone_angle.to_degrees(),
+                falloff: SpotFalloff::Smooth,
             }
         }
     })

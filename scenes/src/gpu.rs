@@ -242,7 +242,7 @@ pub struct GpuLight {
     pub e1: [f32; 3],
     /// Area: 1 / area.
     pub inv_area: f32,
-    /// Area: v2 - v0.
+    /// Area: v2 - v0; spot: x = 1 for Mitsuba's falloff, linear in the angle (0: glTF's).
     pub e2: [f32; 3],
     /// Spot: cosine of the inner cone angle (full intensity inside it).
     pub cos_inner: f32,

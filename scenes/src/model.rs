@@ -211,6 +211,17 @@ pub struct Pbr {
     pub textures: PbrTextures,
 }
 
+/// How a spot light's intensity falls from the inner cone (θ_i, full) to the outer one (θ_o,
+/// none), θ the angle from the axis.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+pub enum SpotFalloff {
+    /// glTF's: t² for t = (cos θ − cos θ_o) / (cos θ_i − cos θ_o).
+    #[default]
+    Smooth,
+    /// Mitsuba's: linear in the angle, (θ_o − θ) / (θ_o − θ_i).
+    Linear,
+}
+
 /// A microfacet distribution of normals, with Smith's masking-shadowing.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 pub enum Microfacet {
@@ -405,9 +416,8 @@ pub enum Light {
         #[serde(default = "unit")]
         scale: f32,
     },
-    /// A point light shining into a cone, with glTF's smooth falloff between the inner and
-    /// outer cone: intensity × t² for t = (cos θ − cos outer) / (cos inner − cos outer)
-    /// clamped to [0, 1], θ the angle from the axis.
+    /// A point light shining into a cone, full inside the inner cone, dark outside the outer
+    /// one, and between them falling off by `falloff`.
     Spot {
         /// Position.
         position: Vec3,
@@ -422,6 +432,9 @@ pub enum Light {
         /// default 45).
         #[serde(default = "default_outer_cone")]
         outer_cone_degrees: f32,
+        /// The falloff between the cones.
+        #[serde(default)]
+        falloff: SpotFalloff,
     },
     /// An equirectangular environment map seen in every direction nothing else is
     /// (`.hdr` or `.exr`, a path below the asset root): +Y is up (the top row), the image's

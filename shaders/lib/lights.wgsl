@@ -39,8 +39,9 @@ fn light_pmf(index: u32) -> f32 {
 }
 
 #if LIGHT_SPOT
-// glTF's spot falloff towards unit direction `d` (travelling away from the light): 1 inside
-// the inner cone, 0 outside the outer one, the square of the linear ramp in cos theta between.
+// A spot's falloff towards unit direction `d` (travelling away from the light): 1 inside the
+// inner cone, 0 outside the outer one; between them glTF's square of the linear ramp in
+// cos theta, or (e2.x = 1) Mitsuba's ramp linear in the angle.
 fn spot_falloff(l: Light, d: vec3<f32>) -> f32 {
     let c = dot(l.e1, d);
     if (c >= l.cos_inner) {
@@ -48,6 +49,10 @@ fn spot_falloff(l: Light, d: vec3<f32>) -> f32 {
     }
     if (c <= l.cos_outer) {
         return 0.0;
+    }
+    if (l.e2.x != 0.0) {
+        let outer = acos(l.cos_outer);
+        return (outer - acos(c)) / (outer - acos(l.cos_inner));
     }
     let t = (c - l.cos_outer) / (l.cos_inner - l.cos_outer);
     return t * t;

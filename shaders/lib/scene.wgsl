@@ -206,7 +206,7 @@ struct Light {
     kind: u32,
     e1: vec3<f32>,          // area v1 - v0, or the spot's unit axis (direction of travel)
     inv_area: f32,
-    e2: vec3<f32>,
+    e2: vec3<f32>,          // area v2 - v0; spot: x = 1 for Mitsuba's falloff, linear in the angle
     cos_inner: f32,         // spot: full intensity within this cone
     normal: vec3<f32>,      // area: the emitting side
     cos_outer: f32,         // spot: no light outside this cone

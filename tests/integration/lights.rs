@@ -458,18 +458,30 @@ fn falloff(cos: f64, cos_inner: f64, cos_outer: f64) -> f64 {
     }
 }
 
+/// Mitsuba's spot falloff, linear in the angle.
+fn linear_falloff(cos: f64, cos_inner: f64, cos_outer: f64) -> f64 {
+    let (angle, inner, outer) = (cos.acos(), cos_inner.acos(), cos_outer.acos());
+    ((outer - angle) / (outer - inner)).clamp(0.0, 1.0)
+}
+
 #[test]
 fn spot_light_falloff_matches_the_direct_illumination_of_a_plane() {
-    // A spot 1 above a diffuse plane (albedo 0.5), pointing straight down; the camera looks
-    // down at it. Each pixel's radiance is ρ/π × I × falloff(θ) × cos θ / r² averaged over
-    // the pixel (the only randomness is the pixel jitter; the bounce ray escapes into black).
+    check_spot_falloff("Smooth", falloff);
+    check_spot_falloff("Linear", linear_falloff);
+}
+
+/// A spot 1 above a diffuse plane (albedo 0.5) with the falloff `name` (`expected` of cos θ,
+/// cos inner, cos outer), pointing straight down; the camera looks down at it. Each pixel's
+/// radiance is ρ/π × I × falloff(θ) × cos θ / r² averaged over the pixel (the only randomness
+/// is the pixel jitter; the bounce ray escapes into black).
+fn check_spot_falloff(name: &str, expected_falloff: fn(f64, f64, f64) -> f64) {
     let (inner, outer, height, intensity) = (20.0f64, 40.0f64, 1.0f64, 3.0f64);
     let text = format!(
         "Scene(camera: (position: (0, 0, 3), look: Target((0, 0, 0)), up: (0, 1, 0), fov_degrees: 40.0),
             materials: {{\"m\": (diffuse: (0.5, 0.5, 0.5))}},
             shapes: [Quad(corners: ((-5, -5, 0), (5, -5, 0), (5, 5, 0), (-5, 5, 0)), material: \"m\")],
             lights: [Spot(position: (0, 0, {height}), direction: (0, 0, -1), intensity: ({intensity}, {intensity}, {intensity}),
-                inner_cone_degrees: {inner}, outer_cone_degrees: {outer})],
+                inner_cone_degrees: {inner}, outer_cone_degrees: {outer}, falloff: {name})],
             integrator: (max_path_length: 2))"
     );
     let s = scene(&text);
@@ -490,7 +502,7 @@ fn spot_light_falloff_matches_the_direct_illumination_of_a_plane() {
         );
         let r2 = px * px + py * py + height * height;
         let cos = height / r2.sqrt();
-        0.5 / std::f64::consts::PI * intensity * falloff(cos, ci, co) * cos / r2
+        0.5 / std::f64::consts::PI * intensity * expected_falloff(cos, ci, co) * cos / r2
     };
     let mut checked = 0;
     let mut worst: f64 = 0.0;
@@ -523,12 +535,12 @@ fn spot_light_falloff_matches_the_direct_illumination_of_a_plane() {
             worst = worst.max((mean - expected).abs() / tolerance);
             assert!(
                 (mean - expected).abs() <= tolerance,
-                "pixel ({x}, {y}): {mean}, analytic {expected} ± {se}"
+                "{name} falloff, pixel ({x}, {y}): {mean}, analytic {expected} ± {se}"
             );
             checked += (expected > 0.0) as usize;
         }
     }
-    eprintln!("spot: {checked} lit pixels, worst deviation {worst:.2} of the tolerance");
+    eprintln!("spot ({name}): {checked} lit pixels, worst deviation {worst:.2} of the tolerance");
     assert!(checked > 100, "the cone lights much of the image ({checked} pixels)");
 }
 
@@ -542,6 +554,7 @@ fn khr_lights_punctual_spot_and_point_lights_import() {
         intensity,
         inner_cone_degrees,
         outer_cone_degrees,
+        falloff,
     } = &spot
         .lights
         .iter()
@@ -557,6 +570,11 @@ fn khr_lights_punctual_spot_and_point_lights_import() {
     assert!(close(direction, &[0.0, -1.0, 0.0], 1e-6), "{direction:?}");
     assert!(close(intensity, &[360.0, 0.0, 0.0], 1e-3), "{intensity:?}");
     assert!((inner_cone_degrees - 18.0).abs() < 1e-4 && (outer_cone_degrees - 30.0).abs() < 1e-4);
+    assert_eq!(
+        *falloff,
+        lightgraph_scenes::model::SpotFalloff::Smooth,
+        "glTF's falloff"
+    );
     // Every spot points at the plane y = 0, 30 degrees from the vertical.
     for l in &spot.lights {
         let Light::Spot { direction, .. } = l else {
@@ -595,6 +613,7 @@ fn imported_spot_lights_light_the_plane_as_the_analytic_direct_illumination() {
                 intensity,
                 inner_cone_degrees,
                 outer_cone_degrees,
+                ..
             } = l
             else {
                 panic!("{l:?}");

@@ -5,7 +5,7 @@
 use super::transform::to_world;
 use super::xml::{Color, Context, Props, Result};
 use crate::environment::{EnvironmentMap, TexelLayout};
-use crate::model::{Light, Rgb};
+use crate::model::{Light, Rgb, SpotFalloff};
 use glam::{Mat4, Vec3};
 use roxmltree::Node;
 
@@ -72,9 +72,6 @@ pub fn light<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<Op
                     ),
                 ));
             }
-            if beam < cutoff {
-                ctx.warn(node, "the falloff between beam_width and cutoff_angle follows glTF's curve, not Mitsuba's (linear in the angle)");
-            }
             if props.get("texture").is_some() {
                 ctx.warn(node, "a projected texture is not supported");
             }
@@ -84,6 +81,7 @@ pub fn light<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<Op
                 intensity: value(ctx, &props, "intensity", [1.0; 3])?,
                 inner_cone_degrees: beam,
                 outer_cone_degrees: cutoff,
+                falloff: SpotFalloff::Linear,
             }
         }
         "directional" => {
@@ -181,17 +179,18 @@ mod tests {
             direction,
             inner_cone_degrees,
             outer_cone_degrees,
+            falloff,
             ..
         }) = l.unwrap()
         else {
             panic!()
         };
         assert_eq!(
-            (position, inner_cone_degrees, outer_cone_degrees),
-            ([0.0, 5.0, 0.0], 22.5, 30.0)
+            (position, inner_cone_degrees, outer_cone_degrees, falloff),
+            ([0.0, 5.0, 0.0], 22.5, 30.0, SpotFalloff::Linear)
         );
         assert!((Vec3::from(direction) - Vec3::NEG_Y).length() < 1e-6);
-        assert_eq!(w.len(), 1, "the falloff is approximated: {w:?}");
+        assert!(w.is_empty(), "Mitsuba's falloff is exact: {w:?}");
         let (l, _) = convert("<emitter type=\"directional\"><vector name=\"direction\" value=\"0, -2, 0\"/></emitter>");
         let Some(Light::Directional { direction, irradiance }) = l.unwrap() else {
             panic!()

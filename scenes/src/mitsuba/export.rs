@@ -561,6 +561,7 @@ mod tests {
             intensity: [1.0; 3],
             inner_cone_degrees: 0.0,
             outer_cone_degrees: 45.0,
+            falloff: Default::default(),
         });
         let e = export(&scene, (8, 8)).unwrap_err();
         assert!(e.contains("spot"), "{e}");
