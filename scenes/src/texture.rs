@@ -161,6 +161,13 @@ pub struct PbrTextures {
     pub emissive: Option<TextureRef>,
 }
 
+impl PbrTextures {
+    /// Whether any texture is set.
+    pub fn any(&self) -> bool {
+        self.base_color.is_some() || self.metallic_roughness.is_some() || self.emissive.is_some()
+    }
+}
+
 /// Textures packed for the GPU: every image's texels, one after another, and one
 /// [`GpuTextureInfo`] per material slot that uses a texture.
 #[derive(Debug, Clone, Default)]

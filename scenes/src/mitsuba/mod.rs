@@ -223,8 +223,14 @@ fn shape<'a, 'i>(
         if radius <= 0.0 || !radius.is_finite() {
             return Err(ctx.error(node, format!("the radius {radius} is not positive")));
         }
+        // The analytic sphere has no texture coordinates: a textured one is meshed (with
+        // Mitsuba's parameterisation, u the azimuth and v the polar angle over pi).
+        let textured = b.materials.materials[&material]
+            .pbr
+            .as_ref()
+            .is_some_and(|p| p.textures.any());
         match similarity_scale(m) {
-            Some(s) if emission.is_none() && !flip => {
+            Some(s) if emission.is_none() && !flip && !textured => {
                 b.shapes.push(Shape::Sphere {
                     center: m.transform_point3(center).to_array(),
                     radius: radius * s,

@@ -89,48 +89,68 @@ fn smoothed(mut mesh: Mesh) -> Mesh {
     mesh
 }
 
-/// Mitsuba's rectangle: [-1, 1]² in the plane z = 0, facing +Z.
+/// Mitsuba's rectangle: [-1, 1]² in the plane z = 0, facing +Z, with Mitsuba's texture
+/// coordinates ((x + 1) / 2, (y + 1) / 2).
 pub fn rectangle() -> Mesh {
-    let positions = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
+    let positions: Vec<Vec3> = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
         .map(|[x, y]| Vec3::new(x, y, 0.0))
         .to_vec();
-    planar(positions, vec![[0, 1, 2], [0, 2, 3]])
-}
-
-/// A mesh in the plane z = 0 facing +Z, with Mitsuba's texture coordinates of [-1, 1]²
-/// (u along +X, v down +Y).
-fn planar(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Mesh {
     Mesh {
         uvs: Some(
             positions
                 .iter()
-                .map(|p| [(p.x + 1.0) / 2.0, (1.0 - p.y) / 2.0])
+                .map(|p| [(p.x + 1.0) / 2.0, (p.y + 1.0) / 2.0])
                 .collect(),
         ),
-        normals: Some(vec![Vec3::Z; positions.len()]),
+        normals: Some(vec![Vec3::Z; 4]),
         positions,
-        indices,
+        indices: vec![[0, 1, 2], [0, 2, 3]],
     }
 }
 
 /// Mitsuba's disk: the unit disk in the plane z = 0 facing +Z, as a fan of [`SEGMENTS`]
-/// triangles whose rim lies a little outside the circle, so that the fan's area is π.
+/// triangles whose rim lies a little outside the circle, so that the fan's area is π. Its
+/// texture coordinates are Mitsuba's polar ones, (r, φ / 2π): each triangle has its own
+/// centre vertex at its middle angle, and the rim's vertex at φ = 0 is repeated at 2π.
 pub fn disk() -> Mesh {
     let n = SEGMENTS as f64;
     // The regular n-gon of circumradius k has the area n k² sin(2π / n) / 2.
     let k = (2.0 * PI / (n * (2.0 * PI / n).sin())).sqrt();
-    let mut positions = vec![Vec3::ZERO];
-    for i in 0..SEGMENTS {
-        let phi = 2.0 * PI * i as f64 / n;
-        positions.push(Vec3::new((k * phi.cos()) as f32, (k * phi.sin()) as f32, 0.0));
-    }
-    let indices = (0..SEGMENTS).map(|i| [0, i + 1, (i + 1) % SEGMENTS + 1]).collect();
-    planar(positions, indices)
+    let mut out = Mesh {
+        normals: Some(Vec::new()),
+        uvs: Some(Vec::new()),
+        ..Default::default()
+    };
+    let mut vertex = |p: Vec3, uv: [f64; 2]| {
+        out.positions.push(p);
+        out.normals.as_mut().unwrap().push(Vec3::Z);
+        out.uvs.as_mut().unwrap().push(uv.map(|c| c as f32));
+        out.positions.len() as u32 - 1
+    };
+    let rim: Vec<u32> = (0..=SEGMENTS)
+        .map(|i| {
+            let phi = 2.0 * PI * i as f64 / n;
+            vertex(
+                Vec3::new((k * phi.cos()) as f32, (k * phi.sin()) as f32, 0.0),
+                [k, i as f64 / n],
+            )
+        })
+        .collect();
+    let fans: Vec<[u32; 3]> = (0..SEGMENTS as usize)
+        .map(|i| [vertex(Vec3::ZERO, [0.0, (i as f64 + 0.5) / n]), rim[i], rim[i + 1]])
+        .collect();
+    out.indices = fans;
+    out
 }
 
-/// Mitsuba's cube: [-1, 1]³ with outward faces (flat shaded).
+/// Mitsuba's cube: [-1, 1]³ with outward faces (flat shaded), with Mitsuba's texture
+/// coordinates: each face maps two of x, y, z, each as (c + 1) / 2 or (1 - c) / 2
+/// ([`cube_uv`]).
 pub fn cube() -> Mesh {
-    let mut out = Mesh::default();
+    let mut out = Mesh {
+        uvs: Some(Vec::new()),
+        ..Default::default()
+    };
     for axis in 0..3 {
         for sign in [-1.0f32, 1.0] {
             let mut n = Vec3::ZERO;
@@ -141,7 +161,9 @@ pub fn cube() -> Mesh {
             let v = n.cross(u);
             let base = out.positions.len() as u32;
             for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                out.positions.push(n + u * a + v * b);
+                let p = n + u * a + v * b;
+                out.positions.push(p);
+                out.uvs.as_mut().unwrap().push(cube_uv(axis, sign > 0.0, p));
             }
             out.indices
                 .extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
@@ -150,9 +172,25 @@ pub fn cube() -> Mesh {
     out
 }
 
+/// The texture coordinates of Mitsuba 3's cube at point `p` of the face normal to `axis` on
+/// its `positive` side (read off Mitsuba 3.9.1's intersections: its cube is a mesh with these
+/// per-face coordinates).
+fn cube_uv(axis: usize, positive: bool, p: Vec3) -> [f32; 2] {
+    let up = |c: f32| (c + 1.0) / 2.0;
+    let down = |c: f32| (1.0 - c) / 2.0;
+    match (axis, positive) {
+        (0, true) => [up(p.y), down(p.z)],
+        (0, false) => [up(p.y), up(p.z)],
+        (1, true) => [down(p.x), down(p.z)],
+        (1, false) => [up(p.z), up(p.x)],
+        (2, true) => [up(p.y), up(p.x)],
+        _ => [down(p.y), up(p.x)],
+    }
+}
+
 /// A sphere as a latitude-longitude mesh of [`SEGMENTS`] x [`SEGMENTS`]/2 quads with
-/// smooth normals (for emitting spheres and spheres under non-uniform scales; others stay
-/// analytic), its vertices pushed out radially so that its area is the sphere's, 4πr².
+/// smooth normals and Mitsuba's texture coordinates (for emitting, textured and flipped spheres
+/// and spheres under non-uniform scales; others stay analytic), its vertices pushed out radially so that its area is the sphere's, 4πr².
 pub fn sphere(center: Vec3, radius: f32) -> Mesh {
     let (nu, nv) = (SEGMENTS, SEGMENTS / 2);
     let mut directions = Vec::new();
@@ -368,12 +406,72 @@ mod tests {
         })
     }
 
+    /// The texture coordinates at `p` on the triangle of `m` that holds it.
+    fn uv_at(m: &Mesh, p: Vec3) -> [f32; 2] {
+        let uvs = m.uvs.as_ref().unwrap();
+        for t in &m.indices {
+            let [a, b, c] = t.map(|i| m.positions[i as usize].as_dvec3());
+            let (e1, e2, d) = (b - a, c - a, p.as_dvec3() - a);
+            let n = e1.cross(e2);
+            if d.dot(n).abs() > 1e-3 * n.length() {
+                continue;
+            }
+            let w1 = d.cross(e2).dot(n) / n.length_squared();
+            let w2 = e1.cross(d).dot(n) / n.length_squared();
+            if w1 >= -1e-9 && w2 >= -1e-9 && w1 + w2 <= 1.0 + 1e-9 {
+                let [ua, ub, uc] = t.map(|i| uvs[i as usize]);
+                return [0, 1].map(|k| ((1.0 - w1 - w2) * ua[k] as f64 + w1 * ub[k] as f64 + w2 * uc[k] as f64) as f32);
+            }
+        }
+        panic!("no triangle holds {p}");
+    }
+
+    #[test]
+    fn texture_coordinates_are_mitsubas() {
+        // The uv of rays' intersections with Mitsuba 3.9.1's shapes (scalar_rgb), at these
+        // points of their object space.
+        let flat = [
+            (rectangle(), [0.5, 0.9, 0.0], [0.75, 0.95]),
+            (rectangle(), [0.5, -0.9, 0.0], [0.75, 0.05]),
+            (disk(), [0.5, 0.3, 0.0], [0.583095, 0.0860105]),
+            (cube(), [1.0, 0.2, 0.6], [0.6, 0.2]),
+            (cube(), [1.0, -0.4, 0.1], [0.3, 0.45]),
+            (cube(), [-1.0, 0.2, 0.6], [0.6, 0.8]),
+            (cube(), [-1.0, -0.4, 0.1], [0.3, 0.55]),
+            (cube(), [0.6, 1.0, 0.2], [0.2, 0.4]),
+            (cube(), [0.1, 1.0, -0.4], [0.45, 0.7]),
+            (cube(), [0.6, -1.0, 0.2], [0.6, 0.8]),
+            (cube(), [0.1, -1.0, -0.4], [0.3, 0.55]),
+            (cube(), [0.2, 0.6, 1.0], [0.8, 0.6]),
+            (cube(), [-0.4, 0.1, 1.0], [0.55, 0.3]),
+            (cube(), [0.2, 0.6, -1.0], [0.2, 0.6]),
+            (cube(), [-0.4, 0.1, -1.0], [0.45, 0.3]),
+        ];
+        for (mesh, p, expected) in flat {
+            let got = uv_at(&mesh, Vec3::from(p));
+            // The disk's fan interpolates the angle across each triangle from its middle at the
+            // centre: within half a segment, 1/512, times the centre's weight.
+            let tolerance = if mesh.positions.len() > 24 { 1e-3 } else { 1e-5 };
+            assert!(
+                (got[0] - expected[0]).abs() < tolerance && (got[1] - expected[1]).abs() < tolerance,
+                "at {p:?}: {got:?}, Mitsuba {expected:?}"
+            );
+        }
+        // The sphere's mesh interpolates Mitsuba's (azimuth, polar angle) linearly.
+        let s = sphere(Vec3::ZERO, 1.0);
+        let got = uv_at(&s, Vec3::new(0.3, 0.4, 0.866025) * 1.0001);
+        assert!(
+            (got[0] - 0.147584).abs() < 1e-3 && (got[1] - 0.166667).abs() < 1e-3,
+            "{got:?}"
+        );
+    }
+
     #[test]
     fn rectangle_and_disk_lie_in_z0_facing_plus_z() {
         let r = rectangle();
         assert_eq!(area(&r), 4.0);
         assert!(faces_out(&r, None));
-        assert_eq!(r.uvs.as_ref().unwrap()[0], [0.0, 1.0]);
+        assert_eq!(r.uvs.as_ref().unwrap()[0], [0.0, 0.0]);
         let d = disk();
         assert!((area(&d) - PI).abs() < 1e-4 * PI, "area {}", area(&d));
         assert!(faces_out(&d, None));
