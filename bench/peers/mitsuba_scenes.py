@@ -13,16 +13,17 @@
           the block means; prints one Markdown table row.
 
 The standard errors are measured, not assumed: lightgraph's from its frames, Mitsuba's from its
-batches. A block test at family-wise level 0.01 uses the Bonferroni critical value for the
-number of blocks (two-sided normal quantile of 0.01 / (2 blocks)).
+batches; the statistics are peer_images.py's (a block test at family-wise level 0.01 uses the
+Bonferroni critical value for the number of blocks).
 """
 import argparse
-import math
 import os
 import sys
 import xml.etree.ElementTree as ET
 
 import numpy as np
+
+import peer_images
 
 
 def prepared_xml(path, width, height, spp):
@@ -59,82 +60,38 @@ def prepared_xml(path, width, height, spp):
     return ET.tostring(root, encoding="unicode")
 
 
-def render(args):
+def render_passes(path, width, height, spp, passes, variant, progress=True):
+    """Mitsuba 3's render of the scene file `path` at width x height in `passes` independent
+    passes (seeds 1000, 1001, ...) of `spp` samples per pixel: the mean image and the
+    per-pixel variance of that mean from the passes' spread (H x W x 3 each)."""
     import mitsuba as mi
 
-    mi.set_variant(args.variant)
-    width, height = (int(v) for v in args.res.split("x"))
+    mi.set_variant(variant)
     # Relative file names start at the scene file's folder.
-    mi.Thread.thread().file_resolver().prepend(os.path.dirname(os.path.abspath(args.scene)))
-    scene = mi.load_string(prepared_xml(args.scene, width, height, args.spp))
+    mi.file_resolver().prepend(os.path.dirname(os.path.abspath(path)))
+    scene = mi.load_string(prepared_xml(path, width, height, spp))
     total = None
     total2 = None
-    for k in range(args.batches):
+    for k in range(passes):
         image = np.array(mi.render(scene, seed=1000 + k), dtype=np.float64)[:, :, :3]
         total = image if total is None else total + image
         total2 = image * image if total2 is None else total2 + image * image
-        print(f"batch {k + 1}/{args.batches}", flush=True)
-    n = args.batches
-    mean = total / n
-    variance = np.maximum(total2 / n - mean * mean, 0.0) * n / (n - 1) / n
-    np.savez_compressed(args.out, mean=mean, variance=variance, spp=args.spp * n)
-
-
-def read_lightgraph(path):
-    import mitsuba as mi
-
-    mi.set_variant("scalar_rgb")
-    bitmap = mi.Bitmap(path)
-    names = [bitmap.struct_()[i].name for i in range(bitmap.channel_count())]
-    data = np.array(bitmap, dtype=np.float64)
-    channel = {name: data[:, :, i] for i, name in enumerate(names)}
-    mean = np.stack([channel[c] + channel.get(f"residual.{c}", 0.0) for c in "RGB"], axis=-1)
-    variance = np.stack([channel[f"variance.{c}"] for c in "RGB"], axis=-1)
+        if progress:
+            print(f"pass {k + 1}/{passes}", flush=True)
+    mean = total / passes
+    variance = np.maximum(total2 / passes - mean * mean, 0.0) / (passes - 1)
     return mean, variance
 
 
-def normal_quantile(p):
-    """The standard normal's upper quantile: z with P(Z > z) = p (bisection on erfc)."""
-    lo, hi = 0.0, 40.0
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if 0.5 * math.erfc(mid / math.sqrt(2.0)) > p:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
+def render(args):
+    width, height = (int(v) for v in args.res.split("x"))
+    mean, variance = render_passes(args.scene, width, height, args.spp, args.batches, args.variant)
+    np.savez_compressed(args.out, mean=mean, variance=variance, spp=args.spp * args.batches)
 
 
 def compare(args):
-    lg_mean, lg_var = read_lightgraph(args.lightgraph)
-    ref = np.load(args.mitsuba)
-    mi_mean, mi_var = ref["mean"], ref["variance"]
-    if lg_mean.shape != mi_mean.shape:
-        sys.exit(f"sizes differ: lightgraph {lg_mean.shape}, Mitsuba {mi_mean.shape}")
-    lum = np.array([0.2126, 0.7152, 0.0722])
-    a, b = lg_mean @ lum, mi_mean @ lum
-    va, vb = lg_var @ (lum * lum), mi_var @ (lum * lum)
-    n = a.size
-    diff = a.mean() - b.mean()
-    se = math.sqrt((va.sum() + vb.sum()) / (n * n))
-    h, w = a.shape
-    bs = args.block
-    zs = []
-    for y in range(0, h - bs + 1, bs):
-        for x in range(0, w - bs + 1, bs):
-            sl = (slice(y, y + bs), slice(x, x + bs))
-            m = bs * bs
-            d = a[sl].mean() - b[sl].mean()
-            s = math.sqrt((va[sl].sum() + vb[sl].sum()) / (m * m))
-            zs.append((d / s if s > 0 else (0.0 if d == 0 else math.inf), d / max(b[sl].mean(), 1e-12)))
-    critical = normal_quantile(0.01 / (2 * len(zs)))
-    beyond = [z for z in zs if abs(z[0]) > critical]
-    worst = max(zs, key=lambda z: abs(z[0]))
-    name = args.name or os.path.basename(args.lightgraph)
-    print(
-        f"| {name} | {b.mean():.5f} | {diff / b.mean():+.4%} | {diff / se:+.2f} | {len(zs)} | "
-        f"{len(beyond)} | {worst[0]:+.2f} ({worst[1]:+.2%}) | {critical:.2f} |"
-    )
+    result = peer_images.compare(peer_images.load(args.lightgraph), peer_images.load(args.mitsuba), args.block)
+    print(peer_images.row(args.name or os.path.basename(args.lightgraph), result))
 
 
 def main():

@@ -90,6 +90,76 @@ impl BlockBatches {
     }
 }
 
+/// One image's estimates: per block, and of the image mean.
+#[derive(Debug, Clone)]
+pub struct Estimates {
+    /// Per block (rows of blocks, top first).
+    pub blocks: Vec<Estimate>,
+    /// The image mean.
+    pub image: Estimate,
+}
+
+impl BlockBatches {
+    /// The blocks' and the image mean's estimates.
+    pub fn estimates(&self) -> Estimates {
+        Estimates {
+            blocks: self.blocks(),
+            image: self.image(),
+        }
+    }
+}
+
+impl Estimates {
+    /// The estimates of an image given per pixel, as its mean and the variance of that mean
+    /// (another renderer's reference, say), each pixel's variance estimated with `dof` degrees
+    /// of freedom (independent passes less one), in blocks of `block` pixels. Pixels must be
+    /// independent (each pixel's samples its own, as in a path tracer with a box filter): a
+    /// region's variance is then the sum of its pixels' over the pixel count squared, and its
+    /// degrees of freedom Welch-Satterthwaite's.
+    pub fn of_pixels(size: (u32, u32), block: u32, mean: &[[f64; 3]], variance: &[[f64; 3]], dof: f64) -> Estimates {
+        let (w, h) = size;
+        let (gx, gy) = (w.div_ceil(block), h.div_ceil(block));
+        let mut members: Vec<Vec<usize>> = vec![Vec::new(); (gx * gy) as usize];
+        for y in 0..h {
+            for x in 0..w {
+                members[((y / block) * gx + x / block) as usize].push((y * w + x) as usize);
+            }
+        }
+        let region = |pixels: &[usize]| {
+            let n = pixels.len() as f64;
+            let mut e = Estimate {
+                mean: [0.0; 3],
+                variance: [0.0; 3],
+                batches: 0,
+            };
+            let mut least_dof = f64::INFINITY;
+            for c in 0..3 {
+                e.mean[c] = pixels.iter().map(|&i| mean[i][c]).sum::<f64>() / n;
+                e.variance[c] = pixels.iter().map(|&i| variance[i][c]).sum::<f64>() / (n * n);
+                let parts = pixels
+                    .iter()
+                    .map(|&i| (variance[i][c] / (n * n)).powi(2) / dof)
+                    .sum::<f64>();
+                if parts > 0.0 {
+                    least_dof = least_dof.min(e.variance[c].powi(2) / parts);
+                }
+            }
+            // The smallest channel's degrees of freedom, as the batches they stand for.
+            e.batches = if least_dof.is_finite() {
+                least_dof.round() as usize + 1
+            } else {
+                dof as usize + 1
+            };
+            e
+        };
+        let all: Vec<usize> = (0..(w * h) as usize).collect();
+        Estimates {
+            blocks: members.iter().map(|m| region(m)).collect(),
+            image: region(&all),
+        }
+    }
+}
+
 /// A mean over batches, its variance (the squared standard error) and the batches it came from.
 #[derive(Debug, Clone, Copy)]
 pub struct Estimate {
@@ -97,7 +167,8 @@ pub struct Estimate {
     pub mean: [f64; 3],
     /// Variance of the mean per channel.
     pub variance: [f64; 3],
-    /// Batches.
+    /// Batches (for a region of independent pixels, [`Estimates::of_pixels`], its degrees of
+    /// freedom plus one).
     pub batches: usize,
 }
 
@@ -362,11 +433,16 @@ const DETERMINISTIC_RELATIVE: f64 = 1e-3;
 /// Compares two runs' blocks and image means; `biased`: one of them is biased at a finite
 /// budget, and the settings' bias tolerances apply.
 pub fn compare(a: &BlockBatches, b: &BlockBatches, settings: &TestSettings, biased: bool) -> PairTest {
-    let (blocks_a, blocks_b) = (a.blocks(), b.blocks());
-    let (image_a, image_b) = (a.image(), b.image());
+    compare_estimates(&a.estimates(), &b.estimates(), settings, biased)
+}
+
+/// [`compare`] of two images' estimates (the same blocks of the same size).
+pub fn compare_estimates(a: &Estimates, b: &Estimates, settings: &TestSettings, biased: bool) -> PairTest {
+    let (blocks_a, blocks_b) = (&a.blocks, &b.blocks);
+    let (image_a, image_b) = (a.image, b.image);
     let pairs: Vec<(&Estimate, &Estimate)> = blocks_a
         .iter()
-        .zip(&blocks_b)
+        .zip(blocks_b.iter())
         .chain(std::iter::once((&image_a, &image_b)))
         .collect();
     // The family: every channel with something to test, Holm-corrected together.
@@ -490,6 +566,28 @@ mod tests {
             r.add(&sums, 10);
         }
         r
+    }
+
+    #[test]
+    fn independent_pixels_give_region_means_variances_and_degrees_of_freedom() {
+        // 4x4 pixels in 2x2 blocks, each pixel's variance of the mean v (estimated from 16
+        // passes, 15 degrees of freedom): a block's variance is 4 v / 16, its degrees of
+        // freedom (4 v / 16)^2 / (4 (v / 16)^2 / 15) = 60; the image's 16 v / 256 and 240.
+        let mean: Vec<[f64; 3]> = (0..16).map(|i| [i as f64; 3]).collect();
+        let variance = vec![[0.5; 3]; 16];
+        let e = Estimates::of_pixels((4, 4), 2, &mean, &variance, 15.0);
+        assert_eq!(e.blocks.len(), 4);
+        assert_eq!(e.blocks[0].mean, [2.5; 3], "pixels 0, 1, 4, 5");
+        assert_eq!(e.blocks[0].variance, [0.125; 3]);
+        assert_eq!(e.blocks[0].batches, 61);
+        assert_eq!(
+            (e.image.mean, e.image.variance, e.image.batches),
+            ([7.5; 3], [0.5 / 16.0; 3], 241)
+        );
+        // Against itself: nothing to tell apart.
+        let t = compare_estimates(&e, &e, &TestSettings::default(), false);
+        assert_eq!(t.blocks_rejected(), 0);
+        assert!(!t.mean_rejected);
     }
 
     #[test]

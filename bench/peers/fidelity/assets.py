@@ -1,0 +1,88 @@
+#!/usr/bin/env python3
+"""Writes the fidelity suite's small assets into scenes/assets/ (deterministic; run once, the
+outputs are committed): sky.exr, a 64 x 32 sky of a blue-to-white gradient with a warm sun
+25 degrees across; grid.png, an 8 x 8 sRGB texture of distinct colours (its texels tell
+filters and wrap modes apart); sphere.obj, a unit sphere of 16 x 32 quads with the sphere's
+normals at its vertices; star.obj, a flat six-pointed star (a concave mesh emitter).
+
+    python3 bench/peers/fidelity/assets.py      # needs numpy and mitsuba (for the EXR/PNG writers)
+"""
+import math
+import os
+
+import numpy as np
+
+HERE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes", "assets")
+
+
+def sky():
+    w, h = 64, 32
+    img = np.zeros((h, w, 3), dtype=np.float32)
+    sun = np.array([math.cos(math.radians(40)) * math.cos(math.radians(30)), math.sin(math.radians(40)),
+                    math.cos(math.radians(40)) * math.sin(math.radians(30))])
+    for j in range(h):
+        theta = math.pi * (j + 0.5) / h
+        for i in range(w):
+            phi = 2 * math.pi * (i + 0.5) / w
+            d = np.array([math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi)])
+            up = max(d[1], 0.0)
+            img[j, i] = (1 - up) * np.array([0.9, 0.9, 1.0]) + up * np.array([0.2, 0.35, 0.9])
+            if d[1] < 0:
+                img[j, i] = np.array([0.25, 0.2, 0.15])
+            if np.dot(d, sun) > math.cos(math.radians(12.5)):
+                img[j, i] = np.array([12.0, 10.0, 7.0])
+    return img
+
+
+def grid():
+    rng = np.random.default_rng(57)
+    return (rng.integers(20, 236, size=(8, 8, 3))).astype(np.uint8)
+
+
+def sphere_obj(rows=16, columns=32):
+    lines = ["# unit sphere, 16 x 32 quads, vertex normals (bench/peers/fidelity/assets.py)"]
+    for j in range(rows + 1):
+        t = math.pi * j / rows
+        for i in range(columns + 1):
+            p = 2 * math.pi * i / columns
+            x, y, z = math.sin(t) * math.cos(p), math.cos(t), math.sin(t) * math.sin(p)
+            lines.append(f"v {x:.6f} {y:.6f} {z:.6f}")
+            lines.append(f"vn {x:.6f} {y:.6f} {z:.6f}")
+    for j in range(rows):
+        for i in range(columns):
+            a = j * (columns + 1) + i + 1
+            b, c, d = a + 1, a + columns + 2, a + columns + 1
+            # Outward facing: counter-clockwise seen from outside.
+            lines.append(f"f {a}//{a} {b}//{b} {c}//{c} {d}//{d}")
+    return "\n".join(lines) + "\n"
+
+
+def star_obj():
+    lines = ["# a flat six-pointed star in the xy plane facing +z (bench/peers/fidelity/assets.py)"]
+    points = []
+    for k in range(12):
+        r = 1.0 if k % 2 == 0 else 0.45
+        a = math.pi * k / 6
+        points.append((r * math.cos(a), r * math.sin(a)))
+    lines.append("v 0 0 0")
+    lines += [f"v {x:.6f} {y:.6f} 0" for x, y in points]
+    for k in range(12):
+        lines.append(f"f 1 {k + 2} {(k + 1) % 12 + 2}")
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    os.makedirs(HERE, exist_ok=True)
+    mi.Bitmap(sky()).write(os.path.join(HERE, "sky.exr"))
+    mi.Bitmap(grid()).write(os.path.join(HERE, "grid.png"))
+    with open(os.path.join(HERE, "sphere.obj"), "w") as f:
+        f.write(sphere_obj())
+    with open(os.path.join(HERE, "star.obj"), "w") as f:
+        f.write(star_obj())
+
+
+if __name__ == "__main__":
+    main()
