@@ -159,6 +159,18 @@ pub struct PbrTextures {
     pub metallic_roughness: Option<TextureRef>,
     /// Emission (sRGB), multiplying the emissive factor.
     pub emissive: Option<TextureRef>,
+    /// The tangent-space normal map (glTF `normalTexture`).
+    pub normal: Option<NormalTexture>,
+}
+
+/// A tangent-space normal map (linear RGB, 2 texel - 1 the normal in the frame of tangent,
+/// bitangent and normal) and the scale of its tangential components (glTF `normalTexture`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NormalTexture {
+    /// The map.
+    pub texture: TextureRef,
+    /// Scales the map's x and y before the normal is normalised.
+    pub scale: f32,
 }
 
 /// Textures packed for the GPU: every image's texels, one after another, and one
