@@ -403,6 +403,7 @@ fn read_primitive(
         .map(|a| (a, uv_types, Dimensions::Vec2));
     let tangents = primitive
         .get(&gltf::Semantic::Tangents)
+        .filter(|_| material.normal_mapped)
         .map(|a| (a, f32_only, Dimensions::Vec4));
     let indices = primitive
         .indices()
@@ -461,19 +462,17 @@ fn read_primitive(
         return Err(format!("indexes vertex {bad} of {vertices}"));
     }
     let mut indices: Vec<[u32; 3]> = flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
-    let mut tangents = match material.normal_mapped {
-        true => {
-            let mesh = LocalMesh {
-                positions: &local_positions,
-                indices: &indices,
-                uvs: uvs.as_deref(),
-                normals: local_normals.as_deref(),
-                tangents: reader.read_tangents().map(Iterator::collect),
-            };
-            Some(corner_tangents(&mesh, transform)?)
-        }
-        false => None,
-    };
+    let mut tangents = None;
+    if material.normal_mapped {
+        let mesh = LocalMesh {
+            positions: &local_positions,
+            indices: &indices,
+            uvs: uvs.as_deref(),
+            normals: local_normals.as_deref(),
+            tangents: reader.read_tangents().map(Iterator::collect),
+        };
+        tangents = Some(corner_tangents(&mesh, transform)?);
+    }
     // A mirroring transform flips the winding; keep triangles facing as authored.
     if transform.determinant() < 0.0 {
         indices.iter_mut().for_each(|t| t.swap(1, 2));
