@@ -36,6 +36,10 @@ pub const ALL: &[(&str, &str)] = &[
         "SHADING_NORMALS",
         "interpolated vertex normals shading triangles (with the adjoint BSDF's correction)",
     ),
+    (
+        "NORMAL_MAPS",
+        "tangent-space normal maps perturbing the shading normal (with SHADING_NORMALS and TEXTURES)",
+    ),
     ("THIN_LENS", "a thin-lens camera: depth of field"),
     ("LIGHT_AREA", "emissive triangles"),
     ("LIGHT_PUNCTUAL", "point or spot lights"),
@@ -97,12 +101,18 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
             .iter()
             .any(|m| m.flags & material_flags::PBR != 0 && m.flags & material_flags::BECKMANN != 0),
     );
+    let normal_maps = scene
+        .attributes
+        .iter()
+        .any(|a| a.flags & attribute_flags::TANGENTS != 0);
+    add("NORMAL_MAPS", normal_maps);
     add(
         "TEXTURES",
-        scene
-            .materials
-            .iter()
-            .any(|m| m.base_color_texture >= 0 || m.metallic_roughness_texture >= 0 || m.emissive_texture >= 0),
+        normal_maps
+            || scene
+                .materials
+                .iter()
+                .any(|m| m.base_color_texture >= 0 || m.metallic_roughness_texture >= 0 || m.emissive_texture >= 0),
     );
     add(
         "ALPHA_MASK",
@@ -113,7 +123,7 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
     );
     add(
         "SHADING_NORMALS",
-        scene.attributes.iter().any(|a| a.flags & attribute_flags::NORMALS != 0),
+        normal_maps || scene.attributes.iter().any(|a| a.flags & attribute_flags::NORMALS != 0),
     );
     add("THIN_LENS", scene.thin_lens);
     let has = |kind: u32| scene.lights.iter().any(|l| l.kind == kind);

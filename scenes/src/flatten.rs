@@ -3,7 +3,9 @@
 
 use crate::MAX_COORDINATE;
 use crate::environment::{self, TexelLayout};
-use crate::gpu::{self, GpuEnvironment, GpuLight, GpuPrimitive, GpuTriangleAttributes, light_kind, primitive_kind};
+use crate::gpu::{
+    self, GpuEnvironment, GpuLight, GpuPrimitive, GpuTriangleAttributes, attribute_flags, light_kind, primitive_kind,
+};
 use crate::model::{self, Light, Scene, Shape, SpotFalloff};
 use bytemuck::Zeroable;
 use glam::Vec3;
@@ -11,11 +13,14 @@ use std::collections::BTreeMap;
 
 /// The primitives of a scene's shapes in shape order (quads as two triangles, meshes as their
 /// triangles), the area lights of the emissive triangles, and the vertex attributes of each
-/// primitive (`None` when no mesh has texture coordinates or normals).
+/// primitive (`None` when no mesh has texture coordinates, normals or tangents), and the
+/// tangent entries of the normal-mapped triangles, which their attributes index from 0
+/// ([`append_tangents`] places them).
 pub(crate) struct Geometry {
     pub primitives: Vec<GpuPrimitive>,
     pub lights: Vec<GpuLight>,
     pub attributes: Option<Vec<GpuTriangleAttributes>>,
+    pub tangents: Vec<GpuTriangleAttributes>,
 }
 
 /// The scene's shapes flattened, each checked first ([`check_shape`]); `material_index` maps a
@@ -24,11 +29,12 @@ pub(crate) fn flatten_shapes(scene: &Scene, material_index: &BTreeMap<&str, u32>
     let with_attributes = scene
         .shapes
         .iter()
-        .any(|s| matches!(s, Shape::Mesh { uvs, normals, .. } if uvs.is_some() || normals.is_some()));
+        .any(|s| matches!(s, Shape::Mesh { uvs, normals, tangents, .. } if uvs.is_some() || normals.is_some() || tangents.is_some()));
     let mut g = Geometry {
         primitives: Vec::new(),
         lights: Vec::new(),
         attributes: with_attributes.then(Vec::new),
+        tangents: Vec::new(),
     };
     for (s, shape) in scene.shapes.iter().enumerate() {
         check_shape(s, shape)?;
@@ -57,13 +63,14 @@ pub(crate) fn flatten_shapes(scene: &Scene, material_index: &BTreeMap<&str, u32>
                 emission,
                 uvs,
                 normals,
+                tangents,
             } => {
                 let m = material_index[material.as_str()];
-                let emissive_texture = scene.materials[material.as_str()]
-                    .pbr
-                    .as_ref()
-                    .and_then(|p| p.textures.emissive);
-                for t in indices {
+                let textures = scene.materials[material.as_str()].pbr.as_ref().map(|p| &p.textures);
+                let emissive_texture = textures.and_then(|t| t.emissive);
+                // Tangents only where the material has a normal map.
+                let normal_scale = textures.and_then(|t| t.normal).map(|n| n.scale);
+                for (k, t) in indices.iter().enumerate() {
                     // An emissive texture scales the light by its mean over the triangle.
                     let emission = match (emission, emissive_texture, uvs) {
                         (Some(e), Some(r), Some(uv)) => {
@@ -74,11 +81,15 @@ pub(crate) fn flatten_shapes(scene: &Scene, material_index: &BTreeMap<&str, u32>
                     };
                     let corners = t.map(|i| v3(positions[i as usize]));
                     let emits = g.push_triangle(corners, m, emission);
-                    if let Some(a) = &mut g.attributes {
-                        // Emitters are shaded with their geometric normal (the lights' own).
-                        let normals = normals.as_deref().filter(|_| !emits);
-                        a.push(triangle_attributes(*t, corners, uvs.as_deref(), normals));
+                    let Some(a) = &mut g.attributes else { continue };
+                    // Emitters are shaded with their geometric normal (the lights' own).
+                    let normals = normals.as_deref().filter(|_| !emits);
+                    let mut attributes = triangle_attributes(*t, corners, uvs.as_deref(), normals);
+                    if let (Some(scale), Some(tangents), false) = (normal_scale, tangents, emits) {
+                        attributes.flags |= tangents_index(g.tangents.len())?;
+                        g.tangents.push(GpuTriangleAttributes::tangents(tangents[k], scale));
                     }
+                    a.push(attributes);
                 }
             }
             Shape::Sphere {
@@ -229,6 +240,34 @@ fn v3(a: [f32; 3]) -> Vec3 {
     Vec3::from_array(a)
 }
 
+/// The attribute flags of a triangle whose tangents are attributes entry `index`.
+fn tangents_index(index: usize) -> Result<u32, String> {
+    u32::try_from(index)
+        .ok()
+        .filter(|&i| i < 1 << (32 - attribute_flags::TANGENTS_SHIFT))
+        .map(|i| attribute_flags::TANGENTS | i << attribute_flags::TANGENTS_SHIFT)
+        .ok_or_else(|| format!("{index} attributes entries: tangents past 2^30 cannot be indexed"))
+}
+
+/// Appends the `tangents` entries to the `attributes` of the primitives (in any order), and
+/// points the normal-mapped triangles' flags at them.
+pub(crate) fn append_tangents(
+    attributes: &mut Vec<GpuTriangleAttributes>,
+    tangents: Vec<GpuTriangleAttributes>,
+) -> Result<(), String> {
+    let first = attributes.len();
+    tangents_index(first + tangents.len())?;
+    for a in attributes
+        .iter_mut()
+        .filter(|a| a.flags & attribute_flags::TANGENTS != 0)
+    {
+        let index = (a.flags >> attribute_flags::TANGENTS_SHIFT) as usize + first;
+        a.flags = a.flags & !(u32::MAX << attribute_flags::TANGENTS_SHIFT) | tangents_index(index)?;
+    }
+    attributes.extend(tangents);
+    Ok(())
+}
+
 /// The sine of the largest angle between a vertex normal and the geometric normal (either
 /// facing) at which a triangle still counts as flat (its vertex normals dropped): 1e-4
 /// radians, about the precision of the normals' octahedral encoding.
@@ -289,6 +328,7 @@ fn check_shape(index: usize, shape: &Shape) -> Result<(), String> {
         indices,
         uvs,
         normals,
+        tangents,
         ..
     } = shape
     {
@@ -313,6 +353,16 @@ fn check_shape(index: usize, shape: &Shape) -> Result<(), String> {
         }
         if let Some(v) = uvs.iter().flatten().flatten().find(|v| !v.is_finite()) {
             return Err(format!("shape {index}: texture coordinate {v} is not a finite number"));
+        }
+        if let Some(t) = tangents.as_ref().filter(|t| t.len() != indices.len()) {
+            return Err(format!(
+                "shape {index}: the mesh has tangents for {} triangles of {}",
+                t.len(),
+                indices.len()
+            ));
+        }
+        if let Some(v) = tangents.iter().flatten().flatten().flatten().find(|v| !v.is_finite()) {
+            return Err(format!("shape {index}: tangent component {v} is not a finite number"));
         }
     }
     Ok(())

@@ -9,7 +9,8 @@
 //! nodes ([`punctual_light`]). Other extensions the file uses are reported as warnings.
 
 use crate::model::{Camera, FovAxis, Light, Look, Material, Pbr, Rgb, Shape, SpotFalloff};
-use crate::texture::{PbrTextures, Texture, TextureRef, Wrap};
+use crate::tangents::{self, CornerTangents};
+use crate::texture::{NormalTexture, PbrTextures, Texture, TextureRef, Wrap};
 use glam::{Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use std::collections::BTreeMap;
@@ -133,7 +134,18 @@ fn load(path: &Path) -> Result<(gltf::Document, Vec<gltf::buffer::Data>, Vec<glt
     }
     let base = path.parent();
     let buffers = gltf::import_buffers(&document, base, gltf.blob).map_err(|e| e.to_string())?;
-    let images = gltf::import_images(&document, base, &buffers).map_err(|e| e.to_string())?;
+    let images = document
+        .images()
+        .map(|image| {
+            gltf::image::Data::from_source(image.source(), base, &buffers).map_err(|e| {
+                let source = match image.source() {
+                    gltf::image::Source::Uri { uri, .. } => format!(" ('{uri}')"),
+                    gltf::image::Source::View { .. } => String::new(),
+                };
+                format!("image {}{source}: {e}", image.index())
+            })
+        })
+        .collect::<Result<_, _>>()?;
     Ok((document, buffers, images))
 }
 
@@ -219,9 +231,9 @@ pub fn import(path: &Path) -> Result<Imported, String> {
         image_texture: vec![None; images.len()],
         out: &mut out,
     };
-    let mut material_names = Vec::new();
+    let mut material_uses = Vec::new();
     for m in document.materials() {
-        material_names.push(materials.material(&m).map_err(|e| format!("{shown}: {e}"))?);
+        material_uses.push(materials.material(&m).map_err(|e| format!("{shown}: {e}"))?);
     }
     let default_material = "gltf:default".to_string();
     let scene = document
@@ -260,29 +272,36 @@ pub fn import(path: &Path) -> Result<Imported, String> {
                     primitive.mode()
                 ));
             }
-            let (material, emission, uv_set) = match primitive.material().index() {
-                Some(i) => material_names[i].clone(),
+            let material = match primitive.material().index() {
+                Some(i) => material_uses[i].clone(),
                 None => {
                     out.materials.entry(default_material.clone()).or_insert(Material {
                         diffuse: [0.8; 3],
                         ..Default::default()
                     });
-                    (default_material.clone(), [0.0; 3], 0)
+                    MaterialUse {
+                        name: default_material.clone(),
+                        emission: [0.0; 3],
+                        uv_set: 0,
+                        normal_mapped: false,
+                    }
                 }
             };
-            let Some(data) = read_primitive(&primitive, &buffers, transform, uv_set)
+            let Some(data) = read_primitive(&primitive, &buffers, transform, &material)
                 .map_err(|e| format!("{shown}: mesh '{mesh_name}': {e}"))?
             else {
                 continue;
             };
+            let emission = material.emission;
             out.triangles += data.indices.len();
             out.shapes.push(Shape::Mesh {
                 positions: data.positions,
                 indices: data.indices,
-                material,
+                material: material.name,
                 emission: emission.iter().any(|&e| e > 0.0).then_some(emission),
                 uvs: data.uvs,
                 normals: data.normals,
+                tangents: data.tangents,
             });
         }
     }
@@ -359,16 +378,19 @@ struct MeshData {
     indices: Vec<[u32; 3]>,
     uvs: Option<Vec<[f32; 2]>>,
     normals: Option<Vec<[f32; 3]>>,
+    tangents: Option<Vec<CornerTangents>>,
 }
 
-/// Reads a triangle primitive's positions, indices, normals and texture coordinates (set
-/// `uv_set`), placed by `transform`; `None` when it has no positions.
+/// Reads a triangle primitive's positions, indices, normals, texture coordinates (the set
+/// `material` reads) and, where `material` has a normal map, tangents (the file's, else
+/// MikkTSpace's), placed by `transform`; `None` when it has no positions.
 fn read_primitive(
     primitive: &gltf::Primitive,
     buffers: &[gltf::buffer::Data],
     transform: Mat4,
-    uv_set: u32,
+    material: &MaterialUse,
 ) -> Result<Option<MeshData>, String> {
+    let uv_set = material.uv_set;
     let f32_only = &[DataType::F32][..];
     let uv_types = &[DataType::F32, DataType::U8, DataType::U16][..];
     let positions = primitive
@@ -380,18 +402,30 @@ fn read_primitive(
     let uvs = primitive
         .get(&gltf::Semantic::TexCoords(uv_set))
         .map(|a| (a, uv_types, Dimensions::Vec2));
+    let tangents = primitive
+        .get(&gltf::Semantic::Tangents)
+        .filter(|_| material.normal_mapped)
+        .map(|a| (a, f32_only, Dimensions::Vec4));
     let indices = primitive
         .indices()
         .map(|a| (a, &[DataType::U8, DataType::U16, DataType::U32][..], Dimensions::Scalar));
-    for (accessor, types, dimensions) in positions.into_iter().chain(normals).chain(uvs).chain(indices) {
+    let accessors = positions
+        .into_iter()
+        .chain(normals)
+        .chain(uvs)
+        .chain(tangents)
+        .chain(indices);
+    for (accessor, types, dimensions) in accessors {
         check_accessor(&accessor, types, dimensions)?;
     }
     let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let Some(positions) = reader.read_positions() else {
         return Ok(None);
     };
-    let positions: Vec<[f32; 3]> = positions
-        .map(|p| transform.transform_point3(Vec3::from_array(p)).to_array())
+    let local_positions: Vec<[f32; 3]> = positions.collect();
+    let positions: Vec<[f32; 3]> = local_positions
+        .iter()
+        .map(|&p| transform.transform_point3(Vec3::from_array(p)).to_array())
         .collect();
     let vertices = positions.len();
     let per_vertex = |what: &str, count: usize| {
@@ -404,16 +438,15 @@ fn read_primitive(
     // Normals are covectors: they map by the inverse transpose, which keeps them on the side
     // the (possibly re-wound) triangles face.
     let normal_matrix = glam::Mat3::from_mat4(transform).inverse().transpose();
-    let normals = match reader.read_normals() {
-        Some(n) => {
-            let n: Vec<[f32; 3]> = n
-                .map(|n| (normal_matrix * Vec3::from_array(n)).normalize_or_zero().to_array())
-                .collect();
-            per_vertex("normals", n.len())?;
-            Some(n)
-        }
-        None => None,
-    };
+    let local_normals: Option<Vec<[f32; 3]>> = reader.read_normals().map(Iterator::collect);
+    if let Some(n) = &local_normals {
+        per_vertex("normals", n.len())?;
+    }
+    let normals = local_normals.as_ref().map(|n| {
+        n.iter()
+            .map(|&n| (normal_matrix * Vec3::from_array(n)).normalize_or_zero().to_array())
+            .collect()
+    });
     let uvs = match reader.read_tex_coords(uv_set) {
         Some(t) => {
             let t: Vec<[f32; 2]> = t.into_f32().collect();
@@ -429,18 +462,72 @@ fn read_primitive(
     if let Some(&bad) = flat.iter().find(|&&i| i as usize >= vertices) {
         return Err(format!("indexes vertex {bad} of {vertices}"));
     }
+    let mut indices: Vec<[u32; 3]> = flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+    let mut tangents = None;
+    if material.normal_mapped {
+        let mesh = LocalMesh {
+            positions: &local_positions,
+            indices: &indices,
+            uvs: uvs.as_deref(),
+            normals: local_normals.as_deref(),
+            tangents: reader.read_tangents().map(Iterator::collect),
+        };
+        tangents = Some(corner_tangents(&mesh, transform)?);
+    }
     // A mirroring transform flips the winding; keep triangles facing as authored.
-    let flip = transform.determinant() < 0.0;
-    let indices: Vec<[u32; 3]> = flat
-        .chunks_exact(3)
-        .map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] })
-        .collect();
+    if transform.determinant() < 0.0 {
+        indices.iter_mut().for_each(|t| t.swap(1, 2));
+        tangents.iter_mut().flatten().for_each(|t| t.swap(1, 2));
+    }
     Ok(Some(MeshData {
         positions,
         indices,
         uvs,
         normals,
+        tangents,
     }))
+}
+
+/// A primitive's triangles in the mesh's own space, as tangents are made.
+struct LocalMesh<'a> {
+    positions: &'a [[f32; 3]],
+    indices: &'a [[u32; 3]],
+    uvs: Option<&'a [[f32; 2]]>,
+    normals: Option<&'a [[f32; 3]]>,
+    tangents: Option<Vec<[f32; 4]>>,
+}
+
+/// The tangents of each triangle's corners in world space (`transform`): the file's TANGENT
+/// where the primitive has normals (glTF ignores it without), else MikkTSpace's of the
+/// normal map's texture coordinates. A tangent turns with `transform`; its handedness
+/// flips with a mirroring one.
+fn corner_tangents(mesh: &LocalMesh, transform: Mat4) -> Result<Vec<CornerTangents>, String> {
+    let local = match mesh.tangents.as_ref().filter(|_| mesh.normals.is_some()) {
+        Some(t) => {
+            if t.len() != mesh.positions.len() {
+                return Err(format!("{} tangents for {} vertices", t.len(), mesh.positions.len()));
+            }
+            if let Some(i) = t.iter().position(|t| !t.iter().all(|c| c.is_finite())) {
+                return Err(format!("tangent {i} is {:?}, not finite", t[i]));
+            }
+            mesh.indices.iter().map(|tri| tri.map(|i| t[i as usize])).collect()
+        }
+        None => {
+            let zeros = vec![[0.0; 2]; mesh.positions.len()];
+            tangents::generate(mesh.positions, mesh.indices, mesh.uvs.unwrap_or(&zeros), mesh.normals)?
+        }
+    };
+    let matrix = glam::Mat3::from_mat4(transform);
+    let handedness = transform.determinant().signum();
+    Ok(local
+        .into_iter()
+        .map(|corners| {
+            corners.map(|t| {
+                let [x, y, z] = (matrix * Vec3::new(t[0], t[1], t[2])).normalize_or_zero().to_array();
+                [x, y, z, if t[3] < 0.0 { -handedness } else { handedness }]
+            })
+        })
+        .collect())
 }
 
 /// The perspective cameras of the document that a node of the scene holds, placed by the
@@ -478,6 +565,17 @@ fn cameras(document: &gltf::Document, nodes: &[Option<(Option<String>, Mat4)>]) 
     out
 }
 
+/// How primitives use a material: its name, the emission its triangles give off as area
+/// lights, the texture coordinate set its textures read, and whether it has a normal map
+/// (its meshes then carry tangents).
+#[derive(Clone)]
+struct MaterialUse {
+    name: String,
+    emission: Rgb,
+    uv_set: u32,
+    normal_mapped: bool,
+}
+
 /// Turns glTF materials into [`Material`]s with [`Pbr`] parameters, and the images their
 /// textures use into [`Texture`]s (each image once).
 struct MaterialImport<'a> {
@@ -488,15 +586,14 @@ struct MaterialImport<'a> {
 }
 
 impl MaterialImport<'_> {
-    /// Adds material `m` to the output; returns its name, the emission its triangles give
-    /// off as area lights, and the texture coordinate set its textures read.
+    /// Adds material `m` to the output; returns how primitives use it.
     ///
     /// The area lights' radiance is the emissive factor (times its strength) alone: the
     /// emissive texture scales only the material's emission (`material_at`), so a light
     /// whose texture is mostly dark (DamagedHelmet) shines as if it were white. Applying the
     /// texture where lights are hit and sampled (and the texture's mean to the light's power
     /// estimate) belongs to the light code.
-    fn material(&mut self, m: &gltf::Material) -> Result<(String, Rgb, u32), String> {
+    fn material(&mut self, m: &gltf::Material) -> Result<MaterialUse, String> {
         let index = m.index().map_or_else(|| "default".to_string(), |i| format!("#{i}"));
         let name = format!("gltf:{}", m.name().map_or(index, String::from));
         let pbr = m.pbr_metallic_roughness();
@@ -517,9 +614,16 @@ impl MaterialImport<'_> {
             base_color: pbr.base_color_texture().map(|t| self.texture(&t)).transpose()?,
             metallic_roughness: pbr.metallic_roughness_texture().map(|t| self.texture(&t)).transpose()?,
             emissive: m.emissive_texture().map(|t| self.texture(&t)).transpose()?,
+            normal: m.normal_texture().map(|t| self.normal_texture(&t)).transpose()?,
         };
         // One set of texture coordinates per mesh: the base colour's, else another slot's.
-        let slots = [&textures.base_color, &textures.metallic_roughness, &textures.emissive];
+        let normal = textures.normal.map(|n| n.texture);
+        let slots = [
+            &textures.base_color,
+            &textures.metallic_roughness,
+            &textures.emissive,
+            &normal,
+        ];
         let sets: Vec<u32> = slots.iter().filter_map(|t| t.map(|t| t.tex_coord)).collect();
         let uv_set = sets.first().copied().unwrap_or(0);
         if sets.iter().any(|&s| s != uv_set) {
@@ -550,7 +654,12 @@ impl MaterialImport<'_> {
                 ..Default::default()
             },
         );
-        Ok((name, emission, uv_set))
+        Ok(MaterialUse {
+            name,
+            emission,
+            uv_set,
+            normal_mapped: normal.is_some(),
+        })
     }
 
     /// The index of refraction that renders KHR_materials_specular's strength and colour of
@@ -613,7 +722,36 @@ impl MaterialImport<'_> {
 
     /// The reference a material slot makes to a texture, converting its image on first use.
     fn texture(&mut self, info: &gltf::texture::Info) -> Result<TextureRef, String> {
-        let texture = info.texture();
+        let mut r = self.texture_ref(&info.texture(), info.tex_coord())?;
+        if let Some(t) = info.texture_transform() {
+            r.transform = uv_transform(t.offset(), t.scale(), t.rotation());
+            r.tex_coord = t.tex_coord().unwrap_or(r.tex_coord);
+        }
+        Ok(r)
+    }
+
+    /// The normal map of a material (the `gltf` crate reads no KHR_texture_transform of
+    /// it: read here from its JSON).
+    fn normal_texture(&mut self, n: &gltf::material::NormalTexture) -> Result<NormalTexture, String> {
+        let mut texture = self.texture_ref(&n.texture(), n.tex_coord())?;
+        if let Some(t) = n.extension_value("KHR_texture_transform") {
+            let pair = |key: &str, default: f32| -> [f32; 2] {
+                let v = |i: usize| t[key][i].as_f64().map_or(default, |x| x as f32);
+                [v(0), v(1)]
+            };
+            let rotation = t["rotation"].as_f64().unwrap_or(0.0) as f32;
+            texture.transform = uv_transform(pair("offset", 0.0), pair("scale", 1.0), rotation);
+            texture.tex_coord = t["texCoord"].as_u64().map_or(texture.tex_coord, |c| c as u32);
+        }
+        Ok(NormalTexture {
+            texture,
+            scale: n.scale(),
+        })
+    }
+
+    /// The reference to `texture` read at texture coordinate set `tex_coord`, converting its
+    /// image on first use.
+    fn texture_ref(&mut self, texture: &gltf::Texture, tex_coord: u32) -> Result<TextureRef, String> {
         let image = texture.source().index();
         let data = self
             .images
@@ -641,16 +779,16 @@ impl MaterialImport<'_> {
         let sampler = texture.sampler();
         let mut r = TextureRef::new(index);
         r.wrap = [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())];
-        r.tex_coord = info.tex_coord();
-        if let Some(t) = info.texture_transform() {
-            // KHR_texture_transform: translation x rotation x scale, rotating counter-clockwise
-            // in uv (the extension's matrix).
-            let ([ox, oy], [sx, sy], (sin, cos)) = (t.offset(), t.scale(), t.rotation().sin_cos());
-            r.transform = [[cos * sx, sin * sy, ox], [-sin * sx, cos * sy, oy]];
-            r.tex_coord = t.tex_coord().unwrap_or(r.tex_coord);
-        }
+        r.tex_coord = tex_coord;
         Ok(r)
     }
+}
+
+/// KHR_texture_transform's matrix: translation x rotation x scale, rotating counter-clockwise
+/// in uv.
+fn uv_transform([ox, oy]: [f32; 2], [sx, sy]: [f32; 2], rotation: f32) -> [[f32; 3]; 2] {
+    let (sin, cos) = rotation.sin_cos();
+    [[cos * sx, sin * sy, ox], [-sin * sx, cos * sy, oy]]
 }
 
 /// An image as RGBA8 texels (grey fills R, G and B; missing alpha is opaque; 16-bit and float

@@ -334,6 +334,11 @@ pub struct GpuTextureInfo {
 pub mod attribute_flags {
     /// The triangle has vertex normals (`n0`..`n2`).
     pub const NORMALS: u32 = 1;
+    /// The triangle is normal-mapped: its tangents are the attributes entry
+    /// `flags >> TANGENTS_SHIFT` ([`GpuTriangleAttributes::tangents`]).
+    pub const TANGENTS: u32 = 2;
+    /// Where the index of the triangle's tangents sits.
+    pub const TANGENTS_SHIFT: u32 = 2;
 }
 
 /// Per-vertex attributes of one primitive (`TriangleAttributes` in WGSL), in BVH order like
@@ -356,6 +361,26 @@ pub struct GpuTriangleAttributes {
     pub n2: u32,
     /// [`attribute_flags`].
     pub flags: u32,
+}
+
+impl GpuTriangleAttributes {
+    /// The entry (past the primitives' own) holding the tangent frames of a normal-mapped
+    /// triangle's `corners` (xyz, w = ±1), of a map of scale `scale`: the unit tangents in
+    /// `n0`..`n2` (encoded as normals), the scale in `uv0.x`, the corners' handedness in
+    /// `uv1` and `uv2.x`; no flags.
+    pub fn tangents(corners: [[f32; 4]; 3], scale: f32) -> Self {
+        let [n0, n1, n2] = corners.map(|t| encode_octahedral([t[0], t[1], t[2]]));
+        let w = corners.map(|t| if t[3] < 0.0 { -1.0 } else { 1.0 });
+        GpuTriangleAttributes {
+            uv0: [scale, 0.0],
+            uv1: [w[0], w[1]],
+            uv2: [w[2], 0.0],
+            n0,
+            n1,
+            n2,
+            flags: 0,
+        }
+    }
 }
 
 /// A unit vector in octahedral encoding (Meyer et al. 2010), x in the low 16 bits and y in

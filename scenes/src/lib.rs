@@ -13,6 +13,7 @@ pub mod mitsuba;
 pub mod model;
 pub mod placement;
 pub mod split;
+pub mod tangents;
 pub mod texture;
 
 use bvh::BvhKind;
@@ -243,9 +244,15 @@ fn add_gltf(scene: &mut Scene, path: &std::path::Path) -> Result<Vec<gltf::Impor
     let first_texture = scene.textures.len() as u32;
     for pbr in imported.materials.values_mut().filter_map(|m| m.pbr.as_mut()) {
         let t = &mut pbr.textures;
-        for r in [&mut t.base_color, &mut t.metallic_roughness, &mut t.emissive]
-            .into_iter()
-            .flatten()
+        let normal = t.normal.as_mut().map(|n| &mut n.texture);
+        for r in [
+            t.base_color.as_mut(),
+            t.metallic_roughness.as_mut(),
+            t.emissive.as_mut(),
+            normal,
+        ]
+        .into_iter()
+        .flatten()
         {
             r.texture += first_texture;
         }
@@ -398,8 +405,9 @@ pub struct CompiledScene {
     pub env_texels: Vec<[f32; 4]>,
     /// The environment map's CDFs; `[0, 1]` when there is no map.
     pub env_cdf: Vec<f32>,
-    /// Vertex attributes per primitive, in the primitives' order; empty when no mesh has
-    /// texture coordinates or normals.
+    /// Vertex attributes per primitive, in the primitives' order, then the tangents of the
+    /// normal-mapped triangles, which their attributes index; empty when no mesh has texture
+    /// coordinates, normals or tangents.
     pub attributes: Vec<GpuTriangleAttributes>,
     /// The texture table: one entry per material slot with a texture.
     pub textures: Vec<GpuTextureInfo>,
@@ -453,6 +461,7 @@ impl CompiledScene {
             primitives: prims,
             mut lights,
             attributes: attrs,
+            tangents,
         } = flatten::flatten_shapes(scene, &material_index)?;
         let sky = flatten::push_scene_lights(&scene.lights, &mut lights)?;
         let (boxes, clipped_primitives) = traced_boxes(&prims);
@@ -468,7 +477,8 @@ impl CompiledScene {
             .iter()
             .map(|&i| mark_alpha_masked(prims[i as usize], &materials))
             .collect();
-        let attributes = attrs.map_or_else(Vec::new, |a| order.iter().map(|&i| a[i as usize]).collect());
+        let mut attributes = attrs.map_or_else(Vec::new, |a| order.iter().map(|&i| a[i as usize]).collect());
+        flatten::append_tangents(&mut attributes, tangents)?;
         let center = (lo + hi) * 0.5;
         let radius = ((hi - lo) * 0.5).length();
         let mean_env_luminance = sky.distribution.as_ref().map_or(0.0, |d| d.mean_luminance);
@@ -694,6 +704,7 @@ fn gpu_material(
                 base_color_texture: slot(&p.textures.base_color, true)?,
                 metallic_roughness_texture: slot(&p.textures.metallic_roughness, false)?,
                 emissive_texture: slot(&p.textures.emissive, true)?,
+                normal_texture: slot(&p.textures.normal.map(|n| n.texture), false)?,
                 ..GpuMaterial::default()
             }
         }

@@ -357,6 +357,10 @@ pub enum Shape {
         /// geometric normal without them (flat shading).
         #[serde(default)]
         normals: Option<Vec<Vec3>>,
+        /// Tangents of each triangle's corners for its material's normal map: unit xyz and
+        /// w = ±1, the bitangent w (normal × tangent) (glTF TANGENT, or MikkTSpace's).
+        #[serde(default)]
+        tangents: Option<Vec<crate::tangents::CornerTangents>>,
     },
     /// An analytic sphere (normals face outward).
     Sphere {

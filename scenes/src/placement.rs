@@ -135,10 +135,20 @@ fn transformed(shape: &Shape, t: &Affine3A) -> Shape {
     match &mut s {
         Shape::Triangle { vertices, .. } => vertices.iter_mut().for_each(|v| *v = point(v)),
         Shape::Quad { corners, .. } => corners.iter_mut().for_each(|v| *v = point(v)),
-        Shape::Mesh { positions, normals, .. } => {
+        Shape::Mesh {
+            positions,
+            normals,
+            tangents,
+            ..
+        } => {
             positions.iter_mut().for_each(|v| *v = point(v));
             if let Some(normals) = normals {
                 normals.iter_mut().for_each(|n| *n = normal(n));
+            }
+            // A similarity keeps the handedness of the tangent frames.
+            for t in tangents.iter_mut().flatten().flatten() {
+                let [x, y, z] = normal(&[t[0], t[1], t[2]]);
+                *t = [x, y, z, t[3]];
             }
         }
         Shape::Sphere { center, radius, .. } => {

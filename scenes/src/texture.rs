@@ -159,12 +159,27 @@ pub struct PbrTextures {
     pub metallic_roughness: Option<TextureRef>,
     /// Emission (sRGB), multiplying the emissive factor.
     pub emissive: Option<TextureRef>,
+    /// The tangent-space normal map (glTF `normalTexture`).
+    pub normal: Option<NormalTexture>,
+}
+
+/// A tangent-space normal map (linear RGB, 2 texel - 1 the normal in the frame of tangent,
+/// bitangent and normal) and the scale of its tangential components (glTF `normalTexture`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NormalTexture {
+    /// The map.
+    pub texture: TextureRef,
+    /// Scales the map's x and y before the normal is normalised.
+    pub scale: f32,
 }
 
 impl PbrTextures {
     /// Whether any texture is set.
     pub fn any(&self) -> bool {
-        self.base_color.is_some() || self.metallic_roughness.is_some() || self.emissive.is_some()
+        self.base_color.is_some()
+            || self.metallic_roughness.is_some()
+            || self.emissive.is_some()
+            || self.normal.is_some()
     }
 }
 

@@ -103,6 +103,42 @@ fn shading_normal(index: u32, uv: vec2<f32>, ng: vec3<f32>) -> vec3<f32> {
     return select(n / len, -n / len, dot(n, ng) < 0.0);
 }
 
+#if NORMAL_MAPS
+// The shading normal of primitive `index` at barycentrics `uv` and texture coordinates `tex`
+// under its material's normal map (glTF normalTexture): normalize(t x s + b y s + n z) for
+// the map's (x, y, z) = 2 texel - 1 and scale s, in the frame of the interpolated vertex
+// normal n (`ng` without vertex normals), the interpolated tangent t orthonormalised against
+// n, and the bitangent b = w (n x t) of the interpolated handedness w; turned to the side of
+// `ng`. `shading_normal` where the primitive has no tangents. With NORMAL_MAPS, `surface_at`
+// takes its shading normal from here.
+fn mapped_shading_normal(index: u32, uv: vec2<f32>, ng: vec3<f32>, material: u32, tex: vec2<f32>) -> vec3<f32> {
+    if (index >= attribute_count()) {
+        return ng;
+    }
+    let a = attribute_at(index);
+    if ((a.flags & ATTRIBUTE_TANGENTS) == 0u) {
+        return shading_normal(index, uv, ng);
+    }
+    let w = vec3<f32>(1.0 - uv.x - uv.y, uv.x, uv.y);
+    var n = ng;
+    if ((a.flags & ATTRIBUTE_NORMALS) != 0u) {
+        let vertex = w.x * decode_octahedral(a.n0) + w.y * decode_octahedral(a.n1) + w.z * decode_octahedral(a.n2);
+        n = select(ng, normalize(vertex), length(vertex) > 0.0);
+    }
+    let f = attribute_at(a.flags >> ATTRIBUTE_TANGENTS_SHIFT);
+    let along = w.x * decode_octahedral(f.n0) + w.y * decode_octahedral(f.n1) + w.z * decode_octahedral(f.n2);
+    let t = along - dot(along, n) * n;
+    let handedness = select(1.0, -1.0, dot(w, vec3<f32>(f.uv1, f.uv2.x)) < 0.0);
+    let scale = f.uv0.x;
+    let x = texture_sample(u32(materials[material].normal_texture), tex).xyz * 2.0 - 1.0;
+    let tangent = select(vec3<f32>(0.0), normalize(t), length(t) > 0.0);
+    let mapped = tangent * (x.x * scale) + handedness * cross(n, tangent) * (x.y * scale) + n * x.z;
+    let len = length(mapped);
+    let m = select(n, mapped / len, len > 0.0);
+    return select(m, -m, dot(m, ng) < 0.0);
+}
+#endif
+
 fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
     let tiny = vec3<f32>(1e-30);
     let big = select(vec3<f32>(-1e30), vec3<f32>(1e30), d >= vec3<f32>(0.0));
@@ -526,10 +562,14 @@ fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
     let position = p.a + hit.uv.x * p.b + hit.uv.y * p.c;
     let ng = triangle_normal(p.b, p.c);
     let tex = surface_tex(hit.primitive, hit.uv);
+#if NORMAL_MAPS
+    let ns = mapped_shading_normal(hit.primitive, hit.uv, ng, p.material, tex);
+#else
 #if SHADING_NORMALS
     let ns = shading_normal(hit.primitive, hit.uv, ng);
 #else
     let ns = ng;
+#endif
 #endif
     return Surface(position, ng, p.material, p.light, triangle_extent(p.a, p.b, p.c), tex, ns);
 }

@@ -158,6 +158,15 @@ struct TriangleAttributes {
 
 const ATTRIBUTE_NORMALS: u32 = 1u;
 
+#if NORMAL_MAPS
+// A normal-mapped triangle's attributes index (flags >> ATTRIBUTE_TANGENTS_SHIFT) an entry
+// past the primitives' that holds its tangent frames: the corners' unit tangents in n0..n2
+// (encoded as normals), the normal map's scale in uv0.x, and the corners' handedness w (+-1:
+// the bitangent is w (normal x tangent)) in uv1.x, uv1.y and uv2.x.
+const ATTRIBUTE_TANGENTS: u32 = 2u;
+const ATTRIBUTE_TANGENTS_SHIFT: u32 = 2u;
+#endif
+
 // The 10 low bits of `v` spread to every third bit (bits 0, 3, ..., 27): one axis of a Morton
 // code, which interleaves them with the other axes' (shifted by 1 and 2).
 fn morton_spread(v: u32) -> u32 {

@@ -66,6 +66,7 @@ fn textured_plane() -> LoadedScene {
             emission: None,
             uvs: Some(vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]),
             normals: None,
+            tangents: None,
         }],
         lights: vec![],
         integrator: Integrator::default(),

@@ -314,6 +314,7 @@ fn gltf_vertex_attributes_materials_textures_and_cameras_import() {
             normals,
             material,
             emission,
+            tangents: None,
         },
     ] = &imported.shapes[..]
     else {

@@ -23,6 +23,7 @@ mod lights;
 mod lost_work;
 mod mitsuba;
 mod mlt;
+mod normal_maps;
 mod options;
 mod photon_query;
 mod pm;

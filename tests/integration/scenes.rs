@@ -73,7 +73,8 @@ fn rust_scene_structs_match_the_wgsl_layout() {
 #[test]
 fn rust_scene_constants_match_the_wgsl_constants() {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/lib/scene.wgsl")).unwrap();
-    let source = preprocess("shaders/lib/scene.wgsl", &text, &BTreeSet::new()).unwrap();
+    let flags = BTreeSet::from(["NORMAL_MAPS".to_string()]);
+    let source = preprocess("shaders/lib/scene.wgsl", &text, &flags).unwrap();
     let module = naga::front::wgsl::parse_str(&source).unwrap();
     let wgsl = |name: &str| -> u32 {
         let (_, c) = module
@@ -100,6 +101,9 @@ fn rust_scene_constants_match_the_wgsl_constants() {
         ("LIGHT_BACKGROUND", gpu::light_kind::BACKGROUND),
         ("LIGHT_SPOT", gpu::light_kind::SPOT),
         ("LIGHT_ENVIRONMENT", gpu::light_kind::ENVIRONMENT),
+        ("ATTRIBUTE_NORMALS", gpu::attribute_flags::NORMALS),
+        ("ATTRIBUTE_TANGENTS", gpu::attribute_flags::TANGENTS),
+        ("ATTRIBUTE_TANGENTS_SHIFT", gpu::attribute_flags::TANGENTS_SHIFT),
     ] {
         assert_eq!(wgsl(name), rust, "{name}");
     }

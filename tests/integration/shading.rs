@@ -26,7 +26,7 @@ const ESTIMATORS: &[(&str, &str, u32)] = &[
 /// The pixels of a `size` x `size` image of the tilted-normals scene whose footprint lies on
 /// the square, `margin` (in scene units) inside its edges: camera at (0, -4, 0) looking at the
 /// origin with a 40 degree field of view, the square [-1, 1]^2 at y = 0.
-fn on_square(size: u32, margin: f64) -> impl Fn(u32, u32) -> bool {
+pub(crate) fn on_square(size: u32, margin: f64) -> impl Fn(u32, u32) -> bool {
     let half = 4.0 * (20f64).to_radians().tan();
     move |x, y| {
         [(0, 0), (1, 0), (0, 1), (1, 1)].iter().all(|&(dx, dy)| {
@@ -40,7 +40,13 @@ fn on_square(size: u32, margin: f64) -> impl Fn(u32, u32) -> bool {
 #[test]
 fn a_square_with_tilted_vertex_normals_is_shaded_by_them_in_every_estimator() {
     let scene = load_scene(data("scenes/tilted-normals-quad.ron").to_str().unwrap()).unwrap();
-    check_tilted_square(&scene, "pinhole");
+    check_tilted_square(&scene, "pinhole", tilted_radiance());
+}
+
+/// The radiance of the tilted square's scene: albedo / pi * E * (l . ns), see the scene file.
+fn tilted_radiance() -> [f64; 3] {
+    let cosine = (30f64.to_radians().cos() - 30f64.to_radians().sin()) / 2f64.sqrt();
+    [1.0, 2.0, 0.5].map(|e| 0.8 * cosine * e)
 }
 
 #[test]
@@ -58,20 +64,17 @@ fn through_a_thin_lens_every_estimator_sees_the_tilted_square_alike() {
     assert!(text.contains("lens: Some"), "the scene's camera line changed");
     let scene = LoadedScene::parse("tilted-normals-quad-lens", &text, BvhKind::Bvh2, None).unwrap();
     assert!(scene.compiled.thin_lens);
-    check_tilted_square(&scene, "thin lens");
+    check_tilted_square(&scene, "thin lens", tilted_radiance());
 }
 
-/// Every estimator's mean over the tilted square of `scene` (seen through `camera`) against
-/// its analytic radiance; through a lens, the merging estimators but VCM are left out (their
-/// camera rays are VCM's, and they take no lens connections).
-fn check_tilted_square(scene: &LoadedScene, camera: &str) {
-    // albedo / pi * E * (l . ns), see the scene file.
-    let cosine = (30f64.to_radians().cos() - 30f64.to_radians().sin()) / 2f64.sqrt();
-    let expected = [1.0, 2.0, 0.5].map(|e| 0.8 * cosine * e);
+/// Every estimator's mean over the square of `scene` (the tilted square's, named `what`)
+/// against its analytic radiance `expected`; through a thin lens, the merging estimators but
+/// VCM are left out (their camera rays are VCM's, and they take no lens connections).
+pub(crate) fn check_tilted_square(scene: &LoadedScene, what: &str, expected: [f64; 3]) {
     let size = 32;
     let merging = [("PM_RADIUS", ConstValue::F32(0.03))];
     for &(graph, layout, frames) in ESTIMATORS {
-        if camera != "pinhole" && matches!(graph, "ppm" | "sppm" | "pbpm") {
+        if scene.compiled.thin_lens && matches!(graph, "ppm" | "sppm" | "pbpm") {
             continue;
         }
         let pm = matches!(graph, "ppm" | "sppm" | "pbpm" | "vcm");
@@ -83,7 +86,7 @@ fn check_tilted_square(scene: &LoadedScene, camera: &str) {
         // 4 standard errors (seven estimators, three channels: a false failure has odds of
         // about 1 in 750), plus float rounding for PT, whose only noise is the jitter of a
         // constant radiance.
-        assert_analytic(&format!("{graph} ({camera})"), mean, se, expected, 4.0, 1e-4);
+        assert_analytic(&format!("{graph} ({what})"), mean, se, expected, 4.0, 1e-4);
     }
 }
 

@@ -72,6 +72,7 @@ fn quad(material: &str, [x0, x1, y0, y1, z]: [f32; 5], normals: Option<Vec<[f32;
         emission: None,
         uvs: Some(vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]),
         normals,
+        tangents: None,
     }
 }
 
@@ -214,6 +215,7 @@ fn texture_lookups_match_a_cpu_evaluation() {
             wrap: [Wrap::ClampToEdge, Wrap::MirroredRepeat],
             ..TextureRef::new(0)
         }),
+        normal: None,
     };
     let s = scene(
         vec![("m", pbr([1.0; 3], textures, None))],

@@ -265,6 +265,7 @@ fn shape<'a, 'i>(
             emission,
             uvs: mesh.uvs,
             normals: mesh.normals.map(|n| n.iter().map(|v| v.to_array()).collect()),
+            tangents: None,
         });
     }
     props.finish(ctx);
