@@ -12,6 +12,7 @@ pub mod gpu;
 pub mod mitsuba;
 pub mod model;
 pub mod placement;
+pub mod plastic;
 pub mod split;
 pub mod texture;
 
