@@ -21,6 +21,7 @@ mod layouts;
 mod lights;
 mod lost_work;
 mod mitsuba;
+mod mitsuba_bsdf;
 mod mlt;
 mod options;
 mod photon_query;
