@@ -41,7 +41,7 @@ pub mod material_flags {
     /// the base colour (else Schlick's from the base colour).
     pub const CONDUCTOR: u32 = 128;
     /// The PBR microfacets' masking-shadowing is the product of the two directions' maskings
-    /// (Mitsuba's) instead of height-correlated (glTF's).
+    /// (Mitsuba's, Beckmann's by Walter's fit) instead of height-correlated (glTF's).
     pub const SMITH_SEPARABLE: u32 = 256;
     /// With `PLASTIC`: Mitsuba's rough plastic, whose coating's transmittance and internal
     /// reflectance are a table in `plastic_tables` ([`crate::plastic`]) at the offset

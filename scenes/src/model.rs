@@ -227,7 +227,7 @@ pub enum Masking {
     /// 1 / (1 + Lambda(o) + Lambda(i)) (glTF's).
     #[default]
     HeightCorrelated,
-    /// G1(o) G1(i) (Mitsuba's).
+    /// G1(o) G1(i) (Mitsuba's: for Beckmann, Walter et al.'s fit of G1 in the BSDF's value).
     Separable,
 }
 

@@ -586,11 +586,23 @@ fn pbr_g1(b: Bsdf, w: vec3<f32>) -> f32 {
     return 1.0 / (1.0 + pbr_lambda(b, w));
 }
 
+// Masking of direction `w` as Mitsuba's separable masking-shadowing takes it: Smith's, but for
+// Beckmann Walter et al.'s fit of it, as Mitsuba evaluates its BSDFs (the visible normals
+// are still sampled, and their pdf evaluated, with Smith's).
+fn pbr_separable_g1(b: Bsdf, w: vec3<f32>) -> f32 {
+#if BSDF_BECKMANN
+    if (pbr_beckmann(b.m)) {
+        return beckmann_g1_fit(w, b.alpha);
+    }
+#endif
+    return pbr_g1(b, w);
+}
+
 // Masking-shadowing of the pair `o`, `i` (either side of the surface): height-correlated
 // (glTF's), or the product of the two maskings (MATERIAL_SMITH_SEPARABLE: Mitsuba's).
 fn pbr_g2(b: Bsdf, o: vec3<f32>, i: vec3<f32>) -> f32 {
     if ((b.m.flags & MATERIAL_SMITH_SEPARABLE) != 0u) {
-        return pbr_g1(b, o) * pbr_g1(b, i);
+        return pbr_separable_g1(b, o) * pbr_separable_g1(b, i);
     }
     return 1.0 / (1.0 + pbr_lambda(b, o) + pbr_lambda(b, i));
 }
