@@ -484,8 +484,7 @@ const PBR_MIN_IOR: f32 = 1.001;
 // its index). It is then set up as the Lambertian lobe of its base colour (photon mapping's
 // gathers evaluate the BSDF for every photon they find).
 fn pbr_is_lambertian(m: Material) -> bool {
-    let rough_plastic = (m.flags & MATERIAL_ROUGH_PLASTIC) != 0u;
-    return m.metallic == 0.0 && m.transmission == 0.0 && m.ior <= PBR_MIN_IOR && !rough_plastic;
+    return m.metallic == 0.0 && m.transmission == 0.0 && m.ior <= PBR_MIN_IOR && !pbr_rough_plastic(m);
 }
 
 // The Lambertian lobe of a PBR material's base colour (pbr_is_lambertian).
@@ -647,7 +646,7 @@ fn pbr_diffuse_reflectance(m: Material) -> vec3<f32> {
 // (Mitsuba's fit for a smooth coating, the table of a rough one), and 1 / ior^2.
 fn plastic_coating(m: Material) -> vec2<f32> {
 #if BSDF_ROUGH_PLASTIC
-    if ((m.flags & MATERIAL_ROUGH_PLASTIC) != 0u) {
+    if (pbr_rough_plastic(m)) {
         let table = rough_plastic_table(m);
         return vec2<f32>(plastic_tables[table], plastic_tables[table + 1u]);
     }
@@ -660,7 +659,7 @@ fn plastic_coating(m: Material) -> vec2<f32> {
 // coating transmits its table's T(cos_w).
 fn pbr_base_transmittance(m: Material, cos_w: f32, f: f32) -> f32 {
 #if BSDF_ROUGH_PLASTIC
-    if ((m.flags & MATERIAL_ROUGH_PLASTIC) != 0u) {
+    if (pbr_rough_plastic(m)) {
         return rough_plastic_transmittance(m, cos_w);
     }
 #endif
@@ -673,11 +672,20 @@ fn pbr_base_transmittance(m: Material, cos_w: f32, f: f32) -> f32 {
 // hemispherical transmittance, exactly.
 fn pbr_base_albedo(m: Material) -> vec3<f32> {
 #if BSDF_ROUGH_PLASTIC
-    if ((m.flags & MATERIAL_ROUGH_PLASTIC) != 0u) {
+    if (pbr_rough_plastic(m)) {
         return pbr_diffuse_reflectance(m) * plastic_tables[rough_plastic_table(m) + 2u];
     }
 #endif
     return m.diffuse;
+}
+
+// Whether the material is Mitsuba's rough plastic, with its coating's table.
+fn pbr_rough_plastic(m: Material) -> bool {
+#if BSDF_ROUGH_PLASTIC
+    return (m.flags & MATERIAL_ROUGH_PLASTIC) != 0u;
+#else
+    return false;
+#endif
 }
 
 #if BSDF_ROUGH_PLASTIC
@@ -715,7 +723,7 @@ fn pbr_setup(bsdf: Bsdf) -> Bsdf {
     b.pbr = true;
     // A rough plastic keeps its index, however close to 1 (the host checked it is positive and
     // not 1): nothing refracts through its coating, whose table stands for it.
-    b.m.ior = select(max(m.ior, PBR_MIN_IOR), m.ior, (m.flags & MATERIAL_ROUGH_PLASTIC) != 0u);
+    b.m.ior = select(max(m.ior, PBR_MIN_IOR), m.ior, pbr_rough_plastic(m));
     let roughness = clamp(m.roughness, 0.0, 1.0);
     b.alpha = select(roughness * roughness, 0.0, roughness * roughness < PBR_SMOOTH_ALPHA);
     let fresnel = pbr_fresnel(b.m, b.fix.z);
