@@ -28,6 +28,10 @@ pub const ALL: &[(&str, &str)] = &[
         "Beckmann microfacets (Mitsuba's default distribution) beside GGX",
     ),
     (
+        "BSDF_ROUGH_PLASTIC",
+        "Mitsuba's rough plastic: its coating's tabulated transmittance and internal reflectance",
+    ),
+    (
         "TEXTURES",
         "texture lookups (base colour, metallic-roughness, emission)",
     ),
@@ -106,6 +110,13 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
         .iter()
         .any(|a| a.flags & attribute_flags::TANGENTS != 0);
     add("NORMAL_MAPS", normal_maps);
+    add(
+        "BSDF_ROUGH_PLASTIC",
+        scene
+            .materials
+            .iter()
+            .any(|m| m.flags & material_flags::PBR != 0 && m.flags & material_flags::ROUGH_PLASTIC != 0),
+    );
     add(
         "TEXTURES",
         normal_maps

@@ -41,8 +41,12 @@ pub mod material_flags {
     /// the base colour (else Schlick's from the base colour).
     pub const CONDUCTOR: u32 = 128;
     /// The PBR microfacets' masking-shadowing is the product of the two directions' maskings
-    /// (Mitsuba's) instead of height-correlated (glTF's).
+    /// (Mitsuba's, Beckmann's by Walter's fit) instead of height-correlated (glTF's).
     pub const SMITH_SEPARABLE: u32 = 256;
+    /// With `PLASTIC`: Mitsuba's rough plastic, whose coating's transmittance and internal
+    /// reflectance are a table in `plastic_tables` ([`crate::plastic`]) at the offset
+    /// `phong_exponent` holds.
+    pub const ROUGH_PLASTIC: u32 = 512;
 }
 
 /// Primitive kinds, as `Primitive::kind` stores them.
@@ -184,7 +188,8 @@ pub struct GpuCwbvhNode {
 pub struct GpuMaterial {
     /// Lambertian reflectance, or the PBR base colour.
     pub diffuse: [f32; 3],
-    /// Phong exponent.
+    /// Phong exponent; a rough plastic's table offset (`material_flags::ROUGH_PLASTIC`), a
+    /// whole number.
     pub phong_exponent: f32,
     /// Phong reflectance.
     pub phong: [f32; 3],

@@ -12,6 +12,7 @@ pub mod gpu;
 pub mod mitsuba;
 pub mod model;
 pub mod placement;
+pub mod plastic;
 pub mod split;
 pub mod tangents;
 pub mod texture;
@@ -405,6 +406,9 @@ pub struct CompiledScene {
     pub env_texels: Vec<[f32; 4]>,
     /// The environment map's CDFs; `[0, 1]` when there is no map.
     pub env_cdf: Vec<f32>,
+    /// The rough plastics' coating tables ([`plastic::PlasticTables`]); one zero when there
+    /// is none.
+    pub plastic_tables: Vec<f32>,
     /// Vertex attributes per primitive, in the primitives' order, then the tangents of the
     /// normal-mapped triangles, which their attributes index; empty when no mesh has texture
     /// coordinates, normals or tangents.
@@ -450,13 +454,16 @@ impl CompiledScene {
             .map(|(i, k)| (k.as_str(), i as u32))
             .collect();
         let mut packed = PackedTextures::new(&scene.textures)?;
+        let mut tables = plastic::PlasticTables::default();
         let materials = scene
             .materials
             .iter()
             .map(|(name, m)| {
-                gpu_material(m, &mut packed, &scene.textures).map_err(|e| format!("material '{name}': {e}"))
+                gpu_material(m, &mut packed, &scene.textures, &mut tables)
+                    .map_err(|e| format!("material '{name}': {e}"))
             })
             .collect::<Result<Vec<_>, String>>()?;
+        let plastic_tables = if tables.data.is_empty() { vec![0.0] } else { tables.data };
         let flatten::Geometry {
             primitives: prims,
             mut lights,
@@ -512,6 +519,7 @@ impl CompiledScene {
             environment: sky.environment,
             env_texels,
             env_cdf,
+            plastic_tables,
             attributes,
             textures: packed.infos,
             texels: packed.texels,
@@ -578,6 +586,10 @@ impl CompiledScene {
             bytemuck::cast_slice(&self.env_texels).to_vec(),
         );
         out.insert("env_cdf".to_string(), bytemuck::cast_slice(&self.env_cdf).to_vec());
+        out.insert(
+            "plastic_tables".to_string(),
+            bytemuck::cast_slice(&self.plastic_tables).to_vec(),
+        );
         out.insert(
             "attributes".to_string(),
             bytemuck::cast_slice(&self.attributes).to_vec(),
@@ -655,11 +667,13 @@ fn check_lights(lights: &[Light]) -> Result<(), (&'static str, String)> {
     Ok(())
 }
 
-/// A material as the GPU reads it, its textures added to `packed`.
+/// A material as the GPU reads it, its textures added to `packed` and a rough plastic's
+/// coating table to `tables`.
 fn gpu_material(
     m: &model::Material,
     packed: &mut PackedTextures,
     textures: &[texture::Texture],
+    tables: &mut plastic::PlasticTables,
 ) -> Result<GpuMaterial, String> {
     let two_sided = if m.two_sided { gpu::material_flags::TWO_SIDED } else { 0 };
     Ok(match &m.pbr {
@@ -689,12 +703,19 @@ fn gpu_material(
                 0
             };
             let (eta, k) = p.conductor.map_or(([0.0; 3], [0.0; 3]), |c| (c.eta, c.k));
+            let table = rough_plastic_table(p, tables)?;
+            let rough_plastic = if table.is_some() {
+                gpu::material_flags::ROUGH_PLASTIC
+            } else {
+                0
+            };
             GpuMaterial {
                 diffuse: p.base_color,
+                phong_exponent: table.unwrap_or(0) as f32,
                 ior: p.ior,
                 mirror: eta,
                 phong: k,
-                flags: two_sided | gpu::material_flags::PBR | mask | thin | pbr_model_flags(p),
+                flags: two_sided | gpu::material_flags::PBR | mask | thin | rough_plastic | pbr_model_flags(p),
                 emission: p.emission,
                 metallic: p.metallic,
                 roughness: p.roughness,
@@ -709,6 +730,20 @@ fn gpu_material(
             }
         }
     })
+}
+
+/// The offset in `tables` of a rough plastic's coating table (added on first use); `None` for
+/// other materials, smooth plastics among them.
+fn rough_plastic_table(p: &model::Pbr, tables: &mut plastic::PlasticTables) -> Result<Option<u32>, String> {
+    if p.plastic.is_none() || p.roughness <= 0.0 {
+        return Ok(None);
+    }
+    let offset = tables.offset(p.roughness.min(1.0), p.ior, p.distribution)?;
+    // The GPU reads the offset from an f32, exact below 2^24.
+    if offset >= 1 << 24 {
+        return Err("too many rough plastic coatings: their tables exceed 2^24 floats".to_string());
+    }
+    Ok(Some(offset))
 }
 
 /// The flags of a PBR material's microfacet distribution and plastic model.

@@ -238,7 +238,7 @@ pub enum Masking {
     /// 1 / (1 + Lambda(o) + Lambda(i)) (glTF's).
     #[default]
     HeightCorrelated,
-    /// G1(o) G1(i) (Mitsuba's).
+    /// G1(o) G1(i) (Mitsuba's: for Beckmann, Walter et al.'s fit of G1 in the BSDF's value).
     Separable,
 }
 
@@ -247,7 +247,9 @@ pub enum Masking {
 /// the coating, and the part the coating reflects back inside (its internal diffuse Fresnel
 /// reflectance F_dr) reaches the base again, scattered anew: the diffuse lobe is
 /// base / (1 - F_dr) (`nonlinear`: base / (1 - base F_dr), a deeper colour) times
-/// (1 - F(cos_o)) (1 - F(cos_i)) / (pi ior^2).
+/// (1 - F(cos_o)) (1 - F(cos_i)) / (pi ior^2). With a roughness above 0 (Mitsuba's
+/// `roughplastic`), the rough coating's transmittances T(cos) and F_dr come from its tables
+/// ([`crate::plastic`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Plastic {

@@ -203,7 +203,8 @@ fn bsdf_diffuse_part(b: Bsdf) -> Bsdf {
     var albedo = b.m.diffuse;
 #if BSDF_PBR
     if (b.pbr) {
-        albedo *= (1.0 - b.m.metallic) * (1.0 - b.m.transmission) * (1.0 - b.fresnel);
+        let through = pbr_base_transmittance(b.m, b.fix.z, b.fresnel);
+        albedo = (1.0 - b.m.metallic) * (1.0 - b.m.transmission) * through * pbr_base_albedo(b.m);
     }
 #endif
     d.continuation = clamp(max_component(albedo), 0.0, 1.0);
@@ -461,7 +462,9 @@ fn bsdf_sample_lobes(b: Bsdf, u: vec3<f32>) -> BsdfSample {
 //   (1 - F(cos_o)) (1 - F(cos_i)), the light that enters and leaves through a smooth
 //   interface: symmetric, so reciprocal, and with reflection never above 1 (the light the
 //   interface reflects back down is dropped: a white base reflects 1 - F_avg of the
-//   diffuse light, 0.91 for ior 1.5).
+//   diffuse light, 0.91 for ior 1.5); Mitsuba's plastic returns it to the base
+//   (`pbr_diffuse_reflectance`), and its rough plastic's coating lets through its tabulated
+//   transmittance T(cos) instead of 1 - F(cos) (`pbr_base_transmittance`).
 // Opaque materials (no transmission) are black from behind. Roughness (perceptual, in [0, 1])
 // gives alpha = roughness^2; below PBR_SMOOTH_ALPHA (roughness 0.0316) the specular lobes are
 // smooth: a perfect mirror for metals, a smooth dielectric for glass (delta lobes), so alpha
@@ -477,10 +480,11 @@ const PBR_MIN_IOR: f32 = 1.001;
 
 // Whether a PBR material is a Lambertian: no metal, no transmission, and no specular layer
 // (an index of refraction of at most PBR_MIN_IOR, which KHR_materials_specular 0 and the
-// Mitsuba import of a textured diffuse give). It is then set up as the Lambertian lobe of its
-// base colour (photon mapping's gathers evaluate the BSDF for every photon they find).
+// Mitsuba import of a textured diffuse give; a rough plastic's coating masks light whatever
+// its index). It is then set up as the Lambertian lobe of its base colour (photon mapping's
+// gathers evaluate the BSDF for every photon they find).
 fn pbr_is_lambertian(m: Material) -> bool {
-    return m.metallic == 0.0 && m.transmission == 0.0 && m.ior <= PBR_MIN_IOR;
+    return m.metallic == 0.0 && m.transmission == 0.0 && m.ior <= PBR_MIN_IOR && !pbr_rough_plastic(m);
 }
 
 // The Lambertian lobe of a PBR material's base colour (pbr_is_lambertian).
@@ -581,11 +585,23 @@ fn pbr_g1(b: Bsdf, w: vec3<f32>) -> f32 {
     return 1.0 / (1.0 + pbr_lambda(b, w));
 }
 
+// Masking of direction `w` as Mitsuba's separable masking-shadowing takes it: Smith's, but for
+// Beckmann Walter et al.'s fit of it, as Mitsuba evaluates its BSDFs (the visible normals
+// are still sampled, and their pdf evaluated, with Smith's).
+fn pbr_separable_g1(b: Bsdf, w: vec3<f32>) -> f32 {
+#if BSDF_BECKMANN
+    if (pbr_beckmann(b.m)) {
+        return beckmann_g1_fit(w, b.alpha);
+    }
+#endif
+    return pbr_g1(b, w);
+}
+
 // Masking-shadowing of the pair `o`, `i` (either side of the surface): height-correlated
 // (glTF's), or the product of the two maskings (MATERIAL_SMITH_SEPARABLE: Mitsuba's).
 fn pbr_g2(b: Bsdf, o: vec3<f32>, i: vec3<f32>) -> f32 {
     if ((b.m.flags & MATERIAL_SMITH_SEPARABLE) != 0u) {
-        return pbr_g1(b, o) * pbr_g1(b, i);
+        return pbr_separable_g1(b, o) * pbr_separable_g1(b, i);
     }
     return 1.0 / (1.0 + pbr_lambda(b, o) + pbr_lambda(b, i));
 }
@@ -614,16 +630,81 @@ fn pbr_sample_visible(b: Bsdf, w: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
 // (MATERIAL_PLASTIC), the base with the light the coating reflects back into it, scattered
 // again: base / (1 - F_dr) (nonlinear: base / (1 - base F_dr)), F_dr the coating's internal
 // diffuse reflectance, and over ior^2 (radiance leaving into the outer medium spreads over
-// the wider solid angle). With the (1 - F(cos_o)) (1 - F(cos_i)) of the lobe, a white linear
-// plastic reflects 1 in all (F_dr's identity 1 - F_dr(outside) = ior^2 (1 - F_dr(inside))).
+// the wider solid angle). With the (1 - F(cos_o)) (1 - F(cos_i)) of the smooth plastic's lobe,
+// a white linear plastic reflects 1 in all (F_dr's identity 1 - F_dr(outside) =
+// ior^2 (1 - F_dr(inside))).
 fn pbr_diffuse_reflectance(m: Material) -> vec3<f32> {
     if ((m.flags & MATERIAL_PLASTIC) == 0u) {
         return m.diffuse;
     }
-    let inside = fresnel_diffuse_reflectance(1.0 / m.ior);
-    let kept = select(vec3<f32>(inside), m.diffuse * inside, (m.flags & MATERIAL_PLASTIC_NONLINEAR) != 0u);
-    return m.diffuse / ((vec3<f32>(1.0) - kept) * (m.ior * m.ior));
+    let coating = plastic_coating(m);
+    let kept = select(vec3<f32>(coating.x), m.diffuse * coating.x, (m.flags & MATERIAL_PLASTIC_NONLINEAR) != 0u);
+    return m.diffuse * coating.y / (vec3<f32>(1.0) - kept);
 }
+
+// A plastic's coating: F_dr, its reflectance of the base's diffuse light back into it
+// (Mitsuba's fit for a smooth coating, the table of a rough one), and 1 / ior^2.
+fn plastic_coating(m: Material) -> vec2<f32> {
+#if BSDF_ROUGH_PLASTIC
+    if (pbr_rough_plastic(m)) {
+        let table = rough_plastic_table(m);
+        return vec2<f32>(plastic_tables[table], plastic_tables[table + 1u]);
+    }
+#endif
+    return vec2<f32>(fresnel_diffuse_reflectance(1.0 / m.ior), 1.0 / (m.ior * m.ior));
+}
+
+// The share of the light arriving at local z `cos_w` (> 0) that the interface lets through to
+// the diffuse base, given its Fresnel reflectance `f` there: 1 - f; Mitsuba's rough plastic's
+// coating transmits its table's T(cos_w).
+fn pbr_base_transmittance(m: Material, cos_w: f32, f: f32) -> f32 {
+#if BSDF_ROUGH_PLASTIC
+    if (pbr_rough_plastic(m)) {
+        return rough_plastic_transmittance(m, cos_w);
+    }
+#endif
+    return 1.0 - f;
+}
+
+// What the diffuse base sends back out per unit of the light let through to it, at most: its
+// colour (a smooth interface lets out less than the base reflects, a smooth plastic's base
+// reflects as much in all); a rough plastic's, its lobe's reflectance times its coating's
+// hemispherical transmittance, exactly.
+fn pbr_base_albedo(m: Material) -> vec3<f32> {
+#if BSDF_ROUGH_PLASTIC
+    if (pbr_rough_plastic(m)) {
+        return pbr_diffuse_reflectance(m) * plastic_tables[rough_plastic_table(m) + 2u];
+    }
+#endif
+    return m.diffuse;
+}
+
+// Whether the material is Mitsuba's rough plastic, with its coating's table.
+fn pbr_rough_plastic(m: Material) -> bool {
+#if BSDF_ROUGH_PLASTIC
+    return (m.flags & MATERIAL_ROUGH_PLASTIC) != 0u;
+#else
+    return false;
+#endif
+}
+
+#if BSDF_ROUGH_PLASTIC
+// Where a rough plastic's coating table starts in `plastic_tables` (scenes/src/plastic.rs):
+// F_dr, 1 / ior^2, the hemispherical transmittance, then T at the cosines k / 63,
+// k = 0 ..= 63.
+fn rough_plastic_table(m: Material) -> u32 {
+    return u32(m.phong_exponent);
+}
+
+// The rough coating's transmittance T at cosine `cos_w`, interpolated linearly in cos_w * 63
+// between the table's entries, as Mitsuba interpolates it.
+fn rough_plastic_transmittance(m: Material, cos_w: f32) -> f32 {
+    let x = clamp(cos_w, 0.0, 1.0) * 63.0;
+    let k = min(u32(x), 62u);
+    let entry = rough_plastic_table(m) + 3u + k;
+    return mix(plastic_tables[entry], plastic_tables[entry + 1u], x - f32(k));
+}
+#endif
 
 // The hemispherical average of the Fresnel reflectance, weighted by the cosine, of light
 // arriving in a medium of relative index `eta` (the index beyond over the index it is in):
@@ -640,7 +721,9 @@ fn pbr_setup(bsdf: Bsdf) -> Bsdf {
     var b = bsdf;
     let m = b.m;
     b.pbr = true;
-    b.m.ior = max(m.ior, PBR_MIN_IOR);
+    // A rough plastic keeps its index, however close to 1 (the host checked it is positive and
+    // not 1): nothing refracts through its coating, whose table stands for it.
+    b.m.ior = select(max(m.ior, PBR_MIN_IOR), m.ior, pbr_rough_plastic(m));
     let roughness = clamp(m.roughness, 0.0, 1.0);
     b.alpha = select(roughness * roughness, 0.0, roughness * roughness < PBR_SMOOTH_ALPHA);
     let fresnel = pbr_fresnel(b.m, b.fix.z);
@@ -668,7 +751,8 @@ fn pbr_setup(bsdf: Bsdf) -> Bsdf {
 // base's (1 - metallic) (1 - transmission) (1 - F) base).
 fn pbr_glossy_albedo(b: Bsdf) -> vec3<f32> {
     let m = b.m;
-    let dielectric = (1.0 - m.metallic) * (b.fresnel + (1.0 - b.fresnel) * m.transmission * m.diffuse);
+    let through = pbr_base_transmittance(m, b.fix.z, b.fresnel);
+    let dielectric = (1.0 - m.metallic) * ((1.0 - through) + through * m.transmission * m.diffuse);
     var bound = select(vec3<f32>(0.0), dielectric, pbr_scatters(b, b.fix.z));
     if (b.fix.z > 0.0) {
         bound += m.metallic * pbr_metal_fresnel(m, b.fix.z);
@@ -676,12 +760,13 @@ fn pbr_glossy_albedo(b: Bsdf) -> vec3<f32> {
     return bound;
 }
 
-// The Russian roulette continuation: the albedo bound at `fix`, everything the interface
-// reflects (`b.fresnel`) plus what it lets through to the base, metal on the outside.
+// The Russian roulette continuation: the albedo bound at `fix`, everything the interface does
+// not let through (`b.fresnel`; a rough coating reflects at most 1 - T) plus what the base
+// sends back of what it does, metal on the outside.
 fn pbr_continuation(b: Bsdf) -> f32 {
     let m = b.m;
-    let base = m.diffuse;
-    let dielectric = (1.0 - m.metallic) * (b.fresnel + (1.0 - b.fresnel) * base);
+    let through = pbr_base_transmittance(m, b.fix.z, b.fresnel);
+    let dielectric = (1.0 - m.metallic) * ((1.0 - through) + through * pbr_base_albedo(m));
     var bound = select(vec3<f32>(0.0), dielectric, pbr_scatters(b, b.fix.z));
     if (b.fix.z > 0.0) {
         bound += m.metallic * pbr_metal_fresnel(m, b.fix.z);
@@ -711,7 +796,8 @@ fn pbr_lobe_probs(b: Bsdf, cos_w: f32) -> vec2<f32> {
     let w = pbr_spec_weights(b, cos_w > 0.0, abs(cos_w), f);
     var diffuse = 0.0;
     if (cos_w > 0.0) {
-        diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * luminance(m.diffuse) * (1.0 - f);
+        let through = pbr_base_transmittance(m, cos_w, f);
+        diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * luminance(m.diffuse) * through;
     }
     let total = w.x + w.y + diffuse;
     if (total <= 1e-9) {
@@ -769,7 +855,8 @@ fn pbr_eval_local(b: Bsdf, gen: vec3<f32>) -> BsdfEval {
     let f_o = b.fresnel;
     let f_i = pbr_fresnel(m, gen.z).x;
     if (outside_o && outside_i && (m.flags & BSDF_NO_DIFFUSE) == 0u) {
-        let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * (1.0 - f_o) * (1.0 - f_i) * INV_PI;
+        let through = pbr_base_transmittance(m, o.z, f_o) * pbr_base_transmittance(m, gen.z, f_i);
+        let diffuse = (1.0 - m.metallic) * (1.0 - m.transmission) * through * INV_PI;
         e.f += pbr_diffuse_reflectance(m) * diffuse;
         e.pdf_forward += lobes_o.y * gen.z * INV_PI;
         e.pdf_reverse += lobes_i.y * o.z * INV_PI;

@@ -96,7 +96,7 @@ struct BvhNode {
 // scale the factors; `material_at` resolves them at a surface point.
 struct Material {
     diffuse: vec3<f32>,     // Lambertian reflectance, or the PBR base colour
-    phong_exponent: f32,
+    phong_exponent: f32,    // MATERIAL_ROUGH_PLASTIC: the offset of its table in plastic_tables
     phong: vec3<f32>,
     ior: f32,               // negative: perfect mirror
     mirror: vec3<f32>,
@@ -122,6 +122,7 @@ const MATERIAL_PLASTIC: u32 = 32u;      // Mitsuba's plastic: the diffuse base's
 const MATERIAL_PLASTIC_NONLINEAR: u32 = 64u;
 const MATERIAL_CONDUCTOR: u32 = 128u;   // PBR metal of a complex index: eta in `mirror`, k in `phong`
 const MATERIAL_SMITH_SEPARABLE: u32 = 256u; // PBR masking-shadowing G1(o) G1(i) (Mitsuba's)
+const MATERIAL_ROUGH_PLASTIC: u32 = 512u;   // MATERIAL_PLASTIC with its rough coating's table (BSDF_ROUGH_PLASTIC)
 
 // One material slot's texture: its image at texels[offset ..] (width x height, rows from the
 // top, RGBA8 with R in the low byte), sampled at uv' = (dot(row0, (u, v, 1)),

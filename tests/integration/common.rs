@@ -4,7 +4,8 @@ use lightgraph::run::{
     Image, LayoutOverrides, LoadedScene, Session, SessionOptions, device_flags, kernel_flags, load_graph,
     specialization,
 };
-use lightgraph_engine::compile;
+use lightgraph_engine::{Program, compile};
+
 use lightgraph_engine::{ConstValue, Gpu};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -170,8 +171,23 @@ pub fn render_with(
     render_with_layout(scene, graph, layout, size, spp, frames, seed, &[], overrides)
 }
 
-/// The generated WGSL of every kernel of `graph` in `layout` for `scene` with `constants`
-/// (every scene feature compiled in with `all_features`), joined.
+/// The program of `graph` in `layout` for `scene` with `constants` (every scene feature
+/// compiled in with `all_features`).
+pub fn program(
+    graph: &str,
+    layout: &str,
+    scene: &LoadedScene,
+    constants: &[(&str, ConstValue)],
+    all_features: bool,
+) -> Program {
+    let graph = load_graph(graph).unwrap();
+    let options = options((8, 8), 1, 1, constants, Default::default());
+    let flags = kernel_flags(device_flags(gpu()), scene, all_features);
+    let spec = specialization(&graph, &scene.scene, &options, flags);
+    compile(&graph, layout, &graph.layouts[layout], &spec, &gpu().target()).unwrap()
+}
+
+/// The generated WGSL of every kernel of [`program`], joined.
 pub fn kernel_sources(
     graph: &str,
     layout: &str,
@@ -179,11 +195,7 @@ pub fn kernel_sources(
     constants: &[(&str, ConstValue)],
     all_features: bool,
 ) -> String {
-    let graph = load_graph(graph).unwrap();
-    let options = options((8, 8), 1, 1, constants, Default::default());
-    let flags = kernel_flags(device_flags(gpu()), scene, all_features);
-    let spec = specialization(&graph, &scene.scene, &options, flags);
-    let program = compile(&graph, layout, &graph.layouts[layout], &spec, &gpu().target()).unwrap();
+    let program = program(graph, layout, scene, constants, all_features);
     let sources: Vec<&str> = program.kernels.iter().map(|k| k.source.text()).collect();
     sources.join("\n")
 }

@@ -22,6 +22,7 @@ mod layouts;
 mod lights;
 mod lost_work;
 mod mitsuba;
+mod mitsuba_bsdf;
 mod mlt;
 mod normal_maps;
 mod options;

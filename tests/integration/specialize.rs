@@ -1,7 +1,7 @@
 //! Scene-specialised kernels: the scene's features decide which WGSL code is generated, and a
 //! specialised kernel renders the same image as one with every feature compiled in.
 
-use crate::common::{gpu, kernel_sources, largest_relative_difference};
+use crate::common::{gpu, kernel_sources, largest_relative_difference, program};
 use lightgraph::run::{LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
 
 /// The generated WGSL of every kernel of `pt` in NaivePTsk for `scene`.
@@ -95,5 +95,33 @@ fn only_scenes_with_thin_walled_transmission_compile_it_in() {
         assert_eq!(used.contains("BSDF_THIN_WALLED"), thin, "{material}: {used:?}");
         let source = kernel_source(&scene, false);
         assert_eq!(source.contains(thin_code), thin, "{material}");
+    }
+}
+
+#[test]
+fn only_scenes_with_rough_plastic_read_its_tables() {
+    // A rough plastic's kernels read its coating's table; a smooth plastic's and glTF's
+    // materials' neither compile that code nor bind the tables.
+    for (material, rough) in [
+        ("(pbr: (roughness: 0.3, plastic: Some((nonlinear: false))))", true),
+        ("(pbr: (roughness: 0.0, plastic: Some((nonlinear: false))))", false),
+        ("(pbr: (roughness: 0.3))", false),
+    ] {
+        let scene = crate::bsdf::material_scene(material);
+        let used = lightgraph_scenes::features::used(&scene.compiled);
+        assert_eq!(used.contains("BSDF_ROUGH_PLASTIC"), rough, "{material}: {used:?}");
+        let source = kernel_source(&scene, false);
+        assert_eq!(
+            source.contains("fn rough_plastic_transmittance"),
+            rough,
+            "{material}: the code"
+        );
+        let program = program("pt", "NaivePTsk", &scene, &[], false);
+        let tables = program.plan.graph.resource_id("plastic_tables").unwrap();
+        assert_eq!(
+            program.resolved.used.contains(&tables),
+            rough,
+            "{material}: the binding"
+        );
     }
 }
