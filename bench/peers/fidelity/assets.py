@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Writes the fidelity suite's small assets into scenes/assets/ (deterministic; run once, the
 outputs are committed): sky.exr, a 64 x 32 sky of a blue-to-white gradient with a warm sun
-25 degrees across; grid.png, an 8 x 8 sRGB texture of distinct colours (its texels tell
+25 degrees across; sun-sky.exr, 64 x 32, smooth throughout (a Gaussian sun about 6 degrees
+wide: both renderers' importance sampling of the map works on the same bilinear radiance), under
+the rough plastic sphere; grid.png, an 8 x 8 sRGB texture of distinct colours (its texels tell
 filters and wrap modes apart); sphere.obj, a unit sphere of 16 x 32 quads with the sphere's
 normals at its vertices; star.obj, a flat six-pointed star (a concave mesh emitter).
 
@@ -32,6 +34,26 @@ def sky():
             if np.dot(d, sun) > math.cos(math.radians(12.5)):
                 img[j, i] = np.array([12.0, 10.0, 7.0])
     return img
+
+
+def sun_sky(width=64, height=32):
+    v = (np.arange(height) + 0.5) / height
+    u = (np.arange(width) + 0.5) / width
+    theta = v[:, None] * math.pi  # from +Y (row 0) down to -Y
+    phi = u[None, :] * 2 * math.pi
+    up = np.cos(theta)
+    horizon = np.clip(up, 0, 1)
+    rgb = np.empty((height, width, 3))
+    for c, (zenith, low, ground) in enumerate([(0.25, 0.9, 0.25), (0.45, 0.95, 0.18), (0.9, 1.0, 0.1)]):
+        above = low + (zenith - low) * horizon ** 0.5
+        rgb[:, :, c] = np.where(up > 0, above, ground * (1 + up)) * np.ones_like(phi)
+    # The sun: 40 degrees up, a Gaussian of about 6 degrees.
+    sun = np.array([math.cos(math.radians(40)) * math.cos(1.0), math.sin(math.radians(40)),
+                    math.cos(math.radians(40)) * math.sin(1.0)])
+    d = np.stack([np.sin(theta) * np.cos(phi), np.cos(theta) * np.ones_like(phi), np.sin(theta) * np.sin(phi)], -1)
+    glow = np.exp(-(1 - d @ sun) / (1 - math.cos(math.radians(6))))
+    rgb += glow[:, :, None] * np.array([40.0, 32.0, 22.0])
+    return rgb.astype(np.float32)
 
 
 def grid():
@@ -77,6 +99,7 @@ def main():
     mi.set_variant("scalar_rgb")
     os.makedirs(HERE, exist_ok=True)
     mi.Bitmap(sky()).write(os.path.join(HERE, "sky.exr"))
+    mi.Bitmap(sun_sky()).write(os.path.join(HERE, "sun-sky.exr"))
     mi.Bitmap(grid()).write(os.path.join(HERE, "grid.png"))
     with open(os.path.join(HERE, "sphere.obj"), "w") as f:
         f.write(sphere_obj())

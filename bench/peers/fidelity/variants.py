@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
-"""lightgraph against Mitsuba 3 on the fidelity scenes of issue 57, variant by variant.
+"""lightgraph against Mitsuba 3 on variants of the fidelity suite's scenes: a scene with its
+<default> values replaced (the rough plastic sphere's distribution, alpha, int_ior, nonlinear).
 
-  python3 bench/peers/fidelity/compare.py OUT [--lightgraph BIN] [--variants NAME,...]
+  python3 bench/peers/fidelity/variants.py OUT [--lightgraph BIN] [--variants NAME,...]
           [--res 64x64] [--spp 2048] [--batches 8] [--frames 1024] [--frame-spp 16]
 
-Each variant is a scene file of scenes/ with its <default> values replaced; it is written to
-OUT (beside the map it uses), rendered by Mitsuba (llvm_ad_rgb, `--batches` x `--spp`; kept
-when OUT already holds it) and by lightgraph (pt, `--frames` x `--frame-spp`), and compared
-with ../mitsuba_scenes.py compare (blocks of 8 x 8): one Markdown row per variant.
+Each variant is written to OUT (beside a copy of scenes/assets), rendered by Mitsuba
+(llvm_ad_rgb, `--batches` x `--spp`; kept when OUT already holds it) and by lightgraph (pt,
+`--frames` x `--frame-spp`), and compared with ../mitsuba_scenes.py compare (blocks of 8 x 8):
+one Markdown row per variant.
 """
 import argparse
 import os
@@ -54,7 +55,7 @@ def main():
     parser.add_argument("--frame-spp", type=int, default=16)
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    shutil.copy(os.path.join(SCENES, "sky.exr"), args.out)
+    shutil.copytree(os.path.join(SCENES, "assets"), os.path.join(args.out, "assets"), dirs_exist_ok=True)
     rows = []
     for name in args.variants.split(","):
         scene, defaults = VARIANTS[name]
