@@ -31,7 +31,7 @@ def load(path):
     import mitsuba as mi
 
     if not mi.variant():
-        mi.set_variant("scalar_rgb")
+        set_any_variant(mi)
     bitmap = mi.Bitmap(path)
     names = [bitmap.struct_()[i].name for i in range(bitmap.channel_count())]
     data = np.array(bitmap, dtype=np.float64)
@@ -42,6 +42,18 @@ def load(path):
     mean = np.stack([channel[c] + channel.get(f"residual.{c}", 0.0) for c in "RGB"], axis=-1)
     variance = np.stack([channel[f"variance.{c}"] for c in "RGB"], axis=-1)
     return mean, variance
+
+
+def set_any_variant(mi):
+    """Sets the first variant that works: reading EXRs needs one, any will do (the slim wheel of
+    the GPU machine has no scalar_rgb; cuda_* needs a GPU, llvm_* a libLLVM)."""
+    for variant in ["scalar_rgb", "cuda_ad_rgb", "llvm_ad_rgb", *mi.variants()]:
+        try:
+            mi.set_variant(variant)
+            return
+        except Exception:  # not installed, or not usable on this machine
+            continue
+    raise SystemExit(f"no Mitsuba variant of {mi.variants()} can be set to read EXRs with")
 
 
 def normal_quantile(p):

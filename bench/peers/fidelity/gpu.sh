@@ -15,7 +15,8 @@
 # SCENES (scene files, default every one of the suite), VARIANT (default cuda_ad_rgb), LG (the
 # command that runs lightgraph, default "bash .gpu/run.sh lightgraph"; target/release/lightgraph
 # to try the script here with VARIANT=llvm_ad_rgb), VERIFY_SCENES and VERIFY_TIME (`lightgraph
-# verify` of every estimator on those scenes at 128 x 128; default none).
+# verify` of every estimator on those scenes at 128 x 128; default none), FIDELITY (0: only the
+# verify run).
 # $OUT gets fidelity.md (the table), verify.md when asked, and logs.tgz.
 set -uo pipefail
 out=${1:?usage: gpu.sh OUT_DIR}
@@ -35,15 +36,17 @@ LG=${LG:-bash .gpu/run.sh lightgraph}
 read -r -a lg <<< "$LG"
 read -r -a scenes <<< "${SCENES:-}"
 command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version --format=csv,noheader | tee "$work/device.txt"
-t0=$SECONDS
-python3 bench/peers/fidelity/fidelity.py reference "${scenes[@]}" --out "$work/ref" --res "${RES:-256x256}" \
-  --spp "${SPP:-1024}" --passes "${PASSES:-16}" --variant "${VARIANT:-cuda_ad_rgb}" 2>&1 | tee "$work/mitsuba.log"
-echo "mitsuba: $((SECONDS - t0)) s"
-t0=$SECONDS
-python3 bench/peers/fidelity/fidelity.py lightgraph "${scenes[@]}" --out "$work/lg" --res "${RES:-256x256}" \
-  --time "${SECONDS_LG:-8}s" --bin "${lg[-1]}" --runner "${lg[*]:0:${#lg[@]}-1}" 2>&1 | tee "$work/lightgraph.log"
-echo "lightgraph: $((SECONDS - t0)) s"
-python3 bench/peers/fidelity/fidelity.py compare "$work/ref" "$work/lg" | tee "$out/fidelity.md"
+if [ "${FIDELITY:-1}" != 0 ]; then
+  t0=$SECONDS
+  python3 bench/peers/fidelity/fidelity.py reference "${scenes[@]}" --out "$work/ref" --res "${RES:-256x256}" \
+    --spp "${SPP:-1024}" --passes "${PASSES:-16}" --variant "${VARIANT:-cuda_ad_rgb}" 2>&1 | tee "$work/mitsuba.log"
+  echo "mitsuba: $((SECONDS - t0)) s"
+  t0=$SECONDS
+  python3 bench/peers/fidelity/fidelity.py lightgraph "${scenes[@]}" --out "$work/lg" --res "${RES:-256x256}" \
+    --time "${SECONDS_LG:-8}s" --bin "${lg[-1]}" --runner "${lg[*]:0:${#lg[@]}-1}" 2>&1 | tee "$work/lightgraph.log"
+  echo "lightgraph: $((SECONDS - t0)) s"
+  python3 bench/peers/fidelity/fidelity.py compare "$work/ref" "$work/lg" | tee "$out/fidelity.md"
+fi
 if [ -n "${VERIFY_SCENES:-}" ]; then
   "${lg[@]}" verify --scenes "$VERIFY_SCENES" --res 128x128 --time "${VERIFY_TIME:-4s}" --out "$work/verify" \
     > "$work/verify.log" 2>&1
