@@ -91,7 +91,7 @@ def compare(a, b, block):
     """Tests image `a` against image `b` (each (mean, variance)); a dict of the results:
     mean (b's image mean luminance), difference (relative), z, blocks, beyond (blocks whose |z|
     passes the critical value), worst (z, relative difference of the block with the largest
-    |z|), critical."""
+    |z|), critical, and per block, row by row: grid (rows of (z, relative difference))."""
     (ma, va), (mb, vb) = a, b
     if ma.shape != mb.shape:
         raise SystemExit(f"sizes differ: {ma.shape} and {mb.shape}")
@@ -102,14 +102,17 @@ def compare(a, b, block):
     se = math.sqrt((sa.sum() + sb.sum()) / (n * n))
     h, w = la.shape
     floor = ROUNDING * 0.5 * (la.mean() + lb.mean())
-    zs = []
+    grid = []
     for y in range(0, h - block + 1, block):
+        grid.append([])
+        zs = grid[-1]
         for x in range(0, w - block + 1, block):
             sl = (slice(y, y + block), slice(x, x + block))
             m = block * block
             d = la[sl].mean() - lb[sl].mean()
             s = math.sqrt((sa[sl].sum() + sb[sl].sum()) / (m * m))
             zs.append((block_z(d, s, lb[sl].mean(), floor), d / max(lb[sl].mean(), 1e-12)))
+    zs = [z for line in grid for z in line]
     critical = normal_quantile(0.01 / (2 * len(zs)))
     return {
         "mean": lb.mean(),
@@ -119,7 +122,24 @@ def compare(a, b, block):
         "beyond": sum(1 for z in zs if abs(z[0]) > critical),
         "worst": max(zs, key=lambda z: abs(z[0])),
         "critical": critical,
+        "grid": grid,
     }
+
+
+def write_block_map(path, result, scale=8):
+    """A PNG of `compare`'s blocks, `scale` pixels each: red where the first image is brighter,
+    blue where darker, by |z| up to three times the critical value; grey within it."""
+    import mitsuba as mi
+
+    z = np.array([[b[0] for b in line] for line in result["grid"]], dtype=np.float64)
+    level = np.clip(np.abs(z) / (3 * result["critical"]), 0, 1)
+    beyond = np.abs(z) > result["critical"]
+    rgb = np.full(z.shape + (3,), 128.0)
+    rgb[..., 0] = np.where(beyond, np.where(z > 0, 128 + 127 * level, 128 * (1 - level)), 128)
+    rgb[..., 2] = np.where(beyond, np.where(z < 0, 128 + 127 * level, 128 * (1 - level)), 128)
+    rgb[..., 1] = np.where(beyond, 128 * (1 - level), 128)
+    image = np.repeat(np.repeat(rgb, scale, axis=0), scale, axis=1).astype(np.uint8)
+    mi.Bitmap(image, mi.Bitmap.PixelFormat.RGB).write(path)
 
 
 HEADER = (

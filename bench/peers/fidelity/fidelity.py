@@ -12,9 +12,11 @@ one importer feature or one emitter shape (scenes/*.xml; README.md says what eac
   lightgraph [SCENE.xml ...] --out DIR [--bin lightgraph] [--res 64x64] [--time 10s | --frames N]
             [--graph pt] [--spp 4] [--runner CMD]
       lightgraph's render of each scene, DIR/NAME.exr (its film: mean and per-pixel variance).
-  compare REFERENCE_DIR LIGHTGRAPH_DIR [--block 8]
+  compare REFERENCE_DIR LIGHTGRAPH_DIR [--block 8] [--maps DIR]
       One Markdown table: per scene, the image mean's relative difference and z (both
-      renders' noise), and the blocks whose z passes the critical value (peer_images.py).
+      renders' noise), and the blocks whose z passes the critical value (peer_images.py);
+      --maps: per scene, DIR/NAME-blocks.png (the blocks' z, red where lightgraph is brighter,
+      blue where darker) and DIR/NAME-blocks.csv.
 
 Run `reference` here (llvm_ad_rgb needs a libLLVM >= 17: Debian's libllvm19 and
 DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so) or on the GPU machine
@@ -86,6 +88,18 @@ def lightgraph(args):
         print(f"{name}: {rate[-1] if rate else 'rendered'}", flush=True)
 
 
+def write_maps(folder, name, result, block):
+    """NAME-blocks.png (the blocks' z: red where lightgraph is brighter) and NAME-blocks.csv
+    (every block: its pixel corner, relative difference and z) in `folder`."""
+    os.makedirs(folder, exist_ok=True)
+    peer_images.write_block_map(os.path.join(folder, f"{name}-blocks.png"), result)
+    with open(os.path.join(folder, f"{name}-blocks.csv"), "w") as f:
+        f.write("x,y,relative_difference,z\n")
+        for j, line in enumerate(result["grid"]):
+            for i, (z, relative) in enumerate(line):
+                f.write(f"{i * block},{j * block},{relative:.6g},{z:.4g}\n")
+
+
 def compare(args):
     print(peer_images.HEADER)
     for ref in sorted(glob.glob(os.path.join(args.reference, "*.exr"))):
@@ -96,6 +110,8 @@ def compare(args):
             continue
         result = peer_images.compare(peer_images.load(ours), peer_images.load(ref), args.block)
         print(peer_images.row(name, result), flush=True)
+        if args.maps:
+            write_maps(args.maps, name, result, args.block)
 
 
 def main():
@@ -122,6 +138,7 @@ def main():
     c.add_argument("reference")
     c.add_argument("lightgraph")
     c.add_argument("--block", type=int, default=8)
+    c.add_argument("--maps", help="a folder for each scene's map of its blocks' z (PNG) and their table (CSV)")
     args = parser.parse_args()
     {"reference": reference, "lightgraph": lightgraph, "compare": compare}[args.command](args)
 

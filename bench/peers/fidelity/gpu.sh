@@ -17,7 +17,8 @@
 # to try the script here with VARIANT=llvm_ad_rgb), VERIFY_SCENES and VERIFY_TIME (`lightgraph
 # verify` of every estimator on those scenes at 128 x 128; default none), FIDELITY (0: only the
 # verify run).
-# $OUT gets fidelity.md (the table), verify.md when asked, and logs.tgz.
+# $OUT gets fidelity.md (the table), maps.tgz (each scene's map of its blocks' z, PNG and CSV),
+# verify.md when asked, and logs.tgz.
 set -uo pipefail
 out=${1:?usage: gpu.sh OUT_DIR}
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -45,7 +46,8 @@ if [ "${FIDELITY:-1}" != 0 ]; then
   python3 bench/peers/fidelity/fidelity.py lightgraph "${scenes[@]}" --out "$work/lg" --res "${RES:-256x256}" \
     --time "${SECONDS_LG:-8}s" --bin "${lg[-1]}" --runner "${lg[*]:0:${#lg[@]}-1}" 2>&1 | tee "$work/lightgraph.log"
   echo "lightgraph: $((SECONDS - t0)) s"
-  python3 bench/peers/fidelity/fidelity.py compare "$work/ref" "$work/lg" | tee "$out/fidelity.md"
+  python3 bench/peers/fidelity/fidelity.py compare "$work/ref" "$work/lg" --maps "$work/maps" | tee "$out/fidelity.md"
+  (cd "$work" && tar -czf "$out/maps.tgz" maps)
 fi
 if [ -n "${VERIFY_SCENES:-}" ]; then
   "${lg[@]}" verify --scenes "$VERIFY_SCENES" --res 128x128 --time "${VERIFY_TIME:-4s}" --out "$work/verify" \
