@@ -726,7 +726,6 @@ fn gpu_material(
                 metallic_roughness_texture: slot(&p.textures.metallic_roughness, false)?,
                 emissive_texture: slot(&p.textures.emissive, true)?,
                 normal_texture: slot(&p.textures.normal.map(|n| n.texture), false)?,
-                ..GpuMaterial::default()
             }
         }
     })
