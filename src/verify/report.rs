@@ -97,7 +97,7 @@ fn markdown(settings: &TestSettings, runs: &[RunLine], pairs: &[PairResult]) -> 
         );
     }
     md.push_str(
-        "\n| scene | a | b | verdict | outcome | blocks differing | worst block: t (critical), a/b − 1 | mean a/b − 1 | mean t | mean detectable | block coverage | expected gaps |\n\
+        "\n| scene | a | b | verdict | outcome | blocks differing | worst block: t (critical), (a − b)/mean | mean (a − b)/mean | mean t | mean detectable | block coverage | expected gaps |\n\
          |---|---|---|---|---|---:|---:|---:|---:|---:|---:|---|\n",
     );
     for p in pairs {
