@@ -312,6 +312,9 @@ pub mod texture_flags {
     pub const WRAP_MIRROR: u32 = 2;
     /// Nearest-texel lookups instead of bilinear ones.
     pub const NEAREST: u32 = 32;
+    /// A checkerboard: `offset` points at its two colours as f32 RGBA words, texel (x, y)
+    /// taking colour (x + y) mod 2 (exact where 8 bits would round them).
+    pub const CHECKER: u32 = 64;
 }
 
 /// One material slot's texture (`TextureInfo` in WGSL): where its image lies in the texel

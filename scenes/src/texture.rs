@@ -72,6 +72,10 @@ pub struct TextureRef {
     /// The colour channels are linear even where the material slot reads sRGB (Mitsuba's
     /// `raw` bitmaps, procedural textures baked to texels).
     pub linear: bool,
+    /// A checkerboard's two linear colours at full precision: its 2 x 2 image holds them in 8
+    /// bits (what host code such as exports reads); the GPU reads these, texel (x, y) taking
+    /// colour (x + y) mod 2.
+    pub checker: Option<[[f32; 3]; 2]>,
 }
 
 impl TextureRef {
@@ -85,6 +89,7 @@ impl TextureRef {
             tex_coord: 0,
             nearest: false,
             linear: false,
+            checker: None,
         }
     }
 }
@@ -121,7 +126,11 @@ impl TextureRef {
                 let texel = t.texels[(y * t.width + x) as usize];
                 for (c, s) in sum.iter_mut().enumerate() {
                     let byte = ((texel >> (8 * c)) & 0xff) as f32 / 255.0;
-                    *s += if srgb { srgb_to_linear(byte) } else { byte } as f64;
+                    *s += match self.checker {
+                        Some(colors) => colors[((x + y) % 2) as usize][c],
+                        None if srgb => srgb_to_linear(byte),
+                        None => byte,
+                    } as f64;
                 }
                 count += 1;
             }
@@ -212,13 +221,22 @@ impl PackedTextures {
     /// [`TextureRef::linear`]) and returns its index.
     pub fn add(&mut self, r: &TextureRef, srgb: bool, textures: &[Texture]) -> i32 {
         let t = &textures[r.texture as usize];
+        let mut offset = self.offsets[r.texture as usize];
+        if let Some(colors) = r.checker {
+            // Its two colours as f32 RGBA words after every image.
+            offset = self.texels.len() as u32;
+            for c in colors {
+                self.texels.extend([c[0], c[1], c[2], 1.0].map(f32::to_bits));
+            }
+        }
         let flags = if srgb && !r.linear { texture_flags::SRGB } else { 0 }
             | if r.nearest { texture_flags::NEAREST } else { 0 }
+            | if r.checker.is_some() { texture_flags::CHECKER } else { 0 }
             | r.wrap[0].bits() << texture_flags::WRAP_S_SHIFT
             | r.wrap[1].bits() << texture_flags::WRAP_T_SHIFT;
         self.infos.push(GpuTextureInfo {
             row0: r.transform[0],
-            offset: self.offsets[r.texture as usize],
+            offset,
             row1: r.transform[1],
             flags,
             width: t.width,
@@ -250,6 +268,16 @@ mod tests {
         assert_eq!(r.mean_over_triangle(&black_white(), right, true), [1.0; 3]);
         let left = [[0.05, 0.1], [0.45, 0.1], [0.05, 0.9]];
         assert_eq!(r.mean_over_triangle(&black_white(), left, true), [0.0; 3]);
+        // A checkerboard's colours at full precision, not its image's bytes.
+        let checker = TextureRef {
+            checker: Some([[0.1, 0.3, 0.7], [0.8, 0.2, 0.21]]),
+            ..r
+        };
+        assert_eq!(
+            checker.mean_over_triangle(&black_white(), right, true),
+            [0.8, 0.2, 0.21]
+        );
+        assert_eq!(checker.mean_over_triangle(&black_white(), left, true), [0.1, 0.3, 0.7]);
         // Across both texels: some points on each side, so strictly between.
         let both = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
         let m = r.mean_over_triangle(&black_white(), both, true)[0];

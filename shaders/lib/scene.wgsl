@@ -131,7 +131,7 @@ struct TextureInfo {
     row0: vec3<f32>,
     offset: u32,
     row1: vec3<f32>,
-    flags: u32,             // TEXTURE_SRGB; wrap modes at bits 1..3 (u) and 3..5 (v); TEXTURE_NEAREST
+    flags: u32,             // TEXTURE_SRGB; wrap modes at bits 1..3 (u) and 3..5 (v); TEXTURE_NEAREST; TEXTURE_CHECKER
     width: u32,
     height: u32,
     pad: vec2<u32>,
@@ -144,6 +144,7 @@ const TEXTURE_WRAP_REPEAT: u32 = 0u;
 const TEXTURE_WRAP_CLAMP: u32 = 1u;
 const TEXTURE_WRAP_MIRROR: u32 = 2u;
 const TEXTURE_NEAREST: u32 = 32u;
+const TEXTURE_CHECKER: u32 = 64u;  // a checkerboard: texels[offset ..] holds its two colours as f32 RGBA
 
 // Vertex attributes of one primitive, in BVH order like the primitives: texture coordinates,
 // and unit shading normals in octahedral encoding (snorm16 x, y; decode_octahedral).

@@ -13,6 +13,10 @@ fn texture_srgb_decode(c: vec3<f32>) -> vec3<f32> {
 
 // Texel (x, y) of `t` as linear RGBA.
 fn texture_texel(t: TextureInfo, x: u32, y: u32) -> vec4<f32> {
+    if ((t.flags & TEXTURE_CHECKER) != 0u) {
+        let i = t.offset + 4u * ((x + y) & 1u);
+        return bitcast<vec4<f32>>(vec4<u32>(texels[i], texels[i + 1u], texels[i + 2u], texels[i + 3u]));
+    }
     let c = unpack4x8unorm(texels[t.offset + y * t.width + x]);
     if ((t.flags & TEXTURE_SRGB) != 0u) {
         return vec4<f32>(texture_srgb_decode(c.rgb), c.a);

@@ -260,6 +260,62 @@ fn texture_lookups_match_a_cpu_evaluation() {
     }
 }
 
+/// A quad whose material's base colour is `r` (an image of `image`), and its compiled scene.
+fn textured_quad(image: Texture, r: TextureRef) -> (Scene, CompiledScene) {
+    let textures = PbrTextures {
+        base_color: Some(r),
+        ..Default::default()
+    };
+    let s = scene(
+        vec![("m", pbr([1.0; 3], textures, None))],
+        vec![quad("m", [-1.0, 1.0, -1.0, 1.0, 0.0], None)],
+        vec![],
+        vec![image],
+        camera_looking_down(1.0, 40.0),
+    );
+    let compiled = CompiledScene::new(&s).unwrap();
+    (s, compiled)
+}
+
+/// Nearest lookups of texture 0 at 200 points (u, v) spread over [-2, 2)^2, but for those
+/// whose texel coordinates `texel(u, v)` lie within 1e-3 of a texel edge: the GPU's results
+/// against `want(x, y)` of the texel coordinates, which must agree within `tolerance`.
+fn check_nearest_lookups(
+    s: &Scene,
+    compiled: &CompiledScene,
+    texel: impl Fn(f32, f32) -> (f32, f32),
+    want: impl Fn(f32, f32) -> [f32; 4],
+    tolerance: f32,
+) {
+    let mut queries = Vec::new();
+    let mut wanted = Vec::new();
+    for i in 0..200u32 {
+        let (u, v) = (
+            (i as f32 * 0.618_034).fract() * 4.0 - 2.0,
+            (i as f32 * 0.754_878).fract() * 4.0 - 2.0,
+        );
+        let (x, y) = texel(u, v);
+        if (x - x.round()).abs() < 1e-3 || (y - y.round()).abs() < 1e-3 {
+            continue;
+        }
+        wanted.push(want(x, y));
+        queries.push(([0.0, u, v], MISS.0, MISS.1));
+    }
+    assert!(wanted.len() > 150);
+    let results = surface_queries(compiled, s, &queries);
+    for (i, want) in wanted.iter().enumerate() {
+        let got = results[4 * i];
+        for k in 0..4 {
+            assert!(
+                (got[k] - want[k]).abs() <= tolerance,
+                "uv ({}, {}): GPU {got:?}, texel {want:?}",
+                queries[i].0[1],
+                queries[i].0[2]
+            );
+        }
+    }
+}
+
 #[test]
 fn nearest_lookups_return_the_texel_under_the_point() {
     // A 3x2 image of arbitrary bytes, read as linear even in the sRGB base colour slot.
@@ -279,53 +335,54 @@ fn nearest_lookups_return_the_texel_under_the_point() {
         linear: true,
         ..TextureRef::new(0)
     };
-    let textures = PbrTextures {
-        base_color: Some(nearest),
-        ..Default::default()
-    };
-    let s = scene(
-        vec![("m", pbr([1.0; 3], textures, None))],
-        vec![quad("m", [-1.0, 1.0, -1.0, 1.0, 0.0], None)],
-        vec![],
-        vec![image],
-        camera_looking_down(1.0, 40.0),
-    );
-    let compiled = CompiledScene::new(&s).unwrap();
+    let (s, compiled) = textured_quad(image, nearest);
     assert_eq!(
         compiled.textures[0].flags & (texture_flags::SRGB | texture_flags::NEAREST),
         texture_flags::NEAREST
     );
-    // Points off the texel edges: (s, t) = transform (u, v) in cells of 1/3 x 1/2.
-    let mut queries = Vec::new();
-    let mut want = Vec::new();
-    for i in 0..200u32 {
-        let (u, v) = (
-            (i as f32 * 0.618_034).fract() * 4.0 - 2.0,
-            (i as f32 * 0.754_878).fract() * 4.0 - 2.0,
-        );
-        let (x, y) = ((2.0 * u + 0.5 * v + 0.1) * 3.0, (-0.5 * u + 3.0 * v + 0.2) * 2.0);
-        if (x - x.round()).abs() < 1e-3 || (y - y.round()).abs() < 1e-3 {
-            continue;
-        }
+    // (s, t) = transform (u, v) in cells of 1/3 x 1/2.
+    let texel = |u: f32, v: f32| ((2.0 * u + 0.5 * v + 0.1) * 3.0, (-0.5 * u + 3.0 * v + 0.2) * 2.0);
+    let want = |x: f32, y: f32| {
         let column = (x.floor() as i64).rem_euclid(3);
         let row = (y.floor() as i64).rem_euclid(4);
         let row = if row >= 2 { 3 - row } else { row };
         let word = pattern[(row * 3 + column) as usize];
-        want.push([0, 8, 16, 24].map(|shift| ((word >> shift) & 0xff) as f32 / 255.0));
-        queries.push(([0.0, u, v], MISS.0, MISS.1));
-    }
-    let results = surface_queries(&compiled, &s, &queries);
-    for (i, want) in want.iter().enumerate() {
-        let got = results[4 * i];
-        for k in 0..4 {
-            assert!(
-                (got[k] - want[k]).abs() < 1e-6,
-                "uv ({}, {}): GPU {got:?}, texel {want:?}",
-                queries[i].0[1],
-                queries[i].0[2]
-            );
-        }
-    }
+        [0, 8, 16, 24].map(|shift| ((word >> shift) & 0xff) as f32 / 255.0)
+    };
+    check_nearest_lookups(&s, &compiled, texel, want, 1e-6);
+}
+
+#[test]
+fn a_checkerboard_returns_its_colours_at_full_precision() {
+    // Colours that 8 bits round (0.1 is stored as 26/255 = 0.10196): the GPU must return the
+    // file's values, not its image's texels.
+    let colors = [[0.1, 0.3, 0.7], [0.8, 0.2, 0.21]];
+    let bytes = colors.map(|c| {
+        let [r, g, b] = c.map(|v: f32| (v * 255.0).round() as u32);
+        r | g << 8 | b << 16 | 0xff << 24
+    });
+    let image = Texture {
+        name: "checker".into(),
+        width: 2,
+        height: 2,
+        texels: vec![bytes[0], bytes[1], bytes[1], bytes[0]],
+    };
+    let checker = TextureRef {
+        transform: [[3.0, 0.0, 0.25], [0.0, 5.0, -0.1]],
+        nearest: true,
+        linear: true,
+        checker: Some(colors),
+        ..TextureRef::new(0)
+    };
+    let (s, compiled) = textured_quad(image, checker);
+    assert_ne!(compiled.textures[0].flags & texture_flags::CHECKER, 0);
+    let texel = |u: f32, v: f32| ((3.0 * u + 0.25) * 2.0, (5.0 * v - 0.1) * 2.0);
+    let want = |x: f32, y: f32| {
+        let c = colors[(x.floor() as i64 + y.floor() as i64).rem_euclid(2) as usize];
+        [c[0], c[1], c[2], 1.0]
+    };
+    // Exactly the file's values.
+    check_nearest_lookups(&s, &compiled, texel, want, 0.0);
 }
 
 #[test]

@@ -56,24 +56,31 @@ impl Images {
     }
 
     /// A `checkerboard` texture: `color0` (default 0.4) where the fractional parts of u and v
-    /// are both above or both at most 1/2, `color1` (0.2) elsewhere, after `to_uv`. Baked into
-    /// 2 x 2 linear texels (8 bits: exact for multiples of 1/255 such as the defaults, else
-    /// within 0.5/255), looked up nearest with repeat wrapping; colours are clamped to [0, 1]
-    /// and a textured colour is replaced by its default (both warned).
+    /// are both above or both at most 1/2, `color1` (0.2) elsewhere, after `to_uv`: 2 x 2
+    /// linear texels looked up nearest with repeat wrapping, the colours exact on the GPU
+    /// ([`TextureRef::checker`]; the image holds them in 8 bits); colours are clamped to
+    /// [0, 1] and a textured colour is replaced by its default (both warned).
     pub fn checkerboard<'a, 'i>(&mut self, ctx: &mut Context<'a, 'i>, props: &Props<'a, 'i>) -> Result<TextureRef> {
-        let color0 = checker_color(ctx, props, "color0", 0.4)?;
-        let color1 = checker_color(ctx, props, "color1", 0.2)?;
+        let colors = [
+            checker_color(ctx, props, "color0", 0.4)?,
+            checker_color(ctx, props, "color1", 0.2)?,
+        ];
+        let [texel0, texel1] = colors.map(|c| {
+            let [r, g, b] = c.map(|v| (v * 255.0).round() as u32);
+            r | g << 8 | b << 16 | 0xff << 24
+        });
         let (line, column) = ctx.at(props.node());
         let texture = self.push(Texture {
             name: format!("checkerboard at {}:{line}:{column}", ctx.file),
             width: 2,
             height: 2,
-            texels: vec![color0, color1, color1, color0],
+            texels: vec![texel0, texel1, texel1, texel0],
         });
         Ok(TextureRef {
             transform: uv_transform(ctx, props)?,
             nearest: true,
             linear: true,
+            checker: Some(colors),
             ..TextureRef::new(texture)
         })
     }
@@ -85,8 +92,13 @@ impl Images {
     }
 }
 
-/// A checkerboard colour `name` as an opaque linear RGBA8 texel.
-fn checker_color<'a, 'i>(ctx: &mut Context<'a, 'i>, props: &Props<'a, 'i>, name: &str, default: f32) -> Result<u32> {
+/// A checkerboard colour `name`, linear RGB in [0, 1].
+fn checker_color<'a, 'i>(
+    ctx: &mut Context<'a, 'i>,
+    props: &Props<'a, 'i>,
+    name: &str,
+    default: f32,
+) -> Result<[f32; 3]> {
     let rgb = match props.color(ctx, name)? {
         None => [default; 3],
         Some(Color::Rgb(c)) => c,
@@ -99,8 +111,7 @@ fn checker_color<'a, 'i>(ctx: &mut Context<'a, 'i>, props: &Props<'a, 'i>, name:
         let node = props.get(name).unwrap_or(props.node());
         ctx.warn(node, format!("{name} {rgb:?} is clamped to [0, 1]"));
     }
-    let [r, g, b] = rgb.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u32);
-    Ok(r | g << 8 | b << 16 | 0xff << 24)
+    Ok(rgb.map(|c| c.clamp(0.0, 1.0)))
 }
 
 /// The 2 x 3 uv transform of a texture: Mitsuba 0.5's `u_scale`/`v_scale` (or `uvscale`)
@@ -214,9 +225,12 @@ mod tests {
             "<bsdf type=\"diffuse\"><texture type=\"checkerboard\" name=\"reflectance\">\n\
              <rgb name=\"color0\" value=\"1, 0.5, 0\"/><rgb name=\"color1\" value=\"2\"/></texture></bsdf>",
         );
-        let t = &textures[p.textures.base_color.unwrap().texture as usize];
+        let r = p.textures.base_color.unwrap();
+        let t = &textures[r.texture as usize];
         assert_eq!((t.width, t.height), (2, 2));
         assert_eq!(t.texels, [0xff00_80ff, 0xffff_ffff, 0xffff_ffff, 0xff00_80ff]);
+        // The GPU's colours: exact, clamped.
+        assert_eq!(r.checker, Some([[1.0, 0.5, 0.0], [1.0; 3]]));
         assert_eq!(
             warnings,
             ["t.xml:2:39: <rgb name=\"color1\">: color1 [2.0, 2.0, 2.0] is clamped to [0, 1]"]
