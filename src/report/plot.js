@@ -11,6 +11,9 @@ window.LightgraphPlot = (function () {
     return a !== 0 && (a < 1e-3 || a >= 1e5) ? v.toExponential(3) : String(+v.toPrecision(4));
   }
 
+  // A tick label: three significant digits at most, no float noise.
+  const tick = (v) => String(+v.toPrecision(3));
+
   // The axis over `values`: its range and ticks, and a map from value to 0..1.
   function axis(values, log) {
     const ok = values.filter((v) => isFinite(v) && (!log || v > 0));
@@ -27,7 +30,8 @@ window.LightgraphPlot = (function () {
         steps.forEach((m) => { const t = m * Math.pow(10, e); if (t >= lo && t <= hi) ticks.push(t); });
       return { f, ticks };
     }
-    if (hi <= lo) hi = lo + 1;
+    lo = Math.min(lo, 0);
+    hi = hi > lo ? hi * 1.05 : lo + 1;
     const step = Math.pow(10, Math.floor(Math.log10((hi - lo) / 4)));
     const ticks = [];
     for (let t = Math.ceil(lo / step) * step; t <= hi; t += step) ticks.push(t);
@@ -40,13 +44,13 @@ window.LightgraphPlot = (function () {
     x.ticks.forEach((t) => {
       const px = MARGIN.left + x.f(t) * w;
       ctx.beginPath(); ctx.moveTo(px, MARGIN.top); ctx.lineTo(px, MARGIN.top + h); ctx.stroke();
-      ctx.fillText(number(t), px, MARGIN.top + h + 16);
+      ctx.fillText(tick(t), px, MARGIN.top + h + 16);
     });
     ctx.textAlign = "right";
     y.ticks.forEach((t) => {
       const py = MARGIN.top + (1 - y.f(t)) * h;
       ctx.beginPath(); ctx.moveTo(MARGIN.left, py); ctx.lineTo(MARGIN.left + w, py); ctx.stroke();
-      ctx.fillText(number(t), MARGIN.left - 6, py + 4);
+      ctx.fillText(tick(t), MARGIN.left - 6, py + 4);
     });
     ctx.strokeStyle = "#333"; ctx.strokeRect(MARGIN.left, MARGIN.top, w, h);
     ctx.textAlign = "center";

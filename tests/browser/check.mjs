@@ -28,12 +28,27 @@ async function pixelAt(page, index, x, y) {
   }, [index, x, y]);
 }
 
+// Checks the pixels of the spec against A's or B's values; `which(p)` says which.
 async function expectPixels(page, name, v, which, what) {
   for (const p of v.pixels) {
-    const got = await pixelAt(page, v.index, p.x, p.y);
-    if (got.join() !== p[which].join())
-      fail(name, `viewer ${v.index} ${what}: pixel (${p.x}, ${p.y}) is ${got}, the EXR's ${which.toUpperCase()} tone-mapped is ${p[which]}`);
+    const got = await pixelAt(page, v.index, p.x, p.y), side = which(p);
+    if (got.join() !== p[side].join())
+      fail(name, `viewer ${v.index} ${what}: pixel (${p.x}, ${p.y}) is ${got}, the EXR's ${side.toUpperCase()} tone-mapped is ${p[side]}`);
   }
+}
+
+// One stop more exposure (ten steps of the slider's arrow key) brightens the image.
+async function checkExposure(page, name, v, viewer, settle) {
+  const before = await Promise.all(v.pixels.map((p) => pixelAt(page, v.index, p.x, p.y)));
+  await viewer.locator("input[type=range]").nth(0).focus();
+  for (let i = 0; i < 10; i++) await page.keyboard.press("ArrowRight");
+  await settle();
+  const after = await Promise.all(v.pixels.map((p) => pixelAt(page, v.index, p.x, p.y)));
+  const flat = (l) => l.flat();
+  if (!flat(after).every((c, i) => c >= flat(before)[i]) || flat(after).join() === flat(before).join())
+    fail(name, `viewer ${v.index}: +1 stop of exposure gave ${flat(after)} from ${flat(before)}`);
+  for (let i = 0; i < 10; i++) await page.keyboard.press("ArrowLeft");
+  await settle();
 }
 
 // Chooses A and B in the viewer's selects and a mode by its button, as a user would.
@@ -49,18 +64,23 @@ async function choose(page, v) {
 async function checkViewer(page, name, v) {
   const viewer = await choose(page, v);
   const settle = () => page.evaluate((i) => window.lightgraph.viewers[i].ready(), v.index);
-  await expectPixels(page, name, v, "a", "showing A");
+  await expectPixels(page, name, v, () => "a", "showing A");
+  await checkExposure(page, name, v, viewer, settle);
+  await expectPixels(page, name, v, () => "a", "back at exposure 0");
   await viewer.locator("button.lg-flip").click();
   await settle();
-  await expectPixels(page, name, v, "b", "after flip");
-  const split = viewer.locator("input[type=range]").nth(1);
-  await split.focus();
+  await expectPixels(page, name, v, () => "b", "after flip");
+  await viewer.locator("button", { hasText: /^split$/ }).click();
+  await settle();
+  const width = await page.evaluate((i) => window.lightgraph.viewers[i].width, v.index);
+  await expectPixels(page, name, v, (p) => (p.x < width / 2 ? "a" : "b"), "split in the middle");
+  await viewer.locator("input[type=range]").nth(1).focus();
   await page.keyboard.press("End");
   await settle();
-  await expectPixels(page, name, v, "a", "split slider at the right end (all A)");
+  await expectPixels(page, name, v, () => "a", "split slider at the right end (all A)");
   await page.keyboard.press("Home");
   await settle();
-  await expectPixels(page, name, v, "b", "split slider at the left end (all B)");
+  await expectPixels(page, name, v, () => "b", "split slider at the left end (all B)");
   await viewer.locator("button", { hasText: "rel. error" }).click();
   await settle();
   const tmap = viewer.locator("button", { hasText: "t-map" });
@@ -99,7 +119,7 @@ async function checkReport(context, report) {
   await page.goto(pathToFileURL(resolve(report.html)).href);
   const ready = await page.evaluate(() => window.lightgraph.ready.then(() => "ok", (e) => String(e)));
   if (ready !== "ok") fail(name, `the viewers did not draw: ${ready}`);
-  for (const v of report.viewers || []) await checkViewer(page, name, v);
+  else for (const v of report.viewers || []) await checkViewer(page, name, v);
   await checkPlots(page, name, report.plots || 0);
   const tables = await page.locator(".lg-table table").count();
   if (tables < (report.tables || 0)) fail(name, `${tables} tables, expected ${report.tables}`);
