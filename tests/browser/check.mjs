@@ -3,7 +3,7 @@
 // pixels read back from the canvas equal to the values the spec gives (the EXR's, tone-mapped
 // by the test that wrote the spec), flip and split slider, plot hover, tables; optionally
 // saves a screenshot. Usage: node check.mjs SPEC.json, where SPEC is
-//   { "reports": [ { "html": PATH, "screenshot": PATH?, "tables": N, "plots": N,
+//   { "reports": [ { "html": PATH, "screenshot": PATH?, "mode": MODE?, "tables": N, "plots": N,
 //       "viewers": [ { "index": I, "a": LABEL, "b": LABEL, "tmap": BOOL?,
 //                      "pixels": [ { "x": X, "y": Y, "a": [R, G, B], "b": [R, G, B] } ] } ] } ] }
 // Exits 1 naming every failure.
@@ -105,6 +105,14 @@ async function checkPlots(page, name, count) {
   }
 }
 
+// Saves a picture of the report's first viewer (in the spec's "mode", else split) or plot.
+async function screenshot(page, report) {
+  await page.evaluate((mode) => Promise.all(window.lightgraph.viewers.map((v) => v.set({ mode, split: 0.5 }))),
+    report.mode || "split");
+  await page.mouse.move(0, 0);
+  await page.locator(".lg-viewer, .lg-plot").first().screenshot({ path: report.screenshot });
+}
+
 async function checkReport(context, report) {
   const name = report.html;
   const page = await context.newPage();
@@ -123,7 +131,7 @@ async function checkReport(context, report) {
   await checkPlots(page, name, report.plots || 0);
   const tables = await page.locator(".lg-table table").count();
   if (tables < (report.tables || 0)) fail(name, `${tables} tables, expected ${report.tables}`);
-  if (report.screenshot) await page.screenshot({ path: report.screenshot, fullPage: true });
+  if (report.screenshot) await screenshot(page, report);
   await page.close();
 }
 

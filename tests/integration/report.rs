@@ -130,7 +130,9 @@ fn verify_report_shows_the_runs_and_their_t_maps() {
     let check = viewer(0, ("pt", &scene.join("pt.exr")), ("lt", &scene.join("lt.exr")), true);
     check_in_browser(
         "verify",
-        vec![json!({"html": html, "screenshot": screenshot("verify"), "tables": 2, "viewers": [check]})],
+        vec![
+            json!({"html": html, "screenshot": screenshot("verify"), "mode": "tmap", "tables": 2, "viewers": [check]}),
+        ],
     );
 }
 
