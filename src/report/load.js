@@ -2,7 +2,9 @@
 // Image data of a lightgraph report: base64 of little-endian f32 RGB, handed over by scripts
 // that call lightgraphData(id, base64), either in the page or in files beside it that are
 // loaded with <script src> (fetch() of file:// is blocked in Chromium; scripts load).
-(function () {
+// Defined once, so that several reports in one page (a notebook's) share the store; their
+// images' ids are unique.
+if (!window.lightgraphLoader) (function () {
   const stored = new Map();
   const waiting = new Map();
   const decoded = new Map();

@@ -25,16 +25,19 @@ const VIEWER_CSS: &str = include_str!("viewer.css");
 /// ([`Report::inline_limit`]).
 pub const INLINE_PIXELS: usize = 256 * 256;
 
-/// One image of a report: its floats and what the manifest says of it.
+/// One image of a report: its floats, its file name beside the page, and what the manifest
+/// says of it.
 struct ImageData {
     info: ImageInfo,
+    file: String,
     rgb: Vec<[f32; 3]>,
 }
 
 /// An image as the manifest names it.
 #[derive(Debug, Clone, Serialize)]
 pub struct ImageInfo {
-    /// Its key in the page (`image-N`).
+    /// Its key in the page: unique to the report (`KEY-image-N`), so that several reports
+    /// in one page (a notebook's) keep their data apart.
     pub id: String,
     /// Its label in the viewer.
     pub label: String,
@@ -121,6 +124,7 @@ pub struct Manifest {
 
 /// A report being put together: text, image viewers and plots, in order.
 pub struct Report {
+    key: String,
     title: String,
     items: Vec<Item>,
     images: Vec<ImageData>,
@@ -131,6 +135,7 @@ impl Report {
     /// An empty report called `title`.
     pub fn new(title: &str) -> Report {
         Report {
+            key: unique_key(),
             title: title.to_string(),
             items: Vec::new(),
             images: Vec::new(),
@@ -170,7 +175,8 @@ impl Report {
             width as usize * height as usize,
             "image {label}: size and data differ"
         );
-        let id = format!("image-{}", self.images.len());
+        let file = format!("image-{}.js", self.images.len());
+        let id = format!("{}-image-{}", self.key, self.images.len());
         self.open_viewer(label).0.push(id.clone());
         let info = ImageInfo {
             id,
@@ -181,6 +187,7 @@ impl Report {
         };
         self.images.push(ImageData {
             info,
+            file,
             rgb: rgb.to_vec(),
         });
         self
@@ -218,7 +225,7 @@ impl Report {
             .map(|image| ImageInfo {
                 src: beside
                     .filter(|_| self.is_beside(image))
-                    .map(|dir| format!("{dir}/{}.js", image.info.id)),
+                    .map(|dir| format!("{dir}/{}", image.file)),
                 ..image.info.clone()
             })
             .collect();
@@ -252,7 +259,7 @@ impl Report {
         }
         for image in self.images.iter().filter(|i| self.is_beside(i)) {
             std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-            let file = dir.join(format!("{}.js", image.info.id));
+            let file = dir.join(&image.file);
             std::fs::write(&file, data_script(image)).with_context(|| format!("writing {}", file.display()))?;
         }
         let html = self.page(&manifest, |i| !self.is_beside(i));
@@ -270,16 +277,27 @@ impl Report {
             .collect();
         format!(
             "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{}</title>\n\
-             <style>\n{VIEWER_CSS}</style>\n</head>\n<body>\n<div id=\"lightgraph-report\"></div>\n\
-             <script>\n{LOAD_JS}</script>\n<script>\n{PLOT_JS}</script>\n<script>\n{VIEWER_JS}</script>\n{data}\
-             <script id=\"lightgraph-manifest\" type=\"application/json\">{}</script>\n\
-             <script>LightgraphViewer.mount(document.getElementById(\"lightgraph-report\"), \
-             JSON.parse(document.getElementById(\"lightgraph-manifest\").textContent), lightgraphLoader);</script>\n\
-             </body>\n</html>\n",
+             <style>\n{VIEWER_CSS}</style>\n</head>\n<body>\n<script>\n{LOAD_JS}</script>\n<script>\n{PLOT_JS}</script>\n\
+             <script>\n{VIEWER_JS}</script>\n{data}<div class=\"lightgraph-report\">\n\
+             <script type=\"application/json\">{}</script>\n<script>{MOUNT}</script>\n</div>\n</body>\n</html>\n",
             escape_html(&self.title),
             json.replace("</", "<\\/")
         )
     }
+}
+
+/// The page's last script: draws the manifest before it into the element around it.
+const MOUNT: &str = "LightgraphViewer.mount(document.currentScript.parentElement, \
+                     JSON.parse(document.currentScript.previousElementSibling.textContent), lightgraphLoader);";
+
+/// A key no other report of this process, or of another made at another time, has.
+fn unique_key() -> String {
+    static COUNT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    format!("r{:x}-{n}", nanos ^ (u128::from(std::process::id()) << 64))
 }
 
 /// The folder beside a report at `path` that holds its large images: `<stem>.data`.
@@ -339,10 +357,7 @@ mod tests {
         assert!(html.contains("<title>a &lt;test&gt;</title>"));
         assert!(html.contains("LightgraphViewer.mount"));
         // The data: 1.0f32 is 00 00 80 3F, so the base64 starts with AACAPwAAAEAAAEBA.
-        assert!(
-            html.contains("lightgraphData(\"image-0\", \"AACAPwAAAEAAAEBA"),
-            "{html}"
-        );
+        assert!(html.contains("-image-0\", \"AACAPwAAAEAAAEBA"), "{html}");
         let manifest = html.split("type=\"application/json\">").nth(1).unwrap();
         let manifest = manifest.split("</script>").next().unwrap();
         assert!(manifest.contains("<\\/script>"));
@@ -357,9 +372,9 @@ mod tests {
         r.inline_limit(1).write(&path).unwrap();
         let html = std::fs::read_to_string(&path).unwrap();
         assert!(html.contains("\"src\":\"my%20report.data/image-0.js\""), "{html}");
-        assert!(!html.contains("lightgraphData(\"image-0\""));
+        assert!(!html.contains("AACAPw"));
         let script = std::fs::read_to_string(dir.join("my report.data/image-0.js")).unwrap();
-        assert!(script.starts_with("lightgraphData(\"image-0\", \"AACAPw"));
+        assert!(script.starts_with("lightgraphData(\"r") && script.contains("-image-0\", \"AACAPw"));
         std::fs::remove_dir_all(dir).unwrap();
     }
 }

@@ -231,8 +231,9 @@ window.LightgraphViewer = (function () {
     return "wheel: zoom (nearest neighbour), drag: pan, double-click: fit; f: flip A/B";
   }
 
-  // Draws `manifest` into `root`; `load(image)` gives an image's floats. Sets
-  // window.lightgraph to { viewers, plots, ready } (ready: a promise of the first drawing).
+  // Draws `manifest` into `root`; `load(image)` gives an image's floats. Adds its viewers and
+  // plots to window.lightgraph = { viewers, plots, ready } (ready: a promise of the first
+  // drawing of every report in the page).
   function mount(root, manifest, load) {
     const byId = new Map(manifest.images.map((im) => [im.id, im]));
     const viewers = [], plots = [];
@@ -252,8 +253,12 @@ window.LightgraphViewer = (function () {
     }
     const ready = Promise.all(viewers.map((v) => v.ready()));
     ready.catch((e) => root.prepend(el("p", { className: "lg-error", textContent: String(e) })));
-    window.lightgraph = { viewers, plots, ready };
-    return window.lightgraph;
+    const all = window.lightgraph || { viewers: [], plots: [], ready: Promise.resolve() };
+    all.viewers.push(...viewers);
+    all.plots.push(...plots);
+    all.ready = Promise.all([all.ready, ready]);
+    window.lightgraph = all;
+    return all;
   }
 
   return { mount, srgb8 };

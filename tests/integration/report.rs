@@ -32,10 +32,18 @@ fn run(args: &[&str]) {
 fn viewer(index: usize, a: (&str, &Path), b: (&str, &Path), tmap: bool) -> Value {
     let (wa, _, ra) = read_rgb(a.1).unwrap();
     let (wb, _, rb) = read_rgb(b.1).unwrap();
-    let tone = |rgb: &[[f32; 3]], w: u32, (x, y): (usize, usize)| rgb[y * w as usize + x].map(linear_to_srgb8);
+    assert_eq!(wa, wb);
+    let mut check = viewer_of(index, (a.0, &ra), (b.0, &rb), wa as usize);
+    check["tmap"] = json!(tmap);
+    check
+}
+
+/// The check of viewer `index` showing images `a` and `b` (label and pixels) of `width`.
+fn viewer_of(index: usize, a: (&str, &[[f32; 3]]), b: (&str, &[[f32; 3]]), width: usize) -> Value {
+    let tone = |rgb: &[[f32; 3]], (x, y): (usize, usize)| rgb[y * width + x].map(linear_to_srgb8);
     let pixels: Vec<Value> = PIXELS
         .iter()
-        .map(|&p| json!({"x": p.0, "y": p.1, "a": tone(&ra, wa, p), "b": tone(&rb, wb, p)}))
+        .map(|&p| json!({"x": p.0, "y": p.1, "a": tone(a.1, p), "b": tone(b.1, p)}))
         .collect();
     assert!(
         pixels.iter().any(|p| p["a"] != p["b"]),
@@ -43,7 +51,15 @@ fn viewer(index: usize, a: (&str, &Path), b: (&str, &Path), tmap: bool) -> Value
         a.0,
         b.0
     );
-    json!({"index": index, "a": a.0, "b": b.0, "tmap": tmap, "pixels": pixels})
+    json!({"index": index, "a": a.0, "b": b.0, "pixels": pixels})
+}
+
+/// A ramp across a 16 x 16 image, and a flat colour.
+fn ramp_and_flat() -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+    let ramp = (0..256)
+        .map(|i| [i as f32 / 255.0, 0.5, 1.0 - i as f32 / 400.0])
+        .collect();
+    (ramp, vec![[0.25f32, 2.0, 0.01]; 256])
 }
 
 /// The first run's label in a comparison's curves.csv.
@@ -240,10 +256,7 @@ fn bench_report_shows_its_tables_and_plot() {
 #[test]
 fn large_images_load_from_beside_the_report() {
     let dir = temp_dir("report-beside");
-    let ramp: Vec<[f32; 3]> = (0..256)
-        .map(|i| [i as f32 / 255.0, 0.5, 1.0 - i as f32 / 400.0])
-        .collect();
-    let flat = vec![[0.25f32, 2.0, 0.01]; 256];
+    let (ramp, flat) = ramp_and_flat();
     let html = dir.join("beside.html");
     let mut report = Report::new("beside");
     report
@@ -253,11 +266,23 @@ fn large_images_load_from_beside_the_report() {
         .image("flat", 16, 16, &flat);
     report.write(&html).unwrap();
     assert!(dir.join("beside.data/image-1.js").exists());
-    let tone = |rgb: &[[f32; 3]], (x, y): (usize, usize)| rgb[y * 16 + x].map(linear_to_srgb8);
-    let pixels: Vec<Value> = PIXELS
-        .iter()
-        .map(|&p| json!({"x": p.0, "y": p.1, "a": tone(&ramp, p), "b": tone(&flat, p)}))
-        .collect();
-    let check = json!({"index": 0, "a": "ramp", "b": "flat", "pixels": pixels});
+    let check = viewer_of(0, ("ramp", &ramp), ("flat", &flat), 16);
     check_in_browser("beside", vec![json!({"html": html, "viewers": [check]})]);
+}
+
+/// A notebook shows several reports in one page ([`Report::to_html`] each): each keeps its
+/// own images, though their labels are the same.
+#[test]
+fn two_reports_in_one_page_keep_their_images_apart() {
+    let (ramp, flat) = ramp_and_flat();
+    let page = |x: &[[f32; 3]], y: &[[f32; 3]]| {
+        let mut report = Report::new("one of two");
+        report.viewer("x and y").image("x", 16, 16, x).image("y", 16, 16, y);
+        report.to_html()
+    };
+    let html = temp_dir("report-two").join("two.html");
+    std::fs::write(&html, page(&ramp, &flat) + &page(&flat, &ramp)).unwrap();
+    let first = viewer_of(0, ("x", &ramp), ("y", &flat), 16);
+    let second = viewer_of(1, ("x", &flat), ("y", &ramp), 16);
+    check_in_browser("two", vec![json!({"html": html, "viewers": [first, second]})]);
 }
