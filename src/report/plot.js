@@ -20,14 +20,17 @@ window.LightgraphPlot = (function () {
     let lo = Math.min(...ok), hi = Math.max(...ok);
     if (!ok.length) { lo = log ? 1 : 0; hi = log ? 10 : 1; }
     if (log) {
-      lo = Math.pow(10, Math.floor(Math.log10(lo) * 4) / 4);
-      hi = Math.pow(10, Math.ceil(Math.log10(hi) * 4) / 4);
-      if (hi <= lo) hi = lo * 10;
+      const decade = (v) => Math.pow(10, Math.floor(Math.log10(v)));
+      const narrow = hi / lo < 10;
+      // Under a decade: to whole multiples of the decade, ticks at each; else quarter decades.
+      lo = narrow ? Math.floor(lo / decade(lo)) * decade(lo) : Math.pow(10, Math.floor(Math.log10(lo) * 4) / 4);
+      hi = narrow ? Math.ceil(hi / decade(hi) - 1e-9) * decade(hi) : Math.pow(10, Math.ceil(Math.log10(hi) * 4) / 4);
+      if (hi <= lo) hi = lo * 2;
       const f = (v) => (Math.log10(v) - Math.log10(lo)) / (Math.log10(hi) - Math.log10(lo));
       const ticks = [];
-      const steps = hi / lo > 1e3 ? [1] : [1, 2, 5];
+      const steps = narrow ? [1, 2, 3, 4, 5, 6, 7, 8, 9] : hi / lo > 1e3 ? [1] : [1, 2, 5];
       for (let e = Math.floor(Math.log10(lo)); e <= Math.ceil(Math.log10(hi)); e++)
-        steps.forEach((m) => { const t = m * Math.pow(10, e); if (t >= lo && t <= hi) ticks.push(t); });
+        steps.forEach((m) => { const t = m * Math.pow(10, e); if (t >= lo * (1 - 1e-9) && t <= hi * (1 + 1e-9)) ticks.push(t); });
       return { f, ticks };
     }
     lo = Math.min(lo, 0);

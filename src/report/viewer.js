@@ -187,7 +187,7 @@ window.LightgraphViewer = (function () {
     const images = spec.images.map((id) => byId.get(id));
     const s = { spec, a: images[0], b: images[Math.min(1, images.length - 1)], mode: "a", exposure: 0, split: 0.5 };
     s.width = s.a.width; s.height = s.a.height;
-    s.canvas = el("canvas", { className: "lg-image" });
+    s.canvas = el("canvas", { className: "lg-image", tabIndex: 0 });
     s.offscreen = el("canvas", { width: s.width, height: s.height });
     s.readout = el("div", { className: "lg-readout" });
     s.legend = el("div", { className: "lg-note" });

@@ -70,6 +70,12 @@ async function checkViewer(page, name, v) {
   await viewer.locator("button.lg-flip").click();
   await settle();
   await expectPixels(page, name, v, () => "b", "after flip");
+  await viewer.locator("canvas").click();
+  await page.keyboard.press("f");
+  await settle();
+  await expectPixels(page, name, v, () => "a", "after the key f on the image");
+  await page.keyboard.press("f");
+  await settle();
   await viewer.locator("button", { hasText: /^split$/ }).click();
   await settle();
   const width = await page.evaluate((i) => window.lightgraph.viewers[i].width, v.index);
