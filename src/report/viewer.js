@@ -192,8 +192,15 @@ window.LightgraphViewer = (function () {
     s.readout = el("div", { className: "lg-readout" });
     s.legend = el("div", { className: "lg-note" });
     fit(s);
-    let shown = Promise.resolve();
-    const update = () => { shown = show(s, load); return shown; };
+    // Changes that come faster than a large image redraws (a slider dragged) draw once.
+    let shown = Promise.resolve(), pending = false;
+    const update = () => {
+      if (!pending) {
+        pending = true;
+        shown = new Promise((done) => requestAnimationFrame(done)).then(() => { pending = false; return show(s, load); });
+      }
+      return shown;
+    };
     s.element = el("section", { className: "lg-viewer" }, el("h2", { textContent: spec.title }),
       controls(s, images, update), s.canvas, s.readout, s.legend);
     interact(s);
