@@ -24,6 +24,7 @@ pub mod multi;
 pub mod output;
 pub mod plot;
 pub mod reference;
+pub mod report;
 pub mod run;
 pub mod stress;
 pub mod study;

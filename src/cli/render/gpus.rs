@@ -4,8 +4,9 @@
 use super::{RenderArgs, budget, progress_bar, write_film};
 use crate::cli::args::{reference_mean, si};
 use anyhow::Result;
+use lightgraph::compare::ErrorSample;
 use lightgraph::interrupt::stopped_by_signal;
-use lightgraph::metrics::image_error;
+use lightgraph::metrics::{ImageError, image_error};
 use lightgraph::multi::{Merging, Share, gpu_selectors, render_on_gpus};
 use lightgraph::reference::Reference;
 use lightgraph::run::Run;
@@ -51,6 +52,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
     let start = Instant::now();
     let pixels = (w as f64) * (h as f64);
     let (mut error, mut error_at) = (String::new(), None::<Instant>);
+    let mut errors = Vec::new();
     let mut view = args.tev.view(&out.display().to_string(), (w, h));
     let frames_before = film.frames;
     // The first checkpoint as soon as the first frames arrive, then one every `--checkpoint`.
@@ -68,8 +70,10 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
         if let Some(r) = &reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
-            error = format!(" | RMSE {:.4e}", image_error(&film.mean(), r).rmse);
+            let e = image_error(&film.mean(), r);
+            error = format!(" | RMSE {:.4e}", e.rmse);
             error_at = Some(Instant::now());
+            errors.push(error_sample(film, frames_before, start.elapsed().as_secs_f64(), e));
         }
         if let Some(v) = view.as_mut().filter(|v| v.due()) {
             v.show(&film.mean());
@@ -106,9 +110,17 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
             "error against the reference: RMSE {:.4e}, relMSE {:.4e}",
             e.rmse, e.rel_mse
         );
+        errors.push(error_sample(&film, frames_before, start.elapsed().as_secs_f64(), e));
     }
     report_shares(&film, &shares, &merging, pixels);
     println!("wrote {} and {}", out.display(), png.display());
+    if let Some(path) = &args.reference {
+        super::html::write_html(&out, &film, (path, layout), &errors)?;
+        println!(
+            "wrote {} (opens offline in a browser)",
+            super::html::html_path(&out).display()
+        );
+    }
     stopped_by_signal(format!(
         "{} and {} hold {} frames; `lightgraph render --resume {} --gpus ...` goes on",
         out.display(),
@@ -116,6 +128,17 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
         film.frames,
         out.display()
     ))
+}
+
+/// The error `e` of `film` after `seconds` of this run, which began at frame `frames_before`.
+fn error_sample(film: &Reference, frames_before: u64, seconds: f64, e: ImageError) -> ErrorSample {
+    let frames = film.frames - frames_before;
+    ErrorSample {
+        seconds,
+        frames: u32::try_from(frames).unwrap_or(u32::MAX),
+        samples_per_pixel: film.samples_per_pixel() / film.frames.max(1) * frames,
+        error: e,
+    }
 }
 
 /// The rates of a render on several GPUs on stderr: samples/s wall-clock over `film`, each
