@@ -74,7 +74,8 @@ class Session:
     def _repr_png_(self) -> bytes:
         """The mean image so far as a PNG file (sRGB, 8 bits), as Jupyter shows it."""
     def _repr_html_(self) -> str:
-        """The mean image so far as HTML (the PNG inline) with its frames, as Jupyter shows it."""
+        """The mean image so far in the reports' viewer (exposure slider, zoom, values under
+        the cursor; a self-contained page in an iframe) with its frames, as Jupyter shows it."""
     @property
     def frames(self) -> int:
         """Frames rendered so far."""

@@ -1,8 +1,10 @@
 //! Images shown in Jupyter: a film as PNG (sRGB, 8 bits, at an exposure in stops, as the
-//! CLI's previews), and as HTML for notebooks that render HTML.
+//! CLI's previews), and as HTML: the reports' viewer (src/report) for notebooks that run a
+//! page's script.
 
 use crate::err;
 use ::lightgraph::output::png_bytes;
+use ::lightgraph::report::Report;
 use ::lightgraph::run::Image;
 use numpy::{PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -15,17 +17,22 @@ pub fn png<'py>(py: Python<'py>, image: &Image, exposure: f32) -> PyResult<Bound
     Ok(PyBytes::new(py, &bytes))
 }
 
-/// An HTML `<img>` of `image` at `exposure` stops (the PNG inline as a data URI), captioned
-/// `caption`.
-pub fn html(py: Python<'_>, image: &Image, exposure: f32, caption: &str) -> PyResult<String> {
-    let png = png(py, image, exposure)?;
-    let base64 = py.import("base64")?.call_method1("b64encode", (png,))?;
-    let text: String = base64.call_method1("decode", ("ascii",))?.extract()?;
+/// The report viewer of `image` (src/report: float data tone-mapped in the page, with an
+/// exposure slider, zoom and the values under the cursor) under `caption`, in an iframe of
+/// its own so that the page's style and script stay out of the notebook's.
+pub fn html(py: Python<'_>, image: &Image, label: &str, caption: &str) -> PyResult<String> {
+    let mut report = Report::new(label);
+    report
+        .viewer(caption)
+        .image(label, image.width, image.height, &image.mean);
+    let page = report.to_html();
+    let escaped: String = py.import("html")?.call_method1("escape", (page, true))?.extract()?;
+    // The viewer shows a small image enlarged to about 512 pixels wide; its title and
+    // controls take about 250 pixels more.
+    let shown = image.height as u64 * 512 / image.width.clamp(1, 512) as u64;
+    let height = shown.min(1200) + 250;
     Ok(format!(
-        "<figure style=\"margin:0\"><img style=\"image-rendering:pixelated\" width=\"{}\" height=\"{}\" \
-         src=\"data:image/png;base64,{text}\"><figcaption>{caption}</figcaption></figure>",
-        image.width.max(256),
-        image.height * image.width.max(256) / image.width.max(1),
+        "<iframe srcdoc=\"{escaped}\" style=\"width:100%;height:{height}px;border:0;resize:vertical\"></iframe>"
     ))
 }
 

@@ -247,13 +247,14 @@ impl Session {
         display::png(py, &self.session.image().map_err(err)?, 0.0)
     }
 
-    /// The mean image so far as HTML (the PNG inline) with its frames, as Jupyter shows it.
+    /// The mean image so far in the reports' viewer (exposure, zoom, values under the
+    /// cursor; a self-contained page in an iframe) with its frames, as Jupyter shows it.
     fn _repr_html_(&self, py: Python<'_>) -> PyResult<String> {
         let caption = format!(
             "{} frames, {:.1} s on {}",
             self.session.frames, self.seconds, self.adapter
         );
-        display::html(py, &self.session.image().map_err(err)?, 0.0, &caption)
+        display::html(py, &self.session.image().map_err(err)?, "lightgraph session", &caption)
     }
 
     /// Frames rendered so far.
