@@ -9,13 +9,17 @@ the CLI's message.
 """
 
 from os import PathLike
-from typing import Any, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
 
 Constant = Union[int, float, bool]
 Path = Union[str, "PathLike[str]"]
+Image = npt.NDArray[np.float32]
+# A table of compare, study or verify: a pandas DataFrame when pandas is installed, else a
+# dict of column name to numpy array (float64 for numbers, text otherwise).
+Table = Any
 
 class Error(Exception):
     """An error of lightgraph, with the CLI's message (file:line:column for bad files)."""
@@ -57,7 +61,9 @@ class Session:
             adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
         """
     def render(self, frames: int = 1, time: Optional[float] = None) -> None:
-        """Renders ``frames`` more frames, or as many as fit in ``time`` seconds.
+        """Renders ``frames`` more frames, or as many as fit in ``time`` seconds. Ctrl-C
+        stops it after the frames in flight and raises KeyboardInterrupt; the session keeps
+        every frame rendered.
 
         Args:
             frames: frames to add, at least 1.
@@ -65,6 +71,11 @@ class Session:
         """
     def image(self) -> npt.NDArray[np.float32]:
         """The mean image so far, shape (height, width, 3)."""
+    def _repr_png_(self) -> bytes:
+        """The mean image so far as a PNG file (sRGB, 8 bits), as Jupyter shows it."""
+    def _repr_html_(self) -> str:
+        """The mean image so far in the reports' viewer (exposure slider, zoom, values under
+        the cursor; a self-contained page in an iframe) with its frames, as Jupyter shows it."""
     @property
     def frames(self) -> int:
         """Frames rendered so far."""
@@ -87,7 +98,8 @@ def render(
 ) -> Tuple[npt.NDArray[np.float32], dict[str, Any]]:
     """Renders ``frames`` frames (or for ``time`` seconds) and returns the mean image and
     the statistics (frames, samples, rays, seconds, adapter), as ``lightgraph render`` with
-    the same options and seed renders it.
+    the same options and seed renders it. Ctrl-C stops it after the frames in flight and
+    raises KeyboardInterrupt carrying the film so far as its ``image`` and ``stats``.
 
     Args:
         scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
@@ -122,7 +134,8 @@ def reference(
     resume: Optional[Path] = None,
 ) -> npt.NDArray[np.float32]:
     """Renders a reference film (f64 sums, variance, settings) for ``frames`` frames or
-    ``time`` seconds, writes it to ``out`` and returns its mean image.
+    ``time`` seconds, writes it to ``out`` and returns its mean image. Ctrl-C stops it
+    after the frames in flight, writes the film and raises KeyboardInterrupt saying so.
 
     Args:
         out: the film's path (an EXR; the PNG preview goes beside it).
@@ -151,10 +164,12 @@ def compare(
     per_decade: int = 6,
     baseline: Optional[str] = None,
     adapter: Optional[str] = None,
-) -> str:
+) -> Dict[str, Any]:
     """Runs each of ``runs`` for ``time`` seconds against the reference film, writes
     curves.csv, rmse_vs_time.png, summary.md and each run's image into ``out``, and returns
-    the summary (Markdown).
+    a dict: ``summary`` (Markdown), ``curves`` (curves.csv as a :data:`Table`), ``images``
+    (each run's mean image by run label) and ``reference`` (the reference's mean image).
+    Ctrl-C stops it after the frames in flight (KeyboardInterrupt saying what was kept).
 
     Args:
         reference: the reference film (from ``reference``).
@@ -177,10 +192,12 @@ def study(
     seed: int = 1,
     out: Path = "out/study",
     adapter: Optional[str] = None,
-) -> str:
+) -> Dict[str, Any]:
     """Runs each estimator on each scene against a reference per scene, writes each scene's
-    comparison and summary.md, summary.csv and layouts.csv into ``out``, and returns the
-    summary (Markdown).
+    comparison and summary.md, summary.csv and layouts.csv into ``out``, and returns a dict:
+    ``summary`` (Markdown), ``table`` (summary.csv), ``layouts`` (layouts.csv) and ``scenes``:
+    per scene folder ``curves`` (its curves.csv), ``images`` (each run's mean image by run
+    label) and ``reference`` (its reference's mean image); tables are :data:`Table`s.
 
     Args:
         scenes: the scenes, as ``scene`` of ``render`` takes them.
@@ -194,6 +211,52 @@ def study(
         seed: the seed of the random streams, 0 to 4294967295.
         out: the folder of the study.
         adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+    """
+
+def verify(
+    scenes: Optional[Sequence[str]] = None,
+    graphs: Optional[Sequence[str]] = None,
+    add: Optional[Sequence[str]] = None,
+    time: float = 10.0,
+    frames: Optional[int] = None,
+    batches: int = 16,
+    block: int = 16,
+    res: Optional[Tuple[int, int]] = None,
+    seed: int = 1,
+    out: Path = "out/verify",
+    adapter: Optional[str] = None,
+) -> Dict[str, Any]:
+    """Every estimator on every scene in batches, every pair tested for a difference beyond
+    their noise (``lightgraph verify``); writes verify.md, verify.csv, each run's image per
+    scene folder and a map of every pair that differs into ``out``, and returns a dict:
+    ``summary`` (Markdown), ``table`` (verify.csv as a :data:`Table`: a row per scene and
+    pair, with its verdict), ``scenes``: per scene folder ``images`` (each estimator's mean
+    image), and ``failed``: None, or the message with which ``lightgraph verify`` fails (a
+    difference nothing predicts, or pairs the budget could not decide), returned with the
+    tables rather than raised.
+
+    Args:
+        scenes: the scenes, as ``scene`` of ``render`` takes them (None: the six Cornell boxes).
+        graphs: estimators, ``graph[:Layout][@NAME=VALUE...]`` (None: every built-in graph of
+            radiance, and VCM's two halves alone).
+        add: estimators verified besides those of ``graphs``, e.g. your own graph file.
+        time: seconds each estimator renders each scene, above zero.
+        frames: frames of each estimator on each scene instead of a time (reproducible).
+        batches: batches each run is split into, at least 2.
+        block: side of the blocks compared, in pixels, at least 1.
+        res: (width, height), each at least 1 (None: each scene's).
+        seed: the seed of the random streams, 0 to 4294967295.
+        out: the folder of the verification.
+        adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+    """
+
+def to_png(image: Image, exposure: float = 0.0) -> bytes:
+    """The PNG file of an image (shape (height, width, 3)) at ``exposure`` stops, sRGB in 8
+    bits as the CLI's previews; in Jupyter: ``IPython.display.Image(lightgraph.to_png(image))``.
+
+    Args:
+        image: float32 linear radiance of shape (height, width, 3).
+        exposure: stops to scale the radiance by (2 ** exposure) before the sRGB curve.
     """
 
 def explain(

@@ -78,6 +78,22 @@ pub fn requested() -> Option<Signal> {
     }
 }
 
+/// Asks the runs in progress to stop at the end of the frame in flight, as `signal` arriving
+/// would: for hosts that see signals themselves rather than through [`install`]'s handlers
+/// (Python, whose interpreter turns Ctrl-C into `KeyboardInterrupt`).
+pub fn request(signal: Signal) {
+    let value = match signal {
+        Signal::Interrupt => 1,
+        Signal::Terminate => 2,
+    };
+    received().store(value, Ordering::SeqCst);
+}
+
+/// Forgets a [`request`] once its run has stopped, so that the next run goes on.
+pub fn clear() {
+    received().store(0, Ordering::SeqCst);
+}
+
 /// The exit status for an error: a signal's status for [`Interrupted`], 1 otherwise.
 pub fn exit_code(error: &anyhow::Error) -> u8 {
     error.downcast_ref::<Interrupted>().map_or(1, |i| i.signal.exit_code())

@@ -125,18 +125,30 @@ pub fn read_rgb(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>)> {
 
 /// Writes an 8-bit sRGB preview, the radiance scaled by 2^`exposure` and clamped.
 pub fn write_png(path: &Path, image: &Image, exposure: f32) -> Result<()> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    std::fs::write(path, png_bytes(image, exposure)?).with_context(|| format!("writing {}", path.display()))
+}
+
+/// The PNG file of `image` at `exposure` stops (sRGB, 8 bits), as [`write_png`] writes it.
+pub fn png_bytes(image: &Image, exposure: f32) -> Result<Vec<u8>> {
     let scale = exposure.exp2();
     let bytes: Vec<u8> = image
         .mean
         .iter()
         .flat_map(|c| c.map(|v| linear_to_srgb8(v * scale)))
         .collect();
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    image::save_buffer(path, &bytes, image.width, image.height, image::ColorType::Rgb8)
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+    let mut png = Vec::new();
+    let encoder = image::codecs::png::PngEncoder::new(&mut png);
+    image::ImageEncoder::write_image(
+        encoder,
+        &bytes,
+        image.width,
+        image.height,
+        image::ExtendedColorType::Rgb8,
+    )?;
+    Ok(png)
 }
 
 /// Checks the film's path `out` before any work: it must be an EXR (the PNG preview goes beside

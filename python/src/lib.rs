@@ -10,28 +10,25 @@
 //! process's life.
 
 mod checks;
+mod display;
+mod lab;
+mod stop;
+mod tables;
 
 use ::lightgraph::cli::Cli;
-use ::lightgraph::compare::RunBudget;
-use ::lightgraph::compare::render::{
-    COMPARE_OUT, COMPARE_TIME, CompareSpec, Comparison, PER_DECADE, compare as run_compare,
-};
 use ::lightgraph::explain::{ExplainSpec, report};
+use ::lightgraph::interrupt;
 use ::lightgraph::reference::Reference;
 use ::lightgraph::reference::render::{
     REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render as render_reference,
 };
-use ::lightgraph::run::{DEFAULT_SEED, Run, RunOptions, RunSpec, Session as RenderSession};
-use ::lightgraph::study::DEFAULT_ESTIMATORS;
-use ::lightgraph::study::render::{
-    LAYOUT_TIME, REFERENCE_GRAPH, REFERENCE_TIME, STUDY_OUT, STUDY_TIME, StudySpec, study as run_study,
-};
+use ::lightgraph::run::{Run, RunOptions, RunSpec, Session as RenderSession};
 use lightgraph_engine::Gpu;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::create_exception;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyBytes, PyDict, PyList};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Mutex, OnceLock};
@@ -67,7 +64,11 @@ fn gpu(adapter: Option<&str>) -> PyResult<&'static Gpu> {
 }
 
 /// Pixels as a float32 array of shape (height, width, 3).
-fn array<'py>(py: Python<'py>, mean: &[[f32; 3]], (w, h): (u32, u32)) -> PyResult<Bound<'py, PyArray3<f32>>> {
+pub(crate) fn array<'py>(
+    py: Python<'py>,
+    mean: &[[f32; 3]],
+    (w, h): (u32, u32),
+) -> PyResult<Bound<'py, PyArray3<f32>>> {
     let flat: Vec<f32> = mean.iter().flatten().copied().collect();
     PyArray1::from_vec(py, flat).reshape([h as usize, w as usize, 3])
 }
@@ -152,30 +153,34 @@ impl Session {
     }
 
     /// Renders `frames` more frames, or frames for `time` seconds, with the interpreter
-    /// released.
+    /// released; at Ctrl-C it stops after the frames in flight, keeps them and raises
+    /// `KeyboardInterrupt`.
     fn advance(&mut self, py: Python<'_>, frames: u32, time: Option<f64>) -> PyResult<()> {
         let started = Instant::now();
         let session = &mut self.session;
-        py.detach(|| match time {
-            Some(t) => {
-                let budget = Duration::from_secs_f64(t);
-                while started.elapsed() < budget {
-                    session.render_for(Some(budget - started.elapsed()), u32::MAX)?;
-                }
-                session.settle()?;
-                anyhow::Ok(())
+        let ended = stop::run(py, || {
+            let budget = time.map(Duration::from_secs_f64);
+            let more = |s: &RenderSession| match budget {
+                Some(b) => started.elapsed() < b,
+                None => s.frames < frames,
+            };
+            while more(session) && interrupt::requested().is_none() {
+                let left = budget.map(|b| b.saturating_sub(started.elapsed()));
+                let max = budget.map_or(frames - session.frames, |_| u32::MAX);
+                session.render_for(left, max)?;
             }
-            None => {
-                while session.frames < frames {
-                    session.render_for(None, frames - session.frames)?;
-                }
-                session.settle()?;
-                Ok(())
-            }
-        })
-        .map_err(err)?;
+            session.settle()?;
+            anyhow::Ok(())
+        });
         self.seconds += started.elapsed().as_secs_f64();
-        Ok(())
+        match ended {
+            stop::Ended::Done(result) => result.map_err(err),
+            stop::Ended::Stopped(e, result) => {
+                result.map_err(err)?;
+                let kept = format!("the session keeps its {} frames (session.image())", self.session.frames);
+                Err(stop::stopped(py, e, &kept))
+            }
+        }
     }
 }
 
@@ -218,7 +223,8 @@ impl Session {
     }
 
     /// Renders `frames` more frames, or as many as fit in `time` seconds when given (the GPU
-    /// works with the interpreter released).
+    /// works with the interpreter released). Ctrl-C stops it after the frames in flight and
+    /// raises KeyboardInterrupt; the session keeps every frame rendered.
     ///
     /// - frames: frames to add, at least 1.
     /// - time: seconds to render for, above zero (None: render `frames`).
@@ -234,6 +240,21 @@ impl Session {
     fn image<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f32>>> {
         let image = self.session.image().map_err(err)?;
         array(py, &image.mean, (image.width, image.height))
+    }
+
+    /// The mean image so far as a PNG file (bytes; sRGB, 8 bits), as Jupyter shows it.
+    fn _repr_png_<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+        display::png(py, &self.session.image().map_err(err)?, 0.0)
+    }
+
+    /// The mean image so far in the reports' viewer (exposure, zoom, values under the
+    /// cursor; a self-contained page in an iframe) with its frames, as Jupyter shows it.
+    fn _repr_html_(&self, py: Python<'_>) -> PyResult<String> {
+        let caption = format!(
+            "{} frames, {:.1} s on {}",
+            self.session.frames, self.seconds, self.adapter
+        );
+        display::html(py, &self.session.image().map_err(err)?, "lightgraph session", &caption)
     }
 
     /// Frames rendered so far.
@@ -258,7 +279,9 @@ impl Session {
 /// Renders `scene` with `graph` for `frames` frames (or for `time` seconds) and returns the
 /// mean image (float32, (height, width, 3)) and the statistics (frames, samples, rays,
 /// seconds, adapter), as `lightgraph render` with the same options and seed renders it. A
-/// bad argument raises ValueError naming it, before any work.
+/// bad argument raises ValueError naming it, before any work. Ctrl-C stops it after the
+/// frames in flight and raises KeyboardInterrupt carrying the film so far as its `image` and
+/// `stats`.
 ///
 /// - scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
 /// - graph: a built-in graph name or a .ron graph file.
@@ -307,13 +330,22 @@ fn render<'py>(
         bvh,
         adapter,
     )?;
-    s.advance(py, frames, time)?;
+    if let Err(e) = s.advance(py, frames, time) {
+        if e.is_instance_of::<PyKeyboardInterrupt>(py) {
+            // The film so far rides on the exception.
+            e.value(py).setattr("image", s.image(py)?)?;
+            e.value(py).setattr("stats", s.stats(py)?)?;
+        }
+        return Err(e);
+    }
     Ok((s.image(py)?, s.stats(py)?))
 }
 
 /// Renders a reference film as `lightgraph reference` does (f64 sums and variance, the
 /// settings, a PNG preview) for `frames` frames or `time` seconds, writes it to `out`, and
 /// returns its mean image. A bad argument raises ValueError naming it, before any work.
+/// Ctrl-C stops it after the frames in flight, writes the film and raises
+/// KeyboardInterrupt saying so.
 ///
 /// - out: the film's path (an EXR; the PNG preview goes beside it).
 /// - scene: a built-in scene name, a .ron scene file, a .gltf/.glb or a Mitsuba .xml file.
@@ -391,126 +423,9 @@ fn reference<'py>(
         gpus: None,
         tev: None,
     };
-    py.detach(|| render_reference(spec)).map_err(err)?;
+    stop::interruptible(py, || render_reference(spec))?;
     let film = Reference::read(&out).map_err(err)?;
     array(py, &film.mean(), film.size)
-}
-
-/// Runs each of `runs` for `time` seconds against the reference film `reference`, as
-/// `lightgraph compare` does, writes the comparison into `out` (curves.csv,
-/// rmse_vs_time.png, summary.md, each run's EXR and PNG) and returns the summary (Markdown).
-///
-/// - reference: the reference film (from `reference`).
-/// - runs: `graph[:layout][@NAME=VALUE...]`, comma-separated.
-/// - time: seconds each run renders for, above zero.
-/// - seed: the seed of the random streams, 0 to 4294967295.
-/// - out: the folder of the comparison.
-/// - per_decade: error samples per decade of time, at least 1.
-/// - baseline: the run the others' speed-ups are against (None: the first).
-/// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
-#[pyfunction]
-#[pyo3(signature = (reference, runs, time = COMPARE_TIME.as_secs_f64(), seed = DEFAULT_SEED as i64,
-    out = PathBuf::from(COMPARE_OUT), per_decade = PER_DECADE as i64, baseline = None, adapter = None))]
-#[allow(clippy::too_many_arguments)]
-fn compare(
-    py: Python<'_>,
-    reference: PathBuf,
-    runs: &str,
-    time: f64,
-    seed: i64,
-    out: PathBuf,
-    per_decade: i64,
-    baseline: Option<&str>,
-    adapter: Option<&str>,
-) -> PyResult<String> {
-    let time = checks::seconds("time", time)?;
-    let (seed, per_decade) = (checks::seed("seed", seed)?, checks::count("per_decade", per_decade)?);
-    let spec = CompareSpec {
-        options: RunOptions {
-            adapter: adapter.map(str::to_string),
-            ..RunOptions::default()
-        },
-        runs: runs.to_string(),
-        reference,
-        resume: false,
-        baseline: baseline.map(str::to_string),
-        comparison: comparison(time, per_decade, seed, out),
-    };
-    py.detach(|| run_compare(spec)).map_err(err)
-}
-
-/// The comparison of runs of `seconds` each (set-up off the clock), `per_decade` error samples
-/// a decade, `seed`, written into `out`, on the options' adapter, as the CLI's defaults leave
-/// the rest.
-fn comparison(seconds: f64, per_decade: u32, seed: u32, out: PathBuf) -> Comparison {
-    Comparison {
-        budget: RunBudget {
-            time: Duration::from_secs_f64(seconds),
-            setup_on_clock: false,
-        },
-        per_decade,
-        seed,
-        tev: None,
-        out,
-        exposure: 0.0,
-        gpus: None,
-    }
-}
-
-/// Runs `lightgraph study`: each estimator on each scene against a reference per scene,
-/// writes each scene's comparison and the summary files into `out`, and returns the summary
-/// (Markdown).
-///
-/// - scenes: the scenes, as `scene` of `render` takes them.
-/// - estimators: `graph` (its fastest layout on each scene) or `graph:Layout` entries
-///   (None: PT, LVC-BPT, PPM, SPPM, PBPM and VCM).
-/// - time: seconds of rendering per estimator and scene, above zero.
-/// - reference_time: seconds of each missing reference, above zero (found in, resumed into
-///   or rendered into `out/references`).
-/// - reference_graph: the graph that renders the references.
-/// - res: (width, height), each at least 1 (None: each scene's).
-/// - seed: the seed of the random streams, 0 to 4294967295.
-/// - out: the folder of the study.
-/// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
-#[pyfunction]
-#[pyo3(signature = (scenes, estimators = None, time = STUDY_TIME.as_secs_f64(),
-    reference_time = REFERENCE_TIME.as_secs_f64(), reference_graph = REFERENCE_GRAPH, res = None,
-    seed = DEFAULT_SEED as i64, out = PathBuf::from(STUDY_OUT), adapter = None))]
-#[allow(clippy::too_many_arguments)]
-fn study(
-    py: Python<'_>,
-    scenes: Vec<String>,
-    estimators: Option<Vec<String>>,
-    time: f64,
-    reference_time: f64,
-    reference_graph: &str,
-    res: Option<(i64, i64)>,
-    seed: i64,
-    out: PathBuf,
-    adapter: Option<&str>,
-) -> PyResult<String> {
-    let time = checks::seconds("time", time)?;
-    let reference_time = checks::seconds("reference_time", reference_time)?;
-    let (res, seed) = (checks::image(res, 1)?, checks::seed("seed", seed)?);
-    let spec = StudySpec {
-        options: RunOptions {
-            res,
-            adapter: adapter.map(str::to_string),
-            ..RunOptions::default()
-        },
-        scenes,
-        estimators: estimators.map_or_else(|| DEFAULT_ESTIMATORS.to_string(), |e| e.join(",")),
-        resume: false,
-        layout_time: LAYOUT_TIME,
-        references: None,
-        reference_graph: reference_graph.to_string(),
-        reference_layout: None,
-        reference_time: Duration::from_secs_f64(reference_time),
-        reference_frames: None,
-        reference_spp: None,
-        comparison: comparison(time, PER_DECADE, seed, out),
-    };
-    py.detach(|| run_study(spec)).map_err(err)
 }
 
 /// The kernels, schedule and resources of `graph`'s layouts (all of them, or `layout`) for
@@ -610,7 +525,7 @@ fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'py, PyArray3<f3
 fn cli(py: Python<'_>, args: Vec<String>) -> PyResult<()> {
     let argv = std::iter::once("lightgraph".to_string()).chain(args);
     let command = Cli::parse_from_args(argv).map_err(err)?;
-    py.detach(|| command.run()).map_err(err)
+    stop::interruptible(py, || command.run())
 }
 
 /// The module `lightgraph`.
@@ -621,12 +536,16 @@ fn lightgraph_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
         // Vulkan loader reads it, and warns twice a call when it is unset.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
     }
+    // numpy's C API now, not at the first image: a Ctrl-C pending then would fail its import.
+    PyArray1::<f32>::zeros(m.py(), 0, false);
     m.add("Error", m.py().get_type::<Error>())?;
     m.add_class::<Session>()?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(reference, m)?)?;
-    m.add_function(wrap_pyfunction!(compare, m)?)?;
-    m.add_function(wrap_pyfunction!(study, m)?)?;
+    m.add_function(wrap_pyfunction!(lab::compare, m)?)?;
+    m.add_function(wrap_pyfunction!(lab::study, m)?)?;
+    m.add_function(wrap_pyfunction!(lab::verify, m)?)?;
+    m.add_function(wrap_pyfunction!(display::to_png, m)?)?;
     m.add_function(wrap_pyfunction!(explain, m)?)?;
     m.add_function(wrap_pyfunction!(list_all, m)?)?;
     m.add_function(wrap_pyfunction!(read, m)?)?;

@@ -5,7 +5,11 @@ builds the module and runs this suite with LIGHTGRAPH_BIN naming the CLI binary 
 build; without it the CLI's commands run in-process through `lightgraph.cli`.
 """
 
+import base64
+import csv
 import inspect
+import json
+from html import unescape
 import os
 import re
 import subprocess
@@ -138,7 +142,8 @@ def test_unknown_constants_and_values_of_the_wrong_type_are_refused():
 
 def test_every_parameter_is_documented():
     for function in [lightgraph.Session, lightgraph.Session.render, lightgraph.render, lightgraph.reference,
-                     lightgraph.compare, lightgraph.study, lightgraph.explain, lightgraph.read, lightgraph.cli]:
+                     lightgraph.compare, lightgraph.study, lightgraph.verify, lightgraph.explain, lightgraph.read,
+                     lightgraph.cli, lightgraph.to_png]:
         doc = function.__doc__ or ""
         names = [n for n in inspect.signature(function).parameters if n != "self"]
         assert names, function
@@ -174,13 +179,53 @@ def test_a_session_loops_and_its_error_falls_with_frames(tmp_path):
     assert errors[64] < errors[16] < errors[4], errors
 
 
-def test_compare_explain_and_list(tmp_path):
-    lightgraph.reference(scene="cornell-diffuse", out=tmp_path / "ref.exr", res=RES, frames=16)
-    summary = lightgraph.compare(
-        tmp_path / "ref.exr", "pt:NaivePTsk,pt:NaivePTmk", time=1.0, out=tmp_path / "cmp"
-    )
-    assert "NaivePTsk" in summary and "NaivePTmk" in summary
-    assert (tmp_path / "cmp" / "curves.csv").exists()
+def as_columns(table):
+    """A table `compare`, `study` or `verify` returns (DataFrame or dict of arrays) as a dict of lists."""
+    return {name: list(table[name]) for name in table}
+
+
+def csv_columns(path):
+    """The CSV file at `path` read by Python's csv module, as a dict of lists of text."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return {name: [row[i] for row in rows[1:]] for i, name in enumerate(rows[0])}
+
+
+def check_table(table, path):
+    """`table` holds the CSV file at `path`: its columns in order, numbers as float64 arrays."""
+    pandas = sys.modules.get("pandas")
+    if pandas is not None:
+        assert isinstance(table, pandas.DataFrame), type(table)
+    else:
+        assert isinstance(table, dict) and all(isinstance(v, np.ndarray) for v in table.values()), table
+    expected = csv_columns(path)
+    got = as_columns(table)
+    assert list(got) == list(expected)
+    for name, texts in expected.items():
+        values = got[name]
+        assert len(values) == len(texts), name
+        if np.asarray(table[name]).dtype == np.float64:
+            numbers = [float(t) if t else float("nan") for t in texts]
+            np.testing.assert_array_equal(np.asarray(values, dtype=np.float64), numbers, err_msg=name)
+        else:
+            assert [str(v) for v in values] == texts, name
+
+
+def test_compare_returns_its_tables_and_images(tmp_path):
+    ref = tmp_path / "ref.exr"
+    lightgraph.reference(scene="cornell-diffuse", out=ref, res=RES, frames=16)
+    found = lightgraph.compare(ref, "pt:NaivePTsk,pt:NaivePTmk", time=1.0, out=tmp_path / "cmp")
+    assert "NaivePTsk" in found["summary"] and "NaivePTmk" in found["summary"]
+    assert found["summary"] == (tmp_path / "cmp" / "summary.md").read_text()
+    check_table(found["curves"], tmp_path / "cmp" / "curves.csv")
+    assert set(found["curves"]["run"]) == {"pt:NaivePTsk", "pt:NaivePTmk"}
+    assert sorted(found["images"]) == ["pt:NaivePTmk", "pt:NaivePTsk"]
+    for image in found["images"].values():
+        check_image(image)
+    np.testing.assert_array_equal(found["reference"], lightgraph.read(ref)[0])
+
+
+def test_explain_and_list():
     text = lightgraph.explain(graph="pt", layout="NaivePTmk", res=RES)
     assert "NaivePTmk" in text and "kernel" in text
     listed = lightgraph.list()
@@ -188,8 +233,8 @@ def test_compare_explain_and_list(tmp_path):
     assert listed["adapters"], "no adapter listed, yet the renders ran"
 
 
-def test_a_study_sums_up_its_scenes(tmp_path):
-    summary = lightgraph.study(
+def test_a_study_returns_its_tables_and_images(tmp_path):
+    found = lightgraph.study(
         ["cornell-diffuse"],
         estimators=["pt:NaivePTsk", "pt:NaivePTmk"],
         time=1.0,
@@ -198,9 +243,143 @@ def test_a_study_sums_up_its_scenes(tmp_path):
         res=RES,
         out=tmp_path / "study",
     )
-    assert "cornell-diffuse" in summary and "NaivePTmk" in summary
+    assert "cornell-diffuse" in found["summary"] and "NaivePTmk" in found["summary"]
     rows = (tmp_path / "study" / "summary.csv").read_text().splitlines()
     assert len(rows) == 3, rows  # the header and one row per estimator
-    assert (tmp_path / "study" / "references" / "cornell-diffuse.exr").exists()
+    check_table(found["table"], tmp_path / "study" / "summary.csv")
+    check_table(found["layouts"], tmp_path / "study" / "layouts.csv")
+    scene = found["scenes"]["cornell-diffuse"]
+    check_table(scene["curves"], tmp_path / "study" / "cornell-diffuse" / "curves.csv")
+    assert sorted(scene["images"]) == ["pt:NaivePTmk", "pt:NaivePTsk"]
+    check_image(scene["reference"])
+    reference = tmp_path / "study" / "references" / "cornell-diffuse.exr"
+    np.testing.assert_array_equal(scene["reference"], lightgraph.read(reference)[0])
     with pytest.raises(lightgraph.Error, match="no-such-scene"):
         lightgraph.study(["no-such-scene"], out=tmp_path / "bad")
+
+
+def test_verify_returns_its_table_and_images(tmp_path):
+    out = tmp_path / "verify"
+    found = lightgraph.verify(
+        scenes=["cornell-diffuse"],
+        graphs=["pt:NaivePTsk", "pt:NaivePTmk"],
+        frames=8,
+        batches=4,
+        block=8,
+        res=RES,
+        out=out,
+    )
+    # 8 frames cannot decide the pair: the command's failure comes with the tables.
+    assert "could not be decided" in found["failed"], found["failed"]
+    assert found["summary"] == (out / "verify.md").read_text()
+    check_table(found["table"], out / "verify.csv")
+    assert list(found["table"]["verdict"]) == csv_columns(out / "verify.csv")["verdict"]
+    assert len(found["table"]["verdict"]) == 1  # one pair
+    images = found["scenes"]["cornell-diffuse"]["images"]
+    assert sorted(images) == ["pt:NaivePTmk", "pt:NaivePTsk"]
+    for image in images.values():
+        check_image(image)
+    refused(lambda: lightgraph.verify(batches=1, out=out), r"^batches=1: it must be at least 2")
+    with pytest.raises(lightgraph.Error, match="no-such-scene"):
+        lightgraph.verify(scenes=["no-such-scene"], graphs=["pt"], frames=8, res=RES, out=out)
+
+
+def png_size(data):
+    """Width and height of a PNG file's bytes."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", data[:8]
+    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+
+
+def test_a_session_shows_itself_in_jupyter():
+    session = lightgraph.Session(scene="cornell-diffuse", res=RES)
+    session.render(frames=2)
+    data = session._repr_png_()
+    assert png_size(data) == RES
+    html = session._repr_html_()
+    frame = re.fullmatch(r'<iframe srcdoc="([^"]*)" style="[^"]*"></iframe>', html)
+    assert frame, html[:300]
+    page = unescape(frame.group(1))
+    assert "<script" in page and "2 frames" in page, page[:300]
+    # The viewer's page holds the image's float data (base64 of little-endian f32 RGB).
+    pixels = session.image().astype("<f4").tobytes()
+    assert base64.b64encode(pixels[:3000]).decode() in page
+    # The PNG is the CLI's preview of the same image: sRGB in 8 bits.
+    assert lightgraph.to_png(session.image()) == data
+    refused(lambda: lightgraph.to_png(np.zeros((4, 4, 2), np.float32)), r"^image of shape \[4, 4, 2\]: ")
+
+
+INTERRUPTED = """
+import json, os, signal, sys, threading, time
+import lightgraph
+
+def ctrl_c_in(seconds):
+    threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT)).start()
+
+found = {}
+# The process's first render (the numpy capsule's first use once panicked at Ctrl-C).
+ctrl_c_in(5.0)
+try:
+    lightgraph.render(scene="cornell-diffuse", res=(16, 16), frames=10**9)
+    found["render"] = "finished"
+except KeyboardInterrupt as e:
+    found["render"] = {"frames": e.stats["frames"], "shape": list(e.image.shape),
+                       "finite": bool(e.image.sum() >= 0), "message": str(e)}
+
+session = lightgraph.Session(scene="cornell-diffuse", res=(16, 16))
+session.render(frames=2)
+ctrl_c_in(1.0)
+started = time.monotonic()
+try:
+    session.render(frames=10**9)
+    found["session"] = "finished"
+except KeyboardInterrupt as e:
+    kept = session.frames
+    session.render(frames=2)  # goes on after the interruption
+    found["session"] = {"frames": kept, "after": session.frames, "mean": float(session.image().mean()),
+                        "seconds": time.monotonic() - started, "message": str(e)}
+
+ctrl_c_in(2.0)
+try:
+    lightgraph.reference(scene="cornell-diffuse", res=(16, 16), frames=10**9, out=sys.argv[1])
+    found["reference"] = "finished"
+except KeyboardInterrupt as e:
+    image, info = lightgraph.read(sys.argv[1])
+    found["reference"] = {"frames": info["frames"], "message": str(e)}
+print(json.dumps(found))
+"""
+
+
+def test_ctrl_c_stops_a_render_between_frames_and_keeps_the_film(tmp_path):
+    film = tmp_path / "ref.exr"
+    done = subprocess.run(
+        [sys.executable, "-c", INTERRUPTED, str(film)], capture_output=True, text=True, timeout=180
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "PanicException" not in done.stderr and "panicked" not in done.stderr, done.stderr[-3000:]
+    found = json.loads(done.stdout.splitlines()[-1])
+    render = found["render"]
+    assert render != "finished" and render["shape"] == [16, 16, 3] and render["finite"], render
+    assert render["message"].startswith("stopped at Ctrl-C"), render
+    session = found["session"]
+    assert session != "finished" and session["frames"] > 2 and session["after"] == session["frames"] + 2, session
+    assert session["mean"] > 0 and session["seconds"] < 60, session
+    assert f"keeps its {session['frames']} frames" in session["message"], session
+    reference = found["reference"]
+    assert reference != "finished" and reference["frames"] > 0, reference
+    assert str(film) in reference["message"], reference
+
+
+def test_the_notebook_runs(tmp_path):
+    """docs/lab.ipynb runs from top to bottom (CI installs nbclient and ipykernel)."""
+    if os.environ.get("LIGHTGRAPH_NOTEBOOK") != "required":
+        pytest.importorskip("nbclient", reason="nbclient and ipykernel run docs/lab.ipynb (Debian: python3-nbclient python3-ipykernel)")
+    import nbclient
+    import nbformat
+
+    notebook = nbformat.read(REPO / "docs" / "lab.ipynb", as_version=4)
+    nbclient.NotebookClient(notebook, timeout=600, resources={"metadata": {"path": str(tmp_path)}}).execute()
+    outputs = [o for cell in notebook.cells if cell.cell_type == "code" for o in cell.outputs]
+    assert not [o for o in outputs if o.output_type == "error"], outputs
+    shown = [o for o in outputs if o.output_type in ("display_data", "execute_result")]
+    assert any("image/png" in o.data for o in shown), "the notebook shows no image"
+    assert (tmp_path / "out" / "compare" / "curves.csv").exists()

@@ -187,7 +187,8 @@ fn python_with_pytest() -> Option<String> {
 
 /// The Python module's tests (python/tests): builds the module for an interpreter with numpy
 /// and pytest, puts it where that interpreter finds it, and runs pytest against the CLI binary
-/// of the same build; a note when no such interpreter exists.
+/// of the same build, printing the reason of every skipped test (the notebook's, without
+/// nbclient and ipykernel); a note when no such interpreter exists.
 fn python_test() -> ExitCode {
     let Some(python) = python_with_pytest() else {
         eprintln!(
@@ -215,7 +216,7 @@ fn python_test() -> ExitCode {
         return ExitCode::FAILURE;
     }
     let status = Command::new(&python)
-        .args(["-m", "pytest", "-q", "python/tests"])
+        .args(["-m", "pytest", "-q", "-rs", "python/tests"])
         .current_dir(&root)
         .env("PYTHONPATH", &module_dir)
         .env("LIGHTGRAPH_BIN", target.join("release/lightgraph"))
