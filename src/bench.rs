@@ -126,14 +126,47 @@ fn count(v: u64) -> String {
 }
 
 /// Writes `bench.csv`, `bench.md` (Mrays/s per layout and frame size, the paper's Table I
-/// form, plus a detail table) and `rays_per_second.png` into `dir`; returns the Markdown.
+/// form, plus a detail table), `rays_per_second.png` and `report.html` ([`html_path`]) into
+/// `dir`; returns the Markdown.
 pub fn write_reports(dir: &Path, title: &str, results: &[Measurement]) -> Result<String> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     std::fs::write(dir.join("bench.csv"), bench_csv(results))?;
     let md = bench_markdown(title, results);
     std::fs::write(dir.join("bench.md"), &md)?;
-    plot_rates(&dir.join("rays_per_second.png"), title, results)?;
+    let plot = rates_plot(title, results);
+    plot_rates(&dir.join("rays_per_second.png"), &plot)?;
+    let mut report = crate::report::Report::new("lightgraph bench");
+    report.markdown(&md).plot(plot);
+    report.write(&html_path(dir))?;
     Ok(md)
+}
+
+/// Where `bench` writes its HTML report in its output folder `dir`.
+pub fn html_path(dir: &Path) -> std::path::PathBuf {
+    dir.join("report.html")
+}
+
+/// The HTML report's plot of rays/s against paths per frame, a line per layout.
+fn rates_plot(title: &str, results: &[Measurement]) -> crate::report::Plot {
+    let (layouts, _) = layouts_and_sizes(results);
+    let line = |l: &str| crate::report::Line {
+        label: l.to_string(),
+        points: results
+            .iter()
+            .filter(|m| m.layout == l)
+            .map(|m| (m.paths_per_frame() as f64, m.rays_per_second() / 1e9, None, None))
+            .collect(),
+        dashed: false,
+    };
+    crate::report::Plot {
+        title: title.to_string(),
+        x_label: "paths per frame".to_string(),
+        y_label: "rays per second (10^9, wall-clock)".to_string(),
+        log_x: true,
+        log_y: false,
+        lines: layouts.iter().map(|l| line(l)).collect(),
+        note: "One measurement per point (no band): repeat the run to see its spread.".to_string(),
+    }
 }
 
 /// The layouts and the paths per frame measured, each once: layouts in the order measured,
@@ -229,31 +262,26 @@ fn bench_markdown(title: &str, results: &[Measurement]) -> String {
     md
 }
 
-/// The plot of rays/s against paths per frame, a line per layout, into `path`.
-fn plot_rates(path: &Path, title: &str, results: &[Measurement]) -> Result<()> {
-    let (layouts, _) = layouts_and_sizes(results);
-    let series: Vec<Series> = layouts
+/// Draws the plot of rays/s against paths per frame ([`rates_plot`]) as a PNG into `path`.
+fn plot_rates(path: &Path, plot: &crate::report::Plot) -> Result<()> {
+    let series: Vec<Series> = plot
+        .lines
         .iter()
         .map(|l| Series {
-            label: l.to_string(),
-            points: results
-                .iter()
-                .filter(|m| m.layout == *l)
-                .map(|m| (m.paths_per_frame() as f64, m.rays_per_second() / 1e9))
-                .collect(),
+            label: l.label.clone(),
+            points: l.points.iter().map(|p| (p.0, p.1)).collect(),
         })
         .collect();
     line_plot(
         path,
         &Axes {
-            title,
-            x_label: "paths per frame",
-            y_label: "rays per second (10^9, wall-clock)",
-            log_x: true,
-            log_y: false,
+            title: &plot.title,
+            x_label: &plot.x_label,
+            y_label: &plot.y_label,
+            log_x: plot.log_x,
+            log_y: plot.log_y,
             legend: plotters::prelude::SeriesLabelPosition::LowerRight,
         },
         &series,
-    )?;
-    Ok(())
+    )
 }

@@ -6,6 +6,7 @@
 //! runs are kept ([`resume`]).
 
 pub mod curve;
+pub mod html;
 pub mod render;
 pub mod resume;
 
@@ -311,8 +312,8 @@ pub fn write_run_images(dir: &Path, scene: &str, run: &RunResult, exposure: f32)
     crate::output::write_png(&stem.with_extension("png"), &run.image, exposure)
 }
 
-/// Writes `curves.csv`, `rmse_vs_time.png` and `summary.md` of the finished `runs` into `dir`
-/// (their images: [`write_run_images`]); returns the summary.
+/// Writes `curves.csv`, `rmse_vs_time.png`, `summary.md` and `report.html` of the finished
+/// `runs` into `dir` (their images: [`write_run_images`]); returns the summary.
 pub fn write_report(dir: &Path, ctx: &ReportContext, runs: &[RunCurve]) -> Result<String> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut csv = String::from(
@@ -364,6 +365,7 @@ pub fn write_report(dir: &Path, ctx: &ReportContext, runs: &[RunCurve]) -> Resul
     let summary = summary(ctx, runs)?;
     let md = dir.join("summary.md");
     std::fs::write(&md, &summary).with_context(|| format!("writing {}", md.display()))?;
+    html::write_html(dir, ctx, runs, &summary)?;
     Ok(summary)
 }
 

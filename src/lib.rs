@@ -25,6 +25,7 @@ pub mod multi;
 pub mod output;
 pub mod plot;
 pub mod reference;
+pub mod report;
 pub mod run;
 pub mod serve;
 pub mod stress;

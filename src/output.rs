@@ -110,6 +110,19 @@ pub fn read_exr(path: &Path) -> Result<ExrFile> {
     })
 }
 
+/// The R, G and B channels of an EXR as pixels: width, height and the pixels (row-major, top
+/// row first).
+pub fn read_rgb(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>)> {
+    let exr = read_exr(path)?;
+    let (r, g, b) = (
+        exr.channel("R", path)?,
+        exr.channel("G", path)?,
+        exr.channel("B", path)?,
+    );
+    let rgb = r.iter().zip(g).zip(b).map(|((r, g), b)| [*r, *g, *b]).collect();
+    Ok((exr.size.0, exr.size.1, rgb))
+}
+
 /// Writes an 8-bit sRGB preview, the radiance scaled by 2^`exposure` and clamped.
 pub fn write_png(path: &Path, image: &Image, exposure: f32) -> Result<()> {
     let scale = exposure.exp2();

@@ -26,7 +26,7 @@ pub struct BenchArgs {
     /// Time each layout renders at each frame size (after a warm-up frame).
     #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "2s")]
     pub time: Duration,
-    /// Output folder for bench.md, bench.csv and rays_per_second.png.
+    /// Output folder for bench.md, bench.csv, rays_per_second.png and report.html.
     #[arg(long, default_value = "out/bench")]
     pub out: PathBuf,
 }
@@ -115,8 +115,9 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     );
     let md = lightgraph::bench::write_reports(&args.out, &title, &results)?;
     println!(
-        "{md}\nwrote {}/bench.md, bench.csv and rays_per_second.png",
-        args.out.display()
+        "{md}\nwrote {}/bench.md, bench.csv, rays_per_second.png and {} (opens offline in a browser)",
+        args.out.display(),
+        lightgraph::bench::html_path(&args.out).display()
     );
     Ok(())
 }

@@ -5,6 +5,7 @@ use super::args::*;
 use anyhow::Result;
 use clap::Args;
 use lightgraph::compare::RunBudget;
+use lightgraph::compare::html::html_path;
 use lightgraph::compare::render::{COMPARE_OUT, COMPARE_TIME, CompareSpec};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -38,7 +39,8 @@ pub struct CompareArgs {
     pub baseline: Option<String>,
     #[command(flatten)]
     pub flags: CompareFlags,
-    /// Output folder: curves.csv, rmse_vs_time.png, summary.md and each run's EXR and PNG.
+    /// Output folder: curves.csv, rmse_vs_time.png, summary.md, report.html and each run's EXR
+    /// and PNG.
     #[arg(long, default_value = COMPARE_OUT)]
     pub out: PathBuf,
     /// Run on several GPUs of one model at once, each taking the next run when its last one
@@ -72,8 +74,10 @@ pub fn compare(args: CompareArgs) -> Result<()> {
     let out = args.out.clone();
     let summary = lightgraph::compare::render::compare(args.spec())?;
     println!(
-        "{summary}\nwrote {}/curves.csv, rmse_vs_time.png, summary.md and each run's EXR and PNG",
-        out.display()
+        "{summary}\nwrote {}/curves.csv, rmse_vs_time.png, summary.md, each run's EXR and PNG, and {} (opens offline \
+         in a browser)",
+        out.display(),
+        html_path(&out).display()
     );
     Ok(())
 }

@@ -64,8 +64,8 @@ pub struct StudyArgs {
     pub reference_spp: Option<u32>,
     #[command(flatten)]
     pub flags: CompareFlags,
-    /// Output folder: summary.md, summary.csv, layouts.csv, and per scene a folder with
-    /// curves.csv, rmse_vs_time.png, summary.md and each run's EXR and PNG.
+    /// Output folder: summary.md, summary.csv, layouts.csv, report.html, and per scene a folder
+    /// with curves.csv, rmse_vs_time.png, summary.md, report.html and each run's EXR and PNG.
     #[arg(long, default_value = STUDY_OUT)]
     pub out: PathBuf,
     /// Run on several GPUs of one model at once, as `compare --gpus` (references as
@@ -103,8 +103,10 @@ pub fn study(args: StudyArgs) -> Result<()> {
     let out = args.out.clone();
     let summary = lightgraph::study::render::study(args.spec())?;
     println!(
-        "{summary}\nwrote {0}/summary.md, summary.csv, layouts.csv and a comparison per scene in {0}/<scene>/",
-        out.display()
+        "{summary}\nwrote {0}/summary.md, summary.csv, layouts.csv, {1} (opens offline in a browser) and a \
+         comparison per scene in {0}/<scene>/",
+        out.display(),
+        lightgraph::study::html::html_path(&out).display()
     );
     Ok(())
 }

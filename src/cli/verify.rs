@@ -13,7 +13,7 @@ use lightgraph::run::{LoadedScene, Run as Loaded, Scenes, load_graph, named_layo
 use lightgraph::study::scene_folders;
 use lightgraph::verify::batches::{Amount, Budget, RunBatches, render_batches};
 use lightgraph::verify::paths::{Kinds, describe, scene_kinds};
-use lightgraph::verify::report::{RunLine, map_name, write_map, write_tables};
+use lightgraph::verify::report::{RunLine, SceneImages, html_path, map_name, write_html, write_map, write_tables};
 use lightgraph::verify::stats::{TestSettings, compare};
 use lightgraph::verify::{
     Claims, DEFAULT_ESTIMATORS, DEFAULT_SCENES, Outcome, PairResult, claims, expected_gaps, unconfirmed_gaps,
@@ -171,20 +171,23 @@ pub fn verify(args: VerifyArgs) -> Result<()> {
         },
         args.batches
     );
-    let mut lines = Vec::new();
-    let mut pairs = Vec::new();
+    let (mut lines, mut pairs, mut images) = (Vec::new(), Vec::new(), Vec::new());
+    let mut md = String::new();
     for (scene, folder) in args.scenes.iter().zip(&folders) {
-        let (scene_lines, scene_pairs) = verify_scene(&args, &settings, &gpu, (scene, folder), &estimators)
-            .with_context(|| format!("scene {scene}"))?;
+        let (scene_lines, scene_pairs, scene_images) =
+            verify_scene(&args, &settings, &gpu, (scene, folder), &estimators)
+                .with_context(|| format!("scene {scene}"))?;
         lines.extend(scene_lines);
         pairs.extend(scene_pairs);
+        images.push(scene_images);
         // After every scene, so that a run stopped early keeps what it found.
-        write_tables(&args.out, &settings, &lines, &pairs)?;
+        md = write_tables(&args.out, &settings, &lines, &pairs)?;
+        write_html(&args.out, &md, &images, &pairs, args.block)?;
     }
-    let md = write_tables(&args.out, &settings, &lines, &pairs)?;
     println!(
-        "{md}\nwrote {0}/verify.md, verify.csv and per scene each run's EXR and PNG",
-        args.out.display()
+        "{md}\nwrote {0}/verify.md, verify.csv, {1} (opens offline in a browser) and per scene each run's EXR and PNG",
+        args.out.display(),
+        html_path(&args.out).display()
     );
     let count = |o: Outcome| pairs.iter().filter(|p| p.outcome == o).count();
     let (unexpected, undecided) = (count(Outcome::UnexpectedDifference), count(Outcome::Undecided));
@@ -268,14 +271,15 @@ fn check_sets(sets: &[String], estimators: &[Estimator]) -> Result<()> {
     Ok(())
 }
 
-/// Renders every estimator on one scene and compares every pair of the same quantity.
+/// Renders every estimator on one scene and compares every pair of the same quantity;
+/// returns the runs' lines, the pairs and the runs' images.
 fn verify_scene(
     args: &VerifyArgs,
     settings: &TestSettings,
     gpu: &Gpu,
     (scene, folder): (&str, &str),
     estimators: &[Estimator],
-) -> Result<(Vec<RunLine>, Vec<PairResult>)> {
+) -> Result<(Vec<RunLine>, Vec<PairResult>, SceneImages)> {
     let (runs, kinds) = render_runs(args, gpu, (scene, folder), estimators)?;
     eprintln!("verify: {scene} has paths of {}", describe(kinds));
     let lines = runs
@@ -289,7 +293,11 @@ fn verify_scene(
             light: r.result.blocks.image().light_and_error(),
         })
         .collect();
-    Ok((lines, compare_runs(args, settings, folder, &runs, kinds)?))
+    let images = SceneImages {
+        scene: folder.to_string(),
+        images: runs.iter().map(|r| (r.label.clone(), r.result.image.clone())).collect(),
+    };
+    Ok((lines, compare_runs(args, settings, folder, &runs, kinds)?, images))
 }
 
 /// Renders every estimator on `scene` and writes each run's EXR and PNG into its folder;

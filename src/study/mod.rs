@@ -4,6 +4,7 @@
 //! ([`layouts`]), names the scenes' folders, calls the winner or the tie of each scene
 //! ([`verdict`]) and sums the comparisons up ([`summary`]).
 
+pub mod html;
 pub mod layouts;
 pub mod render;
 pub mod summary;

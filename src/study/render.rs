@@ -11,6 +11,7 @@ use crate::reference::Reference;
 use crate::reference::render::{REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render};
 use crate::run::scene::find_scene;
 use crate::run::{DEFAULT_GRAPH, Run, RunOptions, Scenes, load_graph, named_layout, parse_sets};
+use crate::study::html::write_html;
 use crate::study::layouts::{Choices, LayoutChoice, choices_text, fastest, measure_layouts, parse_choices};
 use crate::study::scene_folders;
 use crate::study::summary::{EstimatorRun, ReferenceNote, ReferenceSource, SceneRuns, StudyContext, write_summary};
@@ -107,6 +108,7 @@ pub fn study(args: StudySpec) -> Result<String> {
         done.push(runs);
         // After every scene, so that a study stopped early keeps what it measured.
         summary = write_summary(&args.comparison.out, &ctx, &done)?;
+        write_html(&args.comparison.out, &summary, &done)?;
     }
     Ok(summary)
 }
@@ -195,6 +197,7 @@ fn study_scene(
         .map(|(((spec, run), choice), result)| EstimatorRun {
             estimator: spec.to_string(),
             layout: run.layout.expect("chosen above"),
+            label: result.label,
             choice,
             samples: result.samples,
         })

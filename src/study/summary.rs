@@ -17,6 +17,8 @@ pub struct EstimatorRun {
     pub estimator: String,
     /// The layout it ran in.
     pub layout: String,
+    /// Its label in the scene's comparison (`graph:layout`), which names its images.
+    pub label: String,
     /// How that layout was chosen.
     pub choice: LayoutChoice,
     /// Its error against time (a comparison's curve).
@@ -380,6 +382,7 @@ mod tests {
         EstimatorRun {
             estimator: estimator.into(),
             layout: layout.into(),
+            label: format!("{estimator}:{layout}"),
             choice,
             samples: curve(points),
         }

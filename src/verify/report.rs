@@ -214,3 +214,48 @@ const MAP_WIDTH: u32 = 256;
 fn lum_to_display(l: f32) -> f32 {
     (l / (1.0 + l)).max(0.0).powf(1.0 / 2.2)
 }
+
+/// Where `verify` writes its HTML report in its output folder `out`.
+pub fn html_path(out: &Path) -> PathBuf {
+    out.join("report.html")
+}
+
+/// One scene's images for the HTML report: its folder and each estimator's label and image.
+pub struct SceneImages {
+    /// The scene's folder name (as the tables name the scene).
+    pub scene: String,
+    /// Each estimator's label and final image.
+    pub images: Vec<(String, Image)>,
+}
+
+/// Writes the HTML report ([`html_path`]): the Markdown `md`, then per scene a viewer of the
+/// estimators' images with the block t-map of every pair compared there (blocks of `block`
+/// pixels).
+pub fn write_html(out: &Path, md: &str, scenes: &[SceneImages], pairs: &[PairResult], block: u32) -> Result<()> {
+    let mut report = crate::report::Report::new("lightgraph verify");
+    report.markdown(md);
+    for scene in scenes {
+        report.viewer(&format!("scene {}", scene.scene));
+        for (label, image) in &scene.images {
+            report.image(label, image.width, image.height, &image.mean);
+        }
+        for p in pairs.iter().filter(|p| p.scene == scene.scene) {
+            report.tmap(tmap(p, block));
+        }
+    }
+    report.write(&html_path(out))
+}
+
+/// The t-map of a pair's blocks.
+fn tmap(p: &PairResult, block: u32) -> crate::report::TMap {
+    let across = p.grid_width.max(1);
+    crate::report::TMap {
+        a: p.a.clone(),
+        b: p.b.clone(),
+        block,
+        grid: (across, p.test.blocks.len() as u32 / across),
+        t: p.test.blocks.iter().map(|b| b.t).collect(),
+        rejected: p.test.blocks.iter().map(|b| b.rejected).collect(),
+        critical: p.test.t_critical,
+    }
+}

@@ -30,6 +30,7 @@ mod photon_query;
 mod pm;
 mod probe;
 mod reference;
+mod report;
 mod resolve;
 mod scenes;
 mod shading;

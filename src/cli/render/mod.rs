@@ -3,6 +3,7 @@
 
 mod auto;
 mod gpus;
+pub mod html;
 #[cfg(feature = "mpi")]
 mod mpi;
 
@@ -12,6 +13,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::aov::{Aov, AovRender};
+use lightgraph::compare::ErrorSample;
 use lightgraph::interrupt;
 use lightgraph::interrupt::stopped_by_signal;
 use lightgraph::metrics::image_error;
@@ -250,9 +252,11 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
         film: &mut film,
         out: &out,
         reference: reference.as_deref(),
+        errors: Vec::new(),
         view: &mut view,
     };
     let last_line = render_progressively(&mut session, &args, &mut progress)?;
+    let mut errors = std::mem::take(&mut progress.errors);
     view.show(&film.mean(), film.frames, &format!("{last_line} | finished"), true);
     if let Some(r) = &reference {
         let e = image_error(&film.mean(), r);
@@ -262,6 +266,12 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
             e.rmse,
             e.rel_mse
         );
+        errors.push(ErrorSample {
+            seconds: film.seconds - seconds_before,
+            frames: session.frames,
+            samples_per_pixel: session.samples_per_pixel(),
+            error: e,
+        });
     }
     add_statistics(&mut film, &session);
     if let Some(list) = &args.aov {
@@ -270,6 +280,10 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     let png = write_film(&film, &out, args.exposure)?;
     report_rates(&session, film.seconds - seconds_before);
     println!("wrote {} and {}", out.display(), png.display());
+    if let Some(path) = &args.reference {
+        html::write_html(&out, &film, (path, &run.layout), &errors)?;
+        println!("wrote {} (opens offline in a browser)", html::html_path(&out).display());
+    }
     stopped_by_signal(format!(
         "{} and {} hold {} frames; `lightgraph render --resume {}` goes on",
         out.display(),
@@ -304,6 +318,8 @@ struct Progress<'a> {
     film: &'a mut Reference,
     out: &'a Path,
     reference: Option<&'a [[f32; 3]]>,
+    /// The error against the reference, about once a second.
+    errors: Vec<ErrorSample>,
     view: &'a mut Live,
 }
 
@@ -364,8 +380,15 @@ fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut
         if let Some(r) = progress.reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
-            error_text = format!(" | RMSE {:.4e}", image_error(&progress.mean(session)?, r).rmse);
+            let error = image_error(&progress.mean(session)?, r);
+            error_text = format!(" | RMSE {:.4e}", error.rmse);
             error_at = Some(Instant::now());
+            progress.errors.push(ErrorSample {
+                seconds: secs,
+                frames: session.settled,
+                samples_per_pixel: session.samples_per_pixel(),
+                error,
+            });
         }
         bar.set_message(format!(
             "frame {} | {} samples/s | {}rays/s{error_text}",
