@@ -85,7 +85,12 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
     if let Some(e) = checkpoint_error {
         return Err(e);
     }
-    view.show(&film.mean(), film.frames, &format!("{} | finished", bar.message()), true);
+    view.show(
+        &film.mean(),
+        film.frames,
+        &format!("{} | finished", bar.message()),
+        true,
+    );
     // The run's time once every GPU was ready (each GPU's set-up is not on the clock, as a
     // one-GPU render's is not).
     let seconds = merging.run_seconds;

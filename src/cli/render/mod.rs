@@ -16,13 +16,13 @@ use lightgraph::aov::{Aov, AovRender};
 use lightgraph::compare::ErrorSample;
 use lightgraph::interrupt;
 use lightgraph::interrupt::stopped_by_signal;
+use lightgraph::live::Live;
 use lightgraph::metrics::image_error;
 use lightgraph::multi::Budget;
 use lightgraph::output;
 use lightgraph::output::check_out;
 use lightgraph::reference::{Reference, film_settings};
 use lightgraph::run::{LoadedScene, Run, RunSpec, Session};
-use lightgraph::live::Live;
 use lightgraph::serve::LiveServer;
 use lightgraph_engine::Gpu;
 use std::path::{Path, PathBuf};
@@ -132,7 +132,7 @@ impl RenderArgs {
         let name = out.display().to_string();
         let server = match &self.serve {
             Some(address) => {
-                let server = LiveServer::start(address, lightgraph::serve::page(&name), size, reference)?;
+                let server = LiveServer::start(address, &name, size, reference)?;
                 eprintln!("live view at {}", server.url());
                 Some(server)
             }

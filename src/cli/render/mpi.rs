@@ -79,7 +79,12 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
             false => Ok(()),
         };
     }
-    view.show(&film.mean(), film.frames, &format!("{} | finished", bar.message()), true);
+    view.show(
+        &film.mean(),
+        film.frames,
+        &format!("{} | finished", bar.message()),
+        true,
+    );
     let seconds = outcome.render_seconds;
     let setup_seconds = start.elapsed().as_secs_f64() - seconds;
     film.info.insert("layout".into(), run.layout.clone());
