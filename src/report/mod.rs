@@ -242,7 +242,13 @@ impl Report {
 
     /// The page with every image in it (for a notebook, or anywhere one string must do).
     pub fn to_html(&self) -> String {
-        self.page(&self.manifest(None), |_| true)
+        self.page(&self.manifest(None), |_| true, "")
+    }
+
+    /// The page with no image data but the script `loader`, which defines
+    /// `window.lightgraphLoader` to get the images elsewhere (`render --serve`'s live view).
+    pub fn to_html_loading(&self, loader: &str) -> String {
+        self.page(&self.manifest(None), |_| false, loader)
     }
 
     /// Writes the page to `path`; images above the inline limit go into `<stem>.data/`
@@ -262,12 +268,13 @@ impl Report {
             let file = dir.join(&image.file);
             std::fs::write(&file, data_script(image)).with_context(|| format!("writing {}", file.display()))?;
         }
-        let html = self.page(&manifest, |i| !self.is_beside(i));
+        let html = self.page(&manifest, |i| !self.is_beside(i), "");
         std::fs::write(path, html).with_context(|| format!("writing {}", path.display()))
     }
 
-    /// The HTML page of `manifest` with the data of the images `inline` selects.
-    fn page(&self, manifest: &Manifest, inline: impl Fn(&ImageData) -> bool) -> String {
+    /// The HTML page of `manifest` with the data of the images `inline` selects, and the
+    /// script `extra` (after the loader's, before the viewer's).
+    fn page(&self, manifest: &Manifest, inline: impl Fn(&ImageData) -> bool, extra: &str) -> String {
         let json = serde_json::to_string(manifest).expect("a manifest is plain data");
         let data: String = self
             .images
@@ -277,8 +284,8 @@ impl Report {
             .collect();
         format!(
             "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{}</title>\n\
-             <style>\n{VIEWER_CSS}</style>\n</head>\n<body>\n<script>\n{LOAD_JS}</script>\n<script>\n{PLOT_JS}</script>\n\
-             <script>\n{VIEWER_JS}</script>\n{data}<div class=\"lightgraph-report\">\n\
+             <style>\n{VIEWER_CSS}</style>\n</head>\n<body>\n<script>\n{LOAD_JS}</script>\n<script>\n{extra}</script>\n\
+             <script>\n{PLOT_JS}</script>\n<script>\n{VIEWER_JS}</script>\n{data}<div class=\"lightgraph-report\">\n\
              <script type=\"application/json\">{}</script>\n<script>{MOUNT}</script>\n</div>\n</body>\n</html>\n",
             escape_html(&self.title),
             json.replace("</", "<\\/")

@@ -33,6 +33,7 @@ mod reference;
 mod report;
 mod resolve;
 mod scenes;
+mod serve;
 mod shading;
 mod shards;
 mod specialize;

@@ -71,7 +71,7 @@ fn first_run(curves: &Path) -> String {
 
 /// Where the screenshot of report `name` goes: LIGHTGRAPH_SCREENSHOTS/name.png when set (a
 /// folder relative to the repository), else a temporary folder.
-fn screenshot(name: &str) -> PathBuf {
+pub fn screenshot(name: &str) -> PathBuf {
     match std::env::var_os("LIGHTGRAPH_SCREENSHOTS") {
         Some(dir) => Path::new(env!("CARGO_MANIFEST_DIR"))
             .join(dir)
@@ -81,7 +81,7 @@ fn screenshot(name: &str) -> PathBuf {
 }
 
 /// What the browser check needs and is missing, if anything.
-fn missing_browser(root: &Path) -> Option<String> {
+pub fn missing_browser(root: &Path) -> Option<String> {
     if Command::new("node").arg("--version").output().is_err() {
         return Some("node is not installed".into());
     }

@@ -53,7 +53,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
     let pixels = (w as f64) * (h as f64);
     let (mut error, mut error_at) = (String::new(), None::<Instant>);
     let mut errors = Vec::new();
-    let mut view = args.tev.view(&out.display().to_string(), (w, h));
+    let mut view = args.live(&out, (w, h), reference.as_deref())?;
     let frames_before = film.frames;
     // The first checkpoint as soon as the first frames arrive, then one every `--checkpoint`.
     let (mut saved_at, mut checkpoint_error) = (None::<Instant>, None);
@@ -75,11 +75,11 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
             error_at = Some(Instant::now());
             errors.push(error_sample(film, frames_before, start.elapsed().as_secs_f64(), e));
         }
-        if let Some(v) = view.as_mut().filter(|v| v.due()) {
-            v.show(&film.mean());
-        }
         let secs = start.elapsed().as_secs_f64();
         bar.set_message(progress_line(shares, film, pixels, secs, &error));
+        if view.due() {
+            view.show(&film.mean(), film.frames, &bar.message(), false);
+        }
         bar.set_position(match args.time {
             Some(_) => start.elapsed().as_millis() as u64,
             None => film.frames - frames_before,
@@ -89,9 +89,12 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
     if let Some(e) = checkpoint_error {
         return Err(e);
     }
-    if let Some(v) = &mut view {
-        v.show(&film.mean());
-    }
+    view.show(
+        &film.mean(),
+        film.frames,
+        &format!("{} | finished", bar.message()),
+        true,
+    );
     // The run's time once every GPU was ready (each GPU's set-up is not on the clock, as a
     // one-GPU render's is not).
     let seconds = merging.run_seconds;

@@ -16,13 +16,14 @@ use lightgraph::aov::{Aov, AovRender};
 use lightgraph::compare::ErrorSample;
 use lightgraph::interrupt;
 use lightgraph::interrupt::stopped_by_signal;
+use lightgraph::live::Live;
 use lightgraph::metrics::image_error;
 use lightgraph::multi::Budget;
 use lightgraph::output;
 use lightgraph::output::check_out;
 use lightgraph::reference::{Reference, film_settings};
 use lightgraph::run::{LoadedScene, Run, RunSpec, Session};
-use lightgraph::tev::LiveView;
+use lightgraph::serve::LiveServer;
 use lightgraph_engine::Gpu;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -101,6 +102,11 @@ pub struct RenderArgs {
     #[cfg(feature = "mpi")]
     #[arg(long, conflicts_with = "gpus")]
     pub mpi: bool,
+    /// Serve the progressive film to a browser at HOST:PORT [default: 127.0.0.1:8731]: the
+    /// report viewer, updated as frames land, with samples/s and the error against
+    /// --reference. On a remote machine, watch it through `ssh -L 8731:127.0.0.1:8731 HOST`.
+    #[arg(long, num_args = 0..=1, default_missing_value = lightgraph::serve::DEFAULT_ADDRESS, value_name = "HOST:PORT")]
+    pub serve: Option<String>,
 }
 
 /// Where a render's film goes when --out and --resume are not given.
@@ -118,6 +124,24 @@ impl RenderArgs {
     /// Checks the film's path (see [`check_out`]).
     pub fn check_out(&self) -> Result<()> {
         check_out(&self.out(), self.force, self.resume.as_deref())
+    }
+
+    /// The live views asked for (--tev, --serve) of the film `out` of `size` pixels, with the
+    /// reference if any; the server is listening when this returns.
+    pub fn live(&self, out: &Path, size: (u32, u32), reference: Option<&[[f32; 3]]>) -> Result<Live> {
+        let name = out.display().to_string();
+        let server = match &self.serve {
+            Some(address) => {
+                let server = LiveServer::start(address, &name, size, reference)?;
+                eprintln!("live view at {}", server.url());
+                Some(server)
+            }
+            None => None,
+        };
+        Ok(Live {
+            tev: self.tev.view(&name, size),
+            server,
+        })
     }
 
     /// The seed: --seed (or the resumed film's), else 1.
@@ -222,7 +246,7 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     // A frame count that splits a group of frames rendered at once is refused before rendering.
     session.check_frames(args.first_frame, if args.time.is_none() { args.frames } else { 0 })?;
     let out = args.out();
-    let mut view = args.tev.view(&out.display().to_string(), (w, h));
+    let mut view = args.live(&out, (w, h), reference.as_deref())?;
     let seconds_before = film.seconds;
     let mut progress = Progress {
         film: &mut film,
@@ -231,11 +255,9 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
         errors: Vec::new(),
         view: &mut view,
     };
-    render_progressively(&mut session, &args, &mut progress)?;
+    let last_line = render_progressively(&mut session, &args, &mut progress)?;
     let mut errors = std::mem::take(&mut progress.errors);
-    if let Some(v) = &mut view {
-        v.show(&film.mean());
-    }
+    view.show(&film.mean(), film.frames, &format!("{last_line} | finished"), true);
     if let Some(r) = &reference {
         let e = image_error(&film.mean(), r);
         eprintln!(
@@ -298,7 +320,7 @@ struct Progress<'a> {
     reference: Option<&'a [[f32; 3]]>,
     /// The error against the reference, about once a second.
     errors: Vec<ErrorSample>,
-    view: &'a mut Option<LiveView>,
+    view: &'a mut Live,
 }
 
 impl Progress<'_> {
@@ -323,8 +345,8 @@ impl Progress<'_> {
 /// Renders `session` for `--time` or `--frames` into the film, with a progress bar of
 /// samples/s, rays/s and, against a reference, the RMSE (once a second), and the live view;
 /// writes the film every `--checkpoint`. Stops early, after the frames in flight, when a
-/// signal arrives.
-fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut Progress) -> Result<()> {
+/// signal arrives. Returns the last progress line.
+fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut Progress) -> Result<String> {
     let (w, h) = (session.options.width as f64, session.options.height as f64);
     let mut error_text = String::new();
     let mut error_at: Option<Instant> = None;
@@ -368,16 +390,17 @@ fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut
                 error,
             });
         }
-        if progress.view.as_ref().is_some_and(|v| v.due()) {
-            let mean = progress.mean(session)?;
-            progress.view.as_mut().expect("a view").show(&mean);
-        }
         bar.set_message(format!(
             "frame {} | {} samples/s | {}rays/s{error_text}",
             session.frames,
             si(samples / secs),
             si(session.rays() as f64 / secs)
         ));
+        if progress.view.due() {
+            let mean = progress.mean(session)?;
+            let frames = progress.film.frames + session.frames as u64;
+            progress.view.show(&mean, frames, &bar.message(), false);
+        }
         match args.time {
             Some(_) => bar.set_position(start.elapsed().as_millis() as u64),
             None => bar.set_position(session.frames as u64),
@@ -392,7 +415,8 @@ fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut
             progress.film.frames + session.frames as u64
         );
     }
-    progress.absorb(session, absorbed_at)
+    progress.absorb(session, absorbed_at)?;
+    Ok(bar.message())
 }
 
 /// The samples the session's kernels rejected (non-finite or negative).

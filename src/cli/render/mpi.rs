@@ -7,6 +7,7 @@ use anyhow::{Result, anyhow};
 use indicatif::ProgressBar;
 use lightgraph::cluster::{Outcome, place, rank_adapter, render_across};
 use lightgraph::interrupt::stopped_by_signal;
+use lightgraph::live::Live;
 use lightgraph::reference::Reference;
 use lightgraph::run::Run;
 use lightgraph_engine::ConstValue;
@@ -36,21 +37,19 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
         ProgressBar::hidden()
     };
     let pixels = w as f64 * h as f64;
-    let mut view = root
-        .then(|| args.tev.view(&out.display().to_string(), (w, h)))
-        .flatten();
+    let mut view = match root {
+        true => args.live(&out, (w, h), None)?,
+        false => Live::default(),
+    };
     let start = Instant::now();
     let outcome = render_across(
         &world,
         &run,
         args.common.adapter.as_deref(),
         budget(args),
-        args.tev.tev.is_some(),
+        args.tev.tev.is_some() || args.serve.is_some(),
         &mut film,
         |p| {
-            if let Some(v) = view.as_mut().filter(|v| v.due()) {
-                v.show(&p.film.mean());
-            }
             let secs = start.elapsed().as_secs_f64();
             let per_rank: Vec<String> = p
                 .frames_by_rank
@@ -68,6 +67,9 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
                 Some(_) => start.elapsed().as_millis() as u64,
                 None => p.film.frames,
             });
+            if view.due() {
+                view.show(&p.film.mean(), p.film.frames, &bar.message(), false);
+            }
         },
     )?;
     bar.finish();
@@ -77,9 +79,12 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
             false => Ok(()),
         };
     }
-    if let Some(v) = &mut view {
-        v.show(&film.mean());
-    }
+    view.show(
+        &film.mean(),
+        film.frames,
+        &format!("{} | finished", bar.message()),
+        true,
+    );
     let seconds = outcome.render_seconds;
     let setup_seconds = start.elapsed().as_secs_f64() - seconds;
     film.info.insert("layout".into(), run.layout.clone());

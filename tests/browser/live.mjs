@@ -1,0 +1,51 @@
+// Opens `render --serve`'s live page in headless Chromium (the system's, through playwright-core)
+// and follows the render to its end: no console error; the film is fetched anew as its version
+// changes (at least MIN_LOADS times); once the render is over, prints the canvas's pixels at the
+// points asked for, as JSON on stdout, for the caller to compare with the film written, and
+// optionally saves a screenshot. Usage: node live.mjs URL X,Y[;X,Y...] [SCREENSHOT]. Exits 1
+// naming every failure.
+import { chromium } from "playwright-core";
+import { mkdtempSync, rmSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+
+const CHROMIUM = process.env.LIGHTGRAPH_CHROMIUM || "/usr/bin/chromium";
+const ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+  "--disable-background-networking", "--disable-component-update", "--disable-sync"];
+const MIN_LOADS = 3;
+
+const [url, points, screenshot] = process.argv.slice(2);
+const failures = [];
+const profile = mkdtempSync(join(tmpdir(), "lightgraph-live-"));
+const context = await chromium.launchPersistentContext(profile, { executablePath: CHROMIUM, args: ARGS });
+try {
+  const page = await context.newPage();
+  page.on("console", (m) => { if (m.type() === "error") failures.push(`console error: ${m.text()}`); });
+  page.on("pageerror", (e) => failures.push(`page error: ${e.message}`));
+  await page.goto(url);
+  await page.waitForFunction(() => window.lightgraphLive && window.lightgraphLive.status
+    && window.lightgraphLive.status.finished && window.lightgraphLive.drawn === window.lightgraphLive.status.version,
+    null, { timeout: 120000, polling: 100 });
+  const live = await page.evaluate(() => ({ ...window.lightgraphLive }));
+  if (live.loads < MIN_LOADS) failures.push(`the film was loaded ${live.loads} times, fewer than ${MIN_LOADS}`);
+  const line = await page.locator(".lg-live").textContent();
+  if (!line.includes("samples/s") || !line.includes("the render is over")) failures.push(`the status line says '${line}'`);
+  const pixels = await page.evaluate((points) => {
+    const v = window.lightgraph.viewers[0];
+    return points.split(";").map((p) => {
+      const [x, y] = p.split(",").map(Number), [sx, sy] = v.screenPoint(x, y);
+      return Array.from(v.canvas.getContext("2d").getImageData(Math.floor(sx), Math.floor(sy), 1, 1).data.slice(0, 3));
+    });
+  }, points);
+  if (screenshot) await page.screenshot({ path: screenshot, fullPage: true });
+  console.log(JSON.stringify({ pixels, loads: live.loads, version: live.status.version }));
+} catch (e) {
+  failures.push(String(e));
+} finally {
+  await context.close();
+  rmSync(profile, { recursive: true, force: true });
+}
+if (failures.length) {
+  console.error(failures.join("\n"));
+  process.exit(1);
+}
