@@ -93,7 +93,7 @@ fn render_serves_its_film_as_it_renders_and_the_last_one_equals_the_exr() {
     let (mut child, url) = serving_render(&out, "8s");
     let page = String::from_utf8(get(&url)).unwrap();
     assert!(
-        page.contains("lightgraph-manifest") && page.contains("film.f32"),
+        page.contains("lightgraphLiveSources") && page.contains("film.f32"),
         "{page}"
     );
     let first = wait_for(&url, |s| s["frames"].as_u64() > Some(0));
