@@ -312,6 +312,32 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_path_is_one_shell_word() {
+        assert_eq!(shell_word(Path::new("out/film-1.exr")), "out/film-1.exr");
+        assert_eq!(shell_word(Path::new("my film.exr")), "'my film.exr'");
+        assert_eq!(shell_word(Path::new("it's.exr")), "'it'\\''s.exr'");
+    }
+
+    #[test]
+    fn a_folders_own_entries_count_as_an_earlier_run_and_others_do_not() {
+        let dir = std::env::temp_dir().join(format!("lightgraph-check-outputs-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("notes.txt"), "").unwrap();
+        assert!(check_outputs(&[Output::Folder(&dir, &["bench.md"])], false, None).is_ok());
+        std::fs::write(dir.join("bench.md"), "").unwrap();
+        let err = check_outputs(&[Output::Folder(&dir, &["bench.md"])], false, None).unwrap_err();
+        assert!(err.to_string().contains("(bench.md)"), "{err}");
+        assert!(check_outputs(&[Output::Folder(&dir, &["bench.md"])], true, None).is_ok());
+        // The probe file leaves nothing behind.
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn srgb_curve_end_points() {
         assert_eq!(linear_to_srgb8(0.0), 0);
         assert_eq!(linear_to_srgb8(1.0), 255);
