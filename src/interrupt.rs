@@ -2,7 +2,8 @@
 //! stop a job) ask a long run to stop at the end of the frame in flight, keep what it has
 //! done and exit non-zero. A second signal of either kind ends the process at once, without
 //! writing: the files hold what the last checkpoint wrote (each file is written whole or not
-//! at all). Both are said on stderr as they arrive.
+//! at all). Both are said on stderr as they arrive. Only the commands that keep work this way
+//! install the handlers (`Cli::keeps_work_on_signal`); the others end at the first signal.
 
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -151,7 +151,7 @@ fn unknown_constant(graph: &Graph, name: &str) -> String {
 /// too large, with the largest of its aspect that fits. Other errors are returned as they are.
 pub fn image_past_binding_limit(error: anyhow::Error, graph: &Graph, (width, height): (u32, u32)) -> anyhow::Error {
     let text = format!("{error:#}");
-    let grows = |count: &str| ["PIXELS", "WIDTH", "HEIGHT"].iter().any(|c| count.contains(c));
+    let grows = |count: &str| ["PIXELS", "WIDTH", "HEIGHT", "PATHS"].iter().any(|c| count.contains(c));
     let Some(resource) = graph
         .resources
         .iter()
@@ -166,6 +166,7 @@ pub fn image_past_binding_limit(error: anyhow::Error, graph: &Graph, (width, hei
     let (Some(needed), Some(limit)) = (mib_after(" needs "), mib_after("binds at most ")) else {
         return error;
     };
+    let count = resource.decl.count.as_deref().unwrap_or_default();
     // The largest image of this aspect whose buffer fits (a little below, for the rounding of
     // the MiB the engine reports).
     let scale = (limit / needed).sqrt() * 0.999;
@@ -173,12 +174,16 @@ pub fn image_past_binding_limit(error: anyhow::Error, graph: &Graph, (width, hei
     anyhow::anyhow!(
         "the image size (--res) {width}x{height} is too large for this adapter: the graph's buffer '{}' ({} \
          elements of {}) needs {needed:.1} MiB, more than the {limit:.1} MiB the adapter binds in one buffer \
-         (its max_storage_buffer_binding_size); give a smaller --res, at most about {}x{} at this aspect",
+         (its max_storage_buffer_binding_size); give a smaller --res, at most about {}x{} at this aspect{}",
         resource.name,
-        resource.decl.count.as_deref().unwrap_or_default(),
+        count,
         resource.decl.ty,
         fits(width),
-        fits(height)
+        fits(height),
+        match count.contains("PATHS") {
+            true => " and --spp (or a smaller --spp: the buffer holds an element a sample)",
+            false => "",
+        }
     )
 }
 

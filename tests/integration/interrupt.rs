@@ -302,3 +302,46 @@ fn a_second_signal_says_it_exits_without_writing_and_the_checkpoint_stays_whole(
     let kept = Reference::read(&film).unwrap();
     assert!(kept.frames > 0 && kept.frames < 100_000, "{}", kept.frames);
 }
+
+#[test]
+fn a_command_that_keeps_nothing_at_a_signal_ends_at_the_first() {
+    // `bench` has no film to keep: Ctrl-C ends it at once (it used to be told to stop after
+    // its frame, which it never looks at, and ran on to its end).
+    let dir = temp_dir("bench-signal");
+    let out = dir.join("bench");
+    let args = [
+        "bench",
+        "--scene",
+        "cornell-diffuse",
+        "--layouts",
+        "NaivePTsk",
+        "--points",
+        "8x8x1",
+        "--time",
+        "60s",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let mut child = start(&args);
+    // Once it renders (its first frame is at most a few seconds away on a loaded machine).
+    std::thread::sleep(Duration::from_secs(5));
+    assert!(child.try_wait().unwrap().is_none(), "bench ended before the signal");
+    let sent = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let sent_at = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            sent_at.elapsed() < Duration::from_secs(20),
+            "bench still runs 20 s after SIGINT"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(status.signal(), Some(2), "{status:?}");
+}
