@@ -49,7 +49,7 @@ pub fn write_channels(
         exr::prelude::Image::from_layer(layer)
             .write()
             .to_file(partial)
-            .map_err(anyhow::Error::from)
+            .map_err(|e| anyhow!("{e}"))
     })
 }
 
@@ -169,7 +169,7 @@ pub fn write_png(path: &Path, image: &Image, exposure: f32) -> Result<()> {
         .collect();
     write_whole(path, |partial| {
         image::save_buffer(partial, &bytes, image.width, image.height, image::ColorType::Rgb8)
-            .map_err(anyhow::Error::from)
+            .map_err(|e| anyhow!("{e}"))
     })
 }
 
