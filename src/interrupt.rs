@@ -1,9 +1,12 @@
 //! Interruptions: SIGINT (Ctrl-C) and SIGTERM (what Slurm and Kubernetes send before they
 //! stop a job) ask a long run to stop at the end of the frame in flight, keep what it has
-//! done and exit non-zero. A second signal of either kind ends the process at once.
+//! done and exit non-zero. A second signal of either kind ends the process at once, without
+//! writing: the files hold what the last checkpoint wrote (each file is written whole or not
+//! at all). Both are said on stderr as they arrive. Only the commands that keep work this way
+//! install the handlers (`Cli::keeps_work_on_signal`); the others end at the first signal.
 
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A signal that asked the run to stop.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -44,29 +47,56 @@ pub struct Interrupted {
 }
 
 /// Which signal arrived: 0 none, 1 SIGINT, 2 SIGTERM.
-fn received() -> &'static Arc<AtomicUsize> {
-    static RECEIVED: OnceLock<Arc<AtomicUsize>> = OnceLock::new();
-    RECEIVED.get_or_init(|| Arc::new(AtomicUsize::new(0)))
+fn received() -> &'static AtomicUsize {
+    static RECEIVED: AtomicUsize = AtomicUsize::new(0);
+    &RECEIVED
 }
 
-/// Installs the handlers (once; later calls do nothing). Until then signals keep their
-/// default action, which ends the process.
+/// Installs the handlers (once; later calls do nothing): a thread that takes the signals,
+/// says on stderr what each does, records the first and ends the process at the second. Until
+/// then signals keep their default action, which ends the process.
 pub fn install() -> std::io::Result<()> {
     static INSTALLED: OnceLock<()> = OnceLock::new();
     if INSTALLED.get().is_some() {
         return Ok(());
     }
     use signal_hook::consts::{SIGINT, SIGTERM};
-    let any = Arc::new(AtomicBool::new(false));
-    for (signal, value, code) in [(SIGINT, 1, 130), (SIGTERM, 2, 143)] {
-        // Registered first, so that it sees the flag before this signal sets it: only a
-        // second signal ends the process.
-        signal_hook::flag::register_conditional_shutdown(signal, code, any.clone())?;
-        signal_hook::flag::register_usize(signal, received().clone(), value)?;
-        signal_hook::flag::register(signal, any.clone())?;
-    }
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
+    std::thread::Builder::new().name("signals".into()).spawn(move || {
+        for number in signals.forever() {
+            let signal = match number {
+                SIGINT => Signal::Interrupt,
+                _ => Signal::Terminate,
+            };
+            take(signal);
+        }
+    })?;
     let _ = INSTALLED.set(());
     Ok(())
+}
+
+/// Takes a signal: the first is recorded for the run to stop at the end of its frame, the
+/// second ends the process with its status, each said on stderr.
+fn take(signal: Signal) {
+    let value = match signal {
+        Signal::Interrupt => 1,
+        Signal::Terminate => 2,
+    };
+    match received().compare_exchange(0, value, Ordering::SeqCst, Ordering::SeqCst) {
+        Ok(_) => eprintln!(
+            "\n{}: stopping after the frame in flight and writing what the run has (a second Ctrl-C \
+             exits at once without writing)",
+            signal.name()
+        ),
+        Err(_) => {
+            eprintln!(
+                "\nsecond signal ({}): exiting at once without writing; the files on disk hold the last \
+                 checkpoint",
+                signal.name()
+            );
+            signal_hook::low_level::exit(i32::from(signal.exit_code()));
+        }
+    }
 }
 
 /// The signal that asked the run to stop, if one did.

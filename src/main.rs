@@ -15,7 +15,9 @@ fn main() -> ExitCode {
         // SAFETY: set before any thread starts; scene loading reads it.
         unsafe { std::env::set_var("LIGHTGRAPH_ASSETS", dir) };
     }
-    if let Err(e) = lightgraph::interrupt::install() {
+    if cli.keeps_work_on_signal()
+        && let Err(e) = lightgraph::interrupt::install()
+    {
         eprintln!("warning: SIGINT and SIGTERM will end runs without keeping their work: {e}");
     }
     match cli.run() {

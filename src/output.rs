@@ -45,14 +45,28 @@ pub fn write_channels(
         Encoding::FAST_LOSSLESS,
         AnyChannels::sort(list),
     );
-    if let Some(dir) = path.parent() {
+    write_whole(path, |partial| {
+        exr::prelude::Image::from_layer(layer)
+            .write()
+            .to_file(partial)
+            .map_err(|e| anyhow!("{e}"))
+    })
+}
+
+/// Writes the file `path` whole or not at all: `write` writes a partial file beside it (of
+/// the same extension), which then replaces `path` in one rename, so that a process ended
+/// while writing (a second Ctrl-C, a kill) leaves the earlier file intact.
+fn write_whole(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    exr::prelude::Image::from_layer(layer)
-        .write()
-        .to_file(path)
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+    let name = path.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    let partial = path.with_file_name(format!(".partial-{name}"));
+    let written = write(&partial).and_then(|()| Ok(std::fs::rename(&partial, path)?));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&partial);
+    }
+    written.with_context(|| format!("writing {}", path.display()))
 }
 
 /// An EXR read back: its size, its channels as f32 and its `lightgraph.*` attributes.
@@ -82,6 +96,7 @@ impl ExrFile {
 /// Reads the first layer of an EXR file with all its channels and lightgraph attributes.
 pub fn read_exr(path: &Path) -> Result<ExrFile> {
     use exr::meta::attribute::AttributeValue;
+    check_is_exr(path)?;
     let image =
         exr::prelude::read_first_flat_layer_from_file(path).with_context(|| format!("reading {}", path.display()))?;
     let layer = image.layer_data;
@@ -123,12 +138,44 @@ pub fn read_rgb(path: &Path) -> Result<(u32, u32, Vec<[f32; 3]>)> {
     Ok((exr.size.0, exr.size.1, rgb))
 }
 
+/// Checks that `path` is an OpenEXR file by its first bytes, so that another file (a PNG
+/// preview given for its film) is named as what it is, not as a broken EXR.
+fn check_is_exr(path: &Path) -> Result<()> {
+    use std::io::Read;
+    if path.is_dir() {
+        bail!(
+            "{}: it is a folder, not an EXR film written by lightgraph",
+            path.display()
+        );
+    }
+    let mut magic = [0u8; 4];
+    let read = std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut magic))
+        .map(|()| magic);
+    match read {
+        Ok([0x76, 0x2f, 0x31, 0x01]) => Ok(()),
+        Ok([0x89, b'P', b'N', b'G']) => bail!(
+            "{}: a PNG image, not an EXR film written by lightgraph (give the .exr beside it)",
+            path.display()
+        ),
+        Ok(_) => bail!(
+            "{}: not an EXR film written by lightgraph (not an OpenEXR file)",
+            path.display()
+        ),
+        Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+            bail!(
+                "{}: not an EXR film written by lightgraph (too short for an OpenEXR file)",
+                path.display()
+            )
+        }
+        Err(e) => bail!("reading {}: {e}", path.display()),
+    }
+}
+
 /// Writes an 8-bit sRGB preview, the radiance scaled by 2^`exposure` and clamped.
 pub fn write_png(path: &Path, image: &Image, exposure: f32) -> Result<()> {
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    std::fs::write(path, png_bytes(image, exposure)?).with_context(|| format!("writing {}", path.display()))
+    let png = png_bytes(image, exposure)?;
+    write_whole(path, |partial| Ok(std::fs::write(partial, &png)?))
 }
 
 /// The PNG file of `image` at `exposure` stops (sRGB, 8 bits), as [`write_png`] writes it.
@@ -151,8 +198,92 @@ pub fn png_bytes(image: &Image, exposure: f32) -> Result<Vec<u8>> {
     Ok(png)
 }
 
-/// Checks the film's path `out` before any work: it must be an EXR (the PNG preview goes beside
-/// it), and an existing file is replaced only with `--force`, or added to with `--resume`.
+/// Something a command writes: a file, or a folder holding the entries (files or folders)
+/// the command writes into it.
+#[derive(Debug, Clone, Copy)]
+pub enum Output<'a> {
+    /// A file: a film, its PNG preview, a report.
+    File(&'a Path),
+    /// A folder (created if missing) and the entries of it the command writes: only those
+    /// count as an earlier run's output; other files in the folder are left alone.
+    Folder(&'a Path, &'a [&'a str]),
+}
+
+/// Checks every output of a command before any work starts: each can be written (its
+/// folder, or the nearest one above it that exists, is a folder this process can create
+/// files in), and none exists already unless `force` (an existing output's error says to
+/// give --force or another --out, and `resume`, where given, how to continue it instead).
+pub fn check_outputs(outputs: &[Output], force: bool, resume: Option<&str>) -> Result<()> {
+    let exists = |what: String| {
+        let resume = resume.map_or_else(String::new, |r| format!("{r}, "));
+        anyhow!("{what}: give {resume}--force to replace it, or another --out")
+    };
+    for output in outputs {
+        match *output {
+            Output::File(path) => {
+                if path.is_dir() {
+                    bail!("{}: it is a folder; give the path of a file", path.display());
+                }
+                if path.exists() && !force {
+                    return Err(exists(format!("{} exists", path.display())));
+                }
+                let folder = path.parent().filter(|p| !p.as_os_str().is_empty());
+                check_folder_writable(folder.unwrap_or(Path::new(".")), path)?;
+            }
+            Output::Folder(folder, entries) => {
+                if folder.exists() && !folder.is_dir() {
+                    bail!("{}: it is a file, not a folder", folder.display());
+                }
+                let held: Vec<&str> = entries.iter().copied().filter(|e| folder.join(e).exists()).collect();
+                if !held.is_empty() && !force {
+                    return Err(exists(format!(
+                        "{} holds the output of an earlier run ({})",
+                        folder.display(),
+                        held.join(", ")
+                    )));
+                }
+                check_folder_writable(folder, folder)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks that files can be created in `folder` (for `output`), or, where it does not exist
+/// yet, in the nearest folder above it that exists (where it will be created): that one must
+/// be a folder, and a file created there (and removed at once) proves it writable.
+fn check_folder_writable(folder: &Path, output: &Path) -> Result<()> {
+    let mut existing = folder;
+    while !existing.exists() {
+        existing = match existing.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+    }
+    if !existing.is_dir() {
+        bail!(
+            "{}: {} is a file, not a folder; give another --out",
+            output.display(),
+            existing.display()
+        );
+    }
+    let probe = existing.join(format!(".lightgraph-write-check-{}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => bail!(
+            "{}: cannot write into {} ({e}); give another --out",
+            output.display(),
+            existing.display()
+        ),
+    }
+}
+
+/// Checks the film's path `out` and its PNG preview before any work: the film must be an
+/// EXR, an existing film is replaced only with `--force` or added to with `--resume` (then
+/// its preview too), and both must be writable ([`check_outputs`]).
 pub fn check_out(out: &Path, force: bool, resume: Option<&Path>) -> Result<()> {
     let is_exr = out.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     if !is_exr {
@@ -163,13 +294,13 @@ pub fn check_out(out: &Path, force: bool, resume: Option<&Path>) -> Result<()> {
         );
     }
     let resuming_it = resume.is_some_and(|r| same_file(r, out));
-    if out.exists() && !force && !resuming_it {
-        bail!(
-            "--out {}: the file exists; give --resume {0} to add frames to it, --force to replace it, or another --out",
-            out.display()
-        );
-    }
-    Ok(())
+    let advice = format!("--resume {} to add frames to it", out.display());
+    let png = out.with_extension("png");
+    check_outputs(
+        &[Output::File(out), Output::File(&png)],
+        force || resuming_it,
+        (out.exists() && !resuming_it).then_some(advice.as_str()),
+    )
 }
 
 /// Whether `a` and `b` name the same file (by their canonical paths where they exist).
@@ -177,6 +308,17 @@ fn same_file(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
         _ => a == b,
+    }
+}
+
+/// `path` as one word of a shell command: as it is where it has only letters, digits and
+/// `_./:,+=@%-`, else in single quotes.
+pub fn shell_word(path: &Path) -> String {
+    let text = path.display().to_string();
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_./:,+=@%-".contains(c);
+    match !text.is_empty() && text.chars().all(plain) {
+        true => text,
+        false => format!("'{}'", text.replace('\'', "'\\''")),
     }
 }
 
@@ -193,6 +335,32 @@ pub fn si(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_path_is_one_shell_word() {
+        assert_eq!(shell_word(Path::new("out/film-1.exr")), "out/film-1.exr");
+        assert_eq!(shell_word(Path::new("my film.exr")), "'my film.exr'");
+        assert_eq!(shell_word(Path::new("it's.exr")), "'it'\\''s.exr'");
+    }
+
+    #[test]
+    fn a_folders_own_entries_count_as_an_earlier_run_and_others_do_not() {
+        let dir = std::env::temp_dir().join(format!("lightgraph-check-outputs-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("notes.txt"), "").unwrap();
+        assert!(check_outputs(&[Output::Folder(&dir, &["bench.md"])], false, None).is_ok());
+        std::fs::write(dir.join("bench.md"), "").unwrap();
+        let err = check_outputs(&[Output::Folder(&dir, &["bench.md"])], false, None).unwrap_err();
+        assert!(err.to_string().contains("(bench.md)"), "{err}");
+        assert!(check_outputs(&[Output::Folder(&dir, &["bench.md"])], true, None).is_ok());
+        // The probe file leaves nothing behind.
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn srgb_curve_end_points() {

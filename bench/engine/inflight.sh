@@ -18,6 +18,7 @@ bench() { # $1 = binary, $2 = title, then bench arguments; appends the rate tabl
   local bin=$1 title=$2
   shift 2
   echo "### $title ($bin)" >>"$log"
+  rm -rf /tmp/gpu-inflight # bench refuses a folder holding an earlier bench
   bash .gpu/run.sh "$bin" bench "$@" --out /tmp/gpu-inflight >/dev/null 2>/tmp/gpu-inflight.err ||
     tail -3 /tmp/gpu-inflight.err | tee -a "$log"
   sed -n '/^| layout | [0-9]/,/^$/p' /tmp/gpu-inflight/bench.md >>"$log"

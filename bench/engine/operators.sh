@@ -19,4 +19,5 @@ echo "== LVC-BPT and PT rates (cornell-glossy-point 512x512, 4 spp; cornell-mits
 for layout in LVC-BPTsk LVC-BPTmk; do
   lg render --graph bpt-lvc --layout $layout --scene cornell-glossy-point --res 512x512 --spp 4 --time 6s --out /tmp/lvc.exr | grep -E "samples/s"
 done
+rm -rf /tmp/bench # bench refuses a folder holding an earlier bench
 lg bench --scene cornell-mitsuba --graph pt --layouts NaivePTsk,StreamingPTmk1,StreamingPTmk2 --points 1280x720x1 --time 1s --out /tmp/bench | grep "^| [NS]"

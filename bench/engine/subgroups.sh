@@ -27,6 +27,7 @@ same_image() { # $1 = graph, $2 = layout
 bench() { # $1 = title, then bench arguments; appends the rate table
   local title=$1; shift
   echo "### $title" >>"$log"
+  rm -rf /tmp/gpu-sg-bench # bench refuses a folder holding an earlier bench
   lg bench "$@" --out /tmp/gpu-sg-bench >/dev/null 2>/tmp/gpu-sg.err || tail -3 /tmp/gpu-sg.err | tee -a "$log"
   sed -n '/^| layout | [0-9]/,/^$/p' /tmp/gpu-sg-bench/bench.md >>"$log"
 }

@@ -16,6 +16,7 @@ nvidia-smi --query-gpu=name,driver_version --format=csv,noheader | head -1 | tee
 bench() { # $1 = title, then bench arguments; appends the rate table
   local title=$1; shift
   echo "### $title" >>"$log"
+  rm -rf /tmp/gpu-bvh # bench refuses a folder holding an earlier bench
   bash .gpu/run.sh lightgraph bench "$@" --out /tmp/gpu-bvh >/dev/null 2>/tmp/gpu-bvh.err || tail -3 /tmp/gpu-bvh.err | tee -a "$log"
   sed -n '/^| layout | [0-9]/,/^$/p' /tmp/gpu-bvh/bench.md >>"$log"
 }

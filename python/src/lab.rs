@@ -112,6 +112,8 @@ fn comparison(seconds: f64, per_decade: u32, seed: u32, out: PathBuf) -> Compari
         seed,
         tev: None,
         out,
+        // The module replaces an earlier comparison's files, as it always has.
+        force: true,
         exposure: 0.0,
         gpus: None,
     }

@@ -72,15 +72,16 @@ pub struct CompareFlags {
 }
 
 impl CompareFlags {
-    /// The comparison of these options with each run's `budget`, the output folder `out` and
-    /// the GPUs `gpus`.
-    pub fn comparison(self, budget: RunBudget, out: PathBuf, gpus: Option<String>) -> Comparison {
+    /// The comparison of these options with each run's `budget`, the output folder `out`
+    /// (replaced with `force`) and the GPUs `gpus`.
+    pub fn comparison(self, budget: RunBudget, out: PathBuf, gpus: Option<String>, force: bool) -> Comparison {
         Comparison {
             budget,
             per_decade: self.per_decade,
             seed: self.seed,
             tev: self.tev.tev,
             out,
+            force,
             exposure: self.exposure,
             gpus,
         }

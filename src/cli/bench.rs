@@ -4,6 +4,7 @@ use super::args::*;
 use super::checks::count;
 use anyhow::Result;
 use clap::Args;
+use lightgraph::output::{Output, check_outputs};
 use lightgraph::run::{Run, Scenes, load_graph};
 use lightgraph_engine::{Gpu, Plan};
 use lightgraph_scenes::bvh::BvhKind;
@@ -29,7 +30,13 @@ pub struct BenchArgs {
     /// Output folder for bench.md, bench.csv, rays_per_second.png and report.html.
     #[arg(long, default_value = "out/bench")]
     pub out: PathBuf,
+    /// Write into a --out that holds an earlier run's bench.md, bench.csv and plot, replacing them.
+    #[arg(long)]
+    pub force: bool,
 }
+
+/// What `bench` writes into its folder.
+const BENCH_FILES: [&str; 4] = ["bench.md", "bench.csv", "rays_per_second.png", "report.html"];
 
 /// Parses a `--points` entry `WxHxSPP`: each at least 1, the frame within the engine's
 /// counts and the host's memory.
@@ -46,6 +53,7 @@ fn parse_point(s: &str) -> Result<(u32, u32, u32), String> {
 /// `lightgraph bench`: every layout at every frame size, reported as tables and a plot.
 pub fn bench(args: BenchArgs) -> Result<()> {
     let c = &args.common;
+    check_outputs(&[Output::Folder(&args.out, &BENCH_FILES)], args.force, None)?;
     let graph = load_graph(args.graph.name())?;
     let gpu = Gpu::new(c.adapter.as_deref())?;
     let points = match args.points.is_empty() {

@@ -43,6 +43,9 @@ pub struct CompareArgs {
     /// and PNG.
     #[arg(long, default_value = COMPARE_OUT)]
     pub out: PathBuf,
+    /// Write into a --out that holds an earlier run's comparison (its curves, summary and images), replacing them.
+    #[arg(long)]
+    pub force: bool,
     /// Run on several GPUs of one model at once, each taking the next run when its last one
     /// ends (every run still has `--time` on one GPU): `all`, the first N adapters, or a
     /// comma-separated list of adapter indices, PCI bus ids or names (`--adapter` is then
@@ -64,7 +67,7 @@ impl CompareArgs {
             reference: self.reference,
             resume: self.resume,
             baseline: self.baseline,
-            comparison: self.flags.comparison(budget, self.out, self.gpus),
+            comparison: self.flags.comparison(budget, self.out, self.gpus, self.force),
         }
     }
 }

@@ -25,7 +25,7 @@ pub fn frames_left(total: u32, held: u64, path: Option<&Path>) -> Result<u32> {
     match u64::from(total).checked_sub(held) {
         Some(left) => Ok(left as u32),
         None => bail!(
-            "{}: the film holds {held} frames, more than --frames {total} (with --resume, --frames is the run's total)",
+            "{}: the film holds {held} frames, more than --frames {total} (with --resume, --frames is the run's total, 64 when not given): give a larger --frames, or --time",
             path.map_or_else(String::new, |p| p.display().to_string())
         ),
     }

@@ -12,8 +12,8 @@ pub struct MergeArgs {
     /// constants and resolution, disjoint frame ranges.
     #[arg(required = true, num_args = 1..)]
     pub films: Vec<PathBuf>,
-    /// Output EXR (it must end in .exr; an existing file is refused unless --force); a PNG
-    /// preview is written beside it.
+    /// Output EXR (it must end in .exr); a PNG preview is written beside it. An existing EXR
+    /// or PNG is refused unless --force.
     #[arg(long)]
     pub out: PathBuf,
     /// Replace an existing --out.
@@ -25,11 +25,11 @@ pub struct MergeArgs {
 }
 
 pub fn merge(args: MergeArgs) -> Result<()> {
+    lightgraph::output::check_out(&args.out, args.force, None)?;
     let mut merged = Reference::read(&args.films[0])?;
     for path in &args.films[1..] {
         merged.merge(&Reference::read(path)?, path)?;
     }
-    lightgraph::output::check_out(&args.out, args.force, None)?;
     merged.write(&args.out, "merge")?;
     let png = args.out.with_extension("png");
     lightgraph::output::write_png(&png, &merged.image(), args.exposure)?;

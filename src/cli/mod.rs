@@ -108,6 +108,16 @@ impl Cli {
         }
     }
 
+    /// Whether the command stops at a signal keeping its work (`render`, `reference`,
+    /// `compare`, `study`: [`lightgraph::interrupt`]); the others end at once, as a signal's
+    /// default does.
+    pub fn keeps_work_on_signal(&self) -> bool {
+        matches!(
+            self.command,
+            Command::Render(_) | Command::Reference(_) | Command::Compare(_) | Command::Study(_)
+        )
+    }
+
     /// Runs the command.
     pub fn run(self) -> anyhow::Result<()> {
         match self.command {

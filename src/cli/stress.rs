@@ -2,6 +2,7 @@
 
 use anyhow::{Result, bail};
 use clap::Args;
+use lightgraph::output::{Output, check_outputs};
 use lightgraph::stress::{Runner, Settings, cases::cases, estimators, table};
 use lightgraph_engine::Gpu;
 use std::path::PathBuf;
@@ -29,6 +30,9 @@ pub struct StressArgs {
     /// Folder for stress.md and a PNG of each render.
     #[arg(long, default_value = "out/stress")]
     pub out: PathBuf,
+    /// Write into a --out that holds an earlier run's stress.md and PNGs, replacing them.
+    #[arg(long)]
+    pub force: bool,
     /// Acceleration structure: bvh2 or cwbvh.
     #[arg(long, value_parser = lightgraph::run::parse_bvh, default_value = "cwbvh")]
     pub bvh: lightgraph_scenes::bvh::BvhKind,
@@ -38,6 +42,7 @@ pub struct StressArgs {
 }
 
 pub fn stress(args: StressArgs) -> Result<()> {
+    check_outputs(&[Output::Folder(&args.out, &["stress.md"])], args.force, None)?;
     let graphs: Vec<String> = match &args.graphs {
         Some(list) => list.split(',').map(|s| s.trim().to_string()).collect(),
         None => estimators(),

@@ -68,6 +68,9 @@ pub struct StudyArgs {
     /// with curves.csv, rmse_vs_time.png, summary.md, report.html and each run's EXR and PNG.
     #[arg(long, default_value = STUDY_OUT)]
     pub out: PathBuf,
+    /// Write into a --out that holds an earlier study, replacing its files.
+    #[arg(long)]
+    pub force: bool,
     /// Run on several GPUs of one model at once, as `compare --gpus` (references as
     /// `reference --gpus`; layouts are measured on the first).
     #[arg(long)]
@@ -93,7 +96,7 @@ impl StudyArgs {
             reference_time: self.reference_time,
             reference_frames: self.reference_frames,
             reference_spp: self.reference_spp,
-            comparison: self.flags.comparison(budget, self.out, self.gpus),
+            comparison: self.flags.comparison(budget, self.out, self.gpus, self.force),
         }
     }
 }

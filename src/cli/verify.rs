@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::compare::EstimatorSpec;
-use lightgraph::output::{write_exr, write_png};
+use lightgraph::output::{Output, check_outputs, write_exr, write_png};
 use lightgraph::run::{LoadedScene, Run as Loaded, Scenes, load_graph, named_layout, parse_sets};
 use lightgraph::study::scene_folders;
 use lightgraph::verify::batches::{Amount, Budget, RunBatches, render_batches};
@@ -89,6 +89,10 @@ pub struct VerifyArgs {
     /// every pair that differs.
     #[arg(long, default_value = "out/verify")]
     pub out: PathBuf,
+    /// Write into a --out that holds an earlier run's verify.md, verify.csv, report.html and
+    /// images, replacing them.
+    #[arg(long)]
+    pub force: bool,
     /// Exposure of the PNG previews in stops.
     #[arg(long, default_value_t = 0.0)]
     pub exposure: f32,
@@ -159,6 +163,11 @@ pub fn verify(args: VerifyArgs) -> Result<()> {
         find_scene(scene, "--scenes")?;
     }
     let folders = scene_folders(&args.scenes)?;
+    check_outputs(
+        &[Output::Folder(&args.out, &["verify.md", "verify.csv", "report.html"])],
+        args.force,
+        None,
+    )?;
     let gpu = Gpu::new(args.common.adapter.as_deref())?;
     eprintln!(
         "{} | {} estimators on {} scenes, {} each in {} batches",

@@ -2,7 +2,7 @@
 //! the runs checked against the reference, rendered on one GPU or several for the same
 //! budget, their curves and images written and summed up.
 
-use crate::compare::resume::{check_settings, finished_runs, write_settings};
+use crate::compare::resume::{check_folder, check_settings, finished_runs, write_settings};
 use crate::compare::{EstimatorSpec, ReportContext, RunBudget, RunCurve, run, write_report, write_run_images};
 use crate::interrupt::{Interrupted, Signal};
 use crate::multi::gpu_selectors;
@@ -56,6 +56,10 @@ pub struct Comparison {
     /// Output folder: a comparison's curves.csv, rmse_vs_time.png, summary.md and each run's
     /// EXR and PNG; a study's summary files and a comparison per scene.
     pub out: PathBuf,
+    /// Write into an `out` that holds an earlier comparison (or study), replacing its files;
+    /// without it (or `resume`) such a folder is refused before any work
+    /// ([`super::resume::check_folder`]).
+    pub force: bool,
     /// Exposure of the PNG previews in stops.
     pub exposure: f32,
     /// The GPUs to run on at once, each taking the next run (None: the options' adapter; a
@@ -108,6 +112,7 @@ pub fn compare_with(
         n => format!("{} x{n}", gpus[0].info.name),
     };
     let settings = settings(args, reference, &runs, &device);
+    check_folder(&args.comparison.out, args.comparison.force, args.resume)?;
     let done = match args.resume {
         true => {
             check_settings(&args.comparison.out, &settings)?;

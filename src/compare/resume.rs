@@ -4,6 +4,7 @@
 
 use super::{ErrorSample, RunCurve, paths_per_second};
 use crate::metrics::ImageError;
+use crate::output::{Output, check_outputs};
 use anyhow::{Context, Result, bail};
 use std::path::Path;
 
@@ -20,6 +21,24 @@ pub fn write_settings(dir: &Path, settings: &[(String, String)]) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let path = dir.join(SETTINGS_FILE);
     std::fs::write(&path, settings_text(settings)).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Checks the folder `dir` of a comparison (or a study) before any work: writable, and
+/// holding no earlier one unless `force` or `resume` (which continues it).
+pub fn check_folder(dir: &Path, force: bool, resume: bool) -> Result<()> {
+    let entries = [
+        SETTINGS_FILE,
+        "curves.csv",
+        "summary.md",
+        "summary.csv",
+        "rmse_vs_time.png",
+        "report.html",
+    ];
+    check_outputs(
+        &[Output::Folder(dir, &entries)],
+        force || resume,
+        Some("--resume to continue it"),
+    )
 }
 
 /// Whether `dir` holds a comparison to resume.

@@ -4,7 +4,7 @@
 
 use crate::interrupt::stopped_by_signal;
 use crate::multi::{Budget, gpu_selectors, render_on_gpus};
-use crate::output::{check_out, si};
+use crate::output::{check_out, shell_word, si};
 use crate::reference::{Reference, film_settings};
 use crate::run::{Run, RunSpec};
 use crate::tev::LiveView;
@@ -124,12 +124,34 @@ pub fn render(mut spec: ReferenceSpec) -> Result<()> {
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
     let view = LiveView::open(spec.tev.as_deref(), &spec.out.display().to_string(), size);
     let out = spec.out.clone();
+    let before = (film.frames, film.seconds);
     let mut target = Target { film, out, bar, view };
     match &spec.gpus {
         Some(gpus) => on_several_gpus(&spec, &run, gpus, &mut target)?,
         None => on_one_gpu(&spec, &run, &mut target)?,
     }
-    finish(target, spec.exposure)
+    let resume = resume_command(&spec, &target.film, before);
+    finish(target, spec.exposure, resume)
+}
+
+/// The command that goes on with the reference after a signal stopped this run, which began
+/// with the film's `(frames, seconds)` at `before`: the frames or the time left of this run.
+fn resume_command(spec: &ReferenceSpec, film: &Reference, before: (u64, f64)) -> String {
+    let budget = match (spec.time, spec.frames) {
+        (Some(t), _) => format!(
+            "--time {}s",
+            (t.as_secs_f64() - (film.seconds - before.1)).ceil().max(1.0)
+        ),
+        (None, frames) => {
+            let left = u64::from(frames.unwrap_or(0)).saturating_sub(film.frames - before.0);
+            format!("--frames {}", left.max(1))
+        }
+    };
+    let gpus = spec
+        .gpus
+        .as_ref()
+        .map_or_else(String::new, |g| format!(" --gpus {}", shell_word(Path::new(g))));
+    format!("lightgraph reference --resume {} {budget}{gpus}", shell_word(&spec.out))
 }
 
 /// The film of the run: the resumed one, checked to have its settings and size, or a new
@@ -150,8 +172,9 @@ fn film(spec: &ReferenceSpec, run: &Run, resumed: Option<(PathBuf, Reference)>) 
     Ok(film)
 }
 
-/// Writes the target's film and its PNG preview and says so.
-fn finish(target: Target, exposure: f32) -> Result<()> {
+/// Writes the target's film and its PNG preview and says so; after a signal, says that the
+/// command `resume` goes on.
+fn finish(target: Target, exposure: f32, resume: String) -> Result<()> {
     let Target { film, out, bar, view } = target;
     bar.finish();
     if let Some(mut v) = view {
@@ -169,10 +192,9 @@ fn finish(target: Target, exposure: f32) -> Result<()> {
         film.noise_floor_mse().sqrt()
     );
     stopped_by_signal(format!(
-        "{} holds {} spp; `lightgraph reference --resume {}` goes on",
+        "{} holds {} spp; `{resume}` goes on",
         out.display(),
         film.samples_per_pixel(),
-        out.display()
     ))
 }
 

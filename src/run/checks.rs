@@ -146,6 +146,47 @@ fn unknown_constant(graph: &Graph, name: &str) -> String {
     }
 }
 
+/// An engine error of a buffer past the adapter's binding limit, said as what it is where the
+/// buffer grows with the image (its count names PIXELS, WIDTH or HEIGHT): the image size is
+/// too large, with the largest of its aspect that fits. Other errors are returned as they are.
+pub fn image_past_binding_limit(error: anyhow::Error, graph: &Graph, (width, height): (u32, u32)) -> anyhow::Error {
+    let text = format!("{error:#}");
+    let grows = |count: &str| ["PIXELS", "WIDTH", "HEIGHT", "PATHS"].iter().any(|c| count.contains(c));
+    let Some(resource) = graph
+        .resources
+        .iter()
+        .find(|r| text.contains(&format!(" {} needs ", r.name)) && r.decl.count.as_deref().is_some_and(grows))
+    else {
+        return error;
+    };
+    let mib_after = |key: &str| -> Option<f64> {
+        let rest = &text[text.find(key)? + key.len()..];
+        rest[..rest.find(" MiB")?].trim().parse().ok()
+    };
+    let (Some(needed), Some(limit)) = (mib_after(" needs "), mib_after("binds at most ")) else {
+        return error;
+    };
+    let count = resource.decl.count.as_deref().unwrap_or_default();
+    // The largest image of this aspect whose buffer fits (a little below, for the rounding of
+    // the MiB the engine reports).
+    let scale = (limit / needed).sqrt() * 0.999;
+    let fits = |side: u32| ((side as f64 * scale).floor() as u32).max(1);
+    anyhow::anyhow!(
+        "the image size (--res) {width}x{height} is too large for this adapter: the graph's buffer '{}' ({} \
+         elements of {}) needs {needed:.1} MiB, more than the {limit:.1} MiB the adapter binds in one buffer \
+         (its max_storage_buffer_binding_size); give a smaller --res, at most about {}x{} at this aspect{}",
+        resource.name,
+        count,
+        resource.decl.ty,
+        fits(width),
+        fits(height),
+        match count.contains("PATHS") {
+            true => " and --spp (or a smaller --spp: the buffer holds an element a sample)",
+            false => "",
+        }
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

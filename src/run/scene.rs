@@ -33,6 +33,7 @@ pub fn load_scene(name: &str) -> Result<LoadedScene> {
 /// [`LoadedScene::from_mitsuba`]), with a BVH of `kind`; the glTF assets of scene files come
 /// from [`crate::assets::asset_root`].
 pub fn load_scene_with(name: &str, kind: BvhKind) -> Result<LoadedScene> {
+    check_not_a_folder(name)?;
     let lower = name.to_ascii_lowercase();
     let bare_gltf = (lower.ends_with(".gltf") || lower.ends_with(".glb")) && std::path::Path::new(name).is_file();
     let mitsuba = lower.ends_with(".xml") && std::path::Path::new(name).is_file();
@@ -77,6 +78,7 @@ impl LoadedScene {
     /// which of these defaults it took.
     pub fn from_gltf(path: &std::path::Path, kind: BvhKind) -> Result<LoadedScene> {
         let start = Instant::now();
+        check_glb_magic(path)?;
         let (scene, notes) = lightgraph_scenes::scene_from_gltf(path)?;
         for note in notes {
             eprintln!("note: {}: {note}", path.display());
@@ -205,8 +207,36 @@ impl Scenes {
 /// Checks that `scene` (named by option `flag`) is a file or a built-in scene (loading it, and
 /// the errors of its content, come in its turn).
 pub fn find_scene(scene: &str, flag: &str) -> Result<()> {
+    check_not_a_folder(scene).map_err(|e| anyhow!("{flag}: {e}"))?;
     if !Path::new(scene).is_file() {
         crate::assets::scene_text(scene).map_err(|e| anyhow!("{flag}: {e}"))?;
+    }
+    Ok(())
+}
+
+/// An error where the scene `name` is a folder, which no scene is.
+fn check_not_a_folder(name: &str) -> Result<()> {
+    if Path::new(name).is_dir() {
+        return Err(anyhow!(
+            "{name} is a folder, not a scene: give a built-in scene's name (see `lightgraph list`), a .ron scene \
+             file, a .gltf/.glb file or a Mitsuba .xml file"
+        ));
+    }
+    Ok(())
+}
+
+/// An error naming the file where a `.glb` does not begin with the glTF binary's magic
+/// (`glTF`), instead of the JSON parser's error of its first bytes.
+fn check_glb_magic(path: &Path) -> Result<()> {
+    use std::io::Read;
+    let is_glb = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    let mut magic = [0u8; 4];
+    let read = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut magic));
+    if is_glb && (read.is_err() || &magic != b"glTF") {
+        return Err(anyhow!(
+            "{}: not a valid glTF binary (.glb): it does not begin with 'glTF'",
+            path.display()
+        ));
     }
     Ok(())
 }

@@ -4,6 +4,7 @@
 
 use crate::reference::Reference;
 use crate::run::checks;
+use crate::run::checks::image_past_binding_limit;
 use crate::run::graph::{load_graph, named_layout};
 use crate::run::measure::measure_constants;
 use crate::run::options::{LayoutOverrides, SessionOptions, device_flags, kernel_flags, parse_sets, specialization};
@@ -368,6 +369,7 @@ impl Run {
     /// The run compiled and instantiated on `gpu`, at the run's first frame (the program the
     /// tuner compiled for it, where it still fits, instantiated without compiling again).
     pub fn session<'g>(&self, gpu: &'g Gpu) -> Result<Session<'g>> {
+        let size = (self.options.width, self.options.height);
         let mut session = match self.compiled_for(gpu) {
             Some(program) => Session::of_program(
                 gpu,
@@ -376,7 +378,8 @@ impl Run {
                 program.clone(),
                 &self.scene,
                 self.options.clone(),
-            )?,
+            )
+            .map_err(|e| image_past_binding_limit(e, &self.graph, size))?,
             None => self.session_in(gpu, &self.layout, &self.decl)?,
         };
         session.first_frame =
@@ -393,13 +396,8 @@ impl Run {
         let spec = specialization(&self.graph, &self.scene.scene, &self.options, flags);
         let decl = self.options.layout.apply(self.decl.clone());
         let target = self.options.layout.on_target(target);
-        Ok(lightgraph_engine::compile(
-            &self.graph,
-            &self.layout,
-            &decl,
-            &spec,
-            &target,
-        )?)
+        lightgraph_engine::compile(&self.graph, &self.layout, &decl, &spec, &target)
+            .map_err(|e| image_past_binding_limit(e.into(), &self.graph, (self.options.width, self.options.height)))
     }
 
     /// The run compiled and instantiated on `gpu` in the layout `decl` (called `layout`)
@@ -414,5 +412,6 @@ impl Run {
             &self.scene,
             self.options.clone(),
         )
+        .map_err(|e| image_past_binding_limit(e, &self.graph, (self.options.width, self.options.height)))
     }
 }

@@ -3,10 +3,11 @@
 //! the summary of all of them.
 
 use crate::compare::render::{CompareSpec, Comparison, check_reference, compare_with, open_gpus_or_adapter};
-use crate::compare::resume::{check_settings, resumable, write_settings};
+use crate::compare::resume::{check_folder, check_settings, resumable, write_settings};
 use crate::compare::{EstimatorSpec, estimator_specs};
 use crate::interrupt::Interrupted;
-use crate::output::si;
+use crate::output::{Output, check_outputs, si};
+
 use crate::reference::Reference;
 use crate::reference::render::{REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render};
 use crate::run::scene::find_scene;
@@ -95,6 +96,8 @@ pub fn study(args: StudySpec) -> Result<String> {
         scene_count: args.scenes.len(),
     };
     let settings = settings(&args, &names);
+    check_folder(&args.comparison.out, args.comparison.force, args.resume)?;
+    check_outputs(&[Output::Folder(&references, &[])], false, None)?;
     if args.resume {
         check_settings(&args.comparison.out, &settings)?;
     }

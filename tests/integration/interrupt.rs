@@ -60,6 +60,13 @@ fn box_render<'a>(extra: &[&'a str]) -> Vec<&'a str> {
     args
 }
 
+/// The reference of the diffuse box at 16×16 these tests make, with `extra` arguments.
+fn box_reference<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec!["reference", "--scene", "cornell-diffuse", "--res", "16x16"];
+    args.extend_from_slice(extra);
+    args
+}
+
 /// Renders the diffuse box at 16×16 with `extra` arguments; panics on failure.
 fn render(extra: &[&str]) {
     let run = lightgraph(&box_render(extra));
@@ -119,19 +126,7 @@ fn sigterm_keeps_the_frames_of_a_render_on_gpus_and_of_a_reference() {
         Reference::read(&gpus).unwrap().ranges,
         vec![(0, FRAMES.parse().unwrap())]
     );
-    let args = [
-        "reference",
-        "--scene",
-        "cornell-diffuse",
-        "--res",
-        "16x16",
-        "--time",
-        "10m",
-        "--checkpoint",
-        "100ms",
-        "--out",
-        reference_s,
-    ];
+    let args = box_reference(&["--time", "10m", "--checkpoint", "100ms", "--out", reference_s]);
     let (code, stderr) = interrupt_once_written(start(&args), &reference, "TERM");
     assert_eq!(code, Some(143), "{stderr}");
     assert!(
@@ -190,4 +185,163 @@ fn outputs_never_overwrite_a_film_unless_asked() {
         film_s,
     ]);
     assert!(err.contains("exists"), "{err}");
+}
+
+/// The command an interrupted run's error says goes on (between backticks), as words.
+fn printed_resume_command(stderr: &str) -> Vec<String> {
+    let line = stderr
+        .lines()
+        .find(|l| l.contains("goes on"))
+        .unwrap_or_else(|| panic!("no resume command: {stderr}"));
+    let command = line
+        .split('`')
+        .nth(1)
+        .unwrap_or_else(|| panic!("no command in backticks: {line}"));
+    assert!(!command.contains('\''), "a path needing quotes in a test: {command}");
+    command.split_whitespace().map(str::to_string).collect()
+}
+
+/// Runs the printed command `words` (`lightgraph ...`), which must succeed.
+fn run_printed(words: &[String]) {
+    assert_eq!(words[0], "lightgraph", "{words:?}");
+    let args: Vec<&str> = words[1..].iter().map(String::as_str).collect();
+    let run = lightgraph(&args);
+    assert!(
+        run.status.success(),
+        "the printed `{}` failed: {}",
+        words.join(" "),
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
+
+/// Waits until the film at `path` holds more than `frames` frames (its checkpoints), while
+/// the run `child` goes on.
+fn wait_for_frames(child: &mut Child, path: &Path, frames: u64) {
+    let started = Instant::now();
+    while Reference::read(path).map_or(true, |f| f.frames <= frames) {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before its film held {frames} frames"
+        );
+        assert!(
+            started.elapsed() < Duration::from_secs(300),
+            "no film of {frames} frames in 300 s"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn the_resume_command_a_stopped_timed_run_prints_works() {
+    let dir = temp_dir("resume-printed");
+    let (film, reference) = (dir.join("timed.exr"), dir.join("reference.exr"));
+    // More frames than the 64 a render without --frames makes: the hint must not fall back
+    // on that default (it did: "holds N frames, more than --frames 64").
+    let mut child = start(&box_render(&[
+        "--time",
+        "8s",
+        "--checkpoint",
+        "100ms",
+        "--out",
+        film.to_str().unwrap(),
+    ]));
+    wait_for_frames(&mut child, &film, 64);
+    let (code, stderr) = interrupt_once_written(child, &film, "INT");
+    assert_eq!(code, Some(130), "{stderr}");
+    let kept = Reference::read(&film).unwrap().frames;
+    let command = printed_resume_command(&stderr);
+    run_printed(&command);
+    assert!(command.contains(&"--time".to_string()), "{command:?}");
+    assert!(Reference::read(&film).unwrap().frames > kept);
+    // A reference (whose --time or --frames is required) likewise.
+    let out = reference.to_str().unwrap();
+    let args = box_reference(&["--time", "8s", "--checkpoint", "100ms", "--out", out]);
+    let (code, stderr) = interrupt_once_written(start(&args), &reference, "TERM");
+    assert_eq!(code, Some(143), "{stderr}");
+    let kept = Reference::read(&reference).unwrap().frames;
+    run_printed(&printed_resume_command(&stderr));
+    assert!(Reference::read(&reference).unwrap().frames > kept);
+}
+
+#[test]
+fn a_second_signal_says_it_exits_without_writing_and_the_checkpoint_stays_whole() {
+    let dir = temp_dir("second-signal");
+    let film = dir.join("film.exr");
+    let child = start(&box_render(&[
+        "--frames",
+        "100000",
+        "--checkpoint",
+        "100ms",
+        "--out",
+        film.to_str().unwrap(),
+    ]));
+    let started = Instant::now();
+    while !film.exists() {
+        assert!(started.elapsed() < Duration::from_secs(300), "no checkpoint in 300 s");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // Two signals at once (of two kinds, which the system never merges into one).
+    let pid = child.id();
+    let sent = Command::new("sh")
+        .args(["-c", &format!("kill -INT {pid}; kill -TERM {pid}")])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(matches!(out.status.code(), Some(130 | 143)), "{stderr}");
+    assert!(
+        stderr.contains("a second Ctrl-C exits at once without writing"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("second signal") && stderr.contains("exiting at once without writing"),
+        "{stderr}"
+    );
+    // The film on disk is a whole checkpoint.
+    let kept = Reference::read(&film).unwrap();
+    assert!(kept.frames > 0 && kept.frames < 100_000, "{}", kept.frames);
+}
+
+#[test]
+fn a_command_that_keeps_nothing_at_a_signal_ends_at_the_first() {
+    // `bench` has no film to keep: Ctrl-C ends it at once (it used to be told to stop after
+    // its frame, which it never looks at, and ran on to its end).
+    let dir = temp_dir("bench-signal");
+    let out = dir.join("bench");
+    let args = [
+        "bench",
+        "--scene",
+        "cornell-diffuse",
+        "--layouts",
+        "NaivePTsk",
+        "--points",
+        "8x8x1",
+        "--time",
+        "60s",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let mut child = start(&args);
+    // Once it renders (its first frame is at most a few seconds away on a loaded machine).
+    std::thread::sleep(Duration::from_secs(5));
+    assert!(child.try_wait().unwrap().is_none(), "bench ended before the signal");
+    let sent = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let sent_at = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            sent_at.elapsed() < Duration::from_secs(20),
+            "bench still runs 20 s after SIGINT"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(status.signal(), Some(2), "{status:?}");
 }

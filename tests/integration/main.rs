@@ -26,6 +26,7 @@ mod mitsuba_bsdf;
 mod mlt;
 mod normal_maps;
 mod options;
+mod outputs;
 mod photon_query;
 mod pm;
 mod probe;

@@ -219,3 +219,41 @@ fn a_film_larger_than_the_host_memory_is_refused_before_allocating() {
         "{line}"
     );
 }
+
+/// A budget of time and one of frames together are refused, by every command that takes
+/// both (a render given both used to ignore --frames without a word).
+#[test]
+fn a_time_and_a_number_of_frames_together_are_refused() {
+    for (command, args) in [
+        ("render", &["--time", "1s", "--frames", "5"][..]),
+        ("reference", &["--time", "1s", "--frames", "5"]),
+        ("verify", &["--time", "1s", "--frames", "5"]),
+        (
+            "study",
+            &[
+                "--scenes",
+                "cornell-diffuse",
+                "--reference-time",
+                "1s",
+                "--reference-frames",
+                "5",
+            ],
+        ),
+    ] {
+        let dir = temp_dir(&format!("time-and-frames-{command}"));
+        let out = dir.join(if matches!(command, "render" | "reference") {
+            "x.exr"
+        } else {
+            "out"
+        });
+        let mut argv = vec![command];
+        argv.extend_from_slice(args);
+        argv.extend_from_slice(&["--res", "8x8", "--out", out.to_str().unwrap()]);
+        let err = usage_error(&argv);
+        assert!(
+            err.contains("cannot be used with") && err.contains("frames"),
+            "{argv:?}: {err}"
+        );
+        assert!(!out.exists(), "{argv:?} wrote {}", out.display());
+    }
+}

@@ -188,8 +188,10 @@ fn a_study_uses_a_given_reference_and_resumes_a_short_one() {
     );
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("(given)"), "{md}");
-    // Asked for 6: resumed with its own graph.
-    let resume = with("6", "pt");
+    // Asked for 6: resumed with its own graph (the study's folder, of the run before,
+    // replaced with --force).
+    let mut resume = with("6", "pt");
+    resume.push("--force".into());
     study(&args(&resume));
     let resumed = Reference::read(&path).unwrap();
     assert_eq!((resumed.frames, resumed.info["graph"].as_str()), (6, "pt"));

@@ -8,8 +8,10 @@ use lightgraph::compare::ErrorSample;
 use lightgraph::interrupt::stopped_by_signal;
 use lightgraph::metrics::{ImageError, image_error};
 use lightgraph::multi::{Merging, Share, gpu_selectors, render_on_gpus};
+use lightgraph::output::shell_word;
 use lightgraph::reference::Reference;
 use lightgraph::run::Run;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// The progress line: frames, samples/s and each GPU's rate.
@@ -125,11 +127,11 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
         );
     }
     stopped_by_signal(format!(
-        "{} and {} hold {} frames; `lightgraph render --resume {} --gpus ...` goes on",
+        "{} and {} hold {} frames; `{}` goes on",
         out.display(),
         png.display(),
         film.frames,
-        out.display()
+        args.resume_command(&out, seconds, &format!(" --gpus {}", shell_word(Path::new(spec))))
     ))
 }
 

@@ -20,7 +20,7 @@ use lightgraph::live::Live;
 use lightgraph::metrics::image_error;
 use lightgraph::multi::Budget;
 use lightgraph::output;
-use lightgraph::output::check_out;
+use lightgraph::output::{check_out, shell_word};
 use lightgraph::reference::{Reference, film_settings};
 use lightgraph::run::{LoadedScene, Run, RunSpec, Session};
 use lightgraph::serve::LiveServer;
@@ -48,12 +48,16 @@ pub struct RenderArgs {
     /// fastest layout (and store the new winner).
     #[arg(long)]
     pub retune: bool,
-    /// Render for this long (e.g. 10s, 2m); overrides --frames.
+    /// Render for this long (e.g. 10s, 2m) instead of a number of frames.
     #[arg(long, value_parser = crate::cli::checks::duration, allow_hyphen_values = true)]
     pub time: Option<Duration>,
-    /// Frames to render.
-    #[arg(long, default_value_t = 64, value_parser = crate::cli::checks::count::<u32>, allow_negative_numbers = true)]
-    pub frames: u32,
+    /// Frames to render [default: 64]; with --resume, the run's total. Give --frames or
+    /// --time, not both.
+    #[arg(long, conflicts_with = "time", value_parser = crate::cli::checks::count::<u32>, allow_negative_numbers = true)]
+    pub frames: Option<u32>,
+    /// The frames this invocation renders: --frames, less those a resumed film holds.
+    #[arg(skip)]
+    pub frames_left: u32,
     /// Seed of the random streams [default: 1, or the resumed film's].
     #[arg(long)]
     pub seed: Option<u32>,
@@ -112,6 +116,9 @@ pub struct RenderArgs {
 /// Where a render's film goes when --out and --resume are not given.
 const DEFAULT_OUT: &str = "out/render.exr";
 
+/// The frames of a render given neither --frames nor --time.
+const DEFAULT_FRAMES: u32 = 64;
+
 impl RenderArgs {
     /// The film's path: --out, else the resumed film, else out/render.exr.
     pub fn out(&self) -> PathBuf {
@@ -121,9 +128,19 @@ impl RenderArgs {
             .unwrap_or_else(|| PathBuf::from(DEFAULT_OUT))
     }
 
-    /// Checks the film's path (see [`check_out`]).
+    /// Checks the film's path (see [`check_out`]) and, with --reference, its HTML report's
+    /// (replaced with --force or when resuming the film).
     pub fn check_out(&self) -> Result<()> {
-        check_out(&self.out(), self.force, self.resume.as_deref())
+        let out = self.out();
+        check_out(&out, self.force, self.resume.as_deref())?;
+        match self.reference {
+            Some(_) => output::check_outputs(
+                &[output::Output::File(&html::html_path(&out))],
+                self.force || self.resume.is_some(),
+                None,
+            ),
+            None => Ok(()),
+        }
     }
 
     /// The live views asked for (--tev, --serve) of the film `out` of `size` pixels, with the
@@ -142,6 +159,22 @@ impl RenderArgs {
             tev: self.tev.view(&name, size),
             server,
         })
+    }
+
+    /// The run's frames in all: --frames, else 64.
+    pub fn frames(&self) -> u32 {
+        self.frames.unwrap_or(DEFAULT_FRAMES)
+    }
+
+    /// The command that goes on with the film at `out` after a signal stopped this run once
+    /// it rendered for `seconds`: the same frames in all, or the time left; `extra` adds
+    /// options (` --gpus 2`).
+    pub fn resume_command(&self, out: &Path, seconds: f64, extra: &str) -> String {
+        let budget = match self.time {
+            Some(t) => format!("--time {}s", (t.as_secs_f64() - seconds).ceil().max(1.0)),
+            None => format!("--frames {}", self.frames()),
+        };
+        format!("lightgraph render --resume {} {budget}{extra}", shell_word(out))
     }
 
     /// The seed: --seed (or the resumed film's), else 1.
@@ -176,8 +209,9 @@ impl RenderArgs {
 
 /// Reads the film `--resume` names: the settings the command line leaves out become the
 /// film's, the run's frames follow the film's last one, and `--frames` (the run's total)
-/// becomes the frames left to render.
+/// becomes the frames left to render ([`RenderArgs::frames_left`]).
 fn resume_film(args: &mut RenderArgs) -> Result<Option<Reference>> {
+    args.frames_left = args.frames();
     let Some(path) = args.resume.clone() else {
         return Ok(None);
     };
@@ -190,8 +224,8 @@ fn resume_film(args: &mut RenderArgs) -> Result<Option<Reference>> {
     let film = Reference::read(&path)?;
     settings_from_film(&mut args.common, &mut args.graph, &mut args.seed, 1, &film);
     if args.time.is_none() {
-        args.frames = frames_left(args.frames, film.frames, Some(&path))?;
-        if args.frames == 0 {
+        args.frames_left = frames_left(args.frames(), film.frames, Some(&path))?;
+        if args.frames_left == 0 {
             bail!(
                 "{}: the film holds {} frames already; give a larger --frames (the run's total) or --time",
                 path.display(),
@@ -244,7 +278,7 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     }
     let mut session = run.session(&gpu)?;
     // A frame count that splits a group of frames rendered at once is refused before rendering.
-    session.check_frames(args.first_frame, if args.time.is_none() { args.frames } else { 0 })?;
+    session.check_frames(args.first_frame, if args.time.is_none() { args.frames_left } else { 0 })?;
     let out = args.out();
     let mut view = args.live(&out, (w, h), reference.as_deref())?;
     let seconds_before = film.seconds;
@@ -278,18 +312,19 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
         film.layers = feature_buffers(&gpu, &run.scene, &session, list, args.first_frame)?;
     }
     let png = write_film(&film, &out, args.exposure)?;
-    report_rates(&session, film.seconds - seconds_before);
+    let seconds = film.seconds - seconds_before;
+    report_rates(&session, seconds);
     println!("wrote {} and {}", out.display(), png.display());
     if let Some(path) = &args.reference {
         html::write_html(&out, &film, (path, &run.layout), &errors)?;
         println!("wrote {} (opens offline in a browser)", html::html_path(&out).display());
     }
     stopped_by_signal(format!(
-        "{} and {} hold {} frames; `lightgraph render --resume {}` goes on",
+        "{} and {} hold {} frames; `{}` goes on",
         out.display(),
         png.display(),
         film.frames,
-        out.display()
+        args.resume_command(&out, seconds, "")
     ))
 }
 
@@ -357,14 +392,14 @@ fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut
         let elapsed = start.elapsed();
         let done = match args.time {
             Some(t) => elapsed >= t,
-            None => session.frames >= args.frames,
+            None => session.frames >= args.frames_left,
         };
         if done || interrupt::requested().is_some() {
             break;
         }
         match args.time {
             Some(t) => session.render_for(Some(t.saturating_sub(elapsed)), u32::MAX)?,
-            None => session.render_for(None, args.frames - session.frames)?,
+            None => session.render_for(None, args.frames_left - session.frames)?,
         };
         if let Some(every) = args.checkpoint
             && saved_at.elapsed() >= every
@@ -408,14 +443,14 @@ fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut
     }
     session.settle()?;
     bar.finish();
+    progress.absorb(session, absorbed_at)?;
     if let Some(signal) = interrupt::requested() {
         eprintln!(
             "{} received: stopped after frame {}, writing the film",
             signal.name(),
-            progress.film.frames + session.frames as u64
+            progress.film.end_frame()
         );
     }
-    progress.absorb(session, absorbed_at)?;
     Ok(bar.message())
 }
 
@@ -517,7 +552,7 @@ fn scene_size(scene: &LoadedScene) -> String {
 
 /// The progress bar of a render of `args`: over its time in milliseconds, else its frames.
 fn progress_bar(args: &RenderArgs) -> ProgressBar {
-    let bar = ProgressBar::new(args.time.map_or(args.frames as u64, |t| t.as_millis() as u64));
+    let bar = ProgressBar::new(args.time.map_or(args.frames_left as u64, |t| t.as_millis() as u64));
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
     bar
 }
@@ -526,6 +561,6 @@ fn progress_bar(args: &RenderArgs) -> ProgressBar {
 fn budget(args: &RenderArgs) -> Budget {
     match args.time {
         Some(t) => Budget::Time(t),
-        None => Budget::Frames(args.frames as u64),
+        None => Budget::Frames(args.frames_left as u64),
     }
 }

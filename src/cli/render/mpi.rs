@@ -102,7 +102,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
     println!("wrote {} and {}", out.display(), png.display());
     if outcome.interrupted {
         return stopped_by_signal(format!(
-            "{} holds {} frames ({}); `render --mpi --resume {}` goes on after the last",
+            "{} holds {} frames ({}); `mpirun ... {}` goes on after the last",
             out.display(),
             film.frames,
             film.ranges
@@ -110,7 +110,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
                 .map(|r| format!("{}..{}", r.0, r.1))
                 .collect::<Vec<_>>()
                 .join(", "),
-            out.display()
+            args.resume_command(&out, seconds, " --mpi")
         ));
     }
     Ok(())
