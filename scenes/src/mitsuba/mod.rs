@@ -126,6 +126,7 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),
+        mitsuba: None,
         textures: builder.materials.images.textures,
     };
     scene.materials = builder.materials.materials;
