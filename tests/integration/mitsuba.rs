@@ -287,3 +287,57 @@ fn a_broken_scene_file_names_its_line_and_column() {
         "{message}"
     );
 }
+
+/// A RON scene over the test data's `all-features.xml` (as the asset `M` of a fresh asset
+/// root), with `fields`.
+fn over_all_features(fields: &str) -> Result<LoadedScene, String> {
+    let root = std::env::temp_dir().join(format!("lightgraph-mitsuba-ron-{}", std::process::id()));
+    std::fs::create_dir_all(&root).unwrap();
+    let link = root.join("M");
+    if !link.exists() {
+        std::os::unix::fs::symlink(crate::common::data("mitsuba"), &link).unwrap();
+    }
+    let text = format!("Scene(mitsuba: \"M/all-features.xml\", resolution: (8, 8), {fields})");
+    LoadedScene::parse("s.ron", &text, BvhKind::Bvh2, Some(&root)).map_err(|e| format!("{e:#}"))
+}
+
+#[test]
+fn a_ron_scene_imports_a_mitsuba_file_with_its_camera_unless_it_gives_one() {
+    let direct = load_scene_with(
+        crate::common::data("mitsuba/all-features.xml").to_str().unwrap(),
+        BvhKind::Bvh2,
+    )
+    .unwrap();
+    let over = over_all_features("lights: [Point(position: (0.0, 3.0, 0.0), intensity: (1.0, 1.0, 1.0))]").unwrap();
+    assert_eq!(over.scene.resolution, (8, 8), "the RON scene's resolution stands");
+    assert_eq!(over.scene.shapes.len(), direct.scene.shapes.len());
+    assert_eq!(over.scene.textures.len(), direct.scene.textures.len());
+    assert_eq!(over.scene.lights.len(), direct.scene.lights.len() + 1);
+    assert_eq!(over.compiled.primitives.len(), direct.compiled.primitives.len());
+    let camera = |s: &LoadedScene| format!("{:?}", s.scene.camera);
+    assert_eq!(camera(&over), camera(&direct), "the file's sensor");
+    let own = over_all_features(
+        "camera: (position: (0.0, 1.0, 5.0), look: Target((0.0, 0.0, 0.0)), up: (0.0, 1.0, 0.0), fov_degrees: 40.0)",
+    )
+    .unwrap();
+    assert_eq!(own.scene.camera.unwrap().fov_degrees, 40.0, "the scene's camera");
+
+    let e = over_all_features("gltf: \"M/x.gltf\"").err().unwrap();
+    assert!(
+        e.contains("s.ron:1:") && e.contains("both a glTF asset and a Mitsuba file"),
+        "{e}"
+    );
+    let root = std::env::temp_dir().join(format!("lightgraph-mitsuba-none-{}", std::process::id()));
+    let text = "Scene(mitsuba: \"Room/scene.xml\")";
+    let e = format!(
+        "{:#}",
+        LoadedScene::parse("s.ron", text, BvhKind::Bvh2, Some(&root))
+            .err()
+            .unwrap()
+    );
+    assert!(
+        e.contains("the Mitsuba scene 'Room/scene.xml' not found under the asset root")
+            && e.contains("lightgraph assets fetch Room"),
+        "{e}"
+    );
+}
