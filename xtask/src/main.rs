@@ -201,11 +201,13 @@ fn assets_tier(required: bool) -> ExitCode {
         );
         return ExitCode::SUCCESS;
     };
+    // The suite's packages and profile, so that nothing is built again.
     let tier = [
         "test",
+        "--workspace",
+        "--exclude",
+        "lightgraph-python",
         "--release",
-        "--package",
-        "lightgraph",
         "--test",
         "integration",
         "--",
