@@ -114,6 +114,57 @@ impl AssetFile {
     }
 }
 
+/// What a scene lacks of one asset under the asset root, and how to get it.
+#[derive(Debug, PartialEq)]
+pub enum Lack {
+    /// The catalog has no asset of that name (a scene of the user's own).
+    Uncatalogued(String),
+    /// `lightgraph assets fetch NAME` gets what the scene reads: that many bytes at most.
+    Fetch { asset: String, bytes: u64 },
+    /// The catalog knows the asset, but a file the scene reads has no public download.
+    NotDownloadable { asset: String, bytes: u64 },
+}
+
+impl Catalog {
+    /// What a scene that reads `files` (paths below the asset root, as
+    /// [`crate::assets::scene_asset_files`] gives a scene's) lacks under `root` (None: no
+    /// root), per asset: nothing when all is there. A file with a public download counts as
+    /// there when every downloadable file of its asset is (a Mitsuba scene reads the meshes
+    /// beside it), by size; another file when it exists.
+    pub fn lacks(&self, files: &[String], root: Option<&Path>) -> Vec<Lack> {
+        let mut lacks: Vec<Lack> = Vec::new();
+        for file in files {
+            let (name, below) = file.split_once('/').unwrap_or((file.as_str(), ""));
+            let exists = |path: &Path| root.is_some_and(|r| r.join(path).is_file());
+            let lack = match self.assets.iter().find(|a| a.name == name) {
+                None if exists(Path::new(file)) => continue,
+                None => Lack::Uncatalogued(name.to_string()),
+                Some(asset) if asset.files.iter().any(|f| f.path == below && f.url.is_some()) => {
+                    let sized = |f: &AssetFile| {
+                        root.is_some_and(|r| std::fs::metadata(f.location(r, asset)).is_ok_and(|m| m.len() == f.size))
+                    };
+                    if asset.downloadable().all(|(f, _)| sized(f)) {
+                        continue;
+                    }
+                    Lack::Fetch {
+                        asset: asset.name.clone(),
+                        bytes: asset.downloadable().map(|(f, _)| f.size).sum(),
+                    }
+                }
+                Some(_) if exists(Path::new(file)) => continue,
+                Some(asset) => Lack::NotDownloadable {
+                    asset: asset.name.clone(),
+                    bytes: asset.size(),
+                },
+            };
+            if !lacks.contains(&lack) {
+                lacks.push(lack);
+            }
+        }
+        lacks
+    }
+}
+
 /// What a file under the asset root is, against the catalog.
 #[derive(Debug, PartialEq)]
 pub enum FileState {

@@ -80,6 +80,16 @@ pub fn asset_root() -> Option<std::path::PathBuf> {
     candidates.into_iter().find(|d| d.is_dir())
 }
 
+/// The files below the asset root that `scene` reads: its glTF asset or Mitsuba file (whose
+/// own files lie beside it) and its environment maps.
+pub fn scene_asset_files(scene: &lightgraph_scenes::model::Scene) -> Vec<String> {
+    let maps = scene.lights.iter().filter_map(|l| match l {
+        lightgraph_scenes::model::Light::Environment { file, .. } => Some(file.clone()),
+        _ => None,
+    });
+    scene.gltf.iter().chain(&scene.mitsuba).cloned().chain(maps).collect()
+}
+
 /// The text of a scene given by built-in name or path, with the name errors should use.
 pub fn scene_text(scene: &str) -> Result<(String, String), String> {
     let path = Path::new(scene);

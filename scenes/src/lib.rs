@@ -64,7 +64,15 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
         at: locate(text, needle),
         message,
     };
-    if scene.shapes.is_empty() && scene.gltf.is_none() {
+    // A glTF asset or a Mitsuba file brings shapes, lights and maybe a camera.
+    let imports = scene.gltf.is_some() || scene.mitsuba.is_some();
+    if scene.gltf.is_some() && scene.mitsuba.is_some() {
+        return Err(err(
+            "mitsuba",
+            "the scene has both a glTF asset and a Mitsuba file; keep one".into(),
+        ));
+    }
+    if scene.shapes.is_empty() && !imports {
         return Err(err("shapes", "the scene is empty: it has no shapes".into()));
     }
     for shape in &scene.shapes {
@@ -83,7 +91,7 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
         }
     }
     let emissive = scene.shapes.iter().any(Shape::emits);
-    if !emissive && scene.lights.is_empty() && scene.gltf.is_none() {
+    if !emissive && scene.lights.is_empty() && !imports {
         return Err(err(
             "lights",
             "the scene has no light: add an emissive shape or a light (Point, Directional, Background)".into(),
@@ -116,6 +124,7 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
                 "gltf_camera needs a glTF asset (gltf: \"...\")".into(),
             ));
         }
+        (None, None, _) if scene.mitsuba.is_some() => {}
         (None, None, _) => {
             return Err(err(
                 "Scene",
@@ -138,9 +147,9 @@ fn check_fov(fov_degrees: f32) -> Result<(), String> {
 }
 
 /// Imports the scene's glTF asset (a path below `asset_root`) into its shapes, materials,
-/// textures, camera (`gltf_camera`) and lights (KHR_lights_punctual), loads the environment
-/// maps its lights name (paths below `asset_root` too), then checks that the scene has
-/// geometry and light.
+/// textures, camera (`gltf_camera`) and lights (KHR_lights_punctual), or its Mitsuba file
+/// (`mitsuba`, [`add_mitsuba`]), loads the environment maps its lights name (paths below
+/// `asset_root` too), then checks that the scene has geometry and light.
 /// Approximations of the import are printed to stderr as warnings.
 pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path::Path>) -> Result<(), SceneError> {
     let err = |message: String| SceneError {
@@ -149,43 +158,21 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
         message,
     };
     if let Some(asset) = scene.gltf.clone() {
-        let root = asset_root.ok_or_else(|| {
-            err(format!(
-                "the scene needs the glTF asset '{asset}' but there is no asset root: {}",
-                fetch_help(&asset, None)
-            ))
-        })?;
-        let path = root.join(&asset);
-        if !path.is_file() {
-            return Err(err(format!(
-                "glTF asset '{asset}' not found under the asset root {}: {}",
-                root.display(),
-                fetch_help(&asset, Some(root))
-            )));
-        }
+        let path = asset_file(asset_root, &asset, "the glTF asset").map_err(err)?;
         add_gltf(scene, &path).map_err(err)?;
         if scene.gltf_diffuse {
             make_diffuse(scene);
         }
     }
+    if let Some(asset) = scene.mitsuba.clone() {
+        let path = asset_file(asset_root, &asset, "the Mitsuba scene").map_err(err)?;
+        add_mitsuba(scene, &path)?;
+    }
     for light in &mut scene.lights {
         if let Light::Environment { file: image, map, .. } = light
             && map.is_none()
         {
-            let root = asset_root.ok_or_else(|| {
-                err(format!(
-                    "the scene needs the environment map '{image}' but there is no asset root: {}",
-                    fetch_help(image, None)
-                ))
-            })?;
-            let path = root.join(&*image);
-            if !path.is_file() {
-                return Err(err(format!(
-                    "environment map '{image}' not found under the asset root {}: {}",
-                    root.display(),
-                    fetch_help(image, Some(root))
-                )));
-            }
+            let path = asset_file(asset_root, image, "the environment map").map_err(err)?;
             *map = Some(std::sync::Arc::new(
                 environment::EnvironmentMap::load(&path).map_err(err)?,
             ));
@@ -193,6 +180,72 @@ pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path
     }
     check_lights(&scene.lights).map_err(|(_, message)| err(message))?;
     check_resolved(scene).map_err(err)
+}
+
+/// The file `asset` (`what` names it in errors) below the asset root, which must hold it.
+fn asset_file(asset_root: Option<&std::path::Path>, asset: &str, what: &str) -> Result<std::path::PathBuf, String> {
+    let root = asset_root.ok_or_else(|| {
+        format!(
+            "the scene needs {what} '{asset}' but there is no asset root: {}",
+            fetch_help(asset, None)
+        )
+    })?;
+    let path = root.join(asset);
+    if !path.is_file() {
+        return Err(format!(
+            "{what} '{asset}' not found under the asset root {}: {}",
+            root.display(),
+            fetch_help(asset, Some(root))
+        ));
+    }
+    Ok(path)
+}
+
+/// Imports the Mitsuba scene file at `path` into `scene`: its shapes, materials, textures
+/// and emitters join the scene's, and its sensor is the camera unless the scene has one.
+/// Its approximations are printed to stderr as warnings.
+fn add_mitsuba(scene: &mut Scene, path: &std::path::Path) -> Result<(), SceneError> {
+    let imported = mitsuba::load(path)?;
+    for warning in &imported.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let mut imported = imported.scene;
+    if let Some(name) = imported.materials.keys().find(|n| scene.materials.contains_key(*n)) {
+        return Err(SceneError {
+            file: path.display().to_string(),
+            at: None,
+            message: format!("its material '{name}' has the name of one of the scene's: rename the scene's"),
+        });
+    }
+    offset_textures(&mut imported.materials, scene.textures.len() as u32);
+    scene.textures.append(&mut imported.textures);
+    scene.materials.append(&mut imported.materials);
+    scene.shapes.append(&mut imported.shapes);
+    scene.lights.append(&mut imported.lights);
+    if scene.camera.is_none() {
+        scene.camera = imported.camera;
+    }
+    Ok(())
+}
+
+/// Moves the texture indices of `materials` on by `first` (their textures are appended to a
+/// scene that has `first` already).
+fn offset_textures(materials: &mut BTreeMap<String, model::Material>, first: u32) {
+    for pbr in materials.values_mut().filter_map(|m| m.pbr.as_mut()) {
+        let t = &mut pbr.textures;
+        let normal = t.normal.as_mut().map(|n| &mut n.texture);
+        for r in [
+            t.base_color.as_mut(),
+            t.metallic_roughness.as_mut(),
+            t.emissive.as_mut(),
+            normal,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            r.texture += first;
+        }
+    }
 }
 
 /// What to do about an asset file missing under the asset root `root` (None: no root): where
@@ -242,22 +295,7 @@ fn add_gltf(scene: &mut Scene, path: &std::path::Path) -> Result<Vec<gltf::Impor
         eprintln!("warning: {}: {warning}", path.display());
     }
     // The asset's texture indices count from the scene's textures so far.
-    let first_texture = scene.textures.len() as u32;
-    for pbr in imported.materials.values_mut().filter_map(|m| m.pbr.as_mut()) {
-        let t = &mut pbr.textures;
-        let normal = t.normal.as_mut().map(|n| &mut n.texture);
-        for r in [
-            t.base_color.as_mut(),
-            t.metallic_roughness.as_mut(),
-            t.emissive.as_mut(),
-            normal,
-        ]
-        .into_iter()
-        .flatten()
-        {
-            r.texture += first_texture;
-        }
-    }
+    offset_textures(&mut imported.materials, scene.textures.len() as u32);
     scene.textures.extend(imported.textures);
     if let Some(wanted) = &scene.gltf_camera {
         let found = imported.cameras.iter().find(|c| match wanted {
@@ -314,6 +352,7 @@ pub fn scene_from_gltf(path: &std::path::Path) -> Result<(Scene, Vec<String>), S
         gltf: Some(file.clone()),
         gltf_diffuse: false,
         gltf_instances: Vec::new(),
+        mitsuba: None,
         textures: Vec::new(),
     };
     let cameras = add_gltf(&mut scene, path).map_err(err)?;

@@ -55,6 +55,12 @@ pub struct Scene {
     /// emissive meshes are copied with the rest; its punctual lights and cameras are not.
     #[serde(default)]
     pub gltf_instances: Vec<crate::placement::Placement>,
+    /// A Mitsuba scene file (`.xml`, a path below the asset root; not with `gltf`) whose
+    /// shapes, materials, textures and emitters join the scene's, and whose sensor is the
+    /// camera unless the scene gives one (see [`crate::mitsuba`]); the scene's resolution and
+    /// integrator stand.
+    #[serde(default)]
+    pub mitsuba: Option<String>,
     /// Images the materials' textures refer to (filled by the glTF import).
     #[serde(skip)]
     pub textures: Vec<Texture>,

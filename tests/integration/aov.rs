@@ -73,6 +73,7 @@ fn textured_plane() -> LoadedScene {
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),
+        mitsuba: None,
         textures: vec![texture],
     };
     LoadedScene {

@@ -1,9 +1,9 @@
-//! `lightgraph assets`: the catalog checks the shared assets; a clone without them is told the
-//! command that gets them; `fetch` downloads from a local HTTP server, verifies every byte and
+//! `lightgraph assets`: the catalog checks the shared assets (the assets tier); a clone without
+//! them is told the command that gets them, and `lightgraph list` what each scene needs; `fetch` downloads from a local HTTP server, verifies every byte and
 //! leaves nothing behind when a download differs or the server is unreachable.
 
 use crate::cli::{fails, lightgraph, temp_dir};
-use crate::common::data;
+use crate::common::{data, shared_assets};
 use lightgraph::asset_catalog::{Catalog, sha256_of};
 use std::io::{BufRead, BufReader, Write};
 use std::net::TcpListener;
@@ -20,15 +20,9 @@ fn stdout(args: &[&str]) -> String {
 }
 
 #[test]
-fn assets_check_finds_every_shared_asset_intact() {
-    let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes");
-    if !shared.is_dir() {
-        eprintln!(
-            "skipped: {} does not exist (no shared assets beside the repository)",
-            shared.display()
-        );
-        return;
-    }
+#[ignore = "needs the shared assets (every catalogued one): cargo xtask test --assets"]
+fn every_catalogued_asset_is_intact_in_the_shared_assets() {
+    let shared = shared_assets(&[]);
     let text = stdout(&["assets", "check", shared.to_str().unwrap()]);
     let catalog = Catalog::builtin();
     for asset in &catalog.assets {
@@ -65,7 +59,8 @@ fn a_clone_without_assets_is_told_the_command_that_gets_them() {
 }
 
 /// Serves `files` (URL path, bytes) over HTTP/1.1 on 127.0.0.1 from a thread (404 for other
-/// paths); returns the port.
+/// paths); a path that starts with `/truncated/` announces twice its bytes and closes the
+/// connection after them (a download cut off); returns the port.
 fn serve(files: Vec<(String, Vec<u8>)>) -> u16 {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     let port = listener.local_addr().unwrap().port();
@@ -85,10 +80,12 @@ fn serve(files: Vec<(String, Vec<u8>)>) -> u16 {
                 Some((_, body)) => ("200 OK", body.as_slice()),
                 None => ("404 Not Found", &b""[..]),
             };
-            let head = format!(
-                "HTTP/1.1 {status}\r\nContent-Length: {}\r\nConnection: close\r\n\r\n",
+            let announced = if path.starts_with("/truncated/") {
+                2 * body.len()
+            } else {
                 body.len()
-            );
+            };
+            let head = format!("HTTP/1.1 {status}\r\nContent-Length: {announced}\r\nConnection: close\r\n\r\n");
             let _ = stream.write_all(head.as_bytes()).and_then(|()| stream.write_all(body));
         }
     });
@@ -101,6 +98,7 @@ fn entry(path: &str, bytes: &[u8], url: &str) -> String {
     format!("{{ path = \"{path}\", size = {size}, sha256 = \"{sha256}\", url = \"{url}\" }}")
 }
 
+/// A catalog's text of one asset `name` with the file entries `files`.
 fn asset(name: &str, files: &[String]) -> String {
     format!(
         "[[asset]]\nname = \"{name}\"\nwhat = \"test\"\nlicence = \"test\"\nsource = \"a test server\"\nfiles = [\n  {}\n]\n",
@@ -116,9 +114,10 @@ struct Setup {
     files: Vec<(String, Vec<u8>)>,
 }
 
-/// In a fresh folder `name`, a catalog of four assets served from a local server: `box` (two
-/// files, served as they are), `corrupt` (served with one byte changed), `unreachable` (a port
-/// nobody listens on) and `gone` (the server answers 404).
+/// In a fresh folder `name`, a catalog of five assets served from a local server: `box` (two
+/// files, served as they are), `corrupt` (served with one byte changed), `cut` (the download
+/// stops half-way), `unreachable` (a port nobody listens on) and `gone` (the server answers
+/// 404).
 fn test_catalog(name: &str) -> Setup {
     let dir = temp_dir(name);
     let files: Vec<(String, Vec<u8>)> = ["CornellBox-Original.gltf", "CornellBox-Original.bin"]
@@ -136,6 +135,10 @@ fn test_catalog(name: &str) -> Setup {
         (format!("/box/{}", files[0].0), files[0].1.clone()),
         (format!("/box/{}", files[1].0), files[1].1.clone()),
         ("/corrupt.bin".to_string(), corrupt),
+        (
+            "/truncated/cut.bin".to_string(),
+            files[1].1[..files[1].1.len() / 2].to_vec(),
+        ),
     ]);
     let closed = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
     let url = |p: &str| format!("http://127.0.0.1:{port}/{p}");
@@ -146,6 +149,7 @@ fn test_catalog(name: &str) -> Setup {
     let text = [
         asset("box", &box_entries),
         asset("corrupt", &[entry("data.bin", &files[1].1, &url("corrupt.bin"))]),
+        asset("cut", &[entry("data.bin", &files[1].1, &url("truncated/cut.bin"))]),
         asset(
             "unreachable",
             &[entry("data.bin", &files[1].1, &format!("http://127.0.0.1:{closed}/x"))],
@@ -217,6 +221,9 @@ fn a_download_that_differs_or_fails_leaves_nothing_behind() {
         "{e}"
     );
     assert!(entries(&root).is_empty(), "left behind: {:?}", entries(&root));
+    let e = fails(&["assets", "fetch", "cut", "--to", to, "--catalog", catalog]);
+    assert!(e.contains("cut.bin") && e.contains("asset cut file data.bin"), "{e}");
+    assert!(entries(&root).is_empty(), "left behind: {:?}", entries(&root));
     let e = fails(&["assets", "fetch", "unreachable", "--to", to, "--catalog", catalog]);
     assert!(e.contains("could not download http://127.0.0.1:"), "{e}");
     assert!(entries(&root).is_empty(), "left behind: {:?}", entries(&root));
@@ -225,11 +232,119 @@ fn a_download_that_differs_or_fails_leaves_nothing_behind() {
     assert!(entries(&root).is_empty(), "left behind: {:?}", entries(&root));
     let e = fails(&["assets", "fetch", "nothing", "--to", to, "--catalog", catalog]);
     assert!(
-        e.contains("no asset 'nothing'") && e.contains("box, corrupt, unreachable, gone"),
+        e.contains("no asset 'nothing'") && e.contains("box, corrupt, cut, unreachable, gone"),
         "{e}"
     );
     let bad = root.with_file_name("bad.toml");
     std::fs::write(&bad, "[[asset]]\nname = 1\n").unwrap();
     let e = fails(&["assets", "list", "--catalog", bad.to_str().unwrap()]);
     assert!(e.contains("bad.toml"), "{e}");
+}
+
+/// `lightgraph list`'s scenes with `LIGHTGRAPH_ASSETS` set to `root`: (name, rest of line).
+fn listed_scenes(root: &Path) -> Vec<(String, String)> {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_lightgraph"))
+        .arg("list")
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .env("LIGHTGRAPH_ASSETS", root)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    let scenes = text.split("\nscenes").nth(1).expect("a scenes section");
+    let scenes = scenes.split("\nadapters:").next().unwrap();
+    scenes
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let (name, rest) = l.trim().split_once(' ').unwrap();
+            (name.to_string(), rest.to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn list_marks_what_each_scene_needs_and_how_large_it_is() {
+    let root = temp_dir("assets-list");
+    let scenes = listed_scenes(&root);
+    let line = |name: &str| &scenes.iter().find(|(n, _)| n == name).unwrap().1;
+    assert!(
+        !line("cornell-diffuse").contains("[needs"),
+        "{}",
+        line("cornell-diffuse")
+    );
+    let catalog = Catalog::builtin();
+    let living = catalog.find("LivingRoom").unwrap();
+    let bytes: u64 = living.downloadable().map(|(f, _)| f.size).sum();
+    let size = format!("{:.1} MiB", bytes as f64 / 1048576.0);
+    for scene in ["living-room", "living-room-caustics"] {
+        assert!(
+            line(scene).contains(&format!("[needs lightgraph assets fetch LivingRoom ({size})]")),
+            "{scene}: {}",
+            line(scene)
+        );
+    }
+    assert!(line("sponza").contains("CrytekSponza") && line("sponza").contains("no public download"));
+    assert!(line("sponza-many-lights").contains("lightgraph assets fetch envmaps ("));
+
+    // With every file the fetch gets (here only by size: list reads no file), nothing is needed.
+    for (file, _) in living.downloadable() {
+        let path = file.location(&root, living);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::File::create(&path).unwrap().set_len(file.size).unwrap();
+    }
+    let scenes = listed_scenes(&root);
+    let line = |name: &str| scenes.iter().find(|(n, _)| n == name).unwrap().1.clone();
+    assert!(!line("living-room").contains("[needs"), "{}", line("living-room"));
+    std::fs::remove_file(root.join("LivingRoom/models/Mesh000.obj")).unwrap();
+    assert!(
+        listed_scenes(&root)
+            .iter()
+            .any(|(n, l)| n == "living-room" && l.contains("[needs"))
+    );
+}
+
+#[test]
+#[ignore = "needs the shared assets (VeachBidir): cargo xtask test --assets"]
+fn fetch_then_render_veach_bidir_from_a_local_copy_of_the_shared_assets() {
+    // The catalog's VeachBidir with its public URLs pointing at a local server that serves
+    // the shared copy's files: what `assets fetch VeachBidir` gets is what the scene needs.
+    let shared = shared_assets(&["VeachBidir"]);
+    let catalog = Catalog::builtin();
+    let veach = catalog.find("VeachBidir").unwrap();
+    let files: Vec<(String, Vec<u8>)> = veach
+        .downloadable()
+        .map(|(f, _)| {
+            (
+                format!("/{}", f.path),
+                std::fs::read(f.location(&shared, veach)).unwrap(),
+            )
+        })
+        .collect();
+    let port = serve(files.clone());
+    let entries: Vec<String> = files
+        .iter()
+        .map(|(p, b)| entry(&p[1..], b, &format!("http://127.0.0.1:{port}{p}")))
+        .collect();
+    let dir = temp_dir("assets-fetch-veach");
+    let local = dir.join("catalog.toml");
+    std::fs::write(&local, asset("VeachBidir", &entries)).unwrap();
+    let root = dir.join("root");
+    let (to, catalog_file) = (root.to_str().unwrap(), local.to_str().unwrap());
+    stdout(&["assets", "fetch", "VeachBidir", "--to", to, "--catalog", catalog_file]);
+    let out = dir.join("veach.exr");
+    stdout(&[
+        "render",
+        "--scene",
+        "veach-bidir",
+        "--assets",
+        to,
+        "--res",
+        "8x8",
+        "--frames",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(out.is_file());
 }

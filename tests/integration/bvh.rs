@@ -167,6 +167,7 @@ fn scene_of(shapes: Vec<Shape>) -> Scene {
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),
+        mitsuba: None,
         textures: Vec::new(),
     }
 }

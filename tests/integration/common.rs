@@ -298,3 +298,35 @@ pub fn assert_analytic(what: &str, mean: [f64; 3], se: [f64; 3], expected: [f64;
         );
     }
 }
+
+/// The asset root (LIGHTGRAPH_ASSETS, else ../shared/scenes) for a test of the assets tier
+/// (ignored by default, with the reason; `cargo xtask test` runs the tier where the asset
+/// root exists, `cargo xtask test --assets` demands it; their names hold `shared_assets`),
+/// which holds every asset of `assets` intact for what the tests read: every file of the
+/// catalog's entry, by size. Panics naming the root and what is missing otherwise, so that
+/// a test of the tier never passes without running.
+pub fn shared_assets(assets: &[&str]) -> PathBuf {
+    let Some(root) = lightgraph::assets::asset_root() else {
+        panic!(
+            "this test of the assets tier found no asset root: set LIGHTGRAPH_ASSETS or put shared/scenes beside the repository"
+        );
+    };
+    let catalog = lightgraph::asset_catalog::Catalog::builtin();
+    for name in assets {
+        let asset = catalog.find(name).unwrap();
+        let missing: Vec<&str> = asset
+            .files
+            .iter()
+            .filter(|f| !std::fs::metadata(f.location(&root, asset)).is_ok_and(|m| m.len() == f.size))
+            .map(|f| f.path.as_str())
+            .collect();
+        assert!(
+            missing.is_empty(),
+            "this test of the assets tier needs the asset {name} under {}, where these of its files are missing or of another size: {} (lightgraph assets fetch {name} --to {} gets those with a public download)",
+            root.display(),
+            missing.join(", "),
+            root.display()
+        );
+    }
+    root
+}

@@ -1,9 +1,9 @@
 //! glTF import: a small committed asset (McGuire's Cornell box as glTF) loads with its node
 //! transforms, materials and emissive light and renders; broken or unsupported assets give
-//! errors that name the file and the problem; Crytek Sponza loads when the shared assets are
-//! beside the repository (skipped with a printed reason otherwise).
+//! errors that name the file and the problem; Crytek Sponza loads from the shared assets (the
+//! assets tier: ignored unless `cargo xtask test` finds the asset root).
 
-use crate::common::{assert_finite, data, render};
+use crate::common::{assert_finite, data, render, shared_assets};
 use lightgraph::run::LoadedScene;
 use lightgraph_scenes::bvh::BvhKind;
 use lightgraph_scenes::gpu::light_kind;
@@ -179,14 +179,9 @@ fn an_asset_without_geometry_is_refused() {
 }
 
 #[test]
-fn crytek_sponza_loads_when_the_shared_assets_are_present() {
-    let Some(root) = lightgraph::assets::asset_root().filter(|r| r.join("CrytekSponza/glTF/Sponza.gltf").is_file())
-    else {
-        eprintln!(
-            "skipped: CrytekSponza is not under the asset root (set LIGHTGRAPH_ASSETS or put shared/scenes beside the repository)"
-        );
-        return;
-    };
+#[ignore = "needs the shared assets (CrytekSponza): cargo xtask test --assets"]
+fn crytek_sponza_loads_from_the_shared_assets() {
+    let root = shared_assets(&["CrytekSponza"]);
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/gltf/sponza.ron")).unwrap();
     let scene = load("scenes/gltf/sponza.ron", &text, &root).unwrap();
     eprintln!(

@@ -1,7 +1,7 @@
 //! The built-in scenes: they load, render without NaN, infinite or negative samples, and
 //! the Rust mirrors of the scene structs match the WGSL layouts naga computes.
 
-use crate::common::{assert_finite, gpu, render};
+use crate::common::{assert_finite, gpu, render, shared_assets};
 use lightgraph::assets::scene_names;
 use lightgraph::run::load_scene;
 use lightgraph_engine::reflect::struct_layout;
@@ -14,45 +14,76 @@ use lightgraph_scenes::gpu::{
 use std::collections::BTreeSet;
 use std::mem::{offset_of, size_of};
 
-#[test]
-fn every_builtin_scene_renders_without_invalid_samples() {
-    let _ = gpu();
+/// The built-in scenes but the stress scenes (which have their own invariants,
+/// tests/integration/stress.rs: one is black), each with the asset files it reads.
+fn builtin_scenes() -> Vec<(String, Vec<String>)> {
     let names = scene_names();
     assert!(names.len() >= 6, "the six Cornell scenes are built in: {names:?}");
-    // The stress scenes have their own invariants (tests/integration/stress.rs): one is black.
-    for (name, path) in names.into_iter().filter(|(_, p)| !p.starts_with("scenes/stress/")) {
-        let text = lightgraph::assets::builtin().read(&path).unwrap();
-        let spec = lightgraph_scenes::parse_scene(&path, &text).unwrap();
-        if let Some(asset) = &spec.gltf
-            && !lightgraph::assets::asset_root().is_some_and(|root| root.join(asset).is_file())
-        {
-            eprintln!("skipped {name}: its glTF asset {asset} is not under the asset root");
-            continue;
-        }
-        let scene = load_scene(&name).unwrap();
-        for layout in ["NaivePTsk", "NaivePTmk"] {
-            let r = render(&scene, "pt", layout, (32, 32), 2, 2, 7, &[]);
-            let rejected = r.counters["samples_rejected"];
-            eprintln!(
-                "{name} {layout}: {} rays, {rejected} rejected samples",
-                r.counters["rays_primary"] + r.counters["rays_extension"] + r.counters["rays_shadow"]
-            );
-            assert_eq!(
-                rejected, 0,
-                "{name} ({layout}): NaN, infinite or negative samples reached the film"
-            );
-            assert_eq!(r.loops_capped, 0, "{name}: a path loop hit the iteration cap");
-            assert_eq!(
-                r.counters["rays_primary"],
-                32 * 32 * 2 * 2,
-                "{name}: one primary ray per path"
-            );
-            assert_finite(&r.image, &name);
-            assert!(
-                r.image.mean.iter().any(|p| p.iter().any(|&v| v > 0.0)),
-                "{name}: the image is black"
-            );
-        }
+    names
+        .into_iter()
+        .filter(|(_, p)| !p.starts_with("scenes/stress/"))
+        .map(|(name, path)| {
+            let text = lightgraph::assets::builtin().read(&path).unwrap();
+            let spec = lightgraph_scenes::parse_scene(&path, &text).unwrap();
+            (name, lightgraph::assets::scene_asset_files(&spec))
+        })
+        .collect()
+}
+
+#[test]
+fn every_builtin_scene_without_assets_renders_without_invalid_samples() {
+    let _ = gpu();
+    let scenes = builtin_scenes();
+    let without: Vec<&String> = scenes.iter().filter(|(_, f)| f.is_empty()).map(|(n, _)| n).collect();
+    assert!(without.len() >= 6, "{without:?}");
+    for name in without {
+        renders_without_invalid_samples(name);
+    }
+}
+
+#[test]
+#[ignore = "needs the shared assets (every built-in scene's): cargo xtask test --assets"]
+fn every_builtin_scene_over_the_shared_assets_renders_without_invalid_samples() {
+    let _ = gpu();
+    let scenes: Vec<(String, Vec<String>)> = builtin_scenes().into_iter().filter(|(_, f)| !f.is_empty()).collect();
+    let mut assets: Vec<&str> = scenes
+        .iter()
+        .flat_map(|(_, files)| files.iter().map(|f| f.split('/').next().unwrap()))
+        .collect();
+    assets.sort();
+    assets.dedup();
+    shared_assets(&assets);
+    for (name, _) in &scenes {
+        renders_without_invalid_samples(name);
+    }
+}
+
+/// Renders the built-in scene `name` with both naive path-tracing layouts and checks that no
+/// NaN, infinite or negative sample reached the film, one primary ray per path, and light.
+fn renders_without_invalid_samples(name: &str) {
+    let scene = load_scene(name).unwrap();
+    for layout in ["NaivePTsk", "NaivePTmk"] {
+        let r = render(&scene, "pt", layout, (32, 32), 2, 2, 7, &[]);
+        let rejected = r.counters["samples_rejected"];
+        eprintln!(
+            "{name} {layout}: {} rays, {rejected} rejected samples",
+            r.counters["rays_primary"] + r.counters["rays_extension"] + r.counters["rays_shadow"]
+        );
+        assert_eq!(
+            rejected, 0,
+            "{name} ({layout}): NaN, infinite or negative samples reached the film"
+        );
+        assert_eq!(r.loops_capped, 0, "{name}: a path loop hit the iteration cap");
+        assert_eq!(
+            r.counters["rays_primary"],
+            32 * 32 * 2 * 2,
+            "{name}: one primary ray per path"
+        );
+        assert_finite(&r.image, name);
+        assert!(
+            r.image.mean.iter().any(|p| p.iter().any(|&v| v > 0.0)),
+            "{name}: the image is black"
+        );
     }
 }
 

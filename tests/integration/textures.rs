@@ -34,6 +34,7 @@ fn scene(
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),
+        mitsuba: None,
         textures,
     }
 }

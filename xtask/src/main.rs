@@ -13,7 +13,7 @@ const INSTALL: &str = "apt-get install -y --no-install-recommends mesa-vulkan-dr
 
 fn usage() -> ExitCode {
     eprintln!(
-        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [cargo test args]           run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do)\n  vulkan                           only make sure a Vulkan driver is installed"
+        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [--assets] [cargo test args]  run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do, the assets tier where the asset root does; --assets: fail without it)\n  vulkan                           only make sure a Vulkan driver is installed"
     );
     ExitCode::from(2)
 }
@@ -171,6 +171,67 @@ fn mpi_test(extra: &[String]) -> ExitCode {
     )
 }
 
+/// The asset root the tests read (as lightgraph's `assets::asset_root`): LIGHTGRAPH_ASSETS,
+/// else `shared/scenes` beside the repository, when it exists.
+fn asset_root() -> Option<std::path::PathBuf> {
+    match std::env::var_os("LIGHTGRAPH_ASSETS") {
+        Some(dir) => Some(dir.into()),
+        None => Some(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes")).filter(|d| d.is_dir()),
+    }
+}
+
+/// The tests the assets tier holds at the least (their names hold `shared_assets`): a filter
+/// that matched fewer would let the tier pass without running them.
+const ASSETS_TIER_TESTS: usize = 9;
+
+/// The assets tier: the integration tests that need the shared assets (ignored in the plain
+/// run, which reports them as ignored with the reason; their names hold `shared_assets`), run
+/// where the asset root exists; where it does not, a note, or a failure when `required`
+/// (`--assets`).
+fn assets_tier(required: bool) -> ExitCode {
+    let Some(root) = asset_root() else {
+        if required {
+            eprintln!(
+                "xtask: --assets: no asset root (set LIGHTGRAPH_ASSETS or put shared/scenes beside the repository): the assets tier cannot run"
+            );
+            return ExitCode::FAILURE;
+        }
+        eprintln!(
+            "xtask: no asset root (LIGHTGRAPH_ASSETS, or shared/scenes beside the repository): the assets tier (tests named *shared_assets*, ignored above) is not run"
+        );
+        return ExitCode::SUCCESS;
+    };
+    // The suite's packages and profile, so that nothing is built again.
+    let tier = [
+        "test",
+        "--workspace",
+        "--exclude",
+        "lightgraph-python",
+        "--release",
+        "--test",
+        "integration",
+        "--",
+    ];
+    let listed = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .args(tier)
+        .args(["--ignored", "--list", "shared_assets"])
+        .output();
+    let count = listed.map_or(0, |o| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .filter(|l| l.ends_with(": test"))
+            .count()
+    });
+    if count < ASSETS_TIER_TESTS {
+        eprintln!(
+            "xtask: the assets tier lists {count} tests named *shared_assets*, fewer than the {ASSETS_TIER_TESTS} it holds"
+        );
+        return ExitCode::FAILURE;
+    }
+    eprintln!("xtask: the assets tier ({count} tests) over {}", root.display());
+    cargo(&tier, &["--ignored".to_string(), "shared_assets".to_string()])
+}
+
 /// The first Python interpreter (LIGHTGRAPH_PYTHON, python3, /usr/bin/python3) that has
 /// numpy and pytest.
 fn python_with_pytest() -> Option<String> {
@@ -260,12 +321,21 @@ fn main() -> ExitCode {
             cargo(&args, rest)
         }
         "test" => {
+            let assets = rest.iter().any(|a| a == "--assets");
+            let rest: Vec<String> = rest.iter().filter(|a| *a != "--assets").cloned().collect();
+            let rest = rest.as_slice();
             let rust = cargo(
                 &["test", "--workspace", "--exclude", "lightgraph-python", "--release"],
                 rest,
             );
             if rust != ExitCode::SUCCESS {
                 return rust;
+            }
+            if rest.is_empty() || assets {
+                let tier = assets_tier(assets);
+                if tier != ExitCode::SUCCESS {
+                    return tier;
+                }
             }
             // Before the MPI test, whose feature rebuilds the crate.
             if rest.is_empty() {

@@ -285,8 +285,16 @@ impl Materials {
                 ..alpha.clone()
             },
         };
+        // An opacity bitmap with an alpha channel (a texel not opaque) gives its alpha: the
+        // cut-out painted in it (Bitterli's leaves, as Tungsten and the glTF conversions read
+        // them); a grey or RGB one its first channel.
+        let shift = if alpha.texels.iter().any(|t| t >> 24 != 0xff) {
+            24
+        } else {
+            0
+        };
         for (c, a) in combined.texels.iter_mut().zip(&alpha.texels) {
-            *c = (*c & 0x00ff_ffff) | (a & 0xff) << 24;
+            *c = (*c & 0x00ff_ffff) | ((a >> shift) & 0xff) << 24;
         }
         combined.name = format!("{} with the alpha of {}", combined.name, alpha.name);
         textures.push(combined);

@@ -126,6 +126,7 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),
+        mitsuba: None,
         textures: builder.materials.images.textures,
     };
     scene.materials = builder.materials.materials;
@@ -299,6 +300,37 @@ mod tests {
     /// Imports `text` as a scene file beside the test data.
     fn import_text(text: &str) -> std::result::Result<Imported, SceneError> {
         parse("t.xml", &data(""), text)
+    }
+
+    #[test]
+    fn an_opacity_bitmap_with_an_alpha_channel_cuts_out_by_its_alpha() {
+        let dir = std::env::temp_dir().join(format!("lightgraph-mitsuba-alpha-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // A white texel left transparent beside an opaque green one, as a leaf texture holds
+        // them: the white must be cut out, though its red channel is 255.
+        image::RgbaImage::from_raw(2, 1, vec![255, 255, 255, 0, 10, 200, 10, 255])
+            .unwrap()
+            .save(dir.join("leaf.png"))
+            .unwrap();
+        let leaf = r#"<texture type="bitmap" name="NAME"><string name="filename" value="leaf.png"/></texture>"#;
+        let text = format!(
+            r#"<scene version="0.5.0"><bsdf type="mask" id="leaves">{}<bsdf type="diffuse">{}</bsdf></bsdf>
+               <shape type="rectangle"><ref id="leaves"/></shape>
+               <emitter type="constant"/></scene>"#,
+            leaf.replace("NAME", "opacity"),
+            leaf.replace("NAME", "reflectance")
+        );
+        let imported = parse("t.xml", &dir, &text).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let pbr = imported.scene.materials["leaves"].pbr.as_ref().unwrap();
+        let base = pbr.textures.base_color.expect("a base colour texture");
+        let alphas: Vec<u32> = imported.scene.textures[base.texture as usize]
+            .texels
+            .iter()
+            .map(|t| t >> 24)
+            .collect();
+        assert_eq!(alphas, [0, 255]);
+        assert_eq!(pbr.alpha_cutoff, Some(0.5));
     }
 
     #[test]
