@@ -199,8 +199,8 @@ const LIVING_ROOM_OVER_GLTF: &str = r#"Scene(
 )"#;
 
 #[test]
-#[ignore = "needs the shared assets (LivingRoom, with its models): cargo xtask test --assets"]
-fn living_room_agrees_with_its_gltf_conversion_in_the_shared_assets() {
+#[ignore = "needs LivingRoom's Mitsuba meshes, which the shared copy lacks: lightgraph assets fetch LivingRoom --to ROOT, then cargo test --release --test integration -- --ignored fetched_assets"]
+fn living_room_agrees_with_its_gltf_conversion_in_the_fetched_assets() {
     // Lit by the sky through the windows, mostly indirectly.
     agree("living-room", "LivingRoom", LIVING_ROOM_OVER_GLTF, (64, 36), 4, 0.1);
 }
@@ -219,8 +219,8 @@ const LIVING_ROOM_CAUSTICS_OVER_GLTF: &str = r#"Scene(
 )"#;
 
 #[test]
-#[ignore = "needs the shared assets (LivingRoom, with its models): cargo xtask test --assets"]
-fn living_room_caustics_agrees_with_its_gltf_variant_in_the_shared_assets() {
+#[ignore = "needs LivingRoom's Mitsuba meshes, which the shared copy lacks: lightgraph assets fetch LivingRoom --to ROOT, then cargo test --release --test integration -- --ignored fetched_assets"]
+fn living_room_caustics_agrees_with_its_gltf_variant_in_the_fetched_assets() {
     // The caustic on the table and in the mirror: a small, bright part of the image.
     agree(
         "living-room-caustics",

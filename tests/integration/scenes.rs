@@ -1,6 +1,7 @@
 //! The built-in scenes: they load, render without NaN, infinite or negative samples, and
 //! the Rust mirrors of the scene structs match the WGSL layouts naga computes.
 
+use crate::assets::NOT_IN_SHARED_COPY;
 use crate::common::{assert_finite, gpu, render, shared_assets};
 use lightgraph::assets::scene_names;
 use lightgraph::run::load_scene;
@@ -41,11 +42,34 @@ fn every_builtin_scene_without_assets_renders_without_invalid_samples() {
     }
 }
 
+/// Whether a scene over `files` needs an asset the shared copy holds only in part (see
+/// [`NOT_IN_SHARED_COPY`]).
+fn needs_fetched_files(files: &[String]) -> bool {
+    let asset = NOT_IN_SHARED_COPY.split('/').next().expect("an asset folder");
+    files.iter().any(|f| f.split('/').next() == Some(asset))
+}
+
 #[test]
 #[ignore = "needs the shared assets (every built-in scene's): cargo xtask test --assets"]
 fn every_builtin_scene_over_the_shared_assets_renders_without_invalid_samples() {
+    every_builtin_scene_over_assets_renders(false);
+}
+
+#[test]
+#[ignore = "needs LivingRoom's Mitsuba meshes, which the shared copy lacks: lightgraph assets fetch LivingRoom --to ROOT, then cargo test --release --test integration -- --ignored fetched_assets"]
+fn every_builtin_scene_over_the_fetched_assets_renders_without_invalid_samples() {
+    every_builtin_scene_over_assets_renders(true);
+}
+
+/// Renders every built-in scene over assets (those needing files the shared copy lacks, or
+/// the others) after checking their assets are under the asset root.
+fn every_builtin_scene_over_assets_renders(fetched: bool) {
     let _ = gpu();
-    let scenes: Vec<(String, Vec<String>)> = builtin_scenes().into_iter().filter(|(_, f)| !f.is_empty()).collect();
+    let scenes: Vec<(String, Vec<String>)> = builtin_scenes()
+        .into_iter()
+        .filter(|(_, f)| !f.is_empty() && needs_fetched_files(f) == fetched)
+        .collect();
+    assert!(!scenes.is_empty(), "no built-in scene over such assets");
     let mut assets: Vec<&str> = scenes
         .iter()
         .flat_map(|(_, files)| files.iter().map(|f| f.split('/').next().unwrap()))

@@ -182,7 +182,7 @@ fn asset_root() -> Option<std::path::PathBuf> {
 
 /// The tests the assets tier holds at the least (their names hold `shared_assets`): a filter
 /// that matched fewer would let the tier pass without running them.
-const ASSETS_TIER_TESTS: usize = 9;
+const ASSETS_TIER_TESTS: usize = 7;
 
 /// The assets tier: the integration tests that need the shared assets (ignored in the plain
 /// run, which reports them as ignored with the reason; their names hold `shared_assets`), run
@@ -229,7 +229,11 @@ fn assets_tier(required: bool) -> ExitCode {
         return ExitCode::FAILURE;
     }
     eprintln!("xtask: the assets tier ({count} tests) over {}", root.display());
-    cargo(&tier, &["--ignored".to_string(), "shared_assets".to_string()])
+    let result = cargo(&tier, &["--ignored".to_string(), "shared_assets".to_string()]);
+    eprintln!(
+        "xtask: not run: the tests named *fetched_assets* (ignored above, with the reason), which read files the developers' shared copy lacks (LivingRoom's Mitsuba meshes); after `lightgraph assets fetch LivingRoom --to ROOT`: LIGHTGRAPH_ASSETS=ROOT cargo test --release --test integration -- --ignored fetched_assets"
+    );
+    result
 }
 
 /// The first Python interpreter (LIGHTGRAPH_PYTHON, python3, /usr/bin/python3) that has
