@@ -6,6 +6,8 @@ use clap::Args;
 use lightgraph::compare::RunBudget;
 pub use lightgraph::compare::estimator_specs;
 use lightgraph::compare::render::{Comparison, PER_DECADE};
+use lightgraph::interrupt::Interrupted;
+use lightgraph::output::shell_word;
 pub use lightgraph::output::si;
 use lightgraph::reference::Reference;
 pub use lightgraph::run::scene::find_scene;
@@ -17,7 +19,7 @@ use lightgraph::tev::LiveView;
 use lightgraph_engine::Graph;
 use lightgraph_engine::ir::StateStorage;
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Duration;
 
@@ -253,4 +255,25 @@ pub fn reference_mean(path: Option<&PathBuf>, size: (u32, u32)) -> Result<Option
     let r = Reference::read(path)?;
     r.check_size(path, size)?;
     Ok(Some(r.mean()))
+}
+
+/// With a signal's [`Interrupted`] error, says the command that goes on: this process's own
+/// command line with `--resume` (and without `--force`, which resuming does not need); other
+/// errors pass as they are.
+pub fn with_resume_command(error: anyhow::Error) -> anyhow::Error {
+    match error.downcast::<Interrupted>() {
+        Ok(i) => {
+            let mut words: Vec<String> = std::env::args_os()
+                .skip(1)
+                .map(|a| shell_word(Path::new(&a)))
+                .filter(|w| w != "--force")
+                .collect();
+            if !words.iter().any(|w| w == "--resume") {
+                words.push("--resume".into());
+            }
+            let what = format!("{}; `lightgraph {}` goes on", i.what, words.join(" "));
+            Interrupted { what, ..i }.into()
+        }
+        Err(other) => other,
+    }
 }

@@ -75,7 +75,7 @@ impl CompareArgs {
 /// Runs the comparison ([`lightgraph::compare::render::compare`]) and prints its summary.
 pub fn compare(args: CompareArgs) -> Result<()> {
     let out = args.out.clone();
-    let summary = lightgraph::compare::render::compare(args.spec())?;
+    let summary = lightgraph::compare::render::compare(args.spec()).map_err(with_resume_command)?;
     println!(
         "{summary}\nwrote {}/curves.csv, rmse_vs_time.png, summary.md, each run's EXR and PNG, and {} (opens offline \
          in a browser)",

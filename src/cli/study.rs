@@ -104,7 +104,7 @@ impl StudyArgs {
 /// Runs the study ([`lightgraph::study::render::study`]) and prints its summary.
 pub fn study(args: StudyArgs) -> Result<()> {
     let out = args.out.clone();
-    let summary = lightgraph::study::render::study(args.spec())?;
+    let summary = lightgraph::study::render::study(args.spec()).map_err(with_resume_command)?;
     println!(
         "{summary}\nwrote {0}/summary.md, summary.csv, layouts.csv, {1} (opens offline in a browser) and a \
          comparison per scene in {0}/<scene>/",

@@ -154,7 +154,7 @@ pub fn compare_with(
             signal,
             what: format!(
                 "{} of {} runs kept in {} (curves.csv, rmse_vs_time.png, summary.md, their EXR and PNG), \
-                 the run in flight dropped; --resume continues",
+                 the run in flight dropped",
                 curves.len(),
                 runs.len(),
                 args.comparison.out.display()

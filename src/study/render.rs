@@ -138,8 +138,7 @@ fn stopped(error: anyhow::Error, args: &StudySpec, scenes_done: usize, scene: &s
         return error.context(format!("scene {scene}"));
     };
     let what = format!(
-        "{scenes_done} of {} scenes done (summary.md, summary.csv and layouts.csv in {}); scene {scene}: {}; \
-         study --resume continues",
+        "{scenes_done} of {} scenes done (summary.md, summary.csv and layouts.csv in {}); scene {scene}: {}",
         args.scenes.len(),
         args.comparison.out.display(),
         i.what
