@@ -7,15 +7,10 @@
 //       "viewers": [ { "index": I, "a": LABEL, "b": LABEL, "tmap": BOOL?,
 //                      "pixels": [ { "x": X, "y": Y, "a": [R, G, B], "b": [R, G, B] } ] } ] } ] }
 // Exits 1 naming every failure.
-import { chromium } from "playwright-core";
-import { readFileSync, mkdtempSync, rmSync } from "node:fs";
-import { tmpdir } from "node:os";
-import { join, resolve } from "node:path";
+import { readFileSync } from "node:fs";
+import { resolve } from "node:path";
 import { pathToFileURL } from "node:url";
-
-const CHROMIUM = process.env.LIGHTGRAPH_CHROMIUM || "/usr/bin/chromium";
-const ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-  "--disable-background-networking", "--disable-component-update", "--disable-sync"];
+import { CHROMIUM, withChromium } from "./chromium.mjs";
 
 const failures = [];
 const fail = (report, what) => failures.push(`${report}: ${what}`);
@@ -142,17 +137,9 @@ async function checkReport(context, report) {
 }
 
 const spec = JSON.parse(readFileSync(process.argv[2], "utf8"));
-const profile = mkdtempSync(join(tmpdir(), "lightgraph-chromium-"));
-// A new, empty profile (playwright passes it as --user-data-dir).
-const context = await chromium.launchPersistentContext(profile, {
-  executablePath: CHROMIUM, args: ARGS, headless: true, viewport: { width: 1200, height: 900 },
-});
-try {
+await withChromium({ viewport: { width: 1200, height: 900 } }, async (context) => {
   for (const report of spec.reports) await checkReport(context, report);
-} finally {
-  await context.close();
-  rmSync(profile, { recursive: true, force: true });
-}
+});
 if (failures.length) {
   console.error(failures.join("\n"));
   process.exit(1);

@@ -4,21 +4,24 @@
 // points asked for, as JSON on stdout, for the caller to compare with the film written, and
 // optionally saves a screenshot. Usage: node live.mjs URL X,Y[;X,Y...] [SCREENSHOT]. Exits 1
 // naming every failure.
-import { chromium } from "playwright-core";
-import { mkdtempSync, rmSync } from "node:fs";
-import { tmpdir } from "node:os";
-import { join } from "node:path";
+import { withChromium } from "./chromium.mjs";
 
-const CHROMIUM = process.env.LIGHTGRAPH_CHROMIUM || "/usr/bin/chromium";
-const ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-  "--disable-background-networking", "--disable-component-update", "--disable-sync"];
 const MIN_LOADS = 3;
 
 const [url, points, screenshot] = process.argv.slice(2);
 const failures = [];
-const profile = mkdtempSync(join(tmpdir(), "lightgraph-live-"));
-const context = await chromium.launchPersistentContext(profile, { executablePath: CHROMIUM, args: ARGS });
 try {
+  await withChromium({}, (context) => follow(context));
+} catch (e) {
+  failures.push(String(e));
+}
+if (failures.length) {
+  console.error(failures.join("\n"));
+  process.exit(1);
+}
+
+// Follows the page to the render's end and prints what it shows.
+async function follow(context) {
   const page = await context.newPage();
   page.on("console", (m) => { if (m.type() === "error") failures.push(`console error: ${m.text()}`); });
   page.on("pageerror", (e) => failures.push(`page error: ${e.message}`));
@@ -39,13 +42,4 @@ try {
   }, points);
   if (screenshot) await page.screenshot({ path: screenshot, fullPage: true });
   console.log(JSON.stringify({ pixels, loads: live.loads, version: live.status.version }));
-} catch (e) {
-  failures.push(String(e));
-} finally {
-  await context.close();
-  rmSync(profile, { recursive: true, force: true });
-}
-if (failures.length) {
-  console.error(failures.join("\n"));
-  process.exit(1);
 }

@@ -100,6 +100,19 @@ fn cargo(args: &[&str], extra: &[String]) -> ExitCode {
     }
 }
 
+/// `cargo` arguments of the integration tests, with the suite's packages and profile (so that
+/// nothing is built again); the test harness's arguments follow.
+const INTEGRATION_TESTS: [&str; 8] = [
+    "test",
+    "--workspace",
+    "--exclude",
+    "lightgraph-python",
+    "--release",
+    "--test",
+    "integration",
+    "--",
+];
+
 /// The tests of persistent threads (threads that take items until none is left) again, with
 /// a busy thread on every core: on a loaded CPU some threads start late and the others take
 /// more items, which on a driver that caps an invocation's loop iterations (llvmpipe) must
@@ -120,22 +133,8 @@ fn loaded_test() -> ExitCode {
         })
         .collect();
     eprintln!("xtask: the persistent-thread tests again, with {cores} busy threads (a loaded CPU)");
-    let result = cargo(
-        &[
-            "test",
-            "--workspace",
-            "--exclude",
-            "lightgraph-python",
-            "--release",
-            "--test",
-            "integration",
-            "--",
-            "--include-ignored",
-            "persistent_thread",
-            "lost_work::",
-        ],
-        &[],
-    );
+    let filters = ["--include-ignored", "persistent_thread", "lost_work::"].map(String::from);
+    let result = cargo(&INTEGRATION_TESTS, &filters);
     stop.store(true, Ordering::Relaxed);
     for hog in hogs {
         let _ = hog.join();
@@ -201,17 +200,7 @@ fn assets_tier(required: bool) -> ExitCode {
         );
         return ExitCode::SUCCESS;
     };
-    // The suite's packages and profile, so that nothing is built again.
-    let tier = [
-        "test",
-        "--workspace",
-        "--exclude",
-        "lightgraph-python",
-        "--release",
-        "--test",
-        "integration",
-        "--",
-    ];
+    let tier = INTEGRATION_TESTS;
     let listed = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
         .args(tier)
         .args(["--ignored", "--list", "shared_assets"])
