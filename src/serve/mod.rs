@@ -52,9 +52,9 @@ struct Snapshot {
     /// Whether the render is over.
     finished: bool,
     /// The film's mean as little-endian f32 RGB.
-    film: Arc<Vec<u8>>,
+    film: Vec<u8>,
     /// The reference's, if the render has one.
-    reference: Option<Arc<Vec<u8>>>,
+    reference: Option<Vec<u8>>,
     /// Whether a page asked for the status (someone is watching).
     watched: bool,
     /// The version of the last film fetched.
@@ -94,8 +94,8 @@ impl LiveServer {
         let page = page(name, size, reference.is_some());
         let snapshot = Arc::new(Mutex::new(Snapshot {
             size,
-            film: Arc::new(vec![0; 12 * size.0 as usize * size.1 as usize]),
-            reference: reference.map(|r| Arc::new(pixel_bytes(r))),
+            film: vec![0; 12 * size.0 as usize * size.1 as usize],
+            reference: reference.map(pixel_bytes),
             ..Snapshot::default()
         }));
         let server = Arc::new(server);
@@ -132,7 +132,7 @@ impl LiveServer {
     /// `status`; `finished` marks the last update.
     pub fn show(&mut self, pixels: &[[f32; 3]], frames: u64, status: &str, finished: bool) {
         self.last = Some(Instant::now());
-        let film = Arc::new(pixel_bytes(pixels));
+        let film = pixel_bytes(pixels);
         let mut s = self.snapshot.lock().unwrap_or_else(|e| e.into_inner());
         s.version += 1;
         s.frames = frames;
@@ -177,6 +177,11 @@ fn response(body: Vec<u8>, kind: &str) -> tiny_http::Response<std::io::Cursor<Ve
         .with_header(header("Cache-Control", "no-store"))
 }
 
+/// A 404 response.
+fn not_found() -> tiny_http::Response<std::io::Cursor<Vec<u8>>> {
+    response(b"not found".to_vec(), "text/plain").with_status_code(404)
+}
+
 /// The response to a GET of `url`.
 fn respond(url: &str, snapshot: &Mutex<Snapshot>, page: &str) -> tiny_http::Response<std::io::Cursor<Vec<u8>>> {
     let path = url.split('?').next().unwrap_or(url);
@@ -189,14 +194,14 @@ fn respond(url: &str, snapshot: &Mutex<Snapshot>, page: &str) -> tiny_http::Resp
         }
         "/film.f32" => {
             s.delivered = Some(s.version);
-            response(s.film.to_vec(), "application/octet-stream")
+            response(s.film.clone(), "application/octet-stream")
         }
-        "/reference.f32" if s.reference.is_some() => response(
-            s.reference.as_ref().expect("a reference").to_vec(),
-            "application/octet-stream",
-        ),
+        "/reference.f32" => match &s.reference {
+            Some(reference) => response(reference.clone(), "application/octet-stream"),
+            None => not_found(),
+        },
         "/favicon.ico" => response(Vec::new(), "image/x-icon").with_status_code(204),
-        _ => response(b"not found".to_vec(), "text/plain").with_status_code(404),
+        _ => not_found(),
     }
 }
 
