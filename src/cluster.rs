@@ -9,8 +9,8 @@
 //! round in which every rank was done (and every round where a live view wants the film),
 //! so a run pays for one read-back and one film reduction, not one every round.
 
+use crate::film::Film;
 use crate::multi::Budget;
-use crate::reference::Reference;
 use crate::run::Run;
 use crate::run::Session;
 use anyhow::{Result, anyhow, bail};
@@ -62,7 +62,7 @@ pub struct Outcome {
 /// What rank 0 learns at each reduction.
 pub struct Progress<'a> {
     /// The run's film so far.
-    pub film: &'a Reference,
+    pub film: &'a Film,
     /// Frames each rank has rendered.
     pub frames_by_rank: &'a [u64],
     /// Rays each rank has traced.
@@ -82,7 +82,7 @@ fn block_frames(j: u64, budget: Budget) -> Option<(u64, u64)> {
 /// A rank's state: its session, its own film and its count of blocks.
 struct Worker<'g> {
     session: Session<'g>,
-    film: Reference,
+    film: Film,
     blocks: u64,
     done: bool,
 }
@@ -142,7 +142,7 @@ impl Worker<'_> {
 }
 
 /// Puts a film reduction's sums (`sums`: sums, then squared sums, flat) into rank 0's film.
-fn set_sums(film: &mut Reference, sums: &[f64]) {
+fn set_sums(film: &mut Film, sums: &[f64]) {
     for (i, p) in film.sum.iter_mut().chain(film.sum_sq.iter_mut()).enumerate() {
         *p = [sums[3 * i], sums[3 * i + 1], sums[3 * i + 2]];
     }
@@ -150,13 +150,7 @@ fn set_sums(film: &mut Reference, sums: &[f64]) {
 
 /// Sets rank 0's film's frame ranges from a round's all-reduced state (blocks per rank); returns
 /// the frames and rays of each rank.
-fn set_ranges(
-    film: &mut Reference,
-    state: &[f64],
-    run: &Run,
-    place: Place,
-    budget: Budget,
-) -> Result<(Vec<u64>, Vec<u64>)> {
+fn set_ranges(film: &mut Film, state: &[f64], run: &Run, place: Place, budget: Budget) -> Result<(Vec<u64>, Vec<u64>)> {
     let mut ranges = Vec::new();
     let mut frames_by_rank = vec![0; place.ranks];
     for (r, frames) in frames_by_rank.iter_mut().enumerate() {
@@ -196,13 +190,13 @@ fn open_worker<'g, C: Communicator>(
     gpu: Result<&'g Gpu>,
     run: &Run,
     place: Place,
-    film: &Reference,
+    film: &Film,
 ) -> Worker<'g> {
     let session = gpu.and_then(|gpu| run.session(gpu));
     match session {
         Ok(session) => Worker {
             session,
-            film: Reference::new(film.size, film.info.clone()),
+            film: Film::new(film.size, film.info.clone()),
             blocks: 0,
             done: false,
         },
@@ -224,7 +218,7 @@ pub fn render_across<C: Communicator>(
     adapter: Option<&str>,
     budget: Budget,
     live: bool,
-    film: &mut Reference,
+    film: &mut Film,
     mut progress: impl FnMut(&Progress),
 ) -> Result<Outcome> {
     let place = place(world);
@@ -290,7 +284,7 @@ pub fn render_across<C: Communicator>(
 }
 
 /// Reduces every rank's sums into rank 0's film (blocking), timing it into `outcome`.
-fn reduce_film<C: Communicator>(world: &C, worker: &Worker, film: &mut Reference, outcome: &mut Outcome) {
+fn reduce_film<C: Communicator>(world: &C, worker: &Worker, film: &mut Film, outcome: &mut Outcome) {
     let root = world.process_at_rank(0);
     let sums = worker.sums();
     let started = Instant::now();

@@ -12,10 +12,10 @@ pub mod resume;
 
 pub use curve::{convergence_slope, tail_noise, time_to_error};
 
+use crate::film::Film;
 use crate::interrupt::Interrupted;
 use crate::metrics::{ImageError, image_error};
 use crate::plot::{Axes, Series, line_plot};
-use crate::reference::Reference;
 use crate::run::{Image, Run, Session, load_graph, named_layout, parse_sets};
 use anyhow::{Context, Result, bail};
 use lightgraph_engine::Gpu;
@@ -290,7 +290,7 @@ pub struct ReportContext<'a> {
     /// The reference file.
     pub reference_path: &'a Path,
     /// The reference.
-    pub reference: &'a Reference,
+    pub reference: &'a Film,
     /// Label of the baseline run (when it has not run yet, the first run that has stands in).
     pub baseline: &'a str,
     /// Runs of the comparison, finished or not (the report may hold fewer: those done).

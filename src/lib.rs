@@ -16,6 +16,7 @@ pub mod cluster;
 pub mod compare;
 pub mod explain;
 pub mod fetch;
+pub mod film;
 pub mod interrupt;
 pub mod layout_cache;
 pub mod live;

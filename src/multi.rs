@@ -4,7 +4,7 @@
 //! sums to the host, which adds them into one film. The frames are those of a one-GPU run with the same settings, so
 //! the film equals that run's to float rounding.
 
-use crate::reference::Reference;
+use crate::film::Film;
 use crate::run::{Run, Session};
 use anyhow::{Result, anyhow, bail};
 use lightgraph_engine::Gpu;
@@ -176,8 +176,8 @@ pub fn render_on_gpus(
     run: &Run,
     selectors: &[String],
     budget: Budget,
-    film: &mut Reference,
-    mut progress: impl FnMut(&[Share], &Reference),
+    film: &mut Film,
+    mut progress: impl FnMut(&[Share], &Film),
 ) -> Result<(Vec<Share>, Merging)> {
     let claims = Claims {
         next: AtomicU64::new(0),

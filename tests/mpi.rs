@@ -5,7 +5,7 @@
 //! `cargo test --release --features mpi --test mpi`.
 #![cfg(feature = "mpi")]
 
-use lightgraph::reference::Reference;
+use lightgraph::film::Film;
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -20,14 +20,14 @@ fn dir(name: &str) -> PathBuf {
 
 /// `lightgraph render` of 40 frames (seed 3, the diffuse box at 16x12) into `out`, through
 /// `mpirun -n ranks` when given.
-fn render(ranks: Option<u32>, out: &std::path::Path) -> Reference {
+fn render(ranks: Option<u32>, out: &std::path::Path) -> Film {
     let args = ["--scene", "cornell-diffuse", "--frames", "40"];
     render_with(ranks, &args, out)
 }
 
 /// `lightgraph render` at 16x12 with seed 3 and `extra` arguments into `out`, through
 /// `mpirun -n ranks` when given.
-fn render_with(ranks: Option<u32>, extra: &[&str], out: &std::path::Path) -> Reference {
+fn render_with(ranks: Option<u32>, extra: &[&str], out: &std::path::Path) -> Film {
     let args = [
         &[
             "render",
@@ -55,7 +55,7 @@ fn render_with(ranks: Option<u32>, extra: &[&str], out: &std::path::Path) -> Ref
     if let Some(n) = ranks {
         assert!(stderr.contains(&format!("on {n} ranks")), "{stderr}");
     }
-    Reference::read(out).unwrap()
+    Film::read(out).unwrap()
 }
 
 #[test]
@@ -73,7 +73,7 @@ fn ranks_together_render_the_film_of_one_process() {
 }
 
 /// The largest difference of two films' means relative to the larger (floored at 1e-3).
-fn largest_difference(a: &Reference, b: &Reference) -> f64 {
+fn largest_difference(a: &Film, b: &Film) -> f64 {
     a.mean()
         .iter()
         .zip(&b.mean())

@@ -10,7 +10,7 @@ use ::lightgraph::compare::RunBudget;
 use ::lightgraph::compare::render::{
     COMPARE_OUT, COMPARE_TIME, CompareSpec, Comparison, PER_DECADE, compare as run_compare,
 };
-use ::lightgraph::reference::Reference;
+use ::lightgraph::film::Film;
 use ::lightgraph::run::{DEFAULT_SEED, RunOptions};
 use ::lightgraph::study::render::{
     LAYOUT_TIME, REFERENCE_GRAPH, REFERENCE_TIME, STUDY_OUT, STUDY_TIME, StudySpec, study as run_study,
@@ -43,7 +43,7 @@ fn comparison_found<'py>(py: Python<'py>, dir: &Path) -> PyResult<Bound<'py, PyD
 
 /// The reference film at `path`'s mean image.
 fn reference_image<'py>(py: Python<'py>, path: &Path) -> PyResult<Bound<'py, PyAny>> {
-    let film = Reference::read(path).map_err(err)?;
+    let film = Film::read(path).map_err(err)?;
     Ok(crate::array(py, &film.mean(), film.size)?.into_any())
 }
 

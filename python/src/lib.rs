@@ -17,11 +17,9 @@ mod tables;
 
 use ::lightgraph::cli::Cli;
 use ::lightgraph::explain::{ExplainSpec, report};
+use ::lightgraph::film::Film;
 use ::lightgraph::interrupt;
-use ::lightgraph::reference::Reference;
-use ::lightgraph::reference::render::{
-    REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render as render_reference,
-};
+use ::lightgraph::reference::{REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render as render_reference};
 use ::lightgraph::run::{Run, RunOptions, RunSpec, Session as RenderSession};
 use lightgraph_engine::Gpu;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
@@ -403,7 +401,7 @@ fn reference<'py>(
     let (mut graph, mut seed) = (Some(graph.to_string()), seed);
     let resume = match resume {
         Some(path) => {
-            let film = Reference::read(&path).map_err(err)?;
+            let film = Film::read(&path).map_err(err)?;
             options.from_film(&mut graph, &mut seed, REFERENCE_SEED, &film);
             Some((path, film))
         }
@@ -424,7 +422,7 @@ fn reference<'py>(
         tev: None,
     };
     stop::interruptible(py, || render_reference(spec))?;
-    let film = Reference::read(&out).map_err(err)?;
+    let film = Film::read(&out).map_err(err)?;
     array(py, &film.mean(), film.size)
 }
 
@@ -505,7 +503,7 @@ fn list_all(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 /// - path: the film's path.
 #[pyfunction]
 fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyDict>)> {
-    let film = Reference::read(&path).map_err(err)?;
+    let film = Film::read(&path).map_err(err)?;
     let d = PyDict::new(py);
     for (k, v) in &film.info {
         d.set_item(k, v)?;

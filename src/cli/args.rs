@@ -6,10 +6,10 @@ use clap::Args;
 use lightgraph::compare::RunBudget;
 pub use lightgraph::compare::estimator_specs;
 use lightgraph::compare::render::{Comparison, PER_DECADE};
+use lightgraph::film::Film;
 use lightgraph::interrupt::Interrupted;
 use lightgraph::output::shell_word;
 pub use lightgraph::output::si;
-use lightgraph::reference::Reference;
 pub use lightgraph::run::scene::find_scene;
 use lightgraph::run::{
     BvhChoice, DEFAULT_GRAPH, DEFAULT_SCENE, DEFAULT_SEED, LayoutOverrides, LoadedScene, RunOptions, RunSpec,
@@ -252,7 +252,7 @@ pub fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
 /// The mean of the reference at `path`, if any, checked to be `size` (for `--reference`).
 pub fn reference_mean(path: Option<&PathBuf>, size: (u32, u32)) -> Result<Option<Vec<[f32; 3]>>> {
     let Some(path) = path else { return Ok(None) };
-    let r = Reference::read(path)?;
+    let r = Film::read(path)?;
     r.check_size(path, size)?;
     Ok(Some(r.mean()))
 }

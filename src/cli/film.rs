@@ -3,7 +3,7 @@
 
 use super::args::{Common, GraphArg};
 use anyhow::{Result, bail};
-use lightgraph::reference::Reference;
+use lightgraph::film::Film;
 use std::path::Path;
 
 /// Fills the settings a resumed film has and the command line does not give
@@ -13,7 +13,7 @@ pub fn settings_from_film(
     graph: &mut GraphArg,
     seed: &mut Option<u32>,
     default_seed: u32,
-    film: &Reference,
+    film: &Film,
 ) {
     let mut options = common.run_options();
     options.from_film(&mut graph.graph, seed, default_seed, film);

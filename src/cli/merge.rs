@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use lightgraph::reference::Reference;
+use lightgraph::film::Film;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -26,9 +26,9 @@ pub struct MergeArgs {
 
 pub fn merge(args: MergeArgs) -> Result<()> {
     lightgraph::output::check_out(&args.out, args.force, None)?;
-    let mut merged = Reference::read(&args.films[0])?;
+    let mut merged = Film::read(&args.films[0])?;
     for path in &args.films[1..] {
-        merged.merge(&Reference::read(path)?, path)?;
+        merged.merge(&Film::read(path)?, path)?;
     }
     merged.write(&args.out, "merge")?;
     let png = args.out.with_extension("png");

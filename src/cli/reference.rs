@@ -5,8 +5,8 @@ use super::args::*;
 use super::film::settings_from_film;
 use anyhow::Result;
 use clap::Args;
-use lightgraph::reference::Reference;
-use lightgraph::reference::render::{REFERENCE_SEED, ReferenceSpec, out_path, render};
+use lightgraph::film::Film;
+use lightgraph::reference::{REFERENCE_SEED, ReferenceSpec, out_path, render};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -65,7 +65,7 @@ impl ReferenceArgs {
     /// settings not given.
     pub fn spec(mut self) -> Result<ReferenceSpec> {
         let resume = match self.resume.take() {
-            Some(path) => Some((Reference::read(&path)?, path)),
+            Some(path) => Some((Film::read(&path)?, path)),
             None => None,
         };
         if let Some((film, _)) = &resume {

@@ -4,9 +4,9 @@
 
 use crate::compare::resume::{check_folder, check_settings, finished_runs, write_settings};
 use crate::compare::{EstimatorSpec, ReportContext, RunBudget, RunCurve, run, write_report, write_run_images};
+use crate::film::{Film, constants_text};
 use crate::interrupt::{Interrupted, Signal};
 use crate::multi::gpu_selectors;
-use crate::reference::{Reference, constants_text};
 use crate::run::{Run, RunOptions, Scenes, parse_sets};
 use crate::tev::LiveView;
 use anyhow::{Result, anyhow, bail};
@@ -70,7 +70,7 @@ pub struct Comparison {
 /// Runs the comparison `args` names (its scene, resolution and constants, where not given,
 /// the reference's) and returns its summary (Markdown), as written into its folder.
 pub fn compare(mut args: CompareSpec) -> Result<String> {
-    let reference = Reference::read(&args.reference)?;
+    let reference = Film::read(&args.reference)?;
     args.options.from_reference(&reference);
     let gpus = open_gpus_or_adapter(args.comparison.gpus.as_deref(), args.options.adapter.as_deref())?;
     let mut scenes = Scenes::new(args.options.scene());
@@ -92,7 +92,7 @@ pub fn open_gpus_or_adapter(gpus: Option<&str>, adapter: Option<&str>) -> Result
 /// in the order of `--runs`. When a signal stopped it, [`Interrupted`] says what was kept.
 pub fn compare_with(
     args: &CompareSpec,
-    reference: &Reference,
+    reference: &Film,
     gpus: &[Gpu],
     scenes: &mut Scenes,
 ) -> Result<(String, Vec<RunCurve>)> {
@@ -167,7 +167,7 @@ pub fn compare_with(
 
 /// What a resumed comparison must share with the one it continues: the scene, reference,
 /// budget, sampling of the error, device and each run with its options.
-fn settings(args: &CompareSpec, reference: &Reference, jobs: &[Job], device: &str) -> Vec<(String, String)> {
+fn settings(args: &CompareSpec, reference: &Film, jobs: &[Job], device: &str) -> Vec<(String, String)> {
     let mut settings = vec![
         ("scene".to_string(), args.options.scene().to_string()),
         ("reference".to_string(), args.reference.display().to_string()),
@@ -186,7 +186,7 @@ fn settings(args: &CompareSpec, reference: &Reference, jobs: &[Job], device: &st
 
 /// Checks that the reference shows the scene of the runs and was rendered with other random
 /// numbers than theirs.
-pub fn check_reference(args: &CompareSpec, reference: &Reference) -> Result<()> {
+pub fn check_reference(args: &CompareSpec, reference: &Film) -> Result<()> {
     let info = |k: &str| reference.info.get(k).cloned().unwrap_or_default();
     let c = &args.options;
     if c.scene() != info("scene") {
@@ -210,7 +210,7 @@ pub fn check_reference(args: &CompareSpec, reference: &Reference) -> Result<()> 
 
 /// The runs of `--runs`, each checked against the reference (constants, size) before any
 /// renders: a typo should not cost the others' time. Loads the scene with each run's BVH.
-fn jobs(args: &CompareSpec, reference: &Reference, scenes: &mut Scenes) -> Result<Vec<Job>> {
+fn jobs(args: &CompareSpec, reference: &Film, scenes: &mut Scenes) -> Result<Vec<Job>> {
     let info = |k: &str| reference.info.get(k).cloned().unwrap_or_default();
     let c = &args.options;
     let specs = EstimatorSpec::parse_list(&args.runs)?;

@@ -2,7 +2,6 @@
 //! the run it loads ([`Run`]: the graph, its layout, the scene and the checked options, the
 //! measured constants once measured), from which every front end makes its sessions.
 
-use crate::reference::Reference;
 use crate::run::checks;
 use crate::run::checks::image_past_binding_limit;
 use crate::run::graph::{load_graph, named_layout};
@@ -153,40 +152,6 @@ impl RunOptions {
     /// The session options of `graph` on `scene` with `seed` ([`RunSpec::options`]).
     pub fn options(&self, scene: &LoadedScene, graph: &Graph, seed: u32) -> Result<SessionOptions> {
         self.spec(&graph.name, None, seed).options(scene, graph)
-    }
-
-    /// Fills the scene, resolution and constants not given with those of `reference`.
-    pub fn from_reference(&mut self, reference: &Reference) {
-        let info = |k: &str| reference.info.get(k).cloned().unwrap_or_default();
-        self.scene.get_or_insert_with(|| info("scene"));
-        self.res.get_or_insert(reference.size);
-        if self.sets.is_empty() && self.max_path_length.is_none() {
-            self.sets = info("constants").split_whitespace().map(String::from).collect();
-        }
-    }
-
-    /// Fills the settings a resumed film has and these options, `graph` and `seed` do not
-    /// give: scene, graph, resolution, samples per frame, seed (default `default_seed`) and
-    /// constants (the measured ones too, so the resumed run renders the film's estimator).
-    /// Those given must match the film's: [`Reference::check_settings`] checks them.
-    pub fn from_film(
-        &mut self,
-        graph: &mut Option<String>,
-        seed: &mut Option<u32>,
-        default_seed: u32,
-        film: &Reference,
-    ) {
-        let info = |k: &str| film.info.get(k).cloned().unwrap_or_default();
-        self.scene.get_or_insert_with(|| info("scene"));
-        graph.get_or_insert_with(|| info("graph"));
-        self.res.get_or_insert(film.size);
-        self.spp
-            .get_or_insert_with(|| info("samples_per_frame").parse().unwrap_or(1));
-        seed.get_or_insert_with(|| info("seed").parse().unwrap_or(default_seed));
-        if self.sets.is_empty() && self.max_path_length.is_none() {
-            let words = format!("{} {}", info("constants"), info("measured"));
-            self.sets = words.split_whitespace().map(String::from).collect();
-        }
     }
 }
 

@@ -4,7 +4,7 @@
 use super::summary::SceneRuns;
 use crate::compare::ErrorSample;
 use crate::compare::html::{add_images, error_plot};
-use crate::reference::Reference;
+use crate::film::Film;
 use crate::report::Report;
 use anyhow::Result;
 use std::path::{Path, PathBuf};
@@ -20,7 +20,7 @@ pub fn write_html(dir: &Path, md: &str, scenes: &[SceneRuns]) -> Result<()> {
     let mut report = Report::new("Study");
     report.markdown(md);
     for scene in scenes {
-        let reference = Reference::read(Path::new(&scene.reference.path))?;
+        let reference = Film::read(Path::new(&scene.reference.path))?;
         let curves: Vec<(&str, &[ErrorSample])> = scene
             .runs
             .iter()

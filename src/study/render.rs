@@ -8,8 +8,8 @@ use crate::compare::{EstimatorSpec, estimator_specs};
 use crate::interrupt::Interrupted;
 use crate::output::{Output, check_outputs, si};
 
-use crate::reference::Reference;
-use crate::reference::render::{REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render};
+use crate::film::Film;
+use crate::reference::{REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render};
 use crate::run::scene::find_scene;
 use crate::run::{DEFAULT_GRAPH, Run, RunOptions, Scenes, load_graph, named_layout, parse_sets};
 use crate::study::html::write_html;
@@ -232,7 +232,7 @@ fn compare_args(args: &StudySpec, (scene, folder): (&str, &str), path: &Path) ->
 }
 
 /// What the summary says of the reference at `path`.
-fn reference_note(reference: &Reference, path: &Path, source: ReferenceSource) -> ReferenceNote {
+fn reference_note(reference: &Film, path: &Path, source: ReferenceSource) -> ReferenceNote {
     ReferenceNote {
         path: path.display().to_string(),
         graph: reference.info.get("graph").cloned().unwrap_or_default(),
@@ -340,7 +340,7 @@ enum Shortfall {
 
 /// What the film (none when there is no file yet) lacks of `frames` frames, or of `time`
 /// render seconds when no frame count is asked for; `None` when it has enough.
-fn shortfall(film: Option<&Reference>, frames: Option<u32>, time: Duration) -> Option<Shortfall> {
+fn shortfall(film: Option<&Film>, frames: Option<u32>, time: Duration) -> Option<Shortfall> {
     match (film, frames) {
         (None, Some(n)) => Some(Shortfall::Frames(n)),
         (None, None) => Some(Shortfall::Time(time)),
@@ -359,9 +359,9 @@ fn shortfall(film: Option<&Reference>, frames: Option<u32>, time: Duration) -> O
 /// (its settings are checked against the runs as `compare` checks them), resumed when it
 /// holds less, rendered with `--reference-graph` when there is none, both by `lightgraph
 /// reference`.
-fn ensure_reference(args: &StudySpec, scene: &str, path: &Path) -> Result<(Reference, ReferenceSource)> {
+fn ensure_reference(args: &StudySpec, scene: &str, path: &Path) -> Result<(Film, ReferenceSource)> {
     let film = match path.exists() {
-        true => Some(Reference::read(path)?),
+        true => Some(Film::read(path)?),
         false => None,
     };
     let Some(missing) = shortfall(film.as_ref(), args.reference_frames, args.reference_time) else {
@@ -372,7 +372,7 @@ fn ensure_reference(args: &StudySpec, scene: &str, path: &Path) -> Result<(Refer
         None => ReferenceSource::Rendered,
     };
     render(reference_spec(args, scene, (path, film), missing))?;
-    Ok((Reference::read(path)?, source))
+    Ok((Film::read(path)?, source))
 }
 
 /// The reference render that renders (no `film` at `path`) or resumes the reference at
@@ -380,7 +380,7 @@ fn ensure_reference(args: &StudySpec, scene: &str, path: &Path) -> Result<(Refer
 fn reference_spec(
     args: &StudySpec,
     scene: &str,
-    (path, film): (&Path, Option<Reference>),
+    (path, film): (&Path, Option<Film>),
     missing: Shortfall,
 ) -> ReferenceSpec {
     let new = film.is_none();
@@ -419,8 +419,8 @@ mod tests {
     use super::*;
     use std::collections::BTreeMap;
 
-    fn film(frames: u64, seconds: f64) -> Reference {
-        let mut r = Reference::new((1, 1), BTreeMap::new());
+    fn film(frames: u64, seconds: f64) -> Film {
+        let mut r = Film::new((1, 1), BTreeMap::new());
         r.frames = frames;
         r.seconds = seconds;
         r

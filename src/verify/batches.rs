@@ -3,7 +3,7 @@
 //! ([`BlockBatches`]) and the run's total.
 
 use super::stats::BlockBatches;
-use crate::reference::Reference;
+use crate::film::Film;
 use crate::run::{Image, Run, Session};
 use anyhow::{Result, bail};
 use lightgraph_engine::Gpu;
@@ -59,7 +59,7 @@ pub fn render_batches(
     let at_once = session.frames_at_once();
     let mut blocks = BlockBatches::new(size, block);
     // The run's f64 sums over every batch, for its image.
-    let mut total = Reference::new(size, Default::default());
+    let mut total = Film::new(size, Default::default());
     let start = Instant::now();
     let mut per_batch = match budget.amount {
         Amount::Frames(n) => Some(n.div_ceil(budget.batches).div_ceil(at_once) * at_once),

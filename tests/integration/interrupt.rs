@@ -4,7 +4,7 @@
 
 use crate::cli::{fails, lightgraph, temp_dir};
 use crate::shards::largest_difference;
-use lightgraph::reference::Reference;
+use lightgraph::film::Film;
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -83,7 +83,7 @@ fn sigint_keeps_the_frames_and_resume_equals_an_uninterrupted_run() {
     assert_eq!(code, Some(130), "{stderr}");
     assert!(stderr.contains("SIGINT") && stderr.contains("--resume"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
-    let kept = Reference::read(&cut).unwrap();
+    let kept = Film::read(&cut).unwrap();
     let total: u64 = FRAMES.parse().unwrap();
     assert!(
         kept.frames > 0 && kept.frames < total,
@@ -94,7 +94,7 @@ fn sigint_keeps_the_frames_and_resume_equals_an_uninterrupted_run() {
     // Resumed with the run's total: the frames it lacked, then the whole run's image.
     render(&["--frames", FRAMES, "--resume", cut_s]);
     render(&["--frames", FRAMES, "--out", whole_s]);
-    let (resumed, whole) = (Reference::read(&cut).unwrap(), Reference::read(&whole).unwrap());
+    let (resumed, whole) = (Film::read(&cut).unwrap(), Film::read(&whole).unwrap());
     assert_eq!(resumed.ranges, vec![(0, total)]);
     // The same frames summed in two parts instead of one: float rounding only (see
     // shards::shards_merged_equal_one_run for the bound).
@@ -119,13 +119,10 @@ fn sigterm_keeps_the_frames_of_a_render_on_gpus_and_of_a_reference() {
     ]);
     let (code, stderr) = interrupt_once_written(start(&args), &gpus, "TERM");
     assert_eq!(code, Some(143), "{stderr}");
-    let kept = Reference::read(&gpus).unwrap();
+    let kept = Film::read(&gpus).unwrap();
     assert!(kept.frames > 0 && kept.ranges.len() == 1, "{:?}", kept.ranges);
     render(&["--frames", FRAMES, "--gpus", "1", "--resume", gpus_s]);
-    assert_eq!(
-        Reference::read(&gpus).unwrap().ranges,
-        vec![(0, FRAMES.parse().unwrap())]
-    );
+    assert_eq!(Film::read(&gpus).unwrap().ranges, vec![(0, FRAMES.parse().unwrap())]);
     let args = box_reference(&["--time", "10m", "--checkpoint", "100ms", "--out", reference_s]);
     let (code, stderr) = interrupt_once_written(start(&args), &reference, "TERM");
     assert_eq!(code, Some(143), "{stderr}");
@@ -133,11 +130,11 @@ fn sigterm_keeps_the_frames_of_a_render_on_gpus_and_of_a_reference() {
         stderr.contains("SIGTERM") && stderr.contains("reference --resume"),
         "{stderr}"
     );
-    let kept = Reference::read(&reference).unwrap();
+    let kept = Film::read(&reference).unwrap();
     assert!(kept.frames > 0);
     let run = lightgraph(&["reference", "--resume", reference_s, "--frames", "2"]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    assert_eq!(Reference::read(&reference).unwrap().frames, kept.frames + 2);
+    assert_eq!(Film::read(&reference).unwrap().frames, kept.frames + 2);
 }
 
 #[test]
@@ -167,7 +164,7 @@ fn outputs_never_overwrite_a_film_unless_asked() {
     );
     assert_eq!(std::fs::metadata(&film).unwrap().modified().unwrap(), written);
     render(&["--frames", "3", "--out", film_s, "--force"]);
-    assert_eq!(Reference::read(&film).unwrap().frames, 3);
+    assert_eq!(Film::read(&film).unwrap().frames, 3);
     // A resumed film's settings are checked as merge checks them, and --frames is the total.
     let err = fails(&["render", "--resume", film_s, "--spp", "2", "--frames", "6"]);
     assert!(err.contains("samples_per_frame is '1' there, '2' here"), "{err}");
@@ -218,7 +215,7 @@ fn run_printed(words: &[String]) {
 /// the run `child` goes on.
 fn wait_for_frames(child: &mut Child, path: &Path, frames: u64) {
     let started = Instant::now();
-    while Reference::read(path).map_or(true, |f| f.frames <= frames) {
+    while Film::read(path).map_or(true, |f| f.frames <= frames) {
         assert!(
             child.try_wait().unwrap().is_none(),
             "the run ended before its film held {frames} frames"
@@ -248,19 +245,19 @@ fn the_resume_command_a_stopped_timed_run_prints_works() {
     wait_for_frames(&mut child, &film, 64);
     let (code, stderr) = interrupt_once_written(child, &film, "INT");
     assert_eq!(code, Some(130), "{stderr}");
-    let kept = Reference::read(&film).unwrap().frames;
+    let kept = Film::read(&film).unwrap().frames;
     let command = printed_resume_command(&stderr);
     run_printed(&command);
     assert!(command.contains(&"--time".to_string()), "{command:?}");
-    assert!(Reference::read(&film).unwrap().frames > kept);
+    assert!(Film::read(&film).unwrap().frames > kept);
     // A reference (whose --time or --frames is required) likewise.
     let out = reference.to_str().unwrap();
     let args = box_reference(&["--time", "8s", "--checkpoint", "100ms", "--out", out]);
     let (code, stderr) = interrupt_once_written(start(&args), &reference, "TERM");
     assert_eq!(code, Some(143), "{stderr}");
-    let kept = Reference::read(&reference).unwrap().frames;
+    let kept = Film::read(&reference).unwrap().frames;
     run_printed(&printed_resume_command(&stderr));
-    assert!(Reference::read(&reference).unwrap().frames > kept);
+    assert!(Film::read(&reference).unwrap().frames > kept);
 }
 
 #[test]
@@ -299,7 +296,7 @@ fn a_second_signal_says_it_exits_without_writing_and_the_checkpoint_stays_whole(
         "{stderr}"
     );
     // The film on disk is a whole checkpoint.
-    let kept = Reference::read(&film).unwrap();
+    let kept = Film::read(&film).unwrap();
     assert!(kept.frames > 0 && kept.frames < 100_000, "{}", kept.frames);
 }
 

@@ -3,16 +3,16 @@
 //! --reference` / `compare` check what they are given.
 
 use crate::cli::{fails, lightgraph, temp_dir};
-use lightgraph::reference::Reference;
+use lightgraph::film::Film;
 use std::path::Path;
 
 const SCENE: [&str; 6] = ["--scene", "cornell-diffuse", "--res", "16x12", "--spp", "2"];
 
 /// Renders a reference of [`SCENE`] with `args` into `out`; returns it.
-pub(crate) fn reference(args: &[&str], out: &Path) -> Reference {
+pub(crate) fn reference(args: &[&str], out: &Path) -> Film {
     let run = lightgraph(&[&["reference"], &SCENE[..], args, &["--out", out.to_str().unwrap()]].concat());
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    Reference::read(out).expect("a reference was written")
+    Film::read(out).expect("a reference was written")
 }
 
 #[test]
@@ -24,7 +24,7 @@ fn a_resumed_reference_equals_one_rendered_at_once() {
     // Resuming takes the scene, resolution, spp and seed from the file.
     let run = lightgraph(&["reference", "--resume", part.to_str().unwrap(), "--frames", "4"]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let resumed = Reference::read(&part).unwrap();
+    let resumed = Film::read(&part).unwrap();
     assert_eq!((resumed.frames, whole.frames), (6, 6));
     assert_eq!(resumed.samples_per_pixel(), 12);
     assert_eq!(resumed.info["seed"], "1000003");
@@ -136,7 +136,7 @@ fn settings_that_would_mix_estimates_are_refused() {
         more.to_str().unwrap(),
     ]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let film = lightgraph::reference::Reference::read(&more).unwrap();
+    let film = lightgraph::film::Film::read(&more).unwrap();
     assert_eq!((film.frames, film.ranges.clone()), (3, vec![(0, 3)]));
     // An EXR without lightgraph's settings is not a reference.
     let plain = dir.join("plain.exr");
@@ -227,7 +227,7 @@ fn a_measured_constant_is_recorded_resumed_and_left_out_of_compare() {
     let p = path.to_str().unwrap();
     let run = lightgraph(&["reference", "--resume", p, "--frames", "1"]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let resumed = Reference::read(&path).unwrap();
+    let resumed = Film::read(&path).unwrap();
     assert_eq!(
         (resumed.frames, resumed.info["measured"].as_str()),
         (2, measured.as_str())

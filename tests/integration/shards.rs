@@ -6,7 +6,7 @@
 
 use crate::cli::{fails, lightgraph, temp_dir};
 use crate::common::{borrowed, gpu, measured, options};
-use lightgraph::reference::Reference;
+use lightgraph::film::Film;
 use lightgraph::run::{LoadedScene, Session, load_graph, load_scene};
 use lightgraph_engine::ConstValue;
 use std::collections::BTreeMap;
@@ -26,19 +26,19 @@ fn film_of(
     layout: &str,
     (first, frames): (u32, u32),
     constants: &[(&str, ConstValue)],
-) -> Reference {
+) -> Film {
     let graph = load_graph(graph).unwrap();
     let opts = options((SIZE, SIZE), 2, SEED, constants, Default::default());
     let mut session = Session::new(gpu(), &graph, layout, scene, opts).unwrap();
     session.first_frame = first;
     session.render_frames(frames).unwrap();
-    let mut film = Reference::new((SIZE, SIZE), BTreeMap::new());
+    let mut film = Film::new((SIZE, SIZE), BTreeMap::new());
     film.absorb(&session.accumulation().unwrap()).unwrap();
     film
 }
 
 /// The largest difference of two films' means relative to the larger (floored at 1e-3).
-pub(crate) fn largest_difference(a: &Reference, b: &Reference) -> f64 {
+pub(crate) fn largest_difference(a: &Film, b: &Film) -> f64 {
     let mut worst = 0f64;
     for (p, q) in a.mean().iter().zip(&b.mean()) {
         for c in 0..3 {
@@ -123,8 +123,8 @@ fn render_shards_merge_through_the_cli() {
     let run = lightgraph(&["merge", &path("a.exr"), &path("b.exr"), "--out", &path("m.exr")]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     assert!(dir.join("m.png").is_file());
-    let merged = Reference::read(&dir.join("m.exr")).unwrap();
-    let whole = Reference::read(&dir.join("whole.exr")).unwrap();
+    let merged = Film::read(&dir.join("m.exr")).unwrap();
+    let whole = Film::read(&dir.join("whole.exr")).unwrap();
     assert_eq!((merged.frames, merged.ranges.clone()), (3, vec![(0, 3)]));
     let worst = largest_difference(&merged, &whole);
     assert!(worst < 1e-5, "merged shards differ from one run by {worst:.2e}");
@@ -161,11 +161,7 @@ fn a_run_on_two_devices_equals_it_on_one() {
     assert!(one.status.success(), "{}", String::from_utf8_lossy(&one.stderr));
     // The film records the measured average sub-path length; the run on two devices is given
     // it (as shards are), so both render one estimator.
-    let recorded = Reference::read(&dir.join("one.exr"))
-        .unwrap()
-        .info
-        .get("measured")
-        .cloned();
+    let recorded = Film::read(&dir.join("one.exr")).unwrap().info.get("measured").cloned();
     let measured = recorded
         .clone()
         .filter(|m| m.starts_with("LVC_AVERAGE_LENGTH="))
@@ -179,8 +175,8 @@ fn a_run_on_two_devices_equals_it_on_one() {
         "{stderr}"
     );
     let (one, two) = (
-        Reference::read(&dir.join("one.exr")).unwrap(),
-        Reference::read(&dir.join("two.exr")).unwrap(),
+        Film::read(&dir.join("one.exr")).unwrap(),
+        Film::read(&dir.join("two.exr")).unwrap(),
     );
     assert_eq!((two.frames, two.ranges.clone()), (8, vec![(0, 8)]));
     assert_eq!(one.info.get("measured"), two.info.get("measured"));
@@ -203,7 +199,7 @@ fn a_run_on_two_devices_equals_it_on_one() {
         ];
         let run = lightgraph(&args.concat());
         assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-        Reference::read(out.as_ref()).unwrap()
+        Film::read(out.as_ref()).unwrap()
     };
     let (one, two) = (
         reference(&[], &path("ref1.exr")),

@@ -7,7 +7,7 @@ use crate::cli::{fails, lightgraph, temp_dir};
 use crate::common::gpu;
 use crate::reference::reference;
 use lightgraph::compare::{RunBudget, run};
-use lightgraph::reference::Reference;
+use lightgraph::film::Film;
 use lightgraph::run::{Run, RunSpec, load_graph, load_scene};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -122,7 +122,7 @@ fn a_study_writes_a_comparison_per_scene_and_one_summary() {
             &out.join(scene),
             &["pt:NaivePTsk".to_string(), format!("ppm:{}", fastest["layout"])],
         );
-        let reference = Reference::read(&out.join("references").join(format!("{scene}.exr"))).unwrap();
+        let reference = Film::read(&out.join("references").join(format!("{scene}.exr"))).unwrap();
         assert_eq!((reference.frames, reference.info["graph"].as_str()), (4, "pt"));
     }
 }
@@ -193,7 +193,7 @@ fn a_study_uses_a_given_reference_and_resumes_a_short_one() {
     let mut resume = with("6", "pt");
     resume.push("--force".into());
     study(&args(&resume));
-    let resumed = Reference::read(&path).unwrap();
+    let resumed = Film::read(&path).unwrap();
     assert_eq!((resumed.frames, resumed.info["graph"].as_str()), (6, "pt"));
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("(resumed)") && md.contains("12 spp"), "{md}");

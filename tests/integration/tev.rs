@@ -2,7 +2,7 @@
 //! the image the render writes; a tev that is not there costs a warning, not the render.
 
 use crate::cli::{lightgraph, temp_dir};
-use lightgraph::reference::Reference;
+use lightgraph::film::Film;
 use std::io::Read;
 use std::net::TcpListener;
 
@@ -157,7 +157,7 @@ fn the_live_view_streams_the_image_the_render_writes() {
         }
     }
     assert!(tiles >= 4 && tiles % 4 == 0, "{tiles} tiles");
-    let film = Reference::read(&out).unwrap();
+    let film = Film::read(&out).unwrap();
     let mut worst = 0f32;
     for (a, b) in image.iter().zip(film.mean()) {
         for c in 0..3 {

@@ -5,17 +5,17 @@ use super::{RenderArgs, budget, progress_bar, write_film};
 use crate::cli::args::{reference_mean, si};
 use anyhow::Result;
 use lightgraph::compare::ErrorSample;
+use lightgraph::film::Film;
 use lightgraph::interrupt::stopped_by_signal;
 use lightgraph::metrics::{ImageError, image_error};
 use lightgraph::multi::{Merging, Share, gpu_selectors, render_on_gpus};
 use lightgraph::output::shell_word;
-use lightgraph::reference::Reference;
 use lightgraph::run::Run;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// The progress line: frames, samples/s and each GPU's rate.
-fn progress_line(shares: &[Share], film: &Reference, pixels: f64, secs: f64, error: &str) -> String {
+fn progress_line(shares: &[Share], film: &Film, pixels: f64, secs: f64, error: &str) -> String {
     let spf = film.samples_per_pixel() as f64 / film.frames.max(1) as f64;
     let per_gpu: Vec<String> = shares
         .iter()
@@ -32,7 +32,7 @@ fn progress_line(shares: &[Share], film: &Reference, pixels: f64, secs: f64, err
 
 /// `lightgraph render --gpus`: the frames of one render shared by several GPUs, each claiming
 /// batches sized to its speed, added into one film.
-pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Reference>) -> Result<()> {
+pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Film>) -> Result<()> {
     let selectors = gpu_selectors(spec)?;
     let mut run = Run::load_named(&args.spec(), "--gpus")?;
     args.check_out()?;
@@ -136,7 +136,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Ref
 }
 
 /// The error `e` of `film` after `seconds` of this run, which began at frame `frames_before`.
-fn error_sample(film: &Reference, frames_before: u64, seconds: f64, e: ImageError) -> ErrorSample {
+fn error_sample(film: &Film, frames_before: u64, seconds: f64, e: ImageError) -> ErrorSample {
     let frames = film.frames - frames_before;
     ErrorSample {
         seconds,
@@ -148,7 +148,7 @@ fn error_sample(film: &Reference, frames_before: u64, seconds: f64, e: ImageErro
 
 /// The rates of a render on several GPUs on stderr: samples/s wall-clock over `film`, each
 /// GPU's share, and the host's merging.
-fn report_shares(film: &Reference, shares: &[Share], merging: &Merging, pixels: f64) {
+fn report_shares(film: &Film, shares: &[Share], merging: &Merging, pixels: f64) {
     let seconds = merging.run_seconds;
     let spf = film.samples_per_pixel() as f64 / film.frames.max(1) as f64;
     eprintln!(

@@ -4,7 +4,7 @@
 use anyhow::Result;
 use lightgraph::compare::ErrorSample;
 use lightgraph::compare::html::error_plot;
-use lightgraph::reference::Reference;
+use lightgraph::film::Film;
 use lightgraph::report::Report;
 use std::path::{Path, PathBuf};
 
@@ -15,8 +15,8 @@ pub fn html_path(out: &Path) -> PathBuf {
 
 /// Writes the report ([`html_path`]) of the film written to `out`, rendered with `layout`
 /// against the reference at `path`, whose error was `errors` over this run's time.
-pub fn write_html(out: &Path, film: &Reference, (path, layout): (&Path, &str), errors: &[ErrorSample]) -> Result<()> {
-    let reference = Reference::read(path)?;
+pub fn write_html(out: &Path, film: &Film, (path, layout): (&Path, &str), errors: &[ErrorSample]) -> Result<()> {
+    let reference = Film::read(path)?;
     let floor = reference.noise_floor_mse().sqrt();
     let info = |k: &str| film.info.get(k).cloned().unwrap_or_default();
     let (w, h) = film.size;

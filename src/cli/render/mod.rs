@@ -14,6 +14,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::aov::{Aov, AovRender};
 use lightgraph::compare::ErrorSample;
+use lightgraph::film::{Film, film_settings};
 use lightgraph::interrupt;
 use lightgraph::interrupt::stopped_by_signal;
 use lightgraph::live::Live;
@@ -21,7 +22,6 @@ use lightgraph::metrics::image_error;
 use lightgraph::multi::Budget;
 use lightgraph::output;
 use lightgraph::output::{check_out, shell_word};
-use lightgraph::reference::{Reference, film_settings};
 use lightgraph::run::{LoadedScene, Run, RunSpec, Session};
 use lightgraph::serve::LiveServer;
 use lightgraph_engine::Gpu;
@@ -192,7 +192,7 @@ impl RenderArgs {
 
     /// The film `run` starts from: the resumed one (its settings checked against the run's,
     /// measured constants included) or an empty one.
-    pub fn start_film(&self, run: &Run, resumed: Option<Reference>) -> Result<Reference> {
+    pub fn start_film(&self, run: &Run, resumed: Option<Film>) -> Result<Film> {
         let opts = &run.options;
         let info = film_settings(&run.spec.scene, &run.graph, opts);
         let size = (opts.width, opts.height);
@@ -202,7 +202,7 @@ impl RenderArgs {
                 film.check_size(path, size)?;
                 Ok(film)
             }
-            _ => Ok(Reference::new(size, info)),
+            _ => Ok(Film::new(size, info)),
         }
     }
 }
@@ -210,7 +210,7 @@ impl RenderArgs {
 /// Reads the film `--resume` names: the settings the command line leaves out become the
 /// film's, the run's frames follow the film's last one, and `--frames` (the run's total)
 /// becomes the frames left to render ([`RenderArgs::frames_left`]).
-fn resume_film(args: &mut RenderArgs) -> Result<Option<Reference>> {
+fn resume_film(args: &mut RenderArgs) -> Result<Option<Film>> {
     args.frames_left = args.frames();
     let Some(path) = args.resume.clone() else {
         return Ok(None);
@@ -221,7 +221,7 @@ fn resume_film(args: &mut RenderArgs) -> Result<Option<Reference>> {
     if args.layout.as_deref() == Some("auto") {
         bail!("--layout auto measures layouts before a run: name the film's layout with --resume");
     }
-    let film = Reference::read(&path)?;
+    let film = Film::read(&path)?;
     settings_from_film(&mut args.common, &mut args.graph, &mut args.seed, 1, &film);
     if args.time.is_none() {
         args.frames_left = frames_left(args.frames(), film.frames, Some(&path))?;
@@ -329,7 +329,7 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
 }
 
 /// Adds the session's rays and rejected samples to the film's (a resumed film's count on).
-fn add_statistics(film: &mut Reference, session: &Session) {
+fn add_statistics(film: &mut Film, session: &Session) {
     for (key, value) in [
         ("rays", session.rays()),
         ("rejected_samples", rejected_samples(session)),
@@ -340,7 +340,7 @@ fn add_statistics(film: &mut Reference, session: &Session) {
 }
 
 /// Writes `film` to `out` and its PNG preview beside it; returns the PNG's path.
-pub fn write_film(film: &Reference, out: &Path, exposure: f32) -> Result<PathBuf> {
+pub fn write_film(film: &Film, out: &Path, exposure: f32) -> Result<PathBuf> {
     film.write(out, "render")?;
     let png = out.with_extension("png");
     output::write_png(&png, &film.image(), exposure)?;
@@ -350,7 +350,7 @@ pub fn write_film(film: &Reference, out: &Path, exposure: f32) -> Result<PathBuf
 /// Where a progressive render's results go while it runs: the film (on the host, in f64), its
 /// file (for checkpoints), the reference of the progress line's error and the live view.
 struct Progress<'a> {
-    film: &'a mut Reference,
+    film: &'a mut Film,
     out: &'a Path,
     reference: Option<&'a [[f32; 3]]>,
     /// The error against the reference, about once a second.

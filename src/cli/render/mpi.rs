@@ -6,9 +6,9 @@ use crate::cli::args::si;
 use anyhow::{Result, anyhow};
 use indicatif::ProgressBar;
 use lightgraph::cluster::{Outcome, place, rank_adapter, render_across};
+use lightgraph::film::Film;
 use lightgraph::interrupt::stopped_by_signal;
 use lightgraph::live::Live;
-use lightgraph::reference::Reference;
 use lightgraph::run::Run;
 use lightgraph_engine::ConstValue;
 use mpi::topology::SimpleCommunicator;
@@ -17,7 +17,7 @@ use std::time::Instant;
 
 /// `lightgraph render --mpi`: the frames of one render shared by the ranks of an MPI job, one
 /// GPU each; rank 0 shows the progress, takes a resumed film in and writes the film.
-pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<()> {
+pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Film>) -> Result<()> {
     let universe = mpi::initialize().ok_or_else(|| anyhow!("MPI is initialised already"))?;
     let world = universe.world();
     let root = place(&world).rank == 0;
@@ -118,7 +118,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Reference>) -> Result<
 
 /// The run's rates on stderr: samples/s over the time after every rank's set-up (as `--gpus`
 /// counts it), the set-up, frames by rank, the ranks' waits and the film reduction.
-fn report(film: &Reference, outcome: &Outcome, pixels: f64, setup_seconds: f64) {
+fn report(film: &Film, outcome: &Outcome, pixels: f64, setup_seconds: f64) {
     let seconds = outcome.render_seconds;
     eprintln!(
         "{} frames, {} spp in {seconds:.2} s on {} ranks (set-up {setup_seconds:.2} s before): {}samples/s wall-clock, {}rays/s",
