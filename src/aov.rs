@@ -11,6 +11,7 @@
 //! world position. Samples that escape count for none of them: each is averaged over the
 //! pixel's samples that hit (the coverage); a pixel none of whose samples hit holds 0.
 
+use crate::drive::{Budget, Plan, Stopwatch, drive};
 use crate::run::{LoadedScene, Session, SessionOptions, load_graph};
 use anyhow::{Result, bail};
 use lightgraph_engine::{ConstValue, Gpu};
@@ -117,10 +118,8 @@ impl<'g> AovRender<'g> {
     pub fn render(&mut self, first: u32, count: u32) -> Result<()> {
         for (_, session) in &mut self.sessions {
             session.first_frame = first;
-            while session.frames < count {
-                session.render_for(None, count - session.frames)?;
-            }
-            session.settle()?;
+            let budget = Budget::Frames(count.saturating_sub(session.frames) as u64);
+            drive(session, Plan::new(budget), &mut Stopwatch::start(), &mut [])?.whole("the feature buffers")?;
         }
         Ok(())
     }

@@ -2,6 +2,7 @@
 //! budget; `bench` sweeps paths per frame (the paper's Table I and Figure 3) and writes a
 //! Markdown table, a CSV and a PNG plot.
 
+use crate::drive::{Budget, Plan, Stopwatch, drive};
 use crate::plot::{Axes, Series, line_plot};
 use crate::run::{Run, Session};
 use anyhow::{Context, Result};
@@ -9,7 +10,7 @@ use lightgraph_engine::Gpu;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// One layout measured at one frame size.
 #[derive(Debug, Clone)]
@@ -69,14 +70,16 @@ pub fn measure_session(session: &mut Session, layout: &str, budget: Duration) ->
     let (resolution, spp) = ((options.width, options.height), options.samples_per_frame);
     session.render_frame()?;
     let (rays0, kernels0) = (session.rays(), session.kernel_seconds.clone());
-    let start = Instant::now();
+    let mut clock = Stopwatch::start();
     let frames0 = session.frames;
-    while session.frames == frames0 || start.elapsed() < budget {
-        let left = budget.saturating_sub(start.elapsed());
-        session.render_for(Some(left), u32::MAX)?;
-    }
-    session.settle()?;
-    let seconds = start.elapsed().as_secs_f64();
+    drive(
+        session,
+        Plan::new(Budget::Time(budget)).at_least(1),
+        &mut clock,
+        &mut [],
+    )?
+    .whole("the measurement")?;
+    let seconds = clock.seconds();
     let frames = session.frames - frames0;
     let kernel_ms: BTreeMap<String, f64> = session
         .kernel_seconds

@@ -9,8 +9,8 @@
 //! round in which every rank was done (and every round where a live view wants the film),
 //! so a run pays for one read-back and one film reduction, not one every round.
 
+use crate::drive::{Budget, Ended, Executor, Plan, Stopwatch, drive};
 use crate::film::Film;
-use crate::multi::Budget;
 use crate::run::Run;
 use crate::run::Session;
 use anyhow::{Result, anyhow, bail};
@@ -208,10 +208,11 @@ fn open_worker<'g, C: Communicator>(
 }
 
 /// Renders `run` within `budget` on every rank of `world`, each on its adapter (`adapter`, or
-/// the rank's node-local index). Rank 0 gets `progress` after every round and the run's film
-/// in `film` at the end, and after every round too where `live` (the same on every rank:
-/// a live view wants the film); the other ranks leave `film` empty. Returns what the ranks
-/// did (on rank 0; zeros elsewhere but the times).
+/// the rank's node-local index): the driver's loop over [`Ranks`], one round a batch. Rank 0
+/// gets `progress` after every round and the run's film in `film` at the end, and after every
+/// round too where `live` (the same on every rank: a live view wants the film); the other
+/// ranks leave `film` empty. Returns what the ranks did (on rank 0; zeros elsewhere but the
+/// times).
 pub fn render_across<C: Communicator>(
     world: &C,
     run: &Run,
@@ -223,64 +224,124 @@ pub fn render_across<C: Communicator>(
 ) -> Result<Outcome> {
     let place = place(world);
     let gpu = Gpu::new(Some(&rank_adapter(&place, adapter)));
-    let mut worker = open_worker(world, gpu.as_ref().map_err(|e| anyhow!("{e}")), run, place, film);
+    let worker = open_worker(world, gpu.as_ref().map_err(|e| anyhow!("{e}")), run, place, film);
     world.barrier();
-    let start = Instant::now();
-    let mut outcome = Outcome {
-        frames_by_rank: vec![0; place.ranks],
-        rays_by_rank: vec![0; place.ranks],
-        ..Default::default()
+    let mut ranks = Ranks {
+        world,
+        run,
+        place,
+        budget,
+        live,
+        worker,
+        film,
+        outcome: Outcome {
+            frames_by_rank: vec![0; place.ranks],
+            rays_by_rank: vec![0; place.ranks],
+            ..Default::default()
+        },
+        failure: None,
+        start: Instant::now(),
+        rounds: 0,
+        finished: false,
     };
-    let mut failure: Option<anyhow::Error> = None;
-    for round in 1u32.. {
+    let mut show = |r: &mut Ranks<C>, _: &mut Stopwatch| -> Result<()> {
+        if r.place.rank == 0 {
+            progress(&Progress {
+                film: r.film,
+                frames_by_rank: &r.outcome.frames_by_rank,
+                rays_by_rank: &r.outcome.rays_by_rank,
+            });
+        }
+        Ok(())
+    };
+    drive(&mut ranks, Plan::new(budget), &mut Stopwatch::start(), &mut [&mut show])?;
+    ranks.outcome.render_seconds = ranks.start.elapsed().as_secs_f64();
+    if let Some(e) = ranks.failure {
+        bail!("rank {}: {e:#}", place.rank);
+    }
+    Ok(ranks.outcome)
+}
+
+/// The ranks as the driver's executor, seen from one of them: each batch is a round (render
+/// blocks while a small all-reduce of every rank's state completes); the ranks decide the end
+/// together, in the round where every one is done.
+struct Ranks<'a, 'g, C> {
+    world: &'a C,
+    run: &'a Run,
+    place: Place,
+    budget: Budget,
+    live: bool,
+    worker: Worker<'g>,
+    film: &'a mut Film,
+    outcome: Outcome,
+    failure: Option<anyhow::Error>,
+    /// When every rank had its session: the budget's clock.
+    start: Instant,
+    rounds: u32,
+    /// Whether the last round found every rank done.
+    finished: bool,
+}
+
+impl<C: Communicator> Executor for Ranks<'_, '_, C> {
+    fn frames(&self) -> u64 {
+        self.outcome.frames_by_rank.iter().sum()
+    }
+
+    /// One round: this rank's state posted, blocks rendered until the round's end, the
+    /// ranks' states read; the film reduced when all are done (or a live view wants it).
+    fn advance(&mut self, _left: Option<Duration>, _max: u64) -> Result<()> {
+        let (place, world) = (self.place, self.world);
+        self.rounds += 1;
         let interrupted_here = crate::interrupt::requested().is_some();
+        let worker = &mut self.worker;
         worker.done |= interrupted_here;
-        worker.check_budget(place, budget, start);
-        let state = worker.state(place, worker.done || failure.is_some(), interrupted_here);
+        worker.check_budget(place, self.budget, self.start);
+        let state = worker.state(place, worker.done || self.failure.is_some(), interrupted_here);
         let mut all = vec![0.0; state.len()];
+        let (failure, start, round, run, budget) = (&mut self.failure, self.start, self.rounds, self.run, self.budget);
         let waited = mpi::request::scope(|scope| {
             let request = world.immediate_all_reduce_into(scope, &state[..], &mut all[..], SystemOperation::sum());
             // Render on while the message completes, until the round's end.
             while failure.is_none() && !worker.done && start.elapsed() < INTERVAL * round {
                 if let Err(e) = worker.render_block(run, place, budget, start) {
-                    failure = Some(e);
+                    *failure = Some(e);
                 }
             }
             let waiting = Instant::now();
             request.wait();
             waiting.elapsed().as_secs_f64()
         });
-        outcome.waiting_seconds += waited;
+        self.outcome.waiting_seconds += waited;
         let all_done = all[2 * place.ranks] as usize == place.ranks;
-        if all_done || live {
+        if all_done || self.live {
             if let Err(e) = worker.absorb() {
                 eprintln!("error: rank {}: {e:#}", place.rank);
                 world.abort(1)
             }
-            reduce_film(world, &worker, film, &mut outcome);
+            reduce_film(world, worker, self.film, &mut self.outcome);
         }
         if place.rank == 0 {
-            (outcome.frames_by_rank, outcome.rays_by_rank) = set_ranges(film, &all, run, place, budget)?;
-            progress(&Progress {
-                film,
-                frames_by_rank: &outcome.frames_by_rank,
-                rays_by_rank: &outcome.rays_by_rank,
-            });
+            (self.outcome.frames_by_rank, self.outcome.rays_by_rank) = set_ranges(self.film, &all, run, place, budget)?;
         }
         if all[2 * place.ranks + 1] > 0.0 {
             // A signal on some rank: every rank's next message is its last.
-            outcome.interrupted = true;
+            self.outcome.interrupted = true;
             worker.done = true;
         }
-        if all_done {
-            break;
-        }
+        self.finished = all_done;
+        Ok(())
     }
-    outcome.render_seconds = start.elapsed().as_secs_f64();
-    if let Some(e) = failure {
-        bail!("rank {}: {e:#}", place.rank);
+
+    /// Every round ends with its blocks read back where the film is reduced.
+    fn settle(&mut self) -> Result<()> {
+        Ok(())
     }
-    Ok(outcome)
+
+    /// Over in the round where every rank was done: at the budget, a failure or a signal on
+    /// any rank (then [`Outcome::interrupted`]; the signal may have come to another rank).
+    fn ended(&self, _plan: &Plan, _done: u64, _clock: &Stopwatch) -> Option<Ended> {
+        self.finished.then_some(Ended::Done)
+    }
 }
 
 /// Reduces every rank's sums into rank 0's film (blocking), timing it into `outcome`.

@@ -12,6 +12,7 @@ pub mod resume;
 
 pub use curve::{convergence_slope, tail_noise, time_to_error};
 
+use crate::drive::{Budget, Ended, Observer, Plan, Stopwatch, drive};
 use crate::film::Film;
 use crate::interrupt::Interrupted;
 use crate::metrics::{ImageError, image_error};
@@ -178,47 +179,27 @@ pub fn run(
     }
     let setup_seconds = started.elapsed().as_secs_f64();
     let mut clock = Stopwatch::started_at(if budget.setup_on_clock { started } else { Instant::now() });
-    let budget = budget.time.as_secs_f64();
-    let mut samples: Vec<ErrorSample> = Vec::new();
-    // The error now, measured with the clock stopped.
-    // The batch in flight is waited for on the clock.
-    let mut measure = |session: &mut Session, clock: &mut Stopwatch, samples: &mut Vec<ErrorSample>| -> Result<()> {
-        session.settle()?;
-        let seconds = clock.seconds();
-        clock.pause();
-        let image = session.image()?;
-        samples.push(ErrorSample {
-            seconds,
-            frames: session.frames,
-            samples_per_pixel: session.samples_per_pixel(),
-            error: image_error(&image.mean, reference),
-        });
-        // Off the clock too: the progress may send the image to a live view.
-        progress(seconds, samples.last(), &image.mean);
-        clock.resume();
-        Ok(())
+    let time = budget.time;
+    let mut curve = ErrorCurve {
+        reference,
+        samples: Vec::new(),
+        times: Vec::new(),
+        budget: time.as_secs_f64(),
+        progress: &mut progress,
     };
     session.render_frame()?;
-    measure(&mut session, &mut clock, &mut samples)?;
-    let times = sample_times(clock.seconds(), budget, per_decade);
-    let mut next = times.iter().copied().peekable();
-    while clock.seconds() < budget {
-        if let Some(signal) = crate::interrupt::requested() {
-            let what = format!("run {label} dropped at {:.2} s of {budget} s", clock.seconds());
-            return Err(Interrupted { signal, what }.into());
-        }
-        let until = next.peek().copied().unwrap_or(budget).min(budget);
-        let left = (until - clock.seconds()).max(1e-3);
-        session.render_for(Some(Duration::from_secs_f64(left)), u32::MAX)?;
-        let now = clock.seconds();
-        if next.peek().is_some_and(|&t| now >= t) || now >= budget {
-            while next.next_if(|&t| t <= now).is_some() {}
-            measure(&mut session, &mut clock, &mut samples)?;
-        }
+    curve.measure(&mut session, &mut clock)?;
+    curve.times = sample_times(clock.seconds(), curve.budget, per_decade);
+    curve.times.reverse();
+    let plan = Plan::new(Budget::Time(time));
+    if let Ended::Signal(signal) = drive(&mut session, plan, &mut clock, &mut [&mut curve])? {
+        let what = format!("run {label} dropped at {:.2} s of {} s", clock.seconds(), curve.budget);
+        return Err(Interrupted { signal, what }.into());
     }
-    if samples.last().is_some_and(|s| s.frames != session.frames) {
-        measure(&mut session, &mut clock, &mut samples)?;
+    if curve.samples.last().is_some_and(|s| s.frames != session.frames) {
+        curve.measure(&mut session, &mut clock)?;
     }
+    let samples = curve.samples;
     let image = session.image()?;
     let curve = RunCurve {
         samples_per_second: paths_per_second(&samples, image.mean.len()),
@@ -229,38 +210,59 @@ pub fn run(
     Ok(RunResult { curve, image })
 }
 
+/// The error curve of a run: its error against `reference` measured with the clock stopped
+/// (the batch in flight waited for on the clock) at the sample times and at the end of the
+/// budget.
+struct ErrorCurve<'a, P> {
+    reference: &'a [[f32; 3]],
+    samples: Vec<ErrorSample>,
+    /// The sample times still to come, the next one last.
+    times: Vec<f64>,
+    budget: f64,
+    progress: &'a mut P,
+}
+
+impl<P: FnMut(f64, Option<&ErrorSample>, &[[f32; 3]])> ErrorCurve<'_, P> {
+    /// Samples the error now.
+    fn measure(&mut self, session: &mut Session, clock: &mut Stopwatch) -> Result<()> {
+        session.settle()?;
+        let seconds = clock.seconds();
+        clock.pause();
+        let image = session.image()?;
+        self.samples.push(ErrorSample {
+            seconds,
+            frames: session.frames,
+            samples_per_pixel: session.samples_per_pixel(),
+            error: image_error(&image.mean, self.reference),
+        });
+        // Off the clock too: the progress may send the image to a live view.
+        (self.progress)(seconds, self.samples.last(), &image.mean);
+        clock.resume();
+        Ok(())
+    }
+}
+
+impl<P: FnMut(f64, Option<&ErrorSample>, &[[f32; 3]])> Observer<Session<'_>> for ErrorCurve<'_, P> {
+    fn batch(&mut self, session: &mut Session, clock: &mut Stopwatch) -> Result<()> {
+        let now = clock.seconds();
+        if self.times.last().is_some_and(|&t| now >= t) || now >= self.budget {
+            while self.times.pop_if(|t| *t <= now).is_some() {}
+            self.measure(session, clock)?;
+        }
+        Ok(())
+    }
+
+    fn due(&self) -> Option<f64> {
+        self.times.last().copied()
+    }
+}
+
 /// Camera samples (paths) per second over a curve of an image of `pixels` pixels: its last
 /// sample's paths over its clock.
 pub fn paths_per_second(samples: &[ErrorSample], pixels: usize) -> f64 {
     samples
         .last()
         .map_or(0.0, |s| s.samples_per_pixel as f64 * pixels as f64 / s.seconds)
-}
-
-/// A clock that can be paused.
-struct Stopwatch {
-    running_since: Option<Instant>,
-    banked: Duration,
-}
-
-impl Stopwatch {
-    fn started_at(start: Instant) -> Stopwatch {
-        Stopwatch {
-            running_since: Some(start),
-            banked: Duration::ZERO,
-        }
-    }
-    fn pause(&mut self) {
-        if let Some(t) = self.running_since.take() {
-            self.banked += t.elapsed();
-        }
-    }
-    fn resume(&mut self) {
-        self.running_since.get_or_insert_with(Instant::now);
-    }
-    fn seconds(&self) -> f64 {
-        (self.banked + self.running_since.map_or(Duration::ZERO, |t| t.elapsed())).as_secs_f64()
-    }
 }
 
 /// A file-name-safe form of a run label.

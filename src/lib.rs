@@ -14,6 +14,7 @@ pub mod cli;
 #[cfg(feature = "mpi")]
 pub mod cluster;
 pub mod compare;
+pub mod drive;
 pub mod explain;
 pub mod fetch;
 pub mod film;

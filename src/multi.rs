@@ -4,6 +4,8 @@
 //! sums to the host, which adds them into one film. The frames are those of a one-GPU run with the same settings, so
 //! the film equals that run's to float rounding.
 
+pub use crate::drive::Budget;
+use crate::drive::{Ended, Executor, Plan, Stopwatch, drive};
 use crate::film::Film;
 use crate::run::{Run, Session};
 use anyhow::{Result, anyhow, bail};
@@ -20,15 +22,6 @@ const BATCH_TIME: Duration = Duration::from_millis(500);
 
 /// How often a GPU hands its sums to the host (and the progress line moves).
 const SEND_EVERY: Duration = Duration::from_secs(2);
-
-/// How much to render: a number of frames, or a wall-clock time.
-#[derive(Debug, Clone, Copy)]
-pub enum Budget {
-    /// Frames in all.
-    Frames(u64),
-    /// Wall-clock time.
-    Time(Duration),
-}
 
 /// How long the run took once every GPU was ready, and the host's time adding the GPUs'
 /// batches into the film.
@@ -170,8 +163,8 @@ impl Claims {
 
 /// Renders `run` on the adapters `selectors` (see [`Gpu::new`]; one may repeat: two
 /// devices of one adapter) within `budget`, adding every batch into `film` as it arrives and
-/// calling `progress` with the GPUs' shares after each. Returns the shares and the host's time
-/// adding batches.
+/// calling `progress` with the GPUs' shares after each: the host's side is the driver's loop
+/// over [`Gpus`]. Returns the shares and the host's time adding batches.
 pub fn render_on_gpus(
     run: &Run,
     selectors: &[String],
@@ -186,11 +179,22 @@ pub fn render_on_gpus(
         ready: Barrier::new(selectors.len()),
         stop: AtomicBool::new(false),
     };
-    let mut shares = vec![Share::default(); selectors.len()];
-    let mut merging = Merging::default();
     let (tx, rx) = mpsc::channel();
-    let mut failure = None;
-    std::thread::scope(|scope| {
+    let mut gpus = Gpus {
+        rx,
+        open: true,
+        claims: &claims,
+        selectors,
+        film,
+        shares: vec![Share::default(); selectors.len()],
+        merging: Merging::default(),
+        failure: None,
+    };
+    let mut show = |g: &mut Gpus, _: &mut Stopwatch| -> Result<()> {
+        progress(&g.shares, g.film);
+        Ok(())
+    };
+    let driven = std::thread::scope(|scope| {
         for (i, selector) in selectors.iter().enumerate() {
             let (tx, claims) = (tx.clone(), &claims);
             scope.spawn(move || {
@@ -202,33 +206,98 @@ pub fn render_on_gpus(
             });
         }
         drop(tx);
-        for message in rx {
-            match message {
-                Message::Opened(i, adapter) => shares[i].adapter = adapter,
-                Message::Batch(i, taken, rays, seconds) => {
-                    let added = Instant::now();
-                    let absorbed = film.absorb(&taken);
-                    merging.batches += 1;
-                    merging.seconds += added.elapsed().as_secs_f64();
-                    if let Err(e) = absorbed {
-                        claims.stop.store(true, Ordering::Relaxed);
-                        failure.get_or_insert(e);
-                    }
-                    shares[i].frames += taken.frames as u64;
-                    shares[i].rays += rays;
-                    shares[i].busy_seconds += seconds;
-                    progress(&shares, film);
+        drive(&mut gpus, Plan::new(budget), &mut Stopwatch::start(), &mut [&mut show])
+    });
+    gpus.merging.run_seconds = claims.started().elapsed().as_secs_f64();
+    driven?;
+    match gpus.failure {
+        Some(e) => Err(e),
+        None => Ok((gpus.shares, gpus.merging)),
+    }
+}
+
+/// The GPUs' threads as the driver's executor: each batch is one message of a GPU, added into
+/// the film; the threads share the budget through [`Claims`], so the drive ends when the last
+/// thread has stopped.
+struct Gpus<'a> {
+    rx: mpsc::Receiver<Message>,
+    /// Whether a thread may still send.
+    open: bool,
+    claims: &'a Claims,
+    selectors: &'a [String],
+    film: &'a mut Film,
+    shares: Vec<Share>,
+    merging: Merging,
+    failure: Option<anyhow::Error>,
+}
+
+impl Gpus<'_> {
+    /// Takes one message of a GPU's thread.
+    fn take(&mut self, message: Message) {
+        match message {
+            Message::Opened(i, adapter) => self.shares[i].adapter = adapter,
+            Message::Batch(i, taken, rays, seconds) => {
+                let added = Instant::now();
+                let absorbed = self.film.absorb(&taken);
+                self.merging.batches += 1;
+                self.merging.seconds += added.elapsed().as_secs_f64();
+                if let Err(e) = absorbed {
+                    self.claims.stop.store(true, Ordering::Relaxed);
+                    self.failure.get_or_insert(e);
                 }
-                Message::Failed(i, e) => {
-                    failure.get_or_insert(e.context(format!("GPU {i} ('{}')", selectors[i])));
+                let share = &mut self.shares[i];
+                share.frames += taken.frames as u64;
+                share.rays += rays;
+                share.busy_seconds += seconds;
+            }
+            Message::Failed(i, e) => {
+                self.failure
+                    .get_or_insert(e.context(format!("GPU {i} ('{}')", self.selectors[i])));
+            }
+        }
+    }
+}
+
+impl Executor for Gpus<'_> {
+    fn frames(&self) -> u64 {
+        self.film.frames
+    }
+
+    /// Waits for the next batch of a GPU's thread (the threads claim their frames), or for
+    /// the last thread to stop.
+    fn advance(&mut self, _left: Option<Duration>, _max: u64) -> Result<()> {
+        loop {
+            match self.rx.recv() {
+                Ok(message) => {
+                    let batch = matches!(message, Message::Batch(..));
+                    self.take(message);
+                    if batch {
+                        return Ok(());
+                    }
+                }
+                Err(_) => {
+                    self.open = false;
+                    return Ok(());
                 }
             }
         }
-    });
-    merging.run_seconds = claims.started().elapsed().as_secs_f64();
-    match failure {
-        Some(e) => Err(e),
-        None => Ok((shares, merging)),
+    }
+
+    fn settle(&mut self) -> Result<()> {
+        while let Ok(message) = self.rx.recv() {
+            self.take(message);
+        }
+        self.open = false;
+        Ok(())
+    }
+
+    /// Over when every thread has stopped: at the budget, a failure or a signal.
+    fn ended(&self, _plan: &Plan, _done: u64, _clock: &Stopwatch) -> Option<Ended> {
+        match (self.open, crate::interrupt::requested()) {
+            (true, _) => None,
+            (false, Some(signal)) => Some(Ended::Signal(signal)),
+            (false, None) => Some(Ended::Done),
+        }
     }
 }
 

@@ -2,11 +2,12 @@
 //! run accumulated in f64 on the host, with its variance, written as a reference EXR with a
 //! PNG preview and resumable, on one GPU or several.
 
+use crate::drive::{Budget, Observer, Plan, Stopwatch, drive};
 use crate::film::{Film, film_settings};
 use crate::interrupt::stopped_by_signal;
-use crate::multi::{Budget, gpu_selectors, render_on_gpus};
+use crate::multi::{gpu_selectors, render_on_gpus};
 use crate::output::{check_out, shell_word, si};
-use crate::run::{Run, RunSpec};
+use crate::run::{Run, RunSpec, Session};
 use crate::tev::LiveView;
 use anyhow::{Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -205,62 +206,81 @@ fn progress(film: &Film, spp_before: u64, size: (u32, u32), secs: f64) -> String
     format!("{spp} spp | {} samples/s", si(samples / secs))
 }
 
-/// Renders `run` on one GPU (`--adapter`) into the target's film, taking the GPU's sums
-/// every [`ABSORB_EVERY`] and writing the film every `--checkpoint`.
-fn on_one_gpu(args: &ReferenceSpec, run: &Run, target: &mut Target) -> Result<()> {
-    let gpu = Gpu::new(args.run.adapter.as_deref())?;
-    eprintln!("{}", gpu.describe());
-    let film = &mut target.film;
-    list_once(&mut film.info, "adapter", &gpu.info.name);
-    let mut session = run.session(&gpu)?;
-    let spp_before = film.samples_per_pixel();
-    let start = Instant::now();
-    let (mut absorbed_at, mut saved_at) = (Instant::now(), Instant::now());
-    let mut seconds_saved = 0.0;
-    loop {
-        let (left, max) = match (args.time, args.frames) {
-            (Some(t), _) => (Some(t.saturating_sub(start.elapsed())), u32::MAX),
-            (None, frames) => (None, frames.unwrap_or(0).saturating_sub(session.frames)),
-        };
-        if left.is_some_and(|l| l.is_zero()) || max == 0 || crate::interrupt::requested().is_some() {
-            break;
-        }
-        session.render_for(left, max)?;
-        if absorbed_at.elapsed() >= ABSORB_EVERY || saved_at.elapsed() >= args.checkpoint {
+/// The reference's observer on one GPU: takes the GPU's sums every [`ABSORB_EVERY`] and
+/// writes the film every `--checkpoint`, and moves the progress bar.
+struct OneGpu<'a> {
+    target: &'a mut Target,
+    args: &'a ReferenceSpec,
+    spp_before: u64,
+    absorbed_at: Instant,
+    saved_at: Instant,
+    seconds_saved: f64,
+}
+
+impl Observer<Session<'_>> for OneGpu<'_> {
+    fn batch(&mut self, session: &mut Session, clock: &mut Stopwatch) -> Result<()> {
+        let (film, args) = (&mut self.target.film, self.args);
+        if self.absorbed_at.elapsed() >= ABSORB_EVERY || self.saved_at.elapsed() >= args.checkpoint {
             film.absorb(&session.take_accumulation()?)?;
-            absorbed_at = Instant::now();
-            if let Some(v) = target.view.as_mut().filter(|v| v.due()) {
+            self.absorbed_at = Instant::now();
+            if let Some(v) = self.target.view.as_mut().filter(|v| v.due()) {
                 v.show(&film.mean());
             }
         }
-        if saved_at.elapsed() >= args.checkpoint {
-            let now = start.elapsed().as_secs_f64();
-            film.seconds += now - seconds_saved;
-            seconds_saved = now;
-            film.write(&target.out, "reference")?;
-            saved_at = Instant::now();
+        if self.saved_at.elapsed() >= args.checkpoint {
+            let now = clock.seconds();
+            film.seconds += now - self.seconds_saved;
+            self.seconds_saved = now;
+            film.write(&self.target.out, "reference")?;
+            self.saved_at = Instant::now();
         }
-        target
-            .bar
-            .set_message(progress(film, spp_before, film.size, start.elapsed().as_secs_f64()));
-        target.bar.set_position(match args.time {
-            Some(_) => start.elapsed().as_millis() as u64,
+        let bar = &self.target.bar;
+        bar.set_message(progress(film, self.spp_before, film.size, clock.seconds()));
+        bar.set_position(match args.time {
+            Some(_) => clock.elapsed().as_millis() as u64,
             None => session.frames as u64,
         });
+        Ok(())
     }
+}
+
+/// Renders `run` on one GPU (`--adapter`) into the target's film through the driver
+/// ([`OneGpu`] observing).
+fn on_one_gpu(args: &ReferenceSpec, run: &Run, target: &mut Target) -> Result<()> {
+    let gpu = Gpu::new(args.run.adapter.as_deref())?;
+    eprintln!("{}", gpu.describe());
+    list_once(&mut target.film.info, "adapter", &gpu.info.name);
+    let mut session = run.session(&gpu)?;
+    let mut clock = Stopwatch::start();
+    let mut observer = OneGpu {
+        spp_before: target.film.samples_per_pixel(),
+        target,
+        args,
+        absorbed_at: Instant::now(),
+        saved_at: Instant::now(),
+        seconds_saved: 0.0,
+    };
+    drive(&mut session, Plan::new(budget(args)), &mut clock, &mut [&mut observer])?;
+    let seconds_saved = observer.seconds_saved;
+    let film = &mut target.film;
     film.absorb(&session.take_accumulation()?)?;
-    film.seconds += start.elapsed().as_secs_f64() - seconds_saved;
+    film.seconds += clock.seconds() - seconds_saved;
     Ok(())
+}
+
+/// The budget `--time` or `--frames` (none: no frames) gives.
+fn budget(args: &ReferenceSpec) -> Budget {
+    match (args.time, args.frames) {
+        (Some(t), _) => Budget::Time(t),
+        (None, frames) => Budget::Frames(frames.unwrap_or(0) as u64),
+    }
 }
 
 /// Renders `run` on the GPUs `spec` names (`--gpus`, lightgraph::multi) into the target's
 /// film, writing it every `--checkpoint` (with the seconds of the runs before this one).
 fn on_several_gpus(args: &ReferenceSpec, run: &Run, spec: &str, target: &mut Target) -> Result<()> {
     let selectors = gpu_selectors(spec)?;
-    let budget = match (args.time, args.frames) {
-        (Some(t), _) => Budget::Time(t),
-        (None, frames) => Budget::Frames(frames.unwrap_or(0) as u64),
-    };
+    let budget = budget(args);
     let spp_before = target.film.samples_per_pixel();
     let frames_before = target.film.frames;
     let start = Instant::now();

@@ -16,9 +16,9 @@ mod stop;
 mod tables;
 
 use ::lightgraph::cli::Cli;
+use ::lightgraph::drive::{Budget, Plan, Stopwatch, drive};
 use ::lightgraph::explain::{ExplainSpec, report};
 use ::lightgraph::film::Film;
-use ::lightgraph::interrupt;
 use ::lightgraph::reference::{REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render as render_reference};
 use ::lightgraph::run::{Run, RunOptions, RunSpec, Session as RenderSession};
 use lightgraph_engine::Gpu;
@@ -150,24 +150,18 @@ impl Session {
         })
     }
 
-    /// Renders `frames` more frames, or frames for `time` seconds, with the interpreter
-    /// released; at Ctrl-C it stops after the frames in flight, keeps them and raises
-    /// `KeyboardInterrupt`.
+    /// Renders until the session holds `frames` frames, or for `time` seconds, through the
+    /// driver ([`drive`]), with the interpreter released; at Ctrl-C it stops after the frames
+    /// in flight, keeps them and raises `KeyboardInterrupt`.
     fn advance(&mut self, py: Python<'_>, frames: u32, time: Option<f64>) -> PyResult<()> {
         let started = Instant::now();
         let session = &mut self.session;
         let ended = stop::run(py, || {
-            let budget = time.map(Duration::from_secs_f64);
-            let more = |s: &RenderSession| match budget {
-                Some(b) => started.elapsed() < b,
-                None => s.frames < frames,
+            let budget = match time {
+                Some(t) => Budget::Time(Duration::from_secs_f64(t)),
+                None => Budget::Frames(frames.saturating_sub(session.frames) as u64),
             };
-            while more(session) && interrupt::requested().is_none() {
-                let left = budget.map(|b| b.saturating_sub(started.elapsed()));
-                let max = budget.map_or(frames - session.frames, |_| u32::MAX);
-                session.render_for(left, max)?;
-            }
-            session.settle()?;
+            drive(session, Plan::new(budget), &mut Stopwatch::started_at(started), &mut [])?;
             anyhow::Ok(())
         });
         self.seconds += started.elapsed().as_secs_f64();

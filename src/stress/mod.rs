@@ -6,6 +6,7 @@
 pub mod cases;
 pub mod stats;
 
+use crate::drive::{Budget, Plan, Stopwatch, drive};
 use crate::run::{LoadedScene, Session, SessionOptions, load_graph, load_scene_with};
 use anyhow::{Result, bail};
 use cases::{Case, Invariant};
@@ -168,11 +169,15 @@ impl<'g> Runner<'g> {
         };
         let mut session = Session::new(self.gpu, &graph, &graph.default_layout.clone(), loaded, options)?;
         let mut frames = Vec::with_capacity(self.settings.frames as usize);
-        for _ in 0..self.settings.frames {
-            session.render_frame()?;
+        // Every group of frames the GPU renders as one taken apart: the invariants' samples.
+        let mut take = |session: &mut Session, _: &mut Stopwatch| -> Result<()> {
             let taken = session.take_accumulation()?;
             frames.push(taken.sum.iter().map(|s| [s[0], s[1], s[2]]).collect());
-        }
+            Ok(())
+        };
+        let at_once = session.frames_at_once() as u64;
+        let plan = Plan::new(Budget::Frames(self.settings.frames as u64 * at_once)).in_steps_of(at_once);
+        drive(&mut session, plan, &mut Stopwatch::start(), &mut [&mut take])?.whole("the stress case")?;
         Ok(Render {
             frames: Frames { size, frames },
             rejected: session.counters.get("samples_rejected").copied().unwrap_or(0),

@@ -3,11 +3,11 @@
 //! ([`BlockBatches`]) and the run's total.
 
 use super::stats::BlockBatches;
+use crate::drive::{Budget as DriveBudget, Plan, Stopwatch, drive};
 use crate::film::Film;
 use crate::run::{Image, Run, Session};
 use anyhow::{Result, bail};
 use lightgraph_engine::Gpu;
-use lightgraph_engine::runtime::MAX_BATCH;
 use std::time::{Duration, Instant};
 
 /// How much a run renders: a wall-clock time (set-up off the clock) or a number of frames,
@@ -90,27 +90,22 @@ pub fn render_batches(
     })
 }
 
-/// Renders exactly `count` frames.
+/// Renders exactly `count` frames through the driver.
 fn render_frames(session: &mut Session, count: u32) -> Result<u32> {
-    let most = MAX_BATCH * session.frames_at_once();
-    let mut left = count;
-    while left > 0 {
-        let n = left.min(most);
-        session.render_frames(n)?;
-        left -= n;
-    }
+    drive(
+        session,
+        Plan::new(DriveBudget::Frames(count as u64)),
+        &mut Stopwatch::start(),
+        &mut [],
+    )?
+    .whole("the batch")?;
     Ok(count)
 }
 
-/// Renders for `time` (at least one frame); returns the frames.
+/// Renders for `time` (at least one frame) through the driver; returns the frames.
 fn render_for(session: &mut Session, time: Duration) -> Result<u32> {
-    let start = Instant::now();
     let first = session.frames;
-    session.render_frame()?;
-    while start.elapsed() < time {
-        let left = time.saturating_sub(start.elapsed());
-        session.render_for(Some(left), u32::MAX)?;
-    }
-    session.settle()?;
+    let plan = Plan::new(DriveBudget::Time(time)).at_least(1);
+    drive(session, plan, &mut Stopwatch::start(), &mut [])?.whole("the batch")?;
     Ok(session.frames - first)
 }

@@ -14,12 +14,12 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::aov::{Aov, AovRender};
 use lightgraph::compare::ErrorSample;
+use lightgraph::drive::{Budget, Observer, Plan, Stopwatch, drive};
 use lightgraph::film::{Film, film_settings};
 use lightgraph::interrupt;
 use lightgraph::interrupt::stopped_by_signal;
 use lightgraph::live::Live;
 use lightgraph::metrics::image_error;
-use lightgraph::multi::Budget;
 use lightgraph::output;
 use lightgraph::output::{check_out, shell_word};
 use lightgraph::run::{LoadedScene, Run, RunSpec, Session};
@@ -288,8 +288,14 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
         reference: reference.as_deref(),
         errors: Vec::new(),
         view: &mut view,
+        args: &args,
+        bar: progress_bar(&args),
+        error_text: String::new(),
+        error_at: None,
+        absorbed_at: Instant::now(),
+        saved_at: Instant::now(),
     };
-    let last_line = render_progressively(&mut session, &args, &mut progress)?;
+    let last_line = render_progressively(&mut session, &mut progress)?;
     let mut errors = std::mem::take(&mut progress.errors);
     view.show(&film.mean(), film.frames, &format!("{last_line} | finished"), true);
     if let Some(r) = &reference {
@@ -348,7 +354,9 @@ pub fn write_film(film: &Film, out: &Path, exposure: f32) -> Result<PathBuf> {
 }
 
 /// Where a progressive render's results go while it runs: the film (on the host, in f64), its
-/// file (for checkpoints), the reference of the progress line's error and the live view.
+/// file (for checkpoints), the reference of the progress line's error and the live view. As
+/// the driver's observer it writes checkpoints, samples the error, moves the progress bar and
+/// feeds the live view after every batch.
 struct Progress<'a> {
     film: &'a mut Film,
     out: &'a Path,
@@ -356,6 +364,12 @@ struct Progress<'a> {
     /// The error against the reference, about once a second.
     errors: Vec<ErrorSample>,
     view: &'a mut Live,
+    args: &'a RenderArgs,
+    bar: ProgressBar,
+    error_text: String,
+    error_at: Option<Instant>,
+    absorbed_at: Instant,
+    saved_at: Instant,
 }
 
 impl Progress<'_> {
@@ -369,81 +383,72 @@ impl Progress<'_> {
         Ok(all.mean())
     }
 
-    /// Moves the GPU's sums into the film and adds the seconds since `since`.
-    fn absorb(&mut self, session: &mut Session, since: Instant) -> Result<()> {
+    /// Moves the GPU's sums into the film and adds the seconds since the last time.
+    fn absorb(&mut self, session: &mut Session) -> Result<()> {
         self.film.absorb(&session.take_accumulation()?)?;
-        self.film.seconds += since.elapsed().as_secs_f64();
+        self.film.seconds += self.absorbed_at.elapsed().as_secs_f64();
+        self.absorbed_at = Instant::now();
         Ok(())
     }
 }
 
-/// Renders `session` for `--time` or `--frames` into the film, with a progress bar of
-/// samples/s, rays/s and, against a reference, the RMSE (once a second), and the live view;
-/// writes the film every `--checkpoint`. Stops early, after the frames in flight, when a
-/// signal arrives. Returns the last progress line.
-fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut Progress) -> Result<String> {
-    let (w, h) = (session.options.width as f64, session.options.height as f64);
-    let mut error_text = String::new();
-    let mut error_at: Option<Instant> = None;
-    let bar = progress_bar(args);
-    let start = Instant::now();
-    let (mut absorbed_at, mut saved_at) = (start, Instant::now());
-    loop {
-        let elapsed = start.elapsed();
-        let done = match args.time {
-            Some(t) => elapsed >= t,
-            None => session.frames >= args.frames_left,
-        };
-        if done || interrupt::requested().is_some() {
-            break;
-        }
-        match args.time {
-            Some(t) => session.render_for(Some(t.saturating_sub(elapsed)), u32::MAX)?,
-            None => session.render_for(None, args.frames_left - session.frames)?,
-        };
+impl Observer<Session<'_>> for Progress<'_> {
+    fn batch(&mut self, session: &mut Session, clock: &mut Stopwatch) -> Result<()> {
+        let args = self.args;
         if let Some(every) = args.checkpoint
-            && saved_at.elapsed() >= every
+            && self.saved_at.elapsed() >= every
         {
-            progress.absorb(session, absorbed_at)?;
-            absorbed_at = Instant::now();
-            write_film(progress.film, progress.out, args.exposure)?;
-            saved_at = Instant::now();
+            self.absorb(session)?;
+            write_film(self.film, self.out, args.exposure)?;
+            self.saved_at = Instant::now();
         }
         // Rates of the frames read back (one batch may still be running).
-        let secs = start.elapsed().as_secs_f64();
+        let secs = clock.seconds();
+        let (w, h) = (session.options.width as f64, session.options.height as f64);
         let samples = session.settled as f64 * session.options.samples_per_frame as f64 * w * h;
-        if let Some(r) = progress.reference
-            && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
+        if let Some(r) = self.reference
+            && self.error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
-            let error = image_error(&progress.mean(session)?, r);
-            error_text = format!(" | RMSE {:.4e}", error.rmse);
-            error_at = Some(Instant::now());
-            progress.errors.push(ErrorSample {
+            let error = image_error(&self.mean(session)?, r);
+            self.error_text = format!(" | RMSE {:.4e}", error.rmse);
+            self.error_at = Some(Instant::now());
+            self.errors.push(ErrorSample {
                 seconds: secs,
                 frames: session.settled,
                 samples_per_pixel: session.samples_per_pixel(),
                 error,
             });
         }
-        bar.set_message(format!(
-            "frame {} | {} samples/s | {}rays/s{error_text}",
+        self.bar.set_message(format!(
+            "frame {} | {} samples/s | {}rays/s{}",
             session.frames,
             si(samples / secs),
-            si(session.rays() as f64 / secs)
+            si(session.rays() as f64 / secs),
+            self.error_text
         ));
-        if progress.view.due() {
-            let mean = progress.mean(session)?;
-            let frames = progress.film.frames + session.frames as u64;
-            progress.view.show(&mean, frames, &bar.message(), false);
+        if self.view.due() {
+            let mean = self.mean(session)?;
+            let frames = self.film.frames + session.frames as u64;
+            self.view.show(&mean, frames, &self.bar.message(), false);
         }
         match args.time {
-            Some(_) => bar.set_position(start.elapsed().as_millis() as u64),
-            None => bar.set_position(session.frames as u64),
+            Some(_) => self.bar.set_position(clock.elapsed().as_millis() as u64),
+            None => self.bar.set_position(session.frames as u64),
         }
+        Ok(())
     }
-    session.settle()?;
-    bar.finish();
-    progress.absorb(session, absorbed_at)?;
+}
+
+/// Renders `session` for `--time` or `--frames` into the film through the driver, with a
+/// progress bar of samples/s, rays/s and, against a reference, the RMSE (once a second), and
+/// the live view; writes the film every `--checkpoint`. Stops early, after the frames in
+/// flight, when a signal arrives. Returns the last progress line.
+fn render_progressively(session: &mut Session, progress: &mut Progress) -> Result<String> {
+    let mut clock = Stopwatch::start();
+    let plan = Plan::new(budget(progress.args));
+    drive(session, plan, &mut clock, &mut [&mut *progress])?;
+    progress.bar.finish();
+    progress.absorb(session)?;
     if let Some(signal) = interrupt::requested() {
         eprintln!(
             "{} received: stopped after frame {}, writing the film",
@@ -451,7 +456,7 @@ fn render_progressively(session: &mut Session, args: &RenderArgs, progress: &mut
             progress.film.end_frame()
         );
     }
-    Ok(bar.message())
+    Ok(progress.bar.message())
 }
 
 /// The samples the session's kernels rejected (non-finite or negative).
