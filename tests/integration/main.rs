@@ -13,6 +13,7 @@ mod common;
 mod compiles;
 mod composition;
 mod docs;
+mod drive;
 mod fidelity;
 mod frames;
 mod gltf;
