@@ -1,15 +1,16 @@
-//! Every relative link of README.md and docs/**/*.md leads somewhere: to a file of the
-//! repository and, with `#anchor`, to a heading of that Markdown file (GitHub's anchors).
+//! Every relative link of README.md, docs/**/*.md and bench/**/*.md (which name the
+//! measurement log's entries) leads somewhere: to a file of the repository and, with
+//! `#anchor`, to a heading of that Markdown file (GitHub's anchors).
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-/// README.md and every Markdown file below docs/.
+/// README.md and every Markdown file below docs/ and bench/.
 fn markdown_files() -> Vec<PathBuf> {
     let mut files = vec![Path::new(ROOT).join("README.md")];
-    let mut dirs = vec![Path::new(ROOT).join("docs")];
+    let mut dirs = vec![Path::new(ROOT).join("docs"), Path::new(ROOT).join("bench")];
     while let Some(dir) = dirs.pop() {
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
@@ -138,7 +139,7 @@ fn every_relative_link_of_the_docs_resolves() {
     }
     assert!(
         links > 100,
-        "only {links} links found in README.md and docs/: the scan is broken"
+        "only {links} links found in README.md, docs/ and bench/: the scan is broken"
     );
     assert!(
         problems.is_empty(),
