@@ -12,6 +12,7 @@ mod cli;
 mod common;
 mod compiles;
 mod composition;
+mod doc_links;
 mod docs;
 mod drive;
 mod fidelity;
