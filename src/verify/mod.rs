@@ -227,3 +227,51 @@ pub struct PairResult {
     /// The verdict against the prediction.
     pub outcome: Outcome,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::run::RunOptions;
+
+    /// Coverage conditions and the path-length limit are the run's: the scene file's own
+    /// `max_path_length` where no option gives one (not the graph's default), and
+    /// `--max-path-length` over it.
+    #[test]
+    fn claims_see_the_runs_path_length_limit() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let dir = std::env::temp_dir().join(format!("lightgraph-claims-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = std::fs::read_to_string(root.join("scenes/cornell/cornell-diffuse.ron")).unwrap();
+        let scene = dir.join("diffuse-short.ron");
+        std::fs::write(&scene, text.replacen("max_path_length: 10", "max_path_length: 3", 1)).unwrap();
+        // A graph that claims a gap only on paths of fewer than 5 segments.
+        let graph = dir.join("pt-short.ron");
+        let pt = std::fs::read_to_string(root.join("graphs/pt.ron")).unwrap();
+        let short = pt.replacen(
+            "(paths: \"Ld S X* E\",",
+            "(paths: \"La E\", when: \"MAX_PATH_LENGTH < 5\",",
+            1,
+        );
+        assert_ne!(pt, short);
+        std::fs::write(&graph, short).unwrap();
+        let claims_of = |max_path_length: Option<u32>| {
+            let options = RunOptions {
+                scene: Some(scene.display().to_string()),
+                max_path_length,
+                ..Default::default()
+            };
+            let run = Run::load(&options.spec(&graph.display().to_string(), None, 1)).unwrap();
+            // What verify evaluated before: the command line's constants over the graph's.
+            let options_alone = claims(&run.graph, &run.options.constants).unwrap();
+            (claims(&run.graph, &run_constants(&run)).unwrap(), options_alone)
+        };
+        let (scenes, options_alone) = claims_of(None);
+        assert_eq!(scenes.segments, 3);
+        assert_eq!(scenes.misses.len(), 1, "the gap under the scene's limit");
+        assert_eq!(options_alone.segments, 10, "the graph's default, not the scene's limit");
+        assert!(options_alone.misses.is_empty());
+        let (option, _) = claims_of(Some(7));
+        assert_eq!(option.segments, 7);
+        assert!(option.misses.is_empty(), "no gap at 7 segments");
+    }
+}
