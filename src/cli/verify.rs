@@ -42,9 +42,9 @@ pub struct VerifyArgs {
     /// graph file.
     #[arg(long)]
     pub add: Option<String>,
-    /// Power settings by name: `lavapipe` (32x32, --spp 2, --frames 128, --block 8,
-    /// --detect-mean 0.07, --detect-block 0.25, --coverage 0.75) or `gpu` (256x256, --time
-    /// 4s); the options below, given explicitly, win over the preset's.
+    /// Budget and power settings by name (--res, --spp, --time or --frames, --batches,
+    /// --block, --detect-mean, --detect-block, --coverage); each of those options given
+    /// explicitly wins over its preset's value.
     #[arg(long, value_enum)]
     pub preset: Option<Preset>,
     /// Rendering time of each estimator on each scene (set-up off the clock) [default: 10s].
