@@ -89,16 +89,19 @@ pub struct Coverage {
     /// What the graph cannot sample.
     #[serde(default)]
     pub misses: Vec<MissDecl>,
-    /// Why the estimate is biased at a finite budget, if it is (a consistent estimator, e.g.
-    /// one that blurs by a radius that shrinks), under an optional condition.
+    /// The classes of samples whose estimate is biased at a finite budget (a consistent
+    /// estimator's, e.g. one that blurs by a radius that shrinks), each under an optional
+    /// condition; every other class is held to an unbiased estimator's standard.
     #[serde(default)]
-    pub biased: Option<BiasDecl>,
+    pub biased: Vec<BiasDecl>,
 }
 
-/// A graph's claim that its estimate is biased at a finite budget.
+/// A graph's claim that its estimate of one class of samples is biased at a finite budget.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BiasDecl {
+    /// The class, in the application's notation.
+    pub paths: String,
     /// Why, for reports.
     pub why: String,
     /// Constant expression: the claim holds only where it is non-zero (always without it).

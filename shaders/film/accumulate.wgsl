@@ -2,7 +2,8 @@
 // frame's pixel sum, turns it into the frame's estimate (divided by SAMPLES_PER_PIXEL) and
 // adds it to the running sums: a Kahan-compensated sum of estimates and a sum of squares,
 // from which the host derives the mean and its standard error. With FRAMES_AT_ONCE frames run
-// as one it does so for each frame's slot in turn.
+// as one it does so for each frame's slot in turn. With FILM_BIASED it also sums the biased
+// light's estimates (passes/film.ron).
 
 struct Pixel {
     index: u32,
@@ -24,5 +25,9 @@ fn accumulate(pixel: ptr<function, Pixel>, index: u32) -> bool {
     accum_comp[index] = vec4<f32>(comp, 0.0);
     accum[index] = vec4<f32>(sum, 0.0);
     accum_sq[index] = vec4<f32>(sq, 0.0);
+#if FILM_BIASED
+    let biased = film_take(PIXELS * FRAMES_AT_ONCE + index) * (1.0 / f32(SAMPLES_PER_PIXEL));
+    accum_biased[index] += vec4<f32>(biased, 0.0);
+#endif
     return false;
 }

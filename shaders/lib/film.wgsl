@@ -56,6 +56,22 @@ fn film_add(pixel: u32, c: vec3<f32>) {
     }
 }
 
+// With FILM_BIASED, adds `c` (light that `film_add` also added, from the graph's biased
+// technique) to the pixel's biased-light words after the frame slots; nothing otherwise.
+fn film_add_biased(pixel: u32, c: vec3<f32>) {
+#if FILM_BIASED
+    if (!is_valid_sample(c)) {
+        return;
+    }
+    let base = 3u * (PIXELS * FRAMES_AT_ONCE + pixel);
+    for (var k = 0u; k < 3u; k += 1u) {
+        if (c[k] > 0.0) {
+            film_add_word(base + k, c[k]);
+        }
+    }
+#endif
+}
+
 // Index `index` of a start pass over PATHS * FRAMES_AT_ONCE indices (passes/film.ron): path
 // `path` of frame k = index / PATHS of the frames run at once, whose random numbers are those
 // of frame index `frame_index` and whose light goes to the film's pixels from `film_base` on.

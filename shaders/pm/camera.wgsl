@@ -354,7 +354,9 @@ fn merge_end(p: ptr<function, MergePath>, m: Merge) {
         return;
     }
     (*p).flags &= ~MERGE_PENDING;
-    film_add((*p).pixel, (*p).merge.throughput * merge_sum(m) * merge_kernel(m.radius));
+    let merged = (*p).merge.throughput * merge_sum(m) * merge_kernel(m.radius);
+    film_add((*p).pixel, merged);
+    film_add_biased((*p).pixel, merged);
 }
 
 // The estimation's sum of BSDF values times photon throughputs.

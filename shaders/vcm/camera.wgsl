@@ -78,6 +78,7 @@ fn vcm_merge(v: PendingMerge, d_vcm: f32, bsdf: Bsdf, iteration: u32, pixel: u32
     let radiance = vcm_merged(v, d_vcm, bsdf, iteration, counts);
     if (any(radiance != vec3<f32>(0.0))) {
         film_add(pixel, radiance);
+        film_add_biased(pixel, radiance);
     }
 }
 

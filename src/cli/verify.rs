@@ -11,12 +11,14 @@ use lightgraph::compare::EstimatorSpec;
 use lightgraph::output::{Output, check_outputs, write_exr, write_png};
 use lightgraph::run::{LoadedScene, Run as Loaded, Scenes, load_graph, named_layout, parse_sets};
 use lightgraph::study::scene_folders;
-use lightgraph::verify::batches::{Amount, Budget, RunBatches, render_batches};
+use lightgraph::verify::batches::{Amount, RunBatches, render_batches};
 use lightgraph::verify::paths::{Kinds, describe, scene_kinds};
+use lightgraph::verify::preset::{Given, Power, Preset};
 use lightgraph::verify::report::{RunLine, SceneImages, html_path, map_name, write_html, write_map, write_tables};
-use lightgraph::verify::stats::{TestSettings, compare};
+use lightgraph::verify::stats::{Biased, TestSettings, compare};
 use lightgraph::verify::{
-    Claims, DEFAULT_ESTIMATORS, DEFAULT_SCENES, Outcome, PairResult, claims, expected_gaps, unconfirmed_gaps,
+    Claims, DEFAULT_ESTIMATORS, DEFAULT_SCENES, Outcome, PairResult, claims, expected_gaps, run_constants,
+    unconfirmed_gaps,
 };
 use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{Gpu, Graph};
@@ -40,18 +42,23 @@ pub struct VerifyArgs {
     /// graph file.
     #[arg(long)]
     pub add: Option<String>,
-    /// Rendering time of each estimator on each scene (set-up off the clock).
-    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = "10s", conflicts_with = "frames")]
-    pub time: Duration,
+    /// Budget and power settings by name (--res, --spp, --time or --frames, --batches,
+    /// --block, --detect-mean, --detect-block, --coverage); each of those options given
+    /// explicitly wins over its preset's value.
+    #[arg(long, value_enum)]
+    pub preset: Option<Preset>,
+    /// Rendering time of each estimator on each scene (set-up off the clock) [default: 10s].
+    #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, conflicts_with = "frames")]
+    pub time: Option<Duration>,
     /// Frames of each estimator on each scene instead of a time (reproducible).
     #[arg(long, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
     pub frames: Option<u32>,
-    /// Batches each run is split into: the samples of the standard errors.
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..))]
-    pub batches: u32,
-    /// Side of the blocks compared, in pixels.
-    #[arg(long, default_value_t = 16, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
-    pub block: u32,
+    /// Batches each run is split into: the samples of the standard errors [default: 16].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..))]
+    pub batches: Option<u32>,
+    /// Side of the blocks compared, in pixels [default: 16].
+    #[arg(long, value_parser = super::checks::count::<u32>, allow_negative_numbers = true)]
+    pub block: Option<u32>,
     /// Family-wise error of the run: the chance that any pair of estimators that agree is
     /// called different (each pair is tested at alpha over the number of pairs).
     #[arg(long, default_value_t = 0.01)]
@@ -59,18 +66,19 @@ pub struct VerifyArgs {
     /// The probability with which the test must see the differences below.
     #[arg(long, default_value_t = 0.9)]
     pub power: f64,
-    /// Relative difference of the image means the test must see for "agree".
-    #[arg(long, default_value_t = 0.01)]
-    pub detect_mean: f64,
-    /// Relative difference of a block the test must see for "agree" ...
-    #[arg(long, default_value_t = 0.1)]
-    pub detect_block: f64,
-    /// ... in the blocks holding this fraction of the image's light.
-    #[arg(long, default_value_t = 0.9)]
-    pub coverage: f64,
-    /// Relative difference of the image means that is not called a difference, even where
-    /// significant, in a pair with an estimator its graph declares biased at a finite budget
-    /// (photon mapping and VCM: merges blur by a radius that shrinks).
+    /// Relative difference of the image means the test must see for "agree" [default: 0.01].
+    #[arg(long)]
+    pub detect_mean: Option<f64>,
+    /// Relative difference of a block the test must see for "agree" ... [default: 0.1]
+    #[arg(long)]
+    pub detect_block: Option<f64>,
+    /// ... in the blocks holding this fraction of the image's light [default: 0.9].
+    #[arg(long)]
+    pub coverage: Option<f64>,
+    /// The bias an estimator may have in the image mean, as a fraction of the light of the
+    /// path classes its graph declares biased at a finite budget (photon mapping's and VCM's
+    /// merges, which blur by a radius that shrinks): that difference is allowed on top of the
+    /// noise.
     #[arg(long, default_value_t = 0.01)]
     pub bias_tolerance_mean: f64,
     /// The same for a block's mean.
@@ -99,6 +107,24 @@ pub struct VerifyArgs {
 }
 
 impl VerifyArgs {
+    /// The budget and power settings: those given, else the preset's, else the defaults.
+    fn power_settings(&self) -> Power {
+        let given = Given {
+            res: self.common.res,
+            spp: self.common.spp,
+            amount: match (self.frames, self.time) {
+                (Some(n), _) => Some(Amount::Frames(n)),
+                (None, time) => time.map(Amount::Time),
+            },
+            batches: self.batches,
+            block: self.block,
+            detect_mean: self.detect_mean,
+            detect_block: self.detect_block,
+            coverage: self.coverage,
+        };
+        given.resolve(self.preset)
+    }
+
     fn settings(&self) -> Result<TestSettings> {
         let unit = |name: &str, v: f64| {
             if !(v > 0.0 && v < 1.0) {
@@ -112,26 +138,17 @@ impl VerifyArgs {
             }
             Ok(v)
         };
+        let power = self.power_settings();
         Ok(TestSettings {
             alpha: unit("alpha", self.alpha)?,
             pairs: 1,
             power: unit("power", self.power)?,
-            detect_mean: unit("detect-mean", self.detect_mean)?,
-            detect_block: unit("detect-block", self.detect_block)?,
-            coverage: unit("coverage", self.coverage)?,
+            detect_mean: unit("detect-mean", power.detect_mean)?,
+            detect_block: unit("detect-block", power.detect_block)?,
+            coverage: unit("coverage", power.coverage)?,
             bias_tolerance_mean: tolerance("bias-tolerance-mean", self.bias_tolerance_mean)?,
             bias_tolerance_block: tolerance("bias-tolerance-block", self.bias_tolerance_block)?,
         })
-    }
-
-    fn budget(&self) -> Budget {
-        Budget {
-            amount: match self.frames {
-                Some(n) => Amount::Frames(n),
-                None => Amount::Time(self.time),
-            },
-            batches: self.batches,
-        }
     }
 }
 
@@ -150,6 +167,19 @@ struct Run {
     result: RunBatches,
 }
 
+impl Run {
+    /// What of its estimate its graph declares biased on a scene whose paths have `kinds`:
+    /// nothing where no declared class has paths there that it samples, else the light of its
+    /// film's biased channel where it has one, else all of it.
+    fn biased(&self, kinds: Kinds) -> Biased {
+        match (self.claims.biased_with(kinds), &self.result.biased) {
+            (false, _) => Biased::None,
+            (true, Some(part)) => Biased::Part(part.estimates()),
+            (true, None) => Biased::All,
+        }
+    }
+}
+
 /// Runs `verify`: every estimator on every scene, the pairs compared, the reports written; an
 /// error when a pair is not as predicted or cannot be decided.
 pub fn verify(args: VerifyArgs) -> Result<()> {
@@ -157,6 +187,7 @@ pub fn verify(args: VerifyArgs) -> Result<()> {
         bail!("verify renders the scenes of --scenes, not --scene {scene}: name it there");
     }
     let mut settings = args.settings()?;
+    let power = args.power_settings();
     let estimators = estimators(&args)?;
     settings.pairs = args.scenes.len() * pairs_of(&estimators)?;
     for scene in &args.scenes {
@@ -174,11 +205,11 @@ pub fn verify(args: VerifyArgs) -> Result<()> {
         gpu.describe(),
         estimators.len(),
         args.scenes.len(),
-        match args.frames {
-            Some(n) => format!("{n} frames"),
-            None => format!("{:?}", args.time),
+        match power.amount {
+            Amount::Frames(n) => format!("{n} frames"),
+            Amount::Time(t) => format!("{t:?}"),
         },
-        args.batches
+        power.batches
     );
     let (mut lines, mut pairs, mut images) = (Vec::new(), Vec::new(), Vec::new());
     let mut md = String::new();
@@ -191,7 +222,7 @@ pub fn verify(args: VerifyArgs) -> Result<()> {
         images.push(scene_images);
         // After every scene, so that a run stopped early keeps what it found.
         md = write_tables(&args.out, &settings, &lines, &pairs)?;
-        write_html(&args.out, &md, &images, &pairs, args.block)?;
+        write_html(&args.out, &md, &images, &pairs, power.block)?;
     }
     println!(
         "{md}\nwrote {0}/verify.md, verify.csv, {1} (opens offline in a browser) and per scene each run's EXR and PNG",
@@ -353,9 +384,9 @@ fn compare_runs(
             .iter()
             .filter(|b| b.claims.estimates == a.claims.estimates)
         {
-            let biased = a.claims.bias.is_some() || b.claims.bias.is_some();
-            let test = compare(&a.result.blocks, &b.result.blocks, settings, biased);
-            let gaps = expected_gaps((&a.label, &a.claims.misses), (&b.label, &b.claims.misses), kinds);
+            let bias = [a.biased(kinds), b.biased(kinds)];
+            let test = compare(&a.result.blocks, &b.result.blocks, settings, [&bias[0], &bias[1]]);
+            let gaps = expected_gaps((&a.label, &a.claims), (&b.label, &b.claims), kinds);
             let outcome = Outcome::of(test.verdict, !gaps.is_empty());
             let pair = PairResult {
                 scene: folder.to_string(),
@@ -368,7 +399,7 @@ fn compare_runs(
             };
             if let Some(map) = map_name(&pair) {
                 let images = (&a.result.image, &b.result.image);
-                write_map(&args.out.join(map), &pair.test, args.block, images)?;
+                write_map(&args.out.join(map), &pair.test, args.power_settings().block, images)?;
             }
             pairs.push(pair);
         }
@@ -386,15 +417,17 @@ fn render_run(
     index: u32,
 ) -> Result<Run> {
     let seed = args.seed.wrapping_mul(1000).wrapping_add(index);
+    let power = args.power_settings();
     let mut common = args.common.clone();
+    (common.res, common.spp) = (power.res, power.spp);
     common.set = own_sets(&args.common.set, &e.graph);
     let spec = common.spec(&e.graph.name, Some(&e.layout), seed);
     let mut run = Loaded::with_scene(&spec, e.graph.clone(), (e.layout.clone(), decl), scene)?;
     run.options
         .constants
         .extend(parse_sets(&e.spec.sets, &e.graph, "--graphs @")?);
-    let (opts, claims) = (&run.options, claims(&e.graph, &run.options.constants)?);
-    let bar = ProgressBar::new(args.batches as u64);
+    let (opts, claims) = (&run.options, claims(&e.graph, &run_constants(&run))?);
+    let bar = ProgressBar::new(power.batches as u64);
     bar.set_style(
         ProgressStyle::with_template("{prefix:>32} {bar:30} {pos}/{len} batches {msg} ETA {eta}")
             .expect("valid template"),
@@ -402,7 +435,7 @@ fn render_run(
     bar.set_prefix(e.label.clone());
     let start = std::time::Instant::now();
     let paths = (opts.width * opts.height * opts.samples_per_frame) as f64;
-    let result = render_batches(gpu, &run, (args.budget(), args.block), |done, frames| {
+    let result = render_batches(gpu, &run, (power.budget(), power.block), |done, frames| {
         bar.set_position(done as u64);
         let rate = paths * frames as f64 / start.elapsed().as_secs_f64();
         bar.set_message(format!("{}samples/s", si(rate)));

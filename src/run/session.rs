@@ -347,6 +347,20 @@ impl<'g> Session<'g> {
         Ok(taken)
     }
 
+    /// The sums of the per-frame estimates of the light a FILM_BIASED graph's biased technique
+    /// added (its film's second channel, passes/film.ron) since the last take, read and
+    /// emptied; `None` for a graph without the channel. Call it right after
+    /// [`Session::take_accumulation`], which settles the frames.
+    pub fn take_biased(&mut self) -> Result<Option<Vec<[f32; 4]>>> {
+        let constants = &self.instance.program().resolved.constants;
+        if constants.get("FILM_BIASED").is_none_or(|v| v.as_f64() == 0.0) {
+            return Ok(None);
+        }
+        let sums = bytemuck::pod_collect_to_vec(&self.instance.read("accum_biased")?);
+        self.instance.clear("accum_biased")?;
+        Ok(Some(sums))
+    }
+
     /// Renders a frame and throws it away, leaving the session as new (frame 0 next, nothing
     /// accumulated or counted) with every pipeline used once: a driver that compiles a
     /// pipeline at its first dispatch (lavapipe) does it here, before a timed run's clock.

@@ -21,7 +21,7 @@ pub struct Budget {
 }
 
 /// A run's amount of rendering.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Amount {
     /// Rendering time: the first batch renders for its share and fixes the frames of the rest.
     Time(Duration),
@@ -33,6 +33,9 @@ pub enum Amount {
 pub struct RunBatches {
     /// Per-block means, batch by batch.
     pub blocks: BlockBatches,
+    /// The same of the light the graph's biased technique added, where its film has that
+    /// channel (FILM_BIASED).
+    pub biased: Option<BlockBatches>,
     /// The whole run's image (mean and per-frame variance).
     pub image: Image,
     /// Frames rendered.
@@ -58,6 +61,7 @@ pub fn render_batches(
     let mut session = run.session(gpu)?;
     let at_once = session.frames_at_once();
     let mut blocks = BlockBatches::new(size, block);
+    let mut biased: Option<BlockBatches> = None;
     // The run's f64 sums over every batch, for its image.
     let mut total = Film::new(size, Default::default());
     let start = Instant::now();
@@ -76,13 +80,20 @@ pub fn render_batches(
             (None, Amount::Frames(_)) => unreachable!("frame budgets fix the batch first"),
         };
         let taken = session.take_accumulation()?;
-        let sums: Vec<[f64; 3]> = taken.sum.iter().map(|s| [0, 1, 2].map(|c| s[c] as f64)).collect();
-        blocks.add(&sums, frames);
+        let wide =
+            |sums: &[[f32; 4]]| -> Vec<[f64; 3]> { sums.iter().map(|s| [0, 1, 2].map(|c| s[c] as f64)).collect() };
+        blocks.add(&wide(&taken.sum), frames);
+        if let Some(sums) = session.take_biased()? {
+            biased
+                .get_or_insert_with(|| BlockBatches::new(size, block))
+                .add(&wide(&sums), frames);
+        }
         total.absorb(&taken)?;
         progress(b + 1, total.frames as u32);
     }
     Ok(RunBatches {
         blocks,
+        biased,
         image: total.image(),
         frames: total.frames as u32,
         seconds: start.elapsed().as_secs_f64(),

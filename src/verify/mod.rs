@@ -8,9 +8,11 @@
 
 pub mod batches;
 pub mod paths;
+pub mod preset;
 pub mod report;
 pub mod stats;
 
+use crate::run::{Run, specialization};
 use anyhow::{Result, anyhow};
 use lightgraph_engine::expr::Expr;
 use lightgraph_engine::{ConstValue, Graph, Location};
@@ -31,14 +33,15 @@ pub const DEFAULT_ESTIMATORS: &str = "pt,lt,bpt-naive,bpt-streaming,bpt-lvc,ppm,
 /// The quantity a graph estimates when its `coverage` names none.
 pub const DEFAULT_QUANTITY: &str = "radiance";
 
-/// A class of paths a graph declares it cannot sample, active under its constants.
+/// A class of paths a graph declares something of (that it cannot sample them, or that their
+/// estimate is biased at a finite budget), active under its constants.
 #[derive(Debug, Clone)]
-pub struct Miss {
+pub struct ClassClaim {
     /// The class as written.
     pub text: String,
     /// The class parsed.
     pub class: PathClass,
-    /// Why the graph cannot sample it.
+    /// Why, as the graph says it.
     pub why: String,
 }
 
@@ -48,14 +51,38 @@ pub struct Claims {
     /// The quantity its output estimates.
     pub estimates: String,
     /// The path classes it cannot sample.
-    pub misses: Vec<Miss>,
-    /// Why its estimate is biased at a finite budget, if it is.
-    pub bias: Option<String>,
+    pub misses: Vec<ClassClaim>,
+    /// The path classes whose estimate is biased at a finite budget.
+    pub biased: Vec<ClassClaim>,
+    /// The most segments its paths have (its `MAX_PATH_LENGTH`; unlimited without one).
+    pub segments: u32,
+}
+
+impl Claims {
+    /// Whether a path of `class` has vertices of `kinds` alone and at most `segments` segments.
+    fn reaches(class: &PathClass, kinds: Kinds, segments: u32) -> bool {
+        class.possible_with(kinds) && class.min_segments() <= segments
+    }
+
+    /// Whether the estimate is biased on a scene whose paths have the vertex kinds `kinds`: a
+    /// class declared biased has paths there that the graph samples.
+    pub fn biased_with(&self, kinds: Kinds) -> bool {
+        self.biased
+            .iter()
+            .any(|b| Claims::reaches(&b.class, kinds, self.segments))
+    }
+}
+
+/// The constants a run renders with: its graph's, the scene's (its path-length limit), the
+/// command line's (`--max-path-length`, `--set`), as the kernels see them.
+pub fn run_constants(run: &Run) -> BTreeMap<String, ConstValue> {
+    specialization(&run.graph, &run.scene.scene, &run.options, Default::default()).constants
 }
 
 /// What a graph with `constants` claims: the quantity it estimates, the path classes it
-/// cannot sample and its bias. A malformed class or condition is an error at its place in the
-/// graph file.
+/// cannot sample and those it estimates with a bias, and its path-length limit
+/// (`MAX_PATH_LENGTH`). A malformed class or condition is an error at its place in the graph
+/// file.
 pub fn claims(graph: &Graph, constants: &BTreeMap<String, ConstValue>) -> Result<Claims> {
     let coverage = &graph.declared.file.coverage;
     let text = graph.vfs.read(&graph.file).unwrap_or_default();
@@ -69,29 +96,30 @@ pub fn claims(graph: &Graph, constants: &BTreeMap<String, ConstValue>) -> Result
             .map_err(|e| anyhow!("{}: coverage: when: '{when}': {e}", at(when)))?;
         Ok(value != 0.0)
     };
-    let mut misses = Vec::new();
-    for m in &coverage.misses {
-        if !holds(&m.when)? {
-            continue;
+    let active = |decls: Vec<(&String, &Option<String>, &String)>| -> Result<Vec<ClassClaim>> {
+        let mut out = Vec::new();
+        for (paths, when, why) in decls {
+            if holds(when)? {
+                let class = PathClass::parse(paths).map_err(|e| anyhow!("{}: coverage: {e}", at(paths)))?;
+                out.push(ClassClaim {
+                    text: paths.clone(),
+                    class,
+                    why: why.clone(),
+                });
+            }
         }
-        let class = PathClass::parse(&m.paths).map_err(|e| anyhow!("{}: coverage: {e}", at(&m.paths)))?;
-        misses.push(Miss {
-            text: m.paths.clone(),
-            class,
-            why: m.why.clone(),
-        });
-    }
-    let bias = match &coverage.biased {
-        Some(b) if holds(&b.when)? => Some(b.why.clone()),
-        _ => None,
+        Ok(out)
     };
+    let misses = active(coverage.misses.iter().map(|m| (&m.paths, &m.when, &m.why)).collect())?;
+    let biased = active(coverage.biased.iter().map(|b| (&b.paths, &b.when, &b.why)).collect())?;
     Ok(Claims {
         estimates: coverage
             .estimates
             .clone()
             .unwrap_or_else(|| DEFAULT_QUANTITY.to_string()),
         misses,
-        bias,
+        biased,
+        segments: vars.get("MAX_PATH_LENGTH").map_or(u32::MAX, |&n| n as u32),
     })
 }
 
@@ -112,11 +140,14 @@ impl std::fmt::Display for Gap {
 
 /// The gaps that may make two estimators differ on a scene whose paths have the vertex kinds
 /// `kinds`: the classes one of them misses and the other does not, where the scene has such
-/// paths.
-pub fn expected_gaps(a: (&str, &[Miss]), b: (&str, &[Miss]), kinds: Kinds) -> Vec<Gap> {
-    let one_way = |(name, of): (&str, &[Miss]), other: &[Miss]| {
-        of.iter()
-            .filter(|m| !other.iter().any(|o| o.text == m.text) && m.class.possible_with(kinds))
+/// paths within the other's path-length limit.
+pub fn expected_gaps(a: (&str, &Claims), b: (&str, &Claims), kinds: Kinds) -> Vec<Gap> {
+    let one_way = |(name, of): (&str, &Claims), other: &Claims| {
+        of.misses
+            .iter()
+            .filter(|m| {
+                !other.misses.iter().any(|o| o.text == m.text) && Claims::reaches(&m.class, kinds, other.segments)
+            })
             .map(|m| Gap {
                 estimator: name.to_string(),
                 class: m.text.clone(),
@@ -195,4 +226,52 @@ pub struct PairResult {
     pub test: PairTest,
     /// The verdict against the prediction.
     pub outcome: Outcome,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::run::RunOptions;
+
+    /// Coverage conditions and the path-length limit are the run's: the scene file's own
+    /// `max_path_length` where no option gives one (not the graph's default), and
+    /// `--max-path-length` over it.
+    #[test]
+    fn claims_see_the_runs_path_length_limit() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let dir = std::env::temp_dir().join(format!("lightgraph-claims-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = std::fs::read_to_string(root.join("scenes/cornell/cornell-diffuse.ron")).unwrap();
+        let scene = dir.join("diffuse-short.ron");
+        std::fs::write(&scene, text.replacen("max_path_length: 10", "max_path_length: 3", 1)).unwrap();
+        // A graph that claims a gap only on paths of fewer than 5 segments.
+        let graph = dir.join("pt-short.ron");
+        let pt = std::fs::read_to_string(root.join("graphs/pt.ron")).unwrap();
+        let short = pt.replacen(
+            "(paths: \"Ld S X* E\",",
+            "(paths: \"La E\", when: \"MAX_PATH_LENGTH < 5\",",
+            1,
+        );
+        assert_ne!(pt, short);
+        std::fs::write(&graph, short).unwrap();
+        let claims_of = |max_path_length: Option<u32>| {
+            let options = RunOptions {
+                scene: Some(scene.display().to_string()),
+                max_path_length,
+                ..Default::default()
+            };
+            let run = Run::load(&options.spec(&graph.display().to_string(), None, 1)).unwrap();
+            // What verify evaluated before: the command line's constants over the graph's.
+            let options_alone = claims(&run.graph, &run.options.constants).unwrap();
+            (claims(&run.graph, &run_constants(&run)).unwrap(), options_alone)
+        };
+        let (scenes, options_alone) = claims_of(None);
+        assert_eq!(scenes.segments, 3);
+        assert_eq!(scenes.misses.len(), 1, "the gap under the scene's limit");
+        assert_eq!(options_alone.segments, 10, "the graph's default, not the scene's limit");
+        assert!(options_alone.misses.is_empty());
+        let (option, _) = claims_of(Some(7));
+        assert_eq!(option.segments, 7);
+        assert!(option.misses.is_empty(), "no gap at 7 segments");
+    }
 }

@@ -80,6 +80,20 @@ impl PathClass {
         Ok(class)
     }
 
+    /// The fewest segments (vertices less one) of a path of the class.
+    pub fn min_segments(&self) -> u32 {
+        self.min_vertices().saturating_sub(1)
+    }
+
+    fn min_vertices(&self) -> u32 {
+        match self {
+            PathClass::Vertex(_) => 1,
+            PathClass::Sequence(items) => items.iter().map(PathClass::min_vertices).sum(),
+            PathClass::Either(items) => items.iter().map(PathClass::min_vertices).min().unwrap_or(0),
+            PathClass::Repeat { class, min, .. } => *min as u32 * class.min_vertices(),
+        }
+    }
+
     /// Whether some path of the class has vertices of the kinds in `present` alone.
     pub fn possible_with(&self, present: Kinds) -> bool {
         match self {
@@ -258,6 +272,20 @@ mod tests {
         assert!(!lt.possible_with(LIGHT_HIT | DIFFUSE | EYE));
         let optional = PathClass::parse("La G? E").unwrap();
         assert!(optional.possible_with(LIGHT_HIT | EYE));
+    }
+
+    #[test]
+    fn a_class_knows_its_shortest_path() {
+        for (text, segments) in [
+            ("La E", 1),
+            ("Ld S X* E", 2),
+            ("L X* S E", 2),
+            ("Ld S+ ((D|G) S+)+ E", 4),
+            ("L X* (D|G) X* E", 2),
+            ("La (S S | D) G? E", 2),
+        ] {
+            assert_eq!(PathClass::parse(text).unwrap().min_segments(), segments, "{text}");
+        }
     }
 
     #[test]

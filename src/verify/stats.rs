@@ -248,9 +248,9 @@ pub struct TestSettings {
     pub detect_block: f64,
     /// ... in the blocks holding this fraction of the image's light.
     pub coverage: f64,
-    /// In a pair with an estimator that is biased at a finite budget (photon mapping's blur),
-    /// the relative difference of the image means below which a significant one is not called
-    /// a difference.
+    /// The bias a graph that declares some of its light biased at a finite budget (photon
+    /// mapping's blur) may have in the image mean, relative to that light ([`Biased`]): the
+    /// difference the test allows there on top of the noise.
     pub bias_tolerance_mean: f64,
     /// The same for a block's mean.
     pub bias_tolerance_block: f64,
@@ -276,11 +276,14 @@ impl Default for TestSettings {
 pub struct BlockTest {
     /// Welch's t of the channel with the largest |t| (positive: the first run is brighter).
     pub t: f64,
-    /// Whether a channel's difference is significant after the correction and the block's
-    /// relative difference exceeds the tolerance.
+    /// Whether a channel's difference beyond its bias allowance is significant after the
+    /// correction.
     pub rejected: bool,
     /// The relative difference of the block's light, (a - b) / mean of both.
     pub difference: f64,
+    /// The difference of the block's light the declared bias allows, relative as `difference`
+    /// (0 in a pair held to the unbiased test).
+    pub allowance: f64,
     /// The relative difference of the block's light the test detects with the stated power.
     pub detectable: f64,
     /// The block's light (sum of the channels' means, both runs averaged).
@@ -308,6 +311,8 @@ pub struct PairTest {
     pub mean_rejected: bool,
     /// The relative difference of the image mean the test detects with the stated power.
     pub mean_detectable: f64,
+    /// The difference of the image means' light the declared bias allows, relative.
+    pub mean_allowance: f64,
     /// The fraction of the image's light in blocks where the test detects `detect_block`.
     pub coverage: f64,
 }
@@ -341,14 +346,18 @@ struct Welch {
     se: f64,
 }
 
-/// Welch's test of channel `c` of two estimates; `None` when their difference is float
-/// rounding (`floor` and [`ROUNDING_RELATIVE`]: nothing to test).
-fn welch(a: &Estimate, b: &Estimate, c: usize, floor: f64) -> Option<Welch> {
-    let d = a.mean[c] - b.mean[c];
+/// Welch's test of channel `c` of two estimates, of the null hypothesis that their expected
+/// values differ by at most `allowance` (0: that they are equal): the difference is shrunk
+/// towards 0 by the allowance before it is divided by its standard error, which keeps the
+/// test's level for every difference within the allowance. `None` when the difference is
+/// float rounding (`floor` and [`ROUNDING_RELATIVE`]: nothing to test).
+fn welch(a: &Estimate, b: &Estimate, c: usize, floor: f64, allowance: f64) -> Option<Welch> {
+    let raw = a.mean[c] - b.mean[c];
     let scale = a.mean[c].abs().max(b.mean[c].abs());
-    if d.abs() <= floor + ROUNDING_RELATIVE * scale {
+    if raw.abs() <= floor + ROUNDING_RELATIVE * scale {
         return None;
     }
+    let d = raw.signum() * (raw.abs() - allowance).max(0.0);
     let (va, vb) = (a.variance[c], b.variance[c]);
     let s2 = va + vb;
     if s2.sqrt() <= ROUNDING_RELATIVE * scale {
@@ -430,14 +439,43 @@ const ROUNDING_RELATIVE: f64 = 1e-5;
 /// the BPTs 1e-4 apart on the background box's sky).
 const DETERMINISTIC_RELATIVE: f64 = 1e-3;
 
-/// Compares two runs' blocks and image means; `biased`: one of them is biased at a finite
-/// budget, and the settings' bias tolerances apply.
-pub fn compare(a: &BlockBatches, b: &BlockBatches, settings: &TestSettings, biased: bool) -> PairTest {
-    compare_estimates(&a.estimates(), &b.estimates(), settings, biased)
+/// The light of a run's estimate that its graph declares may be biased at a finite budget
+/// (docs/verify.md, "Bias"): the test allows a difference of the settings' bias tolerance times
+/// this light, per channel, on top of the statistical test.
+#[derive(Debug, Clone, Default)]
+pub enum Biased {
+    /// None: the run is held to the unbiased test.
+    #[default]
+    None,
+    /// All of it: the graph declares a biased class the scene has paths of and does not say
+    /// how much light its biased technique adds.
+    All,
+    /// The light its biased technique added (its film's second channel), per block and in the
+    /// image mean.
+    Part(Estimates),
+}
+
+impl Biased {
+    /// The biased light of channel `c` of region `k` (the image mean when `k` is the block
+    /// count) of a run whose estimate there is `whole`.
+    fn light(&self, k: usize, c: usize, whole: &Estimate) -> f64 {
+        match self {
+            Biased::None => 0.0,
+            Biased::All => whole.mean[c].abs(),
+            Biased::Part(part) if k == part.blocks.len() => part.image.mean[c].abs(),
+            Biased::Part(part) => part.blocks[k].mean[c].abs(),
+        }
+    }
+}
+
+/// Compares two runs' blocks and image means; `bias`: what of each run's estimate its graph
+/// declares may be biased ([`Biased`]).
+pub fn compare(a: &BlockBatches, b: &BlockBatches, settings: &TestSettings, bias: [&Biased; 2]) -> PairTest {
+    compare_estimates(&a.estimates(), &b.estimates(), settings, bias)
 }
 
 /// [`compare`] of two images' estimates (the same blocks of the same size).
-pub fn compare_estimates(a: &Estimates, b: &Estimates, settings: &TestSettings, biased: bool) -> PairTest {
+pub fn compare_estimates(a: &Estimates, b: &Estimates, settings: &TestSettings, bias: [&Biased; 2]) -> PairTest {
     let (blocks_a, blocks_b) = (&a.blocks, &b.blocks);
     let (image_a, image_b) = (a.image, b.image);
     let pairs: Vec<(&Estimate, &Estimate)> = blocks_a
@@ -445,27 +483,37 @@ pub fn compare_estimates(a: &Estimates, b: &Estimates, settings: &TestSettings, 
         .zip(blocks_b.iter())
         .chain(std::iter::once((&image_a, &image_b)))
         .collect();
+    // Per region and channel, the difference the declared bias allows: the tolerance times
+    // each run's biased light (the two may be biased in opposite directions).
+    let allowances: Vec<[f64; 3]> = pairs
+        .iter()
+        .enumerate()
+        .map(|(k, (x, y))| {
+            let tolerance = match k + 1 == pairs.len() {
+                true => settings.bias_tolerance_mean,
+                false => settings.bias_tolerance_block,
+            };
+            [0, 1, 2].map(|c| tolerance * (bias[0].light(k, c, x) + bias[1].light(k, c, y)))
+        })
+        .collect();
     // The family: every channel with something to test, Holm-corrected together.
     let floor = ROUNDING * 0.5 * (light(&image_a) + light(&image_b));
     let tests: Vec<Vec<Option<Welch>>> = pairs
         .iter()
-        .map(|(x, y)| (0..3).map(|c| welch(x, y, c, floor)).collect())
+        .zip(&allowances)
+        .map(|((x, y), allow)| (0..3).map(|c| welch(x, y, c, floor, allow[c])).collect())
         .collect();
     let p: Vec<f64> = tests.iter().flatten().flatten().map(|w| w.p).collect();
     let mut rejected = holm(&p, settings.pair_alpha()).into_iter();
     let m = p.len().max(1);
     let level = settings.pair_alpha() / m as f64;
     let mut results: Vec<BlockTest> = Vec::new();
-    for (k, (&(x, y), channels)) in pairs.iter().zip(&tests).enumerate() {
-        let tolerance = match (biased, k + 1 == pairs.len()) {
-            (false, _) => 0.0,
-            (true, true) => settings.bias_tolerance_mean,
-            (true, false) => settings.bias_tolerance_block,
-        };
+    for ((&(x, y), channels), allow) in pairs.iter().zip(&tests).zip(&allowances) {
         // Every channel's verdict is taken (no short cut), so the next block starts at its own.
         let n = channels.iter().flatten().count();
         let found = (&mut rejected).take(n).fold(false, |any, r| any | r);
-        results.push(block_test((x, y), channels, found, tolerance, (level, settings.power)));
+        let allowance = allow.iter().sum::<f64>();
+        results.push(block_test((x, y), channels, found, allowance, (level, settings.power)));
     }
     let mean = results.pop().expect("the image mean's test");
     let coverage = coverage(&results, settings.detect_block);
@@ -486,18 +534,19 @@ pub fn compare_estimates(a: &Estimates, b: &Estimates, settings: &TestSettings, 
         mean_t: mean.t,
         mean_rejected: mean.rejected,
         mean_detectable: mean.detectable,
+        mean_allowance: mean.allowance,
         coverage,
     }
 }
 
 /// One block's (or the mean's) summary from its channels' tests: the largest |t|, whether it
-/// differs (`found` significant and beyond `tolerance`), and what it could have detected at the
-/// per-test `level` with `power`.
+/// differs (`found` significant beyond the bias `allowance`, the channels' sum), and what it
+/// could have detected at the per-test `level` with `power`.
 fn block_test(
     (x, y): (&Estimate, &Estimate),
     channels: &[Option<Welch>],
     found: bool,
-    tolerance: f64,
+    allowance: f64,
     (level, power): (f64, f64),
 ) -> BlockTest {
     let tested: Vec<&Welch> = channels.iter().flatten().collect();
@@ -512,11 +561,11 @@ fn block_test(
         true => f64::INFINITY,
         false => detectable(se, dof, level, power, of),
     };
-    let difference = relative(light(x) - light(y), of);
     BlockTest {
         t,
-        rejected: found && difference.abs() > tolerance,
-        difference,
+        rejected: found,
+        difference: relative(light(x) - light(y), of),
+        allowance: relative(allowance, of),
         detectable,
         light: of,
     }
@@ -585,7 +634,7 @@ mod tests {
             ([7.5; 3], [0.5 / 16.0; 3], 241)
         );
         // Against itself: nothing to tell apart.
-        let t = compare_estimates(&e, &e, &TestSettings::default(), false);
+        let t = compare_estimates(&e, &e, &TestSettings::default(), [&Biased::None; 2]);
         assert_eq!(t.blocks_rejected(), 0);
         assert!(!t.mean_rejected);
     }
@@ -617,10 +666,10 @@ mod tests {
         };
         let a = run(32, 0.2, 1, |_, _| 1.0);
         let b = run(32, 0.2, 2, |_, _| 1.0);
-        assert_eq!(compare(&a, &b, &settings, false).verdict, Verdict::Agree);
+        assert_eq!(compare(&a, &b, &settings, [&Biased::None; 2]).verdict, Verdict::Agree);
         // One block 30% darker: its test rejects, the others do not.
         let c = run(32, 0.2, 3, |x, y| if x >= 2 && y >= 2 { 0.7 } else { 1.0 });
-        let t = compare(&a, &c, &settings, false);
+        let t = compare(&a, &c, &settings, [&Biased::None; 2]);
         assert_eq!(t.verdict, Verdict::Differ);
         assert_eq!(
             t.blocks.iter().map(|b| b.rejected).collect::<Vec<_>>(),
@@ -634,8 +683,49 @@ mod tests {
         let a = run(4, 1.0, 1, |_, _| 1.0);
         let b = run(4, 1.0, 2, |_, _| 0.9);
         assert_eq!(
-            compare(&a, &b, &TestSettings::default(), false).verdict,
+            compare(&a, &b, &TestSettings::default(), [&Biased::None; 2]).verdict,
             Verdict::Undecided
         );
+    }
+
+    /// An image mean (a 2 x 2 grid of equal blocks and their mean) of `value` per channel with
+    /// standard error `se`, from 64 batches.
+    fn uniform(value: f64, se: f64) -> Estimates {
+        let e = Estimate {
+            mean: [value; 3],
+            variance: [se * se; 3],
+            batches: 64,
+        };
+        Estimates {
+            blocks: vec![e; 4],
+            image: e,
+        }
+    }
+
+    #[test]
+    fn a_bias_declared_for_a_part_of_the_light_excuses_only_that_part() {
+        // An estimator whose biased technique adds 2.4% of the image (a caustic photon map
+        // beside path tracing), 0.5% brighter than an unbiased one everywhere: a split error.
+        // The noise (0.05% of the value a run) lets the test see 0.5% and decide.
+        let unbiased = uniform(1.0, 0.0005);
+        let wrong = uniform(1.005, 0.0005);
+        let settings = TestSettings::default();
+        let all_or_nothing = compare_estimates(&unbiased, &wrong, &settings, [&Biased::None, &Biased::All]);
+        // The whole image declared biased: 1% of it allowed, the error excused.
+        assert_eq!(all_or_nothing.verdict, Verdict::Agree);
+        assert!((all_or_nothing.mean_allowance - 0.01).abs() < 1e-4);
+        // Only the caustic's 2.4% declared biased: 1% of that (0.024%) allowed, the error seen.
+        let caustic = Biased::Part(uniform(0.024, 0.0001));
+        let per_class = compare_estimates(&unbiased, &wrong, &settings, [&Biased::None, &caustic]);
+        assert_eq!(per_class.verdict, Verdict::Differ);
+        assert!(per_class.mean_rejected);
+        assert!((per_class.mean_allowance - 0.00024).abs() < 1e-5);
+        // A difference within the allowance is excused: 0.02%, which the unbiased test sees
+        // at this noise (t 14).
+        let (exact, close) = (uniform(1.0, 0.00001), uniform(1.0002, 0.00001));
+        let strict = compare_estimates(&exact, &close, &settings, [&Biased::None; 2]);
+        assert_eq!(strict.verdict, Verdict::Differ);
+        let within = compare_estimates(&exact, &close, &settings, [&Biased::None, &caustic]);
+        assert_eq!(within.verdict, Verdict::Agree);
     }
 }

@@ -12,7 +12,7 @@
 use crate::common::{data, render_batches};
 use lightgraph::output::read_exr;
 use lightgraph::run::LoadedScene;
-use lightgraph::verify::stats::{BlockBatches, Estimates, TestSettings, Verdict, compare_estimates};
+use lightgraph::verify::stats::{Biased, BlockBatches, Estimates, TestSettings, Verdict, compare_estimates};
 use lightgraph_scenes::bvh::BvhKind;
 use std::path::{Path, PathBuf};
 
@@ -124,7 +124,7 @@ fn every_exact_scene_of_the_suite_renders_as_mitsuba_3() {
     let mut failures = Vec::new();
     for name in &scenes {
         let (expected, passes) = reference(name);
-        let test = compare_estimates(&render(name).estimates(), &expected, &settings, false);
+        let test = compare_estimates(&render(name).estimates(), &expected, &settings, [&Biased::None; 2]);
         let (worst, block) = test.worst_block().map_or((0, 0.0), |(i, b)| (i, b.t));
         eprintln!(
             "{name}: mean {:+.3}% (t {:+.2}, detectable {:.2}%), {} of {} blocks differ (worst {worst}: t {block:+.2}, critical {:.2}); reference of {passes} passes: {}",
