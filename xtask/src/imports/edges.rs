@@ -3,7 +3,7 @@
 //! through the module tree and its imports (re-exports and globs followed) to the module that
 //! defines what it names.
 
-use super::tree::{Crate, Import, flatten_use};
+use super::tree::{Crate, Import, flatten_use, is_test};
 use proc_macro2::{TokenStream, TokenTree};
 use syn::visit_mut::{self, VisitMut};
 
@@ -28,6 +28,24 @@ impl VisitMut for Paths {
     fn visit_item_mod_mut(&mut self, _: &mut syn::ItemMod) {}
     fn visit_visibility_mut(&mut self, _: &mut syn::Visibility) {}
     fn visit_attribute_mut(&mut self, _: &mut syn::Attribute) {}
+
+    fn visit_item_fn_mut(&mut self, f: &mut syn::ItemFn) {
+        if !is_test(&f.attrs) {
+            visit_mut::visit_item_fn_mut(self, f);
+        }
+    }
+
+    fn visit_item_impl_mut(&mut self, i: &mut syn::ItemImpl) {
+        if !is_test(&i.attrs) {
+            visit_mut::visit_item_impl_mut(self, i);
+        }
+    }
+
+    fn visit_impl_item_fn_mut(&mut self, f: &mut syn::ImplItemFn) {
+        if !is_test(&f.attrs) {
+            visit_mut::visit_impl_item_fn_mut(self, f);
+        }
+    }
 
     fn visit_item_use_mut(&mut self, u: &mut syn::ItemUse) {
         if u.leading_colon.is_some() {

@@ -55,12 +55,13 @@ fn re_exports_and_globs_are_followed() {
 }
 
 #[test]
-fn a_module_may_use_its_parent_and_children_and_other_crates() {
+fn a_module_may_use_its_parent_and_children_and_other_crates_and_test_code_anything() {
     let files = [
         ("lib.rs", "pub struct R; mod a; mod b; mod gltf; fn f() { a::g(); }"),
         (
             "a.rs",
-            "use super::*; mod inner { pub fn h() { super::g() } } pub fn g() { inner::h(); let _ = R; }",
+            "use super::*; mod inner { pub fn h() { super::g() } } pub fn g() { inner::h(); let _ = R; } \
+             #[cfg(test)] mod tests { use crate::b::k; }",
         ),
         // `gltf` here is the other crate of that name, not the sibling module.
         ("b.rs", "use gltf::Document; pub fn k() { crate::a::g() }"),

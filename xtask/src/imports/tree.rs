@@ -71,6 +71,36 @@ pub fn flatten_use(tree: &UseTree, prefix: &mut Vec<String>, out: &mut Vec<Impor
     }
 }
 
+/// Whether `attrs` hold `#[cfg(test)]`: test code, which the check leaves out.
+pub fn is_test(attrs: &[syn::Attribute]) -> bool {
+    attrs.iter().any(|a| match &a.meta {
+        syn::Meta::List(list) => list.path.is_ident("cfg") && list.tokens.to_string() == "test",
+        _ => false,
+    })
+}
+
+/// The attributes of an item.
+fn attributes(item: &Item) -> &[syn::Attribute] {
+    match item {
+        Item::Const(i) => &i.attrs,
+        Item::Enum(i) => &i.attrs,
+        Item::ExternCrate(i) => &i.attrs,
+        Item::Fn(i) => &i.attrs,
+        Item::ForeignMod(i) => &i.attrs,
+        Item::Impl(i) => &i.attrs,
+        Item::Macro(i) => &i.attrs,
+        Item::Mod(i) => &i.attrs,
+        Item::Static(i) => &i.attrs,
+        Item::Struct(i) => &i.attrs,
+        Item::Trait(i) => &i.attrs,
+        Item::TraitAlias(i) => &i.attrs,
+        Item::Type(i) => &i.attrs,
+        Item::Union(i) => &i.attrs,
+        Item::Use(i) => &i.attrs,
+        _ => &[],
+    }
+}
+
 /// The name an item defines in its module's namespace, for items other than modules, `use`s
 /// and `extern crate`s.
 fn defined_name(item: &Item) -> Option<String> {
@@ -128,7 +158,7 @@ impl Crate {
         path: Vec<String>,
         file: PathBuf,
         dir: &Path,
-        mut items: Vec<Item>,
+        items: Vec<Item>,
         parent: Option<usize>,
         read: Read,
     ) -> Result<usize, String> {
@@ -143,6 +173,7 @@ impl Crate {
             imports: BTreeMap::new(),
             globs: Vec::new(),
         });
+        let mut items: Vec<Item> = items.into_iter().filter(|i| !is_test(attributes(i))).collect();
         for item in &mut items {
             match item {
                 Item::Mod(m) => {
