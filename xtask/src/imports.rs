@@ -47,8 +47,6 @@ pub const ALLOWED: &[&str] = &[
     // removed by issue 58 item 3
     "lightgraph: reference -> run -> reference",
     // removed by issue 58 item 6 (scenes/ split into stages)
-    "lightgraph-scenes: mitsuba::serialized -> mitsuba::shapes -> mitsuba::serialized",
-    // removed by issue 58 item 6 (scenes/ split into stages)
     "lightgraph-scenes: model -> placement -> model",
 ];
 

@@ -13,6 +13,7 @@ pub mod camera;
 pub mod emitters;
 pub mod export;
 pub mod materials;
+pub mod mesh;
 pub mod serialized;
 pub mod shapes;
 pub mod textures;

@@ -5,7 +5,7 @@
 //! and ends with a dictionary: each mesh's file offset (u64 in version 4, u32 in version 3),
 //! then the mesh count (u32).
 
-use super::shapes::Mesh;
+use super::mesh::Mesh;
 use flate2::read::ZlibDecoder;
 use glam::Vec3;
 use std::io::Read;

@@ -5,8 +5,9 @@
 //! PLY's u and v are taken as they are, as Mitsuba 3 does (checked by rendering the exported
 //! Sponza in Mitsuba 3.9.1: with flipped v its mean came out 27% darker than lightgraph's).
 
+use super::mesh::Mesh;
 use super::xml::{Context, Props, Result};
-use glam::{DVec3, Mat3, Mat4, Vec3};
+use glam::{DVec3, Vec3};
 use std::f64::consts::PI;
 
 /// Segments around a disk's rim, and around a sphere tessellated into triangles (half as
@@ -15,56 +16,6 @@ use std::f64::consts::PI;
 /// its face centres at most 8.8e-5 inside; the disk's rim vertices 5.0e-5 outside, its edge
 /// midpoints 2.5e-5 inside).
 pub const SEGMENTS: u32 = 256;
-
-/// A triangle mesh.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Mesh {
-    /// Positions.
-    pub positions: Vec<Vec3>,
-    /// Three vertex indices per triangle, facing by the right-hand rule.
-    pub indices: Vec<[u32; 3]>,
-    /// Unit shading normals per vertex (none: flat shading).
-    pub normals: Option<Vec<Vec3>>,
-    /// Texture coordinates per vertex.
-    pub uvs: Option<Vec<[f32; 2]>>,
-}
-
-impl Mesh {
-    /// The mesh placed by `m`: normals by its inverse transpose, and the winding reversed by a
-    /// mirroring `m` (so triangles keep facing as authored) or by `flip` (Mitsuba's
-    /// `flip_normals`, which also turns the normals over).
-    pub fn placed(mut self, m: Mat4, flip: bool) -> Mesh {
-        let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
-        let sign = if flip { -1.0 } else { 1.0 };
-        for p in &mut self.positions {
-            *p = m.transform_point3(*p);
-        }
-        if let Some(normals) = &mut self.normals {
-            for n in normals {
-                *n = (normal_matrix * *n).normalize_or_zero() * sign;
-            }
-        }
-        if (m.determinant() < 0.0) != flip {
-            for t in &mut self.indices {
-                t.swap(1, 2);
-            }
-        }
-        self
-    }
-
-    /// Area-weighted vertex normals (Mitsuba computes these for meshes without normals).
-    pub fn smooth_normals(&mut self) {
-        let mut normals = vec![Vec3::ZERO; self.positions.len()];
-        for t in &self.indices {
-            let [a, b, c] = t.map(|i| self.positions[i as usize]);
-            let n = (b - a).cross(c - a);
-            for &i in t {
-                normals[i as usize] += n;
-            }
-        }
-        self.normals = Some(normals.into_iter().map(Vec3::normalize_or_zero).collect());
-    }
-}
 
 /// The object-space mesh of a shape of `kind` other than `sphere` (see [`sphere`]), with the
 /// properties the kind reads; `None` for a kind this importer does not know. Meshes read
@@ -373,6 +324,7 @@ fn ply(ctx: &mut Context, props: &Props) -> Result<Mesh> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Mat4;
 
     /// The area of `m`, summed in f64.
     fn area(m: &Mesh) -> f64 {
