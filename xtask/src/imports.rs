@@ -46,8 +46,6 @@ pub const ALLOWED: &[&str] = &[
     "lightgraph: output -> run -> reference -> output",
     // removed by issue 58 item 3
     "lightgraph: reference -> run -> reference",
-    // removed by issue 58 item 6 (scenes/ split into stages)
-    "lightgraph-scenes: model -> placement -> model",
 ];
 
 /// The workspace root.

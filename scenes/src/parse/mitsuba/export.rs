@@ -11,8 +11,8 @@
 //! the base colour as an sRGB `bitmap`, alpha masks as `mask` with a binary opacity bitmap
 //! (the texels' alpha against the cut-off).
 
+use crate::model::texture::{Texture, TextureRef, Wrap, linear_to_srgb8, srgb_to_linear};
 use crate::model::{Camera, FovAxis, Light, Look, Material, Rgb, RussianRoulette, Scene, Shape, Vec3};
-use crate::texture::{Texture, TextureRef, Wrap, linear_to_srgb8, srgb_to_linear};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -505,7 +505,7 @@ mod tests {
     /// cornell-mitsuba as written in its scene file.
     fn cornell() -> Scene {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/cornell/cornell-mitsuba.ron");
-        crate::parse_scene(path, &std::fs::read_to_string(path).unwrap()).unwrap()
+        crate::parse::scene_file::parse_scene(path, &std::fs::read_to_string(path).unwrap()).unwrap()
     }
 
     #[test]

@@ -3,8 +3,8 @@
 //! for a scene is generated with the flags of the features the scene uses, so a Cornell box
 //! kernel carries no texture, microfacet or environment-map code.
 
-use crate::CompiledScene;
 use crate::gpu::{attribute_flags, light_kind, material_flags, primitive_kind};
+use crate::pack::compile::CompiledScene;
 use std::collections::BTreeSet;
 
 /// Every feature flag, with what it compiles in.

@@ -19,7 +19,7 @@ pub enum BvhKind {
     /// A binary BVH ([`build`], [`GpuBvhNode`]).
     #[default]
     Bvh2,
-    /// A compressed eight-wide BVH ([`crate::cwbvh::build`], [`crate::gpu::GpuCwbvhNode`]).
+    /// A compressed eight-wide BVH ([`crate::build::cwbvh::build`], [`crate::gpu::GpuCwbvhNode`]).
     Cwbvh,
 }
 

@@ -6,8 +6,8 @@
 
 use super::textures::Images;
 use super::xml::{Color, Context, Props, Result};
+use crate::model::texture::{Texture, TextureRef};
 use crate::model::{Conductor, Masking, Material, Microfacet, Pbr, Plastic};
-use crate::texture::{Texture, TextureRef};
 use roxmltree::Node;
 
 /// Named indices of refraction Mitsuba knows (its table's common entries).

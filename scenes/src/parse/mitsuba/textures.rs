@@ -4,7 +4,7 @@
 
 use super::transform;
 use super::xml::{Color, Context, Props, Result};
-use crate::texture::{Texture, TextureRef, Wrap};
+use crate::model::texture::{Texture, TextureRef, Wrap};
 use std::collections::HashMap;
 use std::path::PathBuf;
 

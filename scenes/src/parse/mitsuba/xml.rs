@@ -4,7 +4,7 @@
 //! as Mitsuba 3's snake_case ones. Every property a converter does not read is reported as a
 //! warning when the plugin is finished ([`Props::finish`]).
 
-use crate::texture::srgb_to_linear;
+use crate::model::texture::srgb_to_linear;
 use roxmltree::{Document, Node};
 use std::cell::Cell;
 use std::collections::HashMap;

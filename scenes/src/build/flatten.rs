@@ -1,15 +1,18 @@
 //! A scene's shapes and lights flattened into what the GPU reads: primitives (triangles and
 //! spheres) with their vertex attributes and area lights, then the scene's other lights.
 
-use crate::MAX_COORDINATE;
-use crate::environment::{self, TexelLayout};
 use crate::gpu::{
     self, GpuEnvironment, GpuLight, GpuPrimitive, GpuTriangleAttributes, attribute_flags, light_kind, primitive_kind,
 };
+use crate::model::environment::{self, TexelLayout};
 use crate::model::{self, Light, Scene, Shape, SpotFalloff};
 use bytemuck::Zeroable;
 use glam::Vec3;
 use std::collections::BTreeMap;
+
+/// The largest coordinate (or sphere radius) a shape may have: as far as a ray travels
+/// (`INFINITE_DISTANCE` in the WGSL).
+pub const MAX_COORDINATE: f32 = 1e30;
 
 /// The primitives of a scene's shapes in shape order (quads as two triangles, meshes as their
 /// triangles), the area lights of the emissive triangles, and the vertex attributes of each

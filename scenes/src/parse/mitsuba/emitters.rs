@@ -4,7 +4,7 @@
 
 use super::transform::to_world;
 use super::xml::{Color, Context, Props, Result};
-use crate::environment::{EnvironmentMap, TexelLayout};
+use crate::model::environment::{EnvironmentMap, TexelLayout};
 use crate::model::{Light, Rgb, SpotFalloff};
 use glam::{Mat4, Vec3};
 use roxmltree::Node;

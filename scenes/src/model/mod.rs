@@ -1,14 +1,28 @@
 //! The scene model and its RON file format, written by hand: camera, materials, shapes,
 //! lights and integrator settings.
 
-use crate::texture::{PbrTextures, Texture};
+pub mod checks;
+pub mod environment;
+pub mod framing;
+pub mod placement;
+pub mod texture;
+
 use serde::Deserialize;
 use std::collections::BTreeMap;
+use texture::{PbrTextures, Texture};
 
 /// An RGB triple (linear).
 pub type Rgb = [f32; 3];
 /// A point or direction.
 pub type Vec3 = [f32; 3];
+/// A tangent of each corner of each triangle: unit xyz, and w = ±1 with the bitangent
+/// w (normal × tangent) ([`crate::parse::tangents`] generates them where a mesh has none).
+pub type CornerTangents = [[f32; 4]; 3];
+
+/// Rec. 709 luminance of linear RGB (the weights of `luminance` in the WGSL).
+pub fn luminance(c: Rgb) -> f64 {
+    0.212671 * c[0] as f64 + 0.71516 * c[1] as f64 + 0.072169 * c[2] as f64
+}
 
 /// A scene as written in a `.ron` scene file.
 #[derive(Debug, Clone, Deserialize)]
@@ -42,7 +56,7 @@ pub struct Scene {
     /// A glTF 2.0 asset (`.gltf` or `.glb`, a path below the asset root) whose meshes join the
     /// shapes: every node's mesh instance with its transform, normals and texture
     /// coordinates; its metallic-roughness materials, with their textures, are named
-    /// `gltf:NAME` (see [`crate::gltf`]).
+    /// `gltf:NAME` (see [`crate::parse::gltf`]).
     #[serde(default)]
     pub gltf: Option<String>,
     /// Render the glTF asset's materials as pure Lambertians of their base colour (and
@@ -51,13 +65,13 @@ pub struct Scene {
     #[serde(default)]
     pub gltf_diffuse: bool,
     /// Copies of the glTF asset's meshes, each placed by a transform (`At(...)`, `Grid(...)`,
-    /// [`crate::placement::Placement`]); none: the asset once, as it places itself. Its
+    /// [`placement::Placement`]); none: the asset once, as it places itself. Its
     /// emissive meshes are copied with the rest; its punctual lights and cameras are not.
     #[serde(default)]
-    pub gltf_instances: Vec<crate::placement::Placement>,
+    pub gltf_instances: Vec<placement::Placement>,
     /// A Mitsuba scene file (`.xml`, a path below the asset root; not with `gltf`) whose
     /// shapes, materials, textures and emitters join the scene's, and whose sensor is the
-    /// camera unless the scene gives one (see [`crate::mitsuba`]); the scene's resolution and
+    /// camera unless the scene gives one (see [`crate::parse::mitsuba`]); the scene's resolution and
     /// integrator stand.
     #[serde(default)]
     pub mitsuba: Option<String>,
@@ -255,7 +269,7 @@ pub enum Masking {
 /// base / (1 - F_dr) (`nonlinear`: base / (1 - base F_dr), a deeper colour) times
 /// (1 - F(cos_o)) (1 - F(cos_i)) / (pi ior^2). With a roughness above 0 (Mitsuba's
 /// `roughplastic`), the rough coating's transmittances T(cos) and F_dr come from its tables
-/// ([`crate::plastic`]).
+/// ([`crate::build::plastic`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Plastic {
@@ -368,7 +382,7 @@ pub enum Shape {
         /// Tangents of each triangle's corners for its material's normal map: unit xyz and
         /// w = ±1, the bitangent w (normal × tangent) (glTF TANGENT, or MikkTSpace's).
         #[serde(default)]
-        tangents: Option<Vec<crate::tangents::CornerTangents>>,
+        tangents: Option<Vec<CornerTangents>>,
     },
     /// An analytic sphere (normals face outward).
     Sphere {
@@ -451,7 +465,7 @@ pub enum Light {
     /// An equirectangular environment map seen in every direction nothing else is
     /// (`.hdr` or `.exr`, a path below the asset root): +Y is up (the top row), the image's
     /// centre column looks along −Z and u grows towards +X (u = 0 and 1 are +Z); filtered
-    /// bilinearly (see [`crate::environment`]).
+    /// bilinearly (see [`crate::model::environment`]).
     Environment {
         /// The image file, below the asset root.
         file: String,
@@ -464,10 +478,10 @@ pub enum Light {
         /// Where the texels sit, between which the radiance is interpolated bilinearly:
         /// `Centred` (the default) or `PoleToPole` (Mitsuba's envmap, set by its importer).
         #[serde(default)]
-        layout: crate::environment::TexelLayout,
+        layout: environment::TexelLayout,
         /// The decoded map, once the scene's assets are resolved.
         #[serde(skip)]
-        map: Option<std::sync::Arc<crate::environment::EnvironmentMap>>,
+        map: Option<std::sync::Arc<environment::EnvironmentMap>>,
     },
 }
 

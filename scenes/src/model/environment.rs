@@ -23,7 +23,7 @@
 //! `env_lookup` (shaders/lib/environment.wgsl) compute it by the same steps as
 //! [`Distribution::sample`] and [`Distribution::pdf`].
 
-use crate::alias::luminance;
+use crate::model::luminance;
 use serde::Deserialize;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -747,12 +747,12 @@ mod tests {
                     shapes: [Quad(corners: ((-1, 0, -1), (-1, 0, 1), (1, 0, 1), (1, 0, -1)), material: \"white\")],
                     lights: [Environment(file: \"two.exr\"{layout})])"
             );
-            let mut scene = crate::parse_scene("two.ron", &text).unwrap();
+            let mut scene = crate::parse::scene_file::parse_scene("two.ron", &text).unwrap();
             let Light::Environment { map, .. } = &mut scene.lights[0] else {
                 panic!()
             };
             *map = Some(std::sync::Arc::new(varied_map(3, 2)));
-            crate::CompiledScene::new(&scene).unwrap()
+            crate::pack::compile::CompiledScene::new(&scene).unwrap()
         };
         for (text, layout, rows) in [
             ("", TexelLayout::Centred, 3),

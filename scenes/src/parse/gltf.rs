@@ -8,9 +8,10 @@
 //! the perspective cameras the scene's nodes place, and the KHR_lights_punctual lights of its
 //! nodes ([`punctual_light`]). Other extensions the file uses are reported as warnings.
 
+use crate::model::CornerTangents;
+use crate::model::texture::{NormalTexture, PbrTextures, Texture, TextureRef, Wrap};
 use crate::model::{Camera, FovAxis, Light, Look, Material, Pbr, Rgb, Shape, SpotFalloff};
-use crate::tangents::{self, CornerTangents};
-use crate::texture::{NormalTexture, PbrTextures, Texture, TextureRef, Wrap};
+use crate::parse::tangents;
 use glam::{Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use std::collections::BTreeMap;
@@ -692,7 +693,7 @@ impl MaterialImport<'_> {
                 "material '{name}': KHR_materials_specular's colour {color:?} is rendered as its luminance"
             ));
         }
-        let luminance = crate::alias::luminance(color) as f32;
+        let luminance = crate::model::luminance(color) as f32;
         let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
         ior_of_reflectance((factor * (f0 * luminance).min(1.0)).clamp(0.0, 0.99))
     }

@@ -4,7 +4,7 @@
 //! depth we bound until the wide one fits the traversal stack ([`MAX_DEPTH`]); we pack its nodes
 //! into u32 words for WGSL ([`GpuCwbvhNode`]), with primitives reordered into leaf order.
 
-use crate::bvh;
+use crate::build::bvh;
 use crate::gpu::GpuCwbvhNode;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
@@ -227,7 +227,7 @@ mod tests {
     /// [`MAX_DEPTH`] wide levels.
     #[test]
     fn deep_trees_are_built_within_the_stack() {
-        let b = crate::bvh::tests::deep_boxes();
+        let b = crate::build::bvh::tests::deep_boxes();
         let aabbs: Vec<Aabb> = b.iter().map(|(lo, hi)| Aabb::new(*lo, *hi)).collect();
         let unlimited = bvh::depth(&binary_tree(&aabbs, &bvh::BUILD));
         assert!(

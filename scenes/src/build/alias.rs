@@ -18,6 +18,8 @@
 //! beside one of radius 0.5 lit the floor under it 3% too brightly.)
 
 use crate::gpu::GpuAliasEntry;
+/// The luminance by which light powers weigh radiance.
+pub use crate::model::luminance;
 
 /// Random bits a pick uses.
 pub const PICK_BITS: u32 = 24;
@@ -155,11 +157,6 @@ pub fn implied_counts(table: &[GpuAliasEntry], lights: usize) -> Vec<u64> {
     }
     counts.truncate(lights);
     counts
-}
-
-/// Rec. 709 luminance of linear RGB (the weights of `luminance` in the WGSL).
-pub fn luminance(c: [f32; 3]) -> f64 {
-    0.212671 * c[0] as f64 + 0.71516 * c[1] as f64 + 0.072169 * c[2] as f64
 }
 
 #[cfg(test)]

@@ -498,7 +498,7 @@ mod tests {
         // sampler, with their standard errors (bench/peers/fidelity/bsdf_reference.py
         // monte-carlo). 120 comparisons: 4 standard errors (Sidak's bound at family-wise level
         // 1% is 3.8) plus 1e-5 for the integration's own error.
-        let text = include_str!("../../tests/data/mitsuba/roughplastic-coating.txt");
+        let text = include_str!("../../../tests/data/mitsuba/roughplastic-coating.txt");
         for row in rows(text) {
             let v: Vec<f64> = row[1..].iter().map(|x| x.parse().unwrap()).collect();
             let (alpha, eta, mu) = (v[0], v[1], v[2]);
@@ -530,7 +530,7 @@ mod tests {
         // at small alpha and grazing cosines; Beckmann's by up to 0.07%), the tolerance. R_int
         // as the integral of R(mu) mu instead of Mitsuba's mean over the 64 cosines fails
         // (0.4% off at eta 1.1), so does T without the masking of the refracted direction.
-        let text = include_str!("../../tests/data/mitsuba/roughplastic-diffuse.txt");
+        let text = include_str!("../../../tests/data/mitsuba/roughplastic-diffuse.txt");
         let mut table = None;
         for row in rows(text) {
             if row[0] == "case" {

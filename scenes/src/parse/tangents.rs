@@ -4,11 +4,8 @@
 //! MikkTSpace sees (u, 1 - v): its bitangent then points to the image's top, the +Y of glTF's
 //! normal textures.
 
+use crate::model::CornerTangents;
 use glam::Vec3;
-
-/// A tangent of each corner of each triangle: unit xyz, and w = ±1 with the bitangent
-/// w (normal × tangent).
-pub type CornerTangents = [[f32; 4]; 3];
 
 /// The tangent frame of a corner whose tangent is unknown (a degenerate triangle with no
 /// neighbour to borrow from): any unit vector perpendicular to its normal `n`, w = 1.

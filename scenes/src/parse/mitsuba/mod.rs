@@ -20,7 +20,7 @@ pub mod textures;
 pub mod transform;
 pub mod xml;
 
-use crate::SceneError;
+use crate::error::SceneError;
 use crate::model::{Integrator, Rgb, Scene, Shape};
 use glam::{Mat4, Vec3};
 use materials::Materials;
@@ -138,11 +138,11 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         }
         None => {
             ctx.warn(root, "the scene has no sensor: a default camera frames its bounds");
-            scene.camera = Some(crate::default_camera(&scene));
+            scene.camera = Some(crate::model::framing::default_camera(&scene));
         }
     }
-    crate::check_lights(&scene.lights).map_err(|(_, message)| ctx.error(root, message))?;
-    crate::check_resolved(&scene).map_err(|message| ctx.error(root, message))?;
+    crate::model::checks::check_lights(&scene.lights).map_err(|(_, message)| ctx.error(root, message))?;
+    crate::model::checks::check_resolved(&scene).map_err(|message| ctx.error(root, message))?;
     Ok(scene)
 }
 
@@ -372,7 +372,7 @@ mod tests {
         }
         assert_eq!(imported.warnings.len(), 2, "{:?}", imported.warnings);
         assert!(scene.materials["pane"].pbr.as_ref().unwrap().thin_walled);
-        crate::CompiledScene::new(scene).unwrap();
+        crate::pack::compile::CompiledScene::new(scene).unwrap();
     }
 
     #[test]
