@@ -26,8 +26,8 @@ pub struct CompiledScene {
     pub primitives: Vec<GpuPrimitive>,
     /// The kind of BVH built.
     pub bvh_kind: BvhKind,
-    /// The BVH's nodes as the GPU reads them: [`gpu::GpuBvhNode`]s for [`BvhKind::Bvh2`],
-    /// [`gpu::GpuCwbvhNode`]s for [`BvhKind::Cwbvh`].
+    /// The BVH's nodes as the GPU reads them: [`crate::gpu::GpuBvhNode`]s for [`BvhKind::Bvh2`],
+    /// [`crate::gpu::GpuCwbvhNode`]s for [`BvhKind::Cwbvh`].
     pub bvh: Vec<u8>,
     /// `order[i]`: index (in shape order, quads counting as two triangles) of primitive `i`.
     pub order: Vec<u32>,
@@ -42,7 +42,7 @@ pub struct CompiledScene {
     pub light_alias: Vec<GpuAliasEntry>,
     /// The environment map's size and rotation (width 0 when the scene has none).
     pub environment: GpuEnvironment,
-    /// The environment map's texels and sampling weights ([`environment::Distribution`]);
+    /// The environment map's texels and sampling weights ([`crate::model::environment::Distribution`]);
     /// one zero texel when there is no map.
     pub env_texels: Vec<[f32; 4]>,
     /// The environment map's CDFs; `[0, 1]` when there is no map.
@@ -62,7 +62,7 @@ pub struct CompiledScene {
     pub bvh_depth: usize,
     /// Time spent building the BVH.
     pub bvh_time: Duration,
-    /// Primitives reaching beyond ±[`TRACED_EXTENT`], whose boxes the BVH clips there.
+    /// Primitives reaching beyond ±[`crate::TRACED_EXTENT`], whose boxes the BVH clips there.
     pub clipped_primitives: usize,
     /// Whether the camera has a thin lens (depth of field).
     pub thin_lens: bool,

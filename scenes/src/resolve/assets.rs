@@ -8,7 +8,7 @@ use crate::model::{Light, Scene, environment};
 
 /// Imports the scene's glTF asset (a path below `asset_root`) into its shapes, materials,
 /// textures, camera (`gltf_camera`) and lights (KHR_lights_punctual), or its Mitsuba file
-/// (`mitsuba`, [`add_mitsuba`]), loads the environment maps its lights name (paths below
+/// (`mitsuba`, [`crate::parse::mitsuba`]), loads the environment maps its lights name (paths below
 /// `asset_root` too), then checks that the scene has geometry and light.
 /// Approximations of the import are printed to stderr as warnings.
 pub fn resolve_gltf(scene: &mut Scene, file: &str, asset_root: Option<&std::path::Path>) -> Result<(), SceneError> {
