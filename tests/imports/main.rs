@@ -22,6 +22,7 @@
 mod circles;
 mod constructed;
 mod edges;
+mod roots;
 mod tree;
 
 use std::collections::BTreeSet;
