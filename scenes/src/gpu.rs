@@ -44,7 +44,7 @@ pub mod material_flags {
     /// (Mitsuba's, Beckmann's by Walter's fit) instead of height-correlated (glTF's).
     pub const SMITH_SEPARABLE: u32 = 256;
     /// With `PLASTIC`: Mitsuba's rough plastic, whose coating's transmittance and internal
-    /// reflectance are a table in `plastic_tables` ([`crate::plastic`]) at the offset
+    /// reflectance are a table in `plastic_tables` ([`crate::build::plastic`]) at the offset
     /// `phong_exponent` holds.
     pub const ROUGH_PLASTIC: u32 = 512;
 }
@@ -263,7 +263,7 @@ pub struct GpuLight {
 }
 
 /// One entry of the light-selection alias table (`AliasEntry` in WGSL, Walker's alias method
-/// in integers, [`crate::alias`]): of the 2^24 values of a pick's random bits, the slot `i` gets
+/// in integers, [`crate::build::alias`]): of the 2^24 values of a pick's random bits, the slot `i` gets
 /// 2^24 / slots; `keep` of them pick light `i`, the others light `other`; `pmf` is the
 /// probability with which light `i` is picked overall (entries past the last light: 0).
 #[repr(C)]
@@ -291,7 +291,7 @@ pub struct GpuEnvironment {
     pub cos_rotation: f32,
     /// Sine of the map's rotation about +Y.
     pub sin_rotation: f32,
-    /// 1 when the texel rows span pole to pole ([`crate::environment::TexelLayout::PoleToPole`]),
+    /// 1 when the texel rows span pole to pole ([`crate::model::environment::TexelLayout::PoleToPole`]),
     /// 0 when they sit at their centres.
     pub pole_to_pole: u32,
 }

@@ -356,7 +356,7 @@ fn gpu_light_picks_follow_the_alias_table() {
     let c = &s.compiled;
     let n = c.lights.len();
     let total: f64 = c.light_power.iter().sum();
-    // The table's probabilities are whole numbers of 2^24 values (scenes/src/alias.rs),
+    // The table's probabilities are whole numbers of 2^24 values (scenes/src/build/alias.rs),
     // within a value of the normalised power (or one value for the smallest).
     let values = (1u64 << alias::PICK_BITS) as f64;
     let table_p: Vec<f64> = c.light_alias[..n].iter().map(|e| e.pmf as f64).collect();

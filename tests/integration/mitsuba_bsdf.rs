@@ -1,7 +1,7 @@
 //! Mitsuba's rough BSDFs as the import renders them, against Mitsuba 3's own values: whole
 //! `roughplastic`, `roughdielectric` and `roughconductor` BSDFs (the WGSL `bsdf_eval` of the
 //! imported material against Mitsuba's `bsdf.eval`, tests/data/mitsuba/bsdf-eval.txt), and the
-//! rough plastic's diffuse lobe on the GPU against its host tables (`scenes/src/plastic.rs`):
+//! rough plastic's diffuse lobe on the GPU against its host tables (`scenes/src/build/plastic.rs`):
 //! its values, and its albedo as the sampled weights' mean.
 
 use crate::bsdf::{Part, directions, eval, material_scene, mean_weight, sample};
@@ -79,7 +79,7 @@ fn rough_bsdfs_evaluate_as_mitsubas() {
     // to f32 rounding (1.3e-5; before Beckmann's masking took Walter's fit as Mitsuba does,
     // by up to 0.28% at grazing angles): 1e-4 of the value is allowed. The rough plastics'
     // diffuse lobe rests on Mitsuba's tables, which are off the integrals they stand for by
-    // up to 0.06% at these directions (scenes/src/plastic.rs's tests): 1e-3 is allowed (the
+    // up to 0.06% at these directions (scenes/src/build/plastic.rs's tests): 1e-3 is allowed (the
     // smooth interface's transmittance was several percent off). Plus 1e-6 for values that
     // are 0 in one and f32 rounding in the other.
     for case in cases(include_str!("../data/mitsuba/bsdf-eval.txt")) {

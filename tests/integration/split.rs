@@ -1,4 +1,4 @@
-//! Geometry split over several buffers (scenes/src/split.rs): a scene whose primitives or
+//! Geometry split over several buffers (scenes/src/pack/split.rs): a scene whose primitives or
 //! attributes exceed one storage binding renders from chunks. `--max-binding` splits a small
 //! scene as a large one splits, so the split kernels render the glTF Cornell box (triangles
 //! with vertex normals: primitives and attributes both split) in every estimator family and

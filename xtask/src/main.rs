@@ -13,7 +13,7 @@ const INSTALL: &str = "apt-get install -y --no-install-recommends mesa-vulkan-dr
 
 fn usage() -> ExitCode {
     eprintln!(
-        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [--assets] [cargo test args]  run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do, the assets tier where the asset root does; --assets: fail without it)\n  vulkan                           only make sure a Vulkan driver is installed"
+        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [--assets] [cargo test args]  run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do, the assets tier where the asset root does; --assets: fail without it)\n  vulkan                           only make sure a Vulkan driver is installed\n  imports                          list each crate's import circles (tests/imports; fails on one not allowed)"
     );
     ExitCode::from(2)
 }
@@ -294,6 +294,18 @@ fn main() -> ExitCode {
         ("render", Some("--")) => &args[2..],
         _ => &args[1..],
     };
+    if command == "imports" {
+        let check = [
+            "test",
+            "--release",
+            "--package",
+            "lightgraph",
+            "--test",
+            "imports",
+            "--",
+        ];
+        return cargo(&check, &["--nocapture".to_string()]);
+    }
     if !matches!(command.as_str(), "render" | "test" | "vulkan") {
         return usage();
     }

@@ -1,0 +1,145 @@
+//! RON scene files: parsed into the scene model and validated, each error at the file's line
+//! and column.
+
+use crate::error::SceneError;
+use crate::model::checks::{check_fov, check_lights};
+use crate::model::{Scene, Shape, placement};
+
+fn locate(text: &str, needle: &str) -> Option<(usize, usize)> {
+    let offset = text.find(needle)?;
+    let before = &text[..offset];
+    Some((
+        before.matches('\n').count() + 1,
+        before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1,
+    ))
+}
+
+/// Parses and validates the RON scene `text` of `file`.
+pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
+    let scene: Scene = ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .from_str(text)
+        .map_err(|e| SceneError {
+            file: file.to_string(),
+            at: Some((e.span.start.line, e.span.start.col)),
+            message: e.code.to_string(),
+        })?;
+    let err = |needle: &str, message: String| SceneError {
+        file: file.to_string(),
+        at: locate(text, needle),
+        message,
+    };
+    // A glTF asset or a Mitsuba file brings shapes, lights and maybe a camera.
+    let imports = scene.gltf.is_some() || scene.mitsuba.is_some();
+    if scene.gltf.is_some() && scene.mitsuba.is_some() {
+        return Err(err(
+            "mitsuba",
+            "the scene has both a glTF asset and a Mitsuba file; keep one".into(),
+        ));
+    }
+    if scene.shapes.is_empty() && !imports {
+        return Err(err("shapes", "the scene is empty: it has no shapes".into()));
+    }
+    for shape in &scene.shapes {
+        let material = shape.material();
+        if !scene.materials.contains_key(material) {
+            let known: Vec<&str> = scene.materials.keys().map(|s| s.as_str()).collect();
+            return Err(err(
+                &format!("\"{material}\""),
+                format!("unknown material '{material}' (materials: {})", known.join(", ")),
+            ));
+        }
+        if let Shape::Sphere { radius, .. } = shape
+            && (*radius <= 0.0 || !radius.is_finite())
+        {
+            return Err(err("Sphere", format!("sphere radius {radius} is not positive")));
+        }
+    }
+    let emissive = scene.shapes.iter().any(Shape::emits);
+    if !emissive && scene.lights.is_empty() && !imports {
+        return Err(err(
+            "lights",
+            "the scene has no light: add an emissive shape or a light (Point, Directional, Background)".into(),
+        ));
+    }
+    check_lights(&scene.lights).map_err(|(needle, message)| err(needle, message))?;
+    if !scene.gltf_instances.is_empty() && scene.gltf.is_none() {
+        return Err(err(
+            "gltf_instances",
+            "gltf_instances places copies of a glTF asset, but the scene has none (gltf: \"...\")".into(),
+        ));
+    }
+    placement::check(&scene.gltf_instances).map_err(|(needle, message)| err(needle, message))?;
+    let (w, h) = scene.resolution;
+    if w == 0 || h == 0 {
+        return Err(err("resolution", "resolution must be at least 1x1".into()));
+    }
+    match (&scene.camera, &scene.gltf_camera, &scene.gltf) {
+        (Some(camera), None, _) => check_fov(camera.fov_degrees).map_err(|e| err("fov_degrees", e))?,
+        (None, Some(_), Some(_)) => {}
+        (Some(_), Some(_), _) => {
+            return Err(err(
+                "gltf_camera",
+                "the scene has both a camera and a gltf_camera; keep one".into(),
+            ));
+        }
+        (None, Some(_), None) => {
+            return Err(err(
+                "gltf_camera",
+                "gltf_camera needs a glTF asset (gltf: \"...\")".into(),
+            ));
+        }
+        (None, None, _) if scene.mitsuba.is_some() => {}
+        (None, None, _) => {
+            return Err(err(
+                "Scene",
+                "the scene has no camera: add camera: (position: .., look: .., up: .., fov_degrees: ..), or gltf_camera: Index(0) or Name(\"...\") with a glTF asset".into(),
+            ));
+        }
+    }
+    if scene.integrator.max_path_length == 0 {
+        return Err(err("max_path_length", "max_path_length must be at least 1".into()));
+    }
+    Ok(scene)
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    pub(crate) const BASE: &str = r#"Scene(
+    camera: (position: (0.0, -4.0, 0.0), look: Target((0.0, 0.0, 0.0)), up: (0.0, 0.0, 1.0), fov_degrees: 40.0),
+    materials: { "m": (diffuse: (0.5, 0.5, 0.5)) },
+    shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, material: "m")],
+    lights: [Point(position: (0.0, -2.0, 2.0), intensity: (1.0, 1.0, 1.0))],
+)"#;
+
+    fn error(text: &str) -> String {
+        parse_scene("s.ron", text)
+            .expect_err("the scene is refused")
+            .to_string()
+    }
+
+    #[test]
+    fn invalid_scenes_are_refused_with_a_location() {
+        let e = error(&BASE.replace("material: \"m\")", "material: \"n\")"));
+        assert!(e.starts_with("s.ron:4:") && e.contains("unknown material 'n'"), "{e}");
+        let e = error(&BASE.replace(
+            "lights: [Point(position: (0.0, -2.0, 2.0), intensity: (1.0, 1.0, 1.0))],",
+            "",
+        ));
+        assert!(e.contains("no light"), "{e}");
+        let e = error(&BASE.replace(
+            "shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, material: \"m\")]",
+            "shapes: []",
+        ));
+        assert!(e.contains("empty"), "{e}");
+        let e = error(&BASE.replace("radius: 1.0", "radius: -1.0"));
+        assert!(e.contains("radius"), "{e}");
+        let e = error(&BASE.replace("fov_degrees: 40.0", "fov_degrees: 40.0,,"));
+        assert!(e.starts_with("s.ron:2:"), "{e}");
+        // Spheres do not emit: a field a shape does not have is refused, not ignored.
+        let e = error(&BASE.replace("material: \"m\")", "material: \"m\", emission: (1.0, 1.0, 1.0))"));
+        assert!(e.starts_with("s.ron:4:") && e.contains("emission"), "{e}");
+    }
+}
