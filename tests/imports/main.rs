@@ -41,16 +41,7 @@ pub const CRATES: [(&str, &str); 7] = [
 
 /// Circles known and being removed. The check fails on a circle not listed here and on an
 /// entry that is no longer a circle, so that the list cannot go stale.
-pub const ALLOWED: &[&str] = &[
-    // removed by issue 58 item 3
-    "lightgraph: multi -> reference -> multi",
-    // removed by issue 58 item 3
-    "lightgraph: multi -> run -> reference -> multi",
-    // removed by issue 58 item 3
-    "lightgraph: output -> run -> reference -> output",
-    // removed by issue 58 item 3
-    "lightgraph: reference -> run -> reference",
-];
+pub const ALLOWED: &[&str] = &[];
 
 /// The circles of the crate whose root file is `root` (read with `read`), named with `name`.
 pub fn crate_circles(name: &str, root: &Path, read: tree::Read) -> Result<Vec<circles::Circle>, String> {
