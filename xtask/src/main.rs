@@ -1,8 +1,12 @@
-//! `cargo xtask render | test`: the two commands of the README, on a fresh machine.
+//! `cargo xtask render | test`: the two commands of the README, on a fresh machine; and
+//! `cargo xtask docs [--check]`, the references generated from the code (`test` checks them
+//! first).
 //!
-//! Both first make sure a Vulkan driver exists: when none is installed, Mesa's software
+//! `render` and `test` first make sure a Vulkan driver exists: when none is installed, Mesa's software
 //! driver (lavapipe, Debian package `mesa-vulkan-drivers`) is installed with apt-get if this
 //! process may (root, apt present); otherwise the command to run is printed.
+
+mod docs;
 
 use std::path::Path;
 use std::process::{Command, ExitCode};
@@ -13,7 +17,7 @@ const INSTALL: &str = "apt-get install -y --no-install-recommends mesa-vulkan-dr
 
 fn usage() -> ExitCode {
     eprintln!(
-        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [--assets] [cargo test args]  run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do, the assets tier where the asset root does; --assets: fail without it)\n  vulkan                           only make sure a Vulkan driver is installed"
+        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [--assets] [cargo test args]  run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do, the assets tier where the asset root does; --assets: fail without it)\n  vulkan                           only make sure a Vulkan driver is installed\n  docs [--check]                   write docs/reference/cli.md and graph-file.md from the code (--check: fail where the committed ones differ; `test` runs it first)"
     );
     ExitCode::from(2)
 }
@@ -294,6 +298,9 @@ fn main() -> ExitCode {
         ("render", Some("--")) => &args[2..],
         _ => &args[1..],
     };
+    if command == "docs" {
+        return docs::run(rest);
+    }
     if !matches!(command.as_str(), "render" | "test" | "vulkan") {
         return usage();
     }
@@ -317,6 +324,10 @@ fn main() -> ExitCode {
             let assets = rest.iter().any(|a| a == "--assets");
             let rest: Vec<String> = rest.iter().filter(|a| *a != "--assets").cloned().collect();
             let rest = rest.as_slice();
+            let current = docs::run(&["--check".to_string()]);
+            if current != ExitCode::SUCCESS {
+                return current;
+            }
             let rust = cargo(
                 &["test", "--workspace", "--exclude", "lightgraph-python", "--release"],
                 rest,
