@@ -199,7 +199,7 @@ impl MeasuredDecl {
 /// allocates (not `External` ones).
 #[derive(Debug, Clone, Deserialize)]
 pub enum PassEntry {
-    /// `Use("name")`: a pass from one of the graph's catalogs.
+    /// A pass from one of the graph's catalogs, by name.
     Use(String),
     /// A pass from one of the graph's catalogs that also reads or writes what this graph's
     /// library functions, which it calls, use (a Markov chain's path evaluator, say).
@@ -327,7 +327,7 @@ pub enum LayoutEdit {
     Layout(LayoutWritten),
     /// `From("name")`: a copy of the base's layout `name`.
     From(String),
-    /// `Remove`: the base's layout leaves.
+    /// The base's layout leaves.
     Remove,
 }
 
@@ -702,13 +702,13 @@ impl std::fmt::Display for PerCall {
 /// A constant's value, emitted as a WGSL `const` (or a parameter's value).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 pub enum ConstValue {
-    /// `u32`
+    /// A `u32`, e.g. `U32(10)`.
     U32(u32),
-    /// `i32`
+    /// An `i32`, e.g. `I32(-1)`.
     I32(i32),
-    /// `f32`
+    /// An `f32`, e.g. `F32(1.0)`.
     F32(f32),
-    /// `bool`
+    /// A `bool`, e.g. `Bool(true)`.
     Bool(bool),
 }
 
