@@ -87,9 +87,31 @@ fn ensure_vulkan() -> Result<(), String> {
     }
 }
 
+/// Variables `cargo run` sets for the program it runs (xtask's package, manifest and binary).
+const PACKAGE_VARIABLES: [&str; 5] = [
+    "CARGO_PKG_",
+    "CARGO_MANIFEST_",
+    "CARGO_CRATE_",
+    "CARGO_BIN_",
+    "CARGO_PRIMARY_",
+];
+
+/// A cargo command for this process to run, without the variables `cargo run` gave this
+/// process: ring's build script reruns when `CARGO_MANIFEST_DIR` or `CARGO_PKG_NAME` changes,
+/// so with them every build started here rebuilt ring, rustls, ureq and lightgraph after a
+/// plain `cargo` build, and the other way round.
+fn cargo_command() -> Command {
+    let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    for (name, _) in std::env::vars_os() {
+        if PACKAGE_VARIABLES.iter().any(|p| name.to_string_lossy().starts_with(p)) {
+            cmd.env_remove(name);
+        }
+    }
+    cmd
+}
+
 fn cargo(args: &[&str], extra: &[String]) -> ExitCode {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let mut cmd = Command::new(cargo);
+    let mut cmd = cargo_command();
     cmd.args(args).args(extra);
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
@@ -205,7 +227,7 @@ fn assets_tier(required: bool) -> ExitCode {
         return ExitCode::SUCCESS;
     };
     let tier = INTEGRATION_TESTS;
-    let listed = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+    let listed = cargo_command()
         .args(tier)
         .args(["--ignored", "--list", "shared_assets"])
         .output();

@@ -29,8 +29,7 @@ fn generated(root: &Path) -> Result<Vec<(&'static str, String)>, String> {
 /// The output of the example `cli-reference`, built with the test suite's packages and profile
 /// (so that nothing is built twice).
 fn cli_reference() -> Result<String, String> {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let built = Command::new(&cargo)
+    let built = crate::cargo_command()
         .args([
             "build",
             "--release",
