@@ -1,8 +1,21 @@
 //! The RON schema of frame graphs and pass catalogs, as written by people.
 //!
-//! A graph file (`graphs/*.ron`) names the WGSL library it needs, its passes (taken from
-//! the catalog with `Use("name")` or declared inline with `Pass(...)`), its resources,
-//! streams, counters, constants and layouts. See `docs/graphs.md` for the full reference.
+//! A graph file (`graphs/*.ron`) is a [`GraphFile`]: the WGSL library it needs, its passes
+//! (taken from a catalog with `Use("name")` or declared inline with `Pass(...)`), its
+//! resources, streams, counters, constants and layouts. A graph file that starts from another
+//! and changes a few things is an [`ExtendingFile`]. A pass catalog (`passes/*.ron`), and a
+//! file a graph `include`s, is a [`CatalogFile`].
+//!
+//! Unknown fields are errors. Two RON extensions are on: a field that may be left out is
+//! written as its value, without `Some(...)` (`enabled: "MERGE"`), and a variant that holds a
+//! struct takes the struct's fields in its parentheses (`Pass(name: "trace", ...)`). Names of
+//! resources, streams, counters, constants and parameters are WGSL identifiers that do not
+//! start with `lg_`, and a name cannot be both a constant and a parameter. Count expressions
+//! (`count`, `over`, `per_call`, `first`, ...) and conditions (`enabled`, `when`, `checks`) are
+//! written over numbers and the constants' names (docs/graphs.md, "Resources").
+//!
+//! The reference, docs/reference/graph-file.md, is generated from these doc comments by
+//! `cargo xtask docs`.
 
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -11,82 +24,98 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GraphFile {
-    /// Short name, e.g. `pt`.
+    /// Short name, used in messages and in `explain`'s file names, e.g. `pt`.
     pub name: String,
     /// One line on what the estimator computes.
     #[serde(default)]
     pub description: String,
-    /// Declaration files (virtual paths, in the catalog format) whose library, resources,
-    /// counters and constants all join the graph, and whose passes `Use` can name.
+    /// Declaration files (virtual paths, in the [`CatalogFile`] format) whose library,
+    /// resources, counters and constants all join the graph, and whose passes `Use` can name;
+    /// `passes/scene.ron` holds the scene's.
     #[serde(default)]
     pub include: Vec<String>,
     /// WGSL library files (virtual paths), included in every kernel.
     #[serde(default)]
     pub library: Vec<String>,
-    /// Pass catalog files (virtual paths) that `Use` entries are looked up in; a used pass
-    /// brings what it needs from its catalog (see [`CatalogFile`]).
+    /// Pass catalog files (virtual paths) that `Use` entries are looked up in (the later
+    /// catalog's pass where two declare one name); a used pass brings what it needs from its
+    /// catalog (see [`CatalogFile`]).
     #[serde(default)]
     pub catalogs: Vec<String>,
-    /// The passes and operators in order: item chains follow this order, and phases and
-    /// operators run in the order of their start passes and their own.
+    /// The passes and operators, in order: item chains follow this order, and phases and
+    /// operators run in the order of their start passes and their own. A name is listed once.
     pub passes: Vec<PassEntry>,
-    /// Buffers the passes read and write.
+    /// Buffers the passes and operators read and write, by name.
     #[serde(default)]
     pub resources: BTreeMap<String, ResourceDecl>,
-    /// Typed edges from a producing pass to a consuming pass.
+    /// Typed edges from producing passes to a consuming pass, by name.
     #[serde(default)]
     pub streams: BTreeMap<String, StreamDecl>,
-    /// Statistics the passes count with `count(COUNTER_NAME, n)`, summed on the GPU.
+    /// Statistics the passes count with `count(COUNTER_<NAME>, n)`, summed on the GPU.
     #[serde(default)]
     pub counters: Vec<String>,
-    /// WGSL constants with their default values; the host may override them.
+    /// WGSL `const`s with their default values (`U32(10)`, `I32(-1)`, `F32(1.0)`,
+    /// `Bool(true)`); the host, the scene and `--set` may give others.
     #[serde(default)]
     pub constants: BTreeMap<String, ConstValue>,
-    /// Per-frame parameters with their default values: set by the host before any frame
-    /// without recompiling, read in WGSL by name like constants.
+    /// Per-frame parameters with their default values (as `constants`): set by the host before
+    /// any frame without recompiling, read in WGSL by name like constants.
     #[serde(default)]
     pub parameters: BTreeMap<String, ConstValue>,
-    /// `u32` constants computed from the others once they are known: name → count expression
-    /// (e.g. a capacity from a measured average and `PATHS`).
+    /// `u32` constants computed from the others once all are known (the host's, the measured
+    /// ones, `--set`): name → count expression, e.g.
+    /// `"PM_CAPACITY": "PM_LIGHT_PATHS * PM_AVERAGE_LENGTH * 1.1 + 256"`. They may use each
+    /// other, are read like constants, and `--set` may give one directly.
     #[serde(default)]
     pub derived: BTreeMap<String, String>,
-    /// Conditions over the constants that must hold (condition → what the constants may be,
-    /// for the error), checked once the constants are known, e.g.
-    /// `"PM_STRUCTURE <= 3": "PM_STRUCTURE is 0, 1, 2 or 3"`.
+    /// Conditions over the constants that must hold once the constants are known: condition →
+    /// what the constants may be, e.g. `"PM_STRUCTURE <= 3": "PM_STRUCTURE is 0, 1, 2 or 3"`.
+    /// One that fails stops the run with an error at the condition's line, naming the
+    /// constants' values and the message.
     #[serde(default)]
     pub checks: BTreeMap<String, String>,
-    /// Resources the host reads after frames (passes that contribute to none are culled).
+    /// Resources the host reads after frames; passes and operators that contribute to none
+    /// are culled.
     #[serde(default)]
     pub outputs: Vec<String>,
-    /// `f32` constants the host measures before rendering, by a run of the graph itself.
+    /// `f32` constants the host measures before rendering (unless `--set` gives them), by a
+    /// frame of the graph itself; count expressions may use them (`bpt-lvc` sizes its vertex
+    /// cache by the measured vertices per light sub-path).
     #[serde(default)]
     pub measured: BTreeMap<String, MeasuredDecl>,
     /// The most loop iterations an item runs, by item type: a count expression over the
-    /// constants (e.g. `"MAX_PATH_LENGTH"`). A host-driven loop whose items all start in its
-    /// first iteration then runs exactly that many iterations with no read-back in between;
-    /// an item still alive after them is an error when the batch is read back.
+    /// constants, e.g. `{"CameraPath": "MAX_PATH_LENGTH"}` (path tracing's paths trace one
+    /// segment an iteration). A host-driven loop whose items all start in its first iteration
+    /// (no thread pool, or one that holds the chunk) then runs exactly that many iterations
+    /// with no read-back in between; an item still alive after them is an error when the batch
+    /// is read back (`items of 'T' still alive after N loop iterations`). An item type no pass
+    /// runs over is an error. Without a bound the host reads back whether items are alive.
     #[serde(default)]
     pub loop_bounds: BTreeMap<String, String>,
-    /// Named kernel layouts, as written (a layout may be `like` another).
+    /// Named kernel layouts: how the passes become kernels.
     pub layouts: BTreeMap<String, LayoutWritten>,
     /// The layout used when none is asked for.
     pub default_layout: String,
     /// What the graph estimates and what it cannot sample, as the application states them:
-    /// the engine keeps them for the application's checks.
+    /// the engine keeps them for the application's checks (`lightgraph verify`,
+    /// docs/verify.md).
     #[serde(default)]
     pub coverage: Coverage,
 }
 
 /// A graph's claims about its estimate, for the application: which quantity it estimates
 /// (graphs of one quantity may be compared) and which samples it cannot draw, each under an
-/// optional condition over the constants. The engine does not read the texts.
+/// optional condition over the constants, e.g.
+/// `(estimates: "radiance", misses: [(paths: "Ld S X* E", when: "!FLAG", why: "...")])`. The
+/// engine checks only that each `when` names constants; `lightgraph verify` reads the rest.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Coverage {
-    /// The quantity the graph's output estimates (the application's default when absent).
+    /// The quantity the graph's output estimates (the application's default when absent:
+    /// lightgraph's is `"radiance"`).
     #[serde(default)]
     pub estimates: Option<String>,
-    /// What the graph cannot sample.
+    /// The classes of light paths the graph cannot sample.
     #[serde(default)]
     pub misses: Vec<MissDecl>,
     /// The classes of samples whose estimate is biased at a finite budget (a consistent
@@ -113,7 +142,8 @@ pub struct BiasDecl {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MissDecl {
-    /// The class, in the application's notation.
+    /// The class, in the application's notation (lightgraph's: Heckbert's, from the light to
+    /// the eye, e.g. `"Ld S X* E"`).
     pub paths: String,
     /// Constant expression: the claim holds only where it is non-zero (always without it).
     #[serde(default)]
@@ -123,10 +153,12 @@ pub struct MissDecl {
     pub why: String,
 }
 
-/// How the host measures a constant: it runs one frame of the graph (same layout and
-/// scene) with the constants `set`, and the constant becomes the ratio of two counters'
-/// totals, `ratio.0 / ratio.1`, or `value` evaluated with that ratio. Constants are measured
-/// in name order, each measuring frame with the values measured before it.
+/// How the host measures a constant, e.g.
+/// `(set: {"FLAG": Bool(true)}, ratio: ("counter_a", "counter_b"))`: it runs one frame of the
+/// graph (same layout and scene) with the constants `set`, and the constant becomes the ratio
+/// of two counters' totals, `ratio.0 / ratio.1`, or `value` evaluated with that ratio.
+/// Constants are measured in name order, each measuring frame with the values measured before
+/// it.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeasuredDecl {
@@ -137,7 +169,8 @@ pub struct MeasuredDecl {
     pub ratio: (String, String),
     /// The constant's value: an expression of `RATIO` (the counters' ratio; 0 where the
     /// denominator stayed 0) and the graph's constants, e.g. a setting chosen by what the
-    /// frame found. Without it, the ratio itself (and a denominator of 0 is an error).
+    /// frame found (`vcm`'s `"1 + 2 * (RATIO < 0.75)"`). Without it, the ratio itself (and a
+    /// denominator of 0 is an error).
     #[serde(default)]
     pub value: Option<String>,
 }
@@ -163,10 +196,13 @@ impl MeasuredDecl {
 }
 
 /// An entry of a graph's `passes`: a catalog pass, a pass declared inline, or one of the
-/// engine's collective operators.
+/// engine's collective operators. Operators are written once in the engine for any element
+/// type and length and are not listed in layouts; each is a barrier (it runs after every phase
+/// and operator before it and before every one after it), and works on resources the engine
+/// allocates (not `External` ones).
 #[derive(Debug, Clone, Deserialize)]
 pub enum PassEntry {
-    /// A pass from one of the graph's catalogs.
+    /// A pass from one of the graph's catalogs, by name.
     Use(String),
     /// A pass from one of the graph's catalogs that also reads or writes what this graph's
     /// library functions, which it calls, use (a Markov chain's path evaluator, say).
@@ -175,7 +211,7 @@ pub enum PassEntry {
     Pass(PassDecl),
     /// Fills a buffer (or a range of it) with a value.
     Clear(ClearDecl),
-    /// Exclusive prefix sum of `u32`s.
+    /// Exclusive prefix sum of `u32`s (or `f32`s).
     Scan(ScanDecl),
     /// The count step of a counting sort: each element's key bumps its bucket's counter,
     /// and the element keeps the counter's old value as its slot in the bucket.
@@ -289,17 +325,21 @@ pub enum PassEdit {
 /// An edit of a layout of the base, by name, in a graph that extends another.
 #[derive(Debug, Clone, Deserialize)]
 pub enum LayoutEdit {
-    /// `Layout(kernels: [...], ...)`: a layout declared here, new or replacing the base's.
+    /// `Layout(kernels: [...], ...)`: a layout declared here, new or replacing the base's; it
+    /// may be `like` one of the base's (`Layout(like: "base_layout", ...)`).
     Layout(LayoutWritten),
     /// `From("name")`: a copy of the base's layout `name`.
     From(String),
-    /// `Remove`: the base's layout leaves.
+    /// The base's layout leaves.
     Remove,
 }
 
 /// `UseWith(name: "pass", reads: [...], writes: [...], enabled: "...")`: catalog pass `name`
-/// with more resources read and written than its catalog declares, and a condition of the
-/// graph's that it runs under.
+/// with more resources read and written than its catalog declares, for what the graph's own
+/// library functions that it calls use, and a condition of the graph's that it runs under.
+/// `reads` and `writes` may be added only to a catalog pass that lists them: where the catalog
+/// leaves them to be derived from the WGSL, the derivation already sees the graph's functions,
+/// and listing them is an error.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct UseWithDecl {
@@ -318,9 +358,12 @@ pub struct UseWithDecl {
 
 /// A pass catalog file (`passes/*.ron`), also the format of included declaration files.
 ///
-/// A graph that uses one of the catalog's passes gets the catalog's `library`, `counters` and
-/// `constants`, and those of its `resources` that the pass reads or writes; an included file
-/// gives all of them at once.
+/// A graph that uses one of the catalog's passes gets the catalog's `library`, `counters`,
+/// `constants`, `derived` and `checks`, those of its `resources` that the pass reads or writes
+/// (or that one of the graph's operators names), and the pass's own `library`, `counters` and
+/// `constants`; an included file gives all of them at once. For resources and constants the
+/// graph's own declaration wins over an include's, which wins over a catalog's, which wins over
+/// a pass's; two different declarations at the same level are an error naming both files.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CatalogFile {
@@ -356,7 +399,8 @@ pub struct ClearDecl {
     pub name: String,
     /// The buffer.
     pub buffer: String,
-    /// The value, written into each 32-bit word (zero by default).
+    /// The value, written into each 32-bit word: any `U32`, `I32` or `F32` for elements of
+    /// 4 bytes.
     #[serde(default = "zero")]
     pub value: ConstValue,
     /// Count expression of the first element.
@@ -375,13 +419,14 @@ fn zero() -> ConstValue {
 }
 
 /// `Scan(name, input, output, over, counted)`: `output[i] = input[0] + ... + input[i - 1]`
-/// (wrapping `u32` sums); in place when `output` is absent.
+/// (wrapping `u32` sums, or `f32` sums in the order of the scan's tree); in place when
+/// `output` is absent.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScanDecl {
     /// Operator name.
     pub name: String,
-    /// The `u32` elements to sum.
+    /// The elements to sum: `u32` (or `atomic<u32>`) or `f32`, as the output's.
     pub input: String,
     /// Where the sums go (the input itself when absent).
     #[serde(default)]
@@ -397,7 +442,8 @@ pub struct ScanDecl {
 }
 
 /// `Count(name, keys, counts, slots, over, counted)`: for each element `i`,
-/// `slots[i] = counts[keys[i]]++` (atomically).
+/// `slots[i] = counts[keys[i]]++` (atomically). An element whose key is at or beyond the
+/// buckets is skipped, and the frame fails naming how many.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CountDecl {
@@ -421,7 +467,8 @@ pub struct CountDecl {
 
 /// `Scatter(name, keys, slots, offsets, input, output, over, counted)`: for each element `i`,
 /// `output[offsets[keys[i]] + slots[i]] = input[i]`, or `= i` without `input` (the permutation
-/// that sorts, for elements too large to move: readers then load `input[output[k]]`).
+/// that sorts, for elements too large to move: readers then load `input[output[k]]`). An
+/// element whose place is beyond `output` is skipped, and the frame fails naming how many.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScatterDecl {
@@ -450,7 +497,8 @@ pub struct ScatterDecl {
 
 /// `Gather(name, indices, input, output, over, counted)`: for each element `i`,
 /// `output[i] = input[indices[i]]` (after a `Scatter` of indices, the sorted elements written
-/// in order, where a scatter of large elements would write each one to a random place).
+/// in order, where a scatter of large elements would write each one to a random place). An
+/// index past `input` is counted as skipped.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GatherDecl {
@@ -482,7 +530,7 @@ pub struct SortDecl {
     pub name: String,
     /// The `u32` keys, sorted in place.
     pub keys: String,
-    /// The `u32` values, permuted with their keys (none: keys only).
+    /// The `u32` values, permuted with their keys (none: keys only); not the keys' resource.
     #[serde(default)]
     pub values: Option<String>,
     /// Elements.
@@ -490,7 +538,7 @@ pub struct SortDecl {
     /// A GPU counter of the elements (at most `over`).
     #[serde(default)]
     pub counted: Option<String>,
-    /// The low bits of the keys that are sorted by (1 to 32, default 32).
+    /// The low bits of the keys that are sorted by, 1 to 32 (higher bits are ignored).
     #[serde(default = "all_bits")]
     pub bits: u32,
     /// Constant expression; the operator is culled when it is 0.
@@ -502,7 +550,8 @@ fn all_bits() -> u32 {
     32
 }
 
-/// A pass: one WGSL function over one item.
+/// A pass: one WGSL function over one item,
+/// `Pass(name: "shade", item: "Hit", source: "lab/shade.wgsl", role: Step)`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PassDecl {
@@ -510,19 +559,20 @@ pub struct PassDecl {
     pub name: String,
     /// The WGSL struct the pass runs over.
     pub item: String,
-    /// The WGSL file (virtual path) that defines the function.
+    /// The WGSL file (a virtual path) that defines the function.
     pub source: String,
     /// The WGSL function, if its name differs from the pass name.
     #[serde(default)]
     pub function: Option<String>,
     /// How the pass takes part in its item's chain.
     pub role: Role,
-    /// Resources the pass (or what it calls) reads, as the file lists them (`reads`); `None`
-    /// when the file leaves them out: [`PassDecl::reads`] is then derived from the WGSL.
+    /// Resources the pass or anything it calls reads. Left out, they are derived from the
+    /// WGSL (with the constants' and the scene's flags of the program compiled); listed, they
+    /// are checked against it.
     #[serde(default, rename = "reads")]
     pub listed_reads: Option<Vec<String>>,
-    /// Resources the pass (or what it calls) writes, as the file lists them (`writes`); `None`
-    /// when the file leaves them out: [`PassDecl::writes`] is then derived from the WGSL.
+    /// Resources the pass or anything it calls writes, left out or listed as `reads` (each
+    /// list on its own).
     #[serde(default, rename = "writes")]
     pub listed_writes: Option<Vec<String>>,
     /// Resources the pass reads: the listed ones, or those the specialisation derived from
@@ -535,27 +585,31 @@ pub struct PassDecl {
     /// Streams the pass emits items into.
     #[serde(default)]
     pub emits: Vec<String>,
-    /// Constant expression; the pass is culled when it is 0 (e.g. `"MERGE"` or
-    /// `"MAX_PATH_LENGTH > 1"`).
+    /// Condition over the constants; the pass is culled when it is 0 (e.g. `"MERGE"`,
+    /// `"!LVC_MEASURING"` or `"MAX_PATH_LENGTH > 1"`).
     #[serde(default)]
     pub enabled: Option<String>,
-    /// WGSL library files the pass needs besides its source.
+    /// WGSL library files the pass needs besides its source, brought into any graph that
+    /// uses it.
     #[serde(default)]
     pub library: Vec<String>,
-    /// Counters the pass counts.
+    /// Counters the pass counts, brought into any graph that uses it.
     #[serde(default)]
     pub counters: Vec<String>,
-    /// Constants the pass reads, with defaults.
+    /// Constants the pass reads, with defaults, brought into any graph that uses it.
     #[serde(default)]
     pub constants: BTreeMap<String, ConstValue>,
 }
 
-/// The part a pass plays in its item's chain.
+/// The part a pass plays in its item's chain. A `Start` pass, or a stream's consumer, begins a
+/// chain over its item; any other pass joins the most recent chain over the same item type.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 pub enum Role {
     /// Creates items: `fn f(item: ptr<function, T>, index: u32) -> bool`, called for every
-    /// index below the count expression `over` (or below the GPU counter `counted`, at most
-    /// `over`); `false` means no item for that index.
+    /// index below the count expression `over`; `false` means no item for that index. With
+    /// `counted`, for every index below the `u32` that resource holds when the phase runs, at
+    /// most `over`: the domain is counted on the GPU and dispatched indirectly, with no
+    /// read-back (`over` then sizes the phase's buffers and chunks).
     Start {
         /// Count expression of the items, e.g. `PATHS`.
         over: String,
@@ -563,9 +617,12 @@ pub enum Role {
         #[serde(default)]
         counted: Option<String>,
     },
-    /// Runs once: `fn f(item: ptr<function, T>) -> bool`; `false` finishes the item.
+    /// Runs once: `fn f(item: ptr<function, T>) -> bool`; `false` finishes the item, and the
+    /// rest of its chain is skipped.
     Step,
-    /// Runs repeatedly while it returns `true`: `fn f(item: ptr<function, T>) -> bool`.
+    /// `fn f(item: ptr<function, T>) -> bool`: the `Loop` passes at the end of a chain repeat
+    /// as a group, in order, while they return `true`; the first `false` finishes the item.
+    /// Only `Loop` passes may follow one in its chain.
     Loop,
 }
 
@@ -573,11 +630,12 @@ pub enum Role {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ResourceDecl {
-    /// WGSL type: the element type of an engine-allocated array (with `count`), or the whole
-    /// type of a single value or of an external resource (e.g. `array<Primitive>`).
+    /// WGSL type: with `count`, the element type (`vec4<f32>`, `atomic<u32>`, a struct);
+    /// without, the type of a single value; for an `External` resource, the whole type (e.g.
+    /// `array<Primitive>`).
     pub ty: String,
-    /// Count expression of elements; without it the resource is a single value. External
-    /// resources have none: the host's data sizes them.
+    /// Count expression of elements; without it the resource is a single value. It may not
+    /// name a parameter. External resources have none: the host's data sizes them.
     #[serde(default)]
     pub count: Option<String>,
     /// Lifetime and ownership.
@@ -591,25 +649,31 @@ pub struct ResourceDecl {
 /// Who owns a resource and how long it lives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
 pub enum Scope {
-    /// Allocated by the engine, kept across frames (film, accumulation).
+    /// Allocated by the engine, zero-filled at creation, kept across frames (film,
+    /// accumulation). Outputs are persistent.
     #[default]
     Persistent,
     /// Allocated by the engine, valid from its first to its last use within one frame: its
-    /// memory is shared with transient buffers whose lifetimes do not overlap.
+    /// memory is shared with transient buffers whose lifetimes do not overlap, so it holds
+    /// garbage at the start of its lifetime unless it is `clear`.
     Transient,
-    /// Supplied by the host at instantiation (scene data); its bytes decide its size.
+    /// Supplied by the host at instantiation (scene data); its bytes, a whole number of
+    /// elements, decide its size.
     External,
 }
 
-/// A stream: items of one type emitted by passes and consumed by one pass.
+/// A stream: items of one type emitted by passes and consumed by one pass, e.g.
+/// `(item: "ShadowRay", to: "shadow", per_call: 1)`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StreamDecl {
     /// The WGSL struct carried.
     pub item: String,
-    /// The consuming pass (its chain's entry).
+    /// The consuming pass (its chain's entry): a `Step` or `Loop` pass over the same item, fed
+    /// by no other stream.
     pub to: String,
-    /// The most items one call of a producing pass emits (sizes split-layout queues).
+    /// The most items one call of a producing pass emits, never 0: it sizes the queues of split
+    /// layouts, and a queue that overflows is an error of the frame.
     #[serde(default = "one")]
     pub per_call: PerCall,
 }
@@ -641,13 +705,13 @@ impl std::fmt::Display for PerCall {
 /// A constant's value, emitted as a WGSL `const` (or a parameter's value).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 pub enum ConstValue {
-    /// `u32`
+    /// A `u32`, e.g. `U32(10)`.
     U32(u32),
-    /// `i32`
+    /// An `i32`, e.g. `I32(-1)`.
     I32(i32),
-    /// `f32`
+    /// An `f32`, e.g. `F32(1.0)`.
     F32(f32),
-    /// `bool`
+    /// A `bool`, e.g. `Bool(true)`.
     Bool(bool),
 }
 
@@ -732,23 +796,27 @@ pub enum StateStorage {
     AoS,
 }
 
-/// A layout: how the passes become kernels.
+/// A layout: how the passes become kernels. A graph file writes a [`LayoutWritten`].
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct LayoutDecl {
-    /// What the layout is (e.g. the paper's name for it).
+    /// What the layout is (e.g. the paper's name for it), shown by `explain`.
     #[serde(default)]
     pub description: String,
-    /// Fusion groups: each inner list of passes becomes one kernel.
+    /// Fusion groups: each inner list of pass names becomes one kernel (operators are not
+    /// listed). Each pass the constants enable is in one kernel; one they disable may be left
+    /// out, and when other constants enable it, it joins the kernel of the nearest pass before
+    /// it in its chain that a kernel lists (or a kernel of its own where it begins its chain).
     #[serde(default)]
     pub kernels: Vec<Vec<String>>,
     /// Item state layout between split kernels.
     #[serde(default)]
     pub state: StateStorage,
-    /// Threads per workgroup.
+    /// Threads per workgroup, 1 to 1024.
     #[serde(default = "default_workgroup")]
     pub workgroup_size: u32,
-    /// Most items a split chain keeps in flight (larger frames run in chunks).
+    /// Most items a split chain keeps in flight, per chunk of a phase that stores state or
+    /// uses queues (larger frames run in chunks); 4194304 when absent.
     #[serde(default)]
     pub max_items_in_flight: Option<u64>,
     /// Where loop passes repeat.
@@ -757,23 +825,24 @@ pub struct LayoutDecl {
     /// How finished items are replaced in a chain with a loop.
     #[serde(default)]
     pub policy: Policy,
-    /// Threads (item slots) of a regeneration or compaction pool; the whole chunk by default
-    /// for Naive, a device-sized pool otherwise.
+    /// Threads (item slots) of a `Regeneration` or `Compaction` pool: 1048576 when absent,
+    /// fewer when the frame has fewer items or a queue would not fit one binding.
     #[serde(default)]
     pub threads: Option<u64>,
     /// Host loops with policy Regeneration: idle slots are refilled only once at least this
     /// fraction of the pool was idle after the last iteration (van Antwerpen's streaming
-    /// threshold); every iteration when absent.
+    /// threshold, e.g. 0.6); every iteration when absent.
     #[serde(default)]
     pub regenerate_at: Option<f32>,
-    /// Settings for the application that runs the graph, by name (lightgraph reads `bvh`:
-    /// the acceleration structure that measured fastest in this layout); the engine carries
-    /// them unread.
+    /// Settings for the application that runs the graph, by name; the engine carries them
+    /// unread. lightgraph reads `bvh` (`"bvh2"` or `"cwbvh"`): the acceleration structure
+    /// `--bvh auto` gives the layout.
     #[serde(default)]
     pub hints: BTreeMap<String, String>,
     /// Constants this layout compiles with unless the program is given them (a variant of the
     /// estimator's code that suits the layout's kernels, the same image to float rounding):
-    /// they cull passes and enter the code as the graph's own constants do.
+    /// they cull passes and enter the code as the graph's own constants do. Each is a constant
+    /// of the graph, of its type; `--set` wins over it.
     #[serde(default)]
     pub constants: BTreeMap<String, ConstValue>,
     /// Whether the pass kernels keep the loop guards wgpu adds to a shader (a counter in every
@@ -781,7 +850,8 @@ pub struct LayoutDecl {
     /// GPU or be miscompiled). `false` for a layout whose loops all end: its kernels run
     /// without the counters, which also frees the driver to unroll and schedule the loops
     /// (faster where a kernel traverses the BVH at one place, slower where it fuses several
-    /// traversals; measured per layout, docs/performance.md).
+    /// traversals; measured per layout, docs/performance.md). `--loop-guards on|off`
+    /// overrides it.
     #[serde(default = "default_loop_guards")]
     pub loop_guards: bool,
 }
@@ -839,12 +909,15 @@ impl Default for LayoutDecl {
 }
 
 /// A layout as a graph file writes it: the fields it gives, and the layout it is `like`, whose
-/// fields it takes where it gives none (resolved when the file is read, see
-/// [`LayoutWritten::over`]); a field given by neither takes [`LayoutDecl`]'s default.
+/// fields it takes where it gives none (resolved when the file is read); a field given by
+/// neither takes its default. So a layout names only how it differs, e.g.
+/// `"StreamingPTmk2": (like: "RegenerationPTmk2", policy: Compaction)`.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LayoutWritten {
-    /// Another layout of the graph (or of the graph it extends) this one differs from.
+    /// Another layout of the graph (or of the graph it extends) whose fields this one takes
+    /// where it gives none, each field whole (a map given here replaces that layout's); that
+    /// layout may itself be `like` a third. A `like` of no layout, or a cycle, is an error.
     pub like: Option<String>,
     /// [`LayoutDecl::description`].
     pub description: Option<String>,

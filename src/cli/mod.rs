@@ -6,6 +6,7 @@ pub mod assets;
 pub mod bench;
 pub use crate::run::checks;
 pub mod compare;
+pub mod docs;
 pub mod explain;
 pub mod export;
 pub mod film;

@@ -1,8 +1,12 @@
-//! `cargo xtask render | test`: the two commands of the README, on a fresh machine.
+//! `cargo xtask render | test`: the two commands of the README, on a fresh machine; and
+//! `cargo xtask docs [--check]`, the references generated from the code (`test` checks them
+//! first).
 //!
-//! Both first make sure a Vulkan driver exists: when none is installed, Mesa's software
+//! `render` and `test` first make sure a Vulkan driver exists: when none is installed, Mesa's software
 //! driver (lavapipe, Debian package `mesa-vulkan-drivers`) is installed with apt-get if this
 //! process may (root, apt present); otherwise the command to run is printed.
+
+mod docs;
 
 use std::path::Path;
 use std::process::{Command, ExitCode};
@@ -13,7 +17,7 @@ const INSTALL: &str = "apt-get install -y --no-install-recommends mesa-vulkan-dr
 
 fn usage() -> ExitCode {
     eprintln!(
-        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [--assets] [cargo test args]  run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do, the assets tier where the asset root does; --assets: fail without it)\n  vulkan                           only make sure a Vulkan driver is installed\n  imports                          list each crate's import circles (tests/imports; fails on one not allowed)"
+        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [--assets] [cargo test args]  run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do, the assets tier where the asset root does; --assets: fail without it)\n  vulkan                           only make sure a Vulkan driver is installed\n  docs [--check]                   write docs/reference/cli.md and graph-file.md from the code (--check: fail where the committed ones differ; `test` runs it first)\n  imports                          list each crate's import circles (tests/imports; fails on one not allowed)"
     );
     ExitCode::from(2)
 }
@@ -83,9 +87,31 @@ fn ensure_vulkan() -> Result<(), String> {
     }
 }
 
+/// Variables `cargo run` sets for the program it runs (xtask's package, manifest and binary).
+const PACKAGE_VARIABLES: [&str; 5] = [
+    "CARGO_PKG_",
+    "CARGO_MANIFEST_",
+    "CARGO_CRATE_",
+    "CARGO_BIN_",
+    "CARGO_PRIMARY_",
+];
+
+/// A cargo command for this process to run, without the variables `cargo run` gave this
+/// process: ring's build script reruns when `CARGO_MANIFEST_DIR` or `CARGO_PKG_NAME` changes,
+/// so with them every build started here rebuilt ring, rustls, ureq and lightgraph after a
+/// plain `cargo` build, and the other way round.
+fn cargo_command() -> Command {
+    let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    for (name, _) in std::env::vars_os() {
+        if PACKAGE_VARIABLES.iter().any(|p| name.to_string_lossy().starts_with(p)) {
+            cmd.env_remove(name);
+        }
+    }
+    cmd
+}
+
 fn cargo(args: &[&str], extra: &[String]) -> ExitCode {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let mut cmd = Command::new(cargo);
+    let mut cmd = cargo_command();
     cmd.args(args).args(extra);
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         cmd.env("XDG_RUNTIME_DIR", std::env::temp_dir());
@@ -201,7 +227,7 @@ fn assets_tier(required: bool) -> ExitCode {
         return ExitCode::SUCCESS;
     };
     let tier = INTEGRATION_TESTS;
-    let listed = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+    let listed = cargo_command()
         .args(tier)
         .args(["--ignored", "--list", "shared_assets"])
         .output();
@@ -306,6 +332,9 @@ fn main() -> ExitCode {
         ];
         return cargo(&check, &["--nocapture".to_string()]);
     }
+    if command == "docs" {
+        return docs::run(rest);
+    }
     if !matches!(command.as_str(), "render" | "test" | "vulkan") {
         return usage();
     }
@@ -329,6 +358,10 @@ fn main() -> ExitCode {
             let assets = rest.iter().any(|a| a == "--assets");
             let rest: Vec<String> = rest.iter().filter(|a| *a != "--assets").cloned().collect();
             let rest = rest.as_slice();
+            let current = docs::run(&["--check".to_string()]);
+            if current != ExitCode::SUCCESS {
+                return current;
+            }
             let rust = cargo(
                 &["test", "--workspace", "--exclude", "lightgraph-python", "--release"],
                 rest,
