@@ -16,6 +16,7 @@ mod docs;
 mod fidelity;
 mod frames;
 mod gltf;
+mod hooks;
 mod interrupt;
 mod layout_cache;
 mod layouts;
