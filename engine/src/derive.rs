@@ -125,25 +125,22 @@ pub(crate) fn sources_with(graph: &Graph, flags: &BTreeSet<String>, mode: Hooks)
     let flags = &flags_with_constants(flags, &graph.constants);
     let g = graph;
     let hooks = &g.declared.file.hooks;
-    let mut shared = Vec::new();
-    for f in &hooks::source_files(&g.declared) {
-        let mut text = g.vfs.read(f).map_err(|e| g.error_at(f, e.to_string()))?;
-        if mode == Hooks::Replace {
-            for name in hooks.keys() {
-                text = hooks::renamed(&text, name, &hooks::default_name(name));
-            }
-        }
-        shared.push((f.clone(), preprocess(f, &text, flags)?));
-    }
-    let mut hook_files: Vec<&String> = hooks.values().collect();
+    let mut files = g.declared.wgsl_files();
+    let mut hook_files: Vec<&String> = hooks.values().filter(|f| !files.contains(f)).collect();
     hook_files.sort();
     hook_files.dedup();
-    for f in hook_files {
+    files.extend(hook_files.into_iter().cloned());
+    let mut shared = Vec::new();
+    for f in &files {
         let mut text = g.vfs.read(f).map_err(|e| g.error_at(f, e.to_string()))?;
-        if mode == Hooks::Beside {
-            for (name, _) in hooks.iter().filter(|(_, file)| *file == f) {
-                text = hooks::renamed(&text, name, &hooks::candidate_name(name));
-            }
+        for (name, file) in hooks {
+            text = match mode {
+                Hooks::Replace if file != f && hooks::declares(f, &text, name) => {
+                    hooks::renamed(&text, name, &hooks::default_name(name))
+                }
+                Hooks::Beside if file == f => hooks::renamed(&text, name, &hooks::candidate_name(name)),
+                _ => text,
+            };
         }
         shared.push((f.clone(), preprocess(f, &text, flags)?));
     }

@@ -69,6 +69,11 @@ pub fn declared_in(file: &str, text: &str) -> Vec<HookDecl> {
     out
 }
 
+/// Whether `text` (of `file`) declares the hook `name`.
+pub fn declares(file: &str, text: &str, name: &str) -> bool {
+    text.contains(MARKER) && declared_in(file, text).iter().any(|h| h.name == name)
+}
+
 /// The name a replaced hook's default is renamed to.
 pub fn default_name(hook: &str) -> String {
     format!("lg_default_{hook}")
@@ -90,24 +95,13 @@ pub fn renamed(text: &str, name: &str, to: &str) -> String {
 /// The hooks the WGSL sources of `declared` declare (its library and its passes' files).
 pub fn declared_hooks(declared: &Declared, vfs: &Vfs, file: &str) -> Result<Vec<HookDecl>> {
     let mut out = Vec::new();
-    for source in source_files(declared) {
+    for source in declared.wgsl_files() {
         let text = vfs
             .read(&source)
             .map_err(|e| declared.sources.at_name(file, &source, e.to_string()))?;
         out.extend(declared_in(&source, &text));
     }
     Ok(out)
-}
-
-/// The graph's library files and its passes' sources, in order, each once.
-pub fn source_files(declared: &Declared) -> Vec<String> {
-    let mut files = declared.library.clone();
-    for p in &declared.passes {
-        if !files.contains(&p.decl.source) {
-            files.push(p.decl.source.clone());
-        }
-    }
-    files
 }
 
 /// Checks the `hooks` of graph `file` before any WGSL is compiled: each names a hook its sources

@@ -26,7 +26,8 @@ pub fn check(declared: &Declared, vfs: &Vfs, file: &str) -> Result<()> {
     items.extend(declared.file.streams.values().map(|s| s.item.as_str()));
     items.sort();
     items.dedup();
-    let texts = crate::hooks::source_files(declared)
+    let texts = declared
+        .wgsl_files()
         .into_iter()
         .map(|f| vfs.read(&f))
         .collect::<Result<Vec<String>>>()?;

@@ -1,8 +1,9 @@
 //! Hooks and item fields (docs/graphs.md, "Hooks and item fields"): a graph that extends
 //! progressive photon mapping to store caustic photons only, through the hook
 //! `pm_stores_photon` and a field it adds to the light sub-path (tests/data/graphs/
-//! ppm-caustic.ron, no function copied), rendered fused and split; and the errors of hooks and
-//! fields that do not fit, each at its file and line.
+//! ppm-caustic.ron, no function copied), rendered fused and split, beside maps of no photons
+//! and camera vertices that merge none (the hook `pm_merges_photon`); and the errors of hooks
+//! and fields that do not fit, each at its file and line.
 
 use crate::bpt::sds_scene;
 use crate::common::{data, kernel_sources, render_with_layout};
@@ -51,6 +52,9 @@ fn a_caustic_photon_map_is_a_hook_and_an_added_field() {
         let n = image(&diffuse, &none, layout, state);
         let global = image(&diffuse, "ppm", layout, state);
         assert_eq!(c.mean, n.mean, "{what}: a caustic photon on a diffuse box");
+        // Camera vertices that merge nothing they find render the same.
+        let m = image(&diffuse, &test_graph("ppm-merges-nothing"), layout, state);
+        assert_eq!(m.mean, n.mean, "{what}: a photon merged where the hook merges none");
         assert!(
             mean(&global) > 1.5 * mean(&n),
             "{what}: global {} vs none {}",
