@@ -11,6 +11,7 @@ use crate::graph::Graph;
 use crate::ir::{ConstValue, ResourceDecl};
 use crate::limits::FRAME_BINDING;
 use crate::wgsl::{ModuleSource, preprocess};
+use crate::{hooks, item_fields};
 use naga::valid::GlobalUse;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
@@ -102,24 +103,78 @@ fn flags_with_constants(flags: &BTreeSet<String>, constants: &BTreeMap<String, C
     flags.iter().cloned().chain(on.map(|(k, _)| k.clone())).collect()
 }
 
+/// How a graph's replaced hooks join its sources.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Hooks {
+    /// In place of the defaults, which are renamed so that nothing calls them.
+    Replace,
+    /// Beside the defaults, renamed (to compare their signatures).
+    Beside,
+}
+
 /// The library and the pass sources of every declared pass of `graph` (a live pass may call
 /// functions a culled pass's file defines; what no kernel calls is shaken out later),
-/// preprocessed with `flags` and the graph's true `Bool` constants.
+/// preprocessed with `flags` and the graph's true `Bool` constants, then the files of its
+/// replaced hooks, with the fields it adds to items written in.
 pub fn sources(graph: &Graph, flags: &BTreeSet<String>) -> Result<Vec<(String, String)>> {
+    sources_with(graph, flags, Hooks::Replace)
+}
+
+/// [`sources`] with the replaced hooks joining as `mode` says.
+pub(crate) fn sources_with(graph: &Graph, flags: &BTreeSet<String>, mode: Hooks) -> Result<Vec<(String, String)>> {
     let flags = &flags_with_constants(flags, &graph.constants);
     let g = graph;
-    let mut files: Vec<String> = g.library.clone();
-    for p in &g.declared.passes {
-        if !files.contains(&p.decl.source) {
-            files.push(p.decl.source.clone());
-        }
-    }
+    let hooks = &g.declared.file.hooks;
+    let mut files = g.declared.wgsl_files();
+    let mut hook_files: Vec<&String> = hooks.values().filter(|f| !files.contains(f)).collect();
+    hook_files.sort();
+    hook_files.dedup();
+    files.extend(hook_files.into_iter().cloned());
     let mut shared = Vec::new();
     for f in &files {
-        let text = g.vfs.read(f).map_err(|e| g.error_at(f, e.to_string()))?;
+        let mut text = g.vfs.read(f).map_err(|e| g.error_at(f, e.to_string()))?;
+        for (name, file) in hooks {
+            text = match mode {
+                Hooks::Replace if file != f && hooks::declares(f, &text, name) => {
+                    hooks::renamed(&text, name, &hooks::default_name(name))
+                }
+                Hooks::Beside if file == f => hooks::renamed(&text, name, &hooks::candidate_name(name)),
+                _ => text,
+            };
+        }
         shared.push((f.clone(), preprocess(f, &text, flags)?));
     }
+    let fields = &g.declared.file.item_fields;
+    if !fields.is_empty() {
+        for (_, text) in &mut shared {
+            *text = item_fields::added(text, fields);
+        }
+    }
     Ok(shared)
+}
+
+/// Checks each hook `graph` replaces against its default, the two compiled beside each other
+/// with `flags` (before any compile that calls the replacements): a pass calls it, and the
+/// signatures agree ([`hooks::check_compiled`]).
+pub(crate) fn check_hooks(graph: &Graph, flags: &BTreeSet<String>) -> Result<()> {
+    let hooks = &graph.declared.file.hooks;
+    if hooks.is_empty() {
+        return Ok(());
+    }
+    let (module, _) = compile_all(graph, flags, Hooks::Beside)?;
+    let mut replaced = Vec::new();
+    for (name, file) in hooks {
+        let text = graph.vfs.read(file)?;
+        replaced.push(hooks::Replaced {
+            name: name.clone(),
+            file: file.clone(),
+            text,
+        });
+    }
+    let known = hooks::declared_hooks(&graph.declared, &graph.vfs, &graph.file)?;
+    let passes: Vec<&str> = graph.declared.passes.iter().map(|p| p.function()).collect();
+    let unused = |name: &str, message: String| graph.declared.sources.at_key(&graph.file, name, message);
+    hooks::check_compiled(&module, &passes, &replaced, &known, unused)
 }
 
 /// The constant a naga error says has no definition, when its name is one a constant could
@@ -140,8 +195,12 @@ fn unknown_constant(e: &Error) -> Option<String> {
 /// yet compiles) and emits that do nothing. A constant not known yet (`PIXELS` before the host
 /// gives it, in the default constants' view or a view of some constants only) is declared as a
 /// `u32`, as the host's are; where it is not one, the compile fails.
-fn compile_all(graph: &Graph, flags: &BTreeSet<String>) -> Result<(naga::Module, naga::valid::ModuleInfo)> {
-    let shared = sources(graph, flags)?;
+fn compile_all(
+    graph: &Graph,
+    flags: &BTreeSet<String>,
+    hooks: Hooks,
+) -> Result<(naga::Module, naga::valid::ModuleInfo)> {
+    let shared = sources_with(graph, flags, hooks)?;
     let parameters: Vec<(String, ConstValue)> = graph.parameters.iter().map(|(k, v)| (k.clone(), *v)).collect();
     let mut declarations = frame_record(&parameters);
     declarations.push_str(FRAME_BINDING);
@@ -245,7 +304,7 @@ impl Graph {
 
     /// Fills the lists passes leave out from naga's view of the sources with `flags`.
     fn derive_uses(&mut self, flags: &BTreeSet<String>) -> Result<()> {
-        let (module, info) = compile_all(self, flags)?;
+        let (module, info) = compile_all(self, flags, Hooks::Replace)?;
         let resources: Vec<(naga::Handle<naga::GlobalVariable>, &str)> = module
             .global_variables
             .iter()

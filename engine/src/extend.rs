@@ -114,6 +114,8 @@ fn apply(
         layouts,
         default_layout: ext.default_layout.unwrap_or(base.default_layout),
         coverage: ext.coverage.unwrap_or(base.coverage),
+        item_fields: appended(base.item_fields, ext.item_fields),
+        hooks: merged(base.hooks, ext.hooks),
     };
     Ok((g, files))
 }
@@ -121,6 +123,14 @@ fn apply(
 /// `base` with `over`'s entries added, replacing those of the same key.
 fn merged<T>(mut base: BTreeMap<String, T>, over: BTreeMap<String, T>) -> BTreeMap<String, T> {
     base.extend(over);
+    base
+}
+
+/// `base`'s lists with `over`'s appended, key by key.
+fn appended<T>(mut base: BTreeMap<String, Vec<T>>, over: BTreeMap<String, Vec<T>>) -> BTreeMap<String, Vec<T>> {
+    for (key, more) in over {
+        base.entry(key).or_default().extend(more);
+    }
     base
 }
 

@@ -168,6 +168,8 @@ impl Graph {
     /// gives its live view of the default constants.
     pub(crate) fn declare(vfs: &Vfs, file: &str, text: &str) -> Result<Graph> {
         let declared = declare(vfs, file, resolve(vfs, file, text)?)?;
+        crate::hooks::check(&declared, vfs, file)?;
+        crate::item_fields::check(&declared, vfs, file)?;
         let g = &declared.file;
         let g_streams = g.streams.clone();
         let mut graph = Graph {

@@ -101,6 +101,14 @@ pub struct GraphFile {
     /// docs/verify.md).
     #[serde(default)]
     pub coverage: Coverage,
+    /// Fields added to item structs: item → `(name, WGSL type)` in order; the engine adds them
+    /// to the struct and packs them in every layout like the struct's own.
+    #[serde(default)]
+    pub item_fields: BTreeMap<String, Vec<(String, String)>>,
+    /// Named hooks replaced: hook (a WGSL function a source declares with `// Hook:`) → the
+    /// WGSL file (virtual path) that defines the replacement, of the same signature.
+    #[serde(default)]
+    pub hooks: BTreeMap<String, String>,
 }
 
 /// A graph's claims about its estimate, for the application: which quantity it estimates
@@ -306,6 +314,12 @@ pub struct ExtendingFile {
     /// Replaces the base's coverage.
     #[serde(default)]
     pub coverage: Option<Coverage>,
+    /// Fields added to item structs, after the base's.
+    #[serde(default)]
+    pub item_fields: BTreeMap<String, Vec<(String, String)>>,
+    /// Hooks replaced, merged into the base's by hook name.
+    #[serde(default)]
+    pub hooks: BTreeMap<String, String>,
 }
 
 /// An edit of the base's `passes` in a graph that extends another; each names an entry (a

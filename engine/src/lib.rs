@@ -13,7 +13,7 @@
 //! | stage | modules | what it does |
 //! |---|---|---|
 //! | leaf | `error`, `expr`, `ids`, `ir`, `limits`, `vfs`, `wgsl` | errors, count expressions, typed indices, the RON declarations, shared limits and the target, the file system, WGSL sources (`#if` flags, naga with a source map) |
-//! | load | `operator`, `load`, `extend`, `graph` | the graph file with its bases, catalogs and includes, every name checked; chains and phases |
+//! | load | `operator`, `load`, `extend`, `hooks`, `item_fields`, `graph` | the graph file with its bases, catalogs and includes, every name checked; the hooks it replaces and the fields it adds to items; chains and phases |
 //! | specialise | `derive`, `specialize` | the constants' values; the reads and writes that passes leave out, derived with naga from the WGSL with the flags; then culling: the live graph |
 //! | plan | `plan`, `auto` | a layout's kernels, roots and schedule, its fusion checked; every legal layout |
 //! | reflect | `reflect`, `access` | the sources compiled together with naga: item words, what each pass touches of its item, each pass checked against its declaration |
@@ -42,9 +42,11 @@ pub mod expr;
 pub mod extend;
 pub mod gpu;
 pub mod graph;
+pub mod hooks;
 pub mod ids;
 pub mod internal;
 pub mod ir;
+pub mod item_fields;
 pub mod limits;
 pub mod load;
 pub mod memory;

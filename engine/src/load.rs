@@ -164,6 +164,19 @@ pub struct Declared {
     pub sources: Sources,
 }
 
+impl Declared {
+    /// The WGSL files of the graph: its library and its passes' sources, in order, each once.
+    pub fn wgsl_files(&self) -> Vec<String> {
+        let mut files = self.library.clone();
+        for p in &self.passes {
+            if !files.contains(&p.decl.source) {
+                files.push(p.decl.source.clone());
+            }
+        }
+        files
+    }
+}
+
 /// A condition over the constants that must hold (`checks` of a graph or catalog).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ConstCheck {

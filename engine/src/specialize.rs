@@ -5,7 +5,7 @@
 //! Loading ends here too: [`Graph::load`] gives the declared graph's view of its default
 //! constants.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::expr::Expr;
 use crate::graph::{ChainEntry, Culled, FrameStep, Graph};
 use crate::ids::{ChainId, OpId};
@@ -81,6 +81,13 @@ impl Graph {
         self.derive_constants(given, strict)?;
         let vars: BTreeMap<String, f64> = self.constants.iter().map(|(k, v)| (k.clone(), v.as_f64())).collect();
         self.check_constants(&vars)?;
+        // The hooks the graph replaces, against their defaults: their own errors always, a
+        // compile that fails otherwise only where every constant is known.
+        match crate::derive::check_hooks(&self, flags) {
+            Err(e @ Error::Invalid { .. }) => return Err(e),
+            Err(e) if strict => return Err(e),
+            _ => {}
+        }
         // What the passes that leave out their reads or writes use, before culling needs it.
         // The default constants' view may not compile yet (a host constant of another type
         // than a placeholder's); it then culls nothing that depends on what passes use.

@@ -58,6 +58,55 @@ pub fn preprocess(file: &str, text: &str, flags: &BTreeSet<String>) -> Result<St
     Ok(out)
 }
 
+/// Whether each byte of `text` is code: false inside `//` and `/* */` comments.
+pub fn code_bytes(text: &str) -> Vec<bool> {
+    let b = text.as_bytes();
+    let mut code = vec![true; b.len()];
+    let mut i = 0;
+    while i < b.len() {
+        let end = match (b[i], b.get(i + 1)) {
+            (b'/', Some(b'/')) => text[i..].find('\n').map_or(b.len(), |n| i + n),
+            (b'/', Some(b'*')) => text[i + 2..].find("*/").map_or(b.len(), |n| i + 2 + n + 2),
+            _ => {
+                i += 1;
+                continue;
+            }
+        };
+        code[i..end].fill(false);
+        i = end;
+    }
+    code
+}
+
+/// Whether `c` may be part of a WGSL identifier.
+fn is_ident_byte(c: u8) -> bool {
+    c.is_ascii_alphanumeric() || c == b'_'
+}
+
+/// Byte offsets in `text` where the identifier `name` stands in code (not in a comment, not
+/// part of a longer identifier).
+pub fn identifier_offsets(text: &str, name: &str) -> Vec<usize> {
+    let code = code_bytes(text);
+    let b = text.as_bytes();
+    text.match_indices(name)
+        .map(|(i, _)| i)
+        .filter(|&i| code[i])
+        .filter(|&i| i == 0 || !is_ident_byte(b[i - 1]))
+        .filter(|&i| b.get(i + name.len()).is_none_or(|c| !is_ident_byte(*c)))
+        .collect()
+}
+
+/// The offset of the name in the definition `fn name(` in `text`, if `text` defines `name`.
+pub fn function_definition(text: &str, name: &str) -> Option<usize> {
+    identifier_offsets(text, name).into_iter().find(|&i| {
+        text[..i]
+            .trim_end()
+            .strip_suffix("fn")
+            .is_some_and(|before| before.as_bytes().last().is_none_or(|c| !is_ident_byte(*c)))
+            && text[i + name.len()..].trim_start().starts_with('(')
+    })
+}
+
 /// One WGSL module assembled from several files, remembering where each line came from.
 #[derive(Debug, Clone, Default)]
 pub struct ModuleSource {

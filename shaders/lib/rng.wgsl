@@ -11,14 +11,16 @@ fn rng_seed(seed: u32, frame_index: u32, path: u32) -> u32 {
     return rng_hash(path ^ rng_hash(frame_index ^ rng_hash(seed)));
 }
 
+// Hook: the random-number source, the next 32 random bits of the stream `*state` (seeded by
+// `rng_seed`, advanced here). Every sampling function draws through it (`rng_f32`,
+// `rng_vec2`). Default: the PCG step; a Markov chain's graph whose evaluator draws so reads
+// the chain's primary samples there instead (shaders/mlt/stream_rng.wgsl).
 fn rng_u32(state: ptr<function, u32>) -> u32 {
-#if PRIMARY_SAMPLE_STREAMS
-    // A Markov chain's graph: in an evaluator the numbers come from the chain's primary
-    // samples, `*state` naming the stream and its next dimension (shaders/mlt/streams.wgsl).
-    if (streams_on) {
-        return primary_stream_u32(state);
-    }
-#endif
+    return rng_pcg_u32(state);
+}
+
+// The PCG step: the next 32 random bits of the stream `*state`.
+fn rng_pcg_u32(state: ptr<function, u32>) -> u32 {
     let s = *state;
     *state = s * 747796405u + 2891336453u;
     let word = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;

@@ -15,7 +15,9 @@ fn mmlt_techniques(k: u32) -> u32 {
     return select(k + 1u, 1u, k == 1u);
 }
 
-// The path the samples of `src` make.
+// Hook: a Markov chain's path evaluator, the path the primary samples of `src` make (its
+// pixel and contribution; the chain's target is its luminance). Default here: one
+// bidirectional technique picked by the samples (mmlt).
 fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
     streams_read(*src);
     var camera_rng = stream_start(0u);

@@ -5,7 +5,9 @@
 // the raster position (2), the lens (2), then at each vertex that goes on the light pick (1),
 // the point on the light (2), the BSDF sample (3) and the roulette (1): 4 + 7 per bounce.
 
-// The path the samples of `src` make.
+// Hook: a Markov chain's path evaluator, the path the primary samples of `src` make (its
+// pixel and contribution; the chain's target is its luminance). Default here: path tracing
+// (pssmlt).
 fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
     let x = primary_next(src) * f32(WIDTH);
     let y = primary_next(src) * f32(HEIGHT);

@@ -1,5 +1,5 @@
-// Random-number streams that read a chain's primary samples: in a graph that sets the constant
-// PRIMARY_SAMPLE_STREAMS, `rng_u32` (shaders/lib/rng.wgsl) takes its numbers from here once an
+// Random-number streams that read a chain's primary samples: in a graph that replaces the hook
+// `rng_u32` with shaders/mlt/stream_rng.wgsl, `rng_u32` takes its numbers from here once an
 // evaluator has called `streams_read` (in that thread; other passes, such as a light phase,
 // keep their own random streams), so code written for path streams (`rng_f32(&rng)`: BPT's
 // sub-paths, scatter, the camera's jitter) runs unchanged on a chain's samples. A stream's

@@ -9,7 +9,9 @@
 // frame, so a stored pick would name a different vertex anyway (docs/mlt.md says why the
 // chains stay correct while the cache changes under them).
 
-// The camera sub-path the samples of `src` make, and what it adds to its pixel.
+// Hook: a Markov chain's path evaluator, the camera sub-path the primary samples of `src`
+// make and what it adds to its pixel (the chain's target is its luminance). Default here:
+// Metropolised VCM's camera sub-path (mvcm).
 fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
     streams_read(*src);
     var rng = stream_start(0u);

@@ -308,7 +308,7 @@ fn merge_unset_at(position: vec3<f32>, d_vm: f32, length: u32) -> Merge {
 // longer than MAX_PATH_LENGTH are left out.
 fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
     count(COUNTER_PM_FOUND, 1u);
-    if (photon_length(photon) + (*m).length > MAX_PATH_LENGTH) {
+    if (photon_length(photon) + (*m).length > MAX_PATH_LENGTH || !pm_merges_photon(*m, photon)) {
         return;
     }
     let towards = photon_direction(photon);
@@ -340,6 +340,14 @@ fn merge_photon(m: ptr<function, Merge>, photon: Photon, weight: f32) {
         w /= w_light + 1.0 + w_camera;
     }
     (*m).sum += e.f * photon.throughput * w;
+}
+
+// Hook: whether the density estimation `m` at a camera vertex (its position, radius, BSDF,
+// camera sub-path length and dVM) merges `photon`, found within its radius, asked for every
+// photon that keeps the path within MAX_PATH_LENGTH (`photon_length`, `photon_direction` and
+// `photon_delta_chain` read its packed word). Default: every such photon.
+fn pm_merges_photon(m: Merge, photon: Photon) -> bool {
+    return true;
 }
 
 // The density estimation's kernel at `radius`: 1 / (pi r^2 N), N the iteration's light

@@ -90,7 +90,7 @@ fn pm_light_arrive(p: ptr<function, PhotonPath>, a: Arrival) -> PhotonHere {
     let length = (*p).light.length;
     (*p).d_vm = mis_clamp((*p).d_vm / mis_pow(abs(a.bsdf.fix.z)));
     var here: PhotonHere;
-    here.stored = !a.bsdf.is_delta && length + 1u <= MAX_PATH_LENGTH;
+    here.stored = !a.bsdf.is_delta && length + 1u <= MAX_PATH_LENGTH && pm_stores_photon(p, a);
     if (here.stored) {
         count(COUNTER_PM_STORED, 1u);
         let towards = -(*p).light.direction;
@@ -99,6 +99,16 @@ fn pm_light_arrive(p: ptr<function, PhotonPath>, a: Arrival) -> PhotonHere {
         here.photon = Photon(position, (*p).d_vm, (*p).light.throughput, packed);
     }
     return here;
+}
+
+// Hook: whether light sub-path `p` stores a photon at the vertex it arrived at (`a`), asked
+// at each non-delta vertex where a merge keeps the path within MAX_PATH_LENGTH, in the order
+// the sub-path meets them; it may read and write the sub-path's fields (a field a graph adds
+// to `PhotonPath` with `item_fields` carries what it needs from vertex to vertex). Default:
+// every such vertex (the global photon map); a caustic map keeps the vertices reached from the
+// light through delta vertices alone (L S+ D).
+fn pm_stores_photon(p: ptr<function, PhotonPath>, a: Arrival) -> bool {
+    return true;
 }
 
 // The sub-path's next direction from the vertex it arrived at (`a`); false when it ends there.

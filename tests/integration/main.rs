@@ -18,6 +18,7 @@ mod drive;
 mod fidelity;
 mod frames;
 mod gltf;
+mod hooks;
 mod interrupt;
 mod layout_cache;
 mod layouts;
