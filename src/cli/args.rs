@@ -120,8 +120,8 @@ pub struct Common {
     /// Override a graph constant, NAME=VALUE (repeatable).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
-    /// Folder scene files find their glTF assets in (also LIGHTGRAPH_ASSETS; default:
-    /// ../shared/scenes when it exists).
+    /// Folder scene files find their glTF assets in (also LIGHTGRAPH_ASSETS; default: the
+    /// developers' shared scenes beside a checkout, where they exist).
     #[arg(long, env = "LIGHTGRAPH_ASSETS")]
     pub assets: Option<PathBuf>,
     /// GPU adapter: its index in `lightgraph list`, its PCI bus id, or text its name contains

@@ -24,14 +24,16 @@ pub enum AssetsAction {
     /// List every asset: what it is, its licence and source, whether it can be downloaded, and
     /// whether its files are under the asset root (by name and size; `check` reads them).
     List {
-        /// The asset root (default: LIGHTGRAPH_ASSETS, else ../shared/scenes).
+        /// The asset root (default: LIGHTGRAPH_ASSETS, else the developers' shared scenes
+        /// beside a checkout, where they exist).
         #[arg(long)]
         root: Option<PathBuf>,
     },
     /// Check every asset's files under DIR against the catalog's sizes and SHA-256s: intact,
     /// missing, partial or damaged; fails when a file present differs.
     Check {
-        /// The asset root (default: LIGHTGRAPH_ASSETS, else ../shared/scenes).
+        /// The asset root (default: LIGHTGRAPH_ASSETS, else the developers' shared scenes
+        /// beside a checkout, where they exist).
         dir: Option<PathBuf>,
     },
     /// Download an asset's files from their public sources into DIR/NAME, each verified
@@ -39,8 +41,8 @@ pub enum AssetsAction {
     Fetch {
         /// The asset (a folder name, as `lightgraph assets list` shows).
         name: String,
-        /// The asset root to write into (default: LIGHTGRAPH_ASSETS, else
-        /// ../shared/scenes).
+        /// The asset root to write into (default: LIGHTGRAPH_ASSETS, else the developers'
+        /// shared scenes beside a checkout, where they exist).
         #[arg(long, value_name = "DIR")]
         to: Option<PathBuf>,
     },

@@ -22,11 +22,11 @@ pub enum Invariant {
     Background(f64),
     /// A lossless object in a uniform environment: every pixel is the environment's radiance,
     /// none brighter beyond rounding; a path lost on the way (a sample of 0) shows as a deficit,
-    /// and at most this fraction of the samples may be lost (see README, "Stress suite").
+    /// and at most this fraction of the samples may be lost (see docs/testing.md, "Stress suite").
     Furnace(f64),
     /// An enclosure that hides a bright environment: black, but for rays that slip through
     /// the single-precision triangle test at an edge, each of which sees the environment. At
-    /// most this fraction of the samples may (see README, "Stress suite").
+    /// most this fraction of the samples may (see docs/testing.md, "Stress suite").
     Enclosed(f64),
 }
 

@@ -51,7 +51,7 @@ pub fn options(
 /// The graph's measured constants (LVC-BPT's average light sub-path length) for `scene` in
 /// `layout` at `size` and `spp` with `seed` and `constants`, measured once: runs that must
 /// render the same image are given one measurement (on lavapipe the measuring frame's count
-/// can differ between sessions, see the README, Testing).
+/// can differ between sessions, see docs/testing.md).
 pub fn measured(
     scene: &LoadedScene,
     graph: &str,

@@ -139,7 +139,7 @@ fn lvc_bpt_mk_shares_memory_and_renders_what_it_renders_without_sharing() {
 /// atomic sums.
 /// The average light sub-path length it was rendered with, 0.8007 (8007 vertices stored by the
 /// 10^4 sub-paths of the measuring frame), is given rather than measured again: on lavapipe the
-/// measuring frame's count can differ between sessions (README, Testing).
+/// measuring frame's count can differ between sessions (docs/testing.md).
 #[test]
 fn lvc_bpt_renders_what_it_rendered_before_the_operators() {
     let path = data("golden/bpt-lvc-sk.exr");

@@ -58,8 +58,8 @@ fn shards_merged_equal_one_run() {
     // whatever order the threads run (LVC-BPT): many adds a pixel, each rounding to 6e-8,
     // measured up to 4.6e-5 on a dim pixel, so SPLAT_ROUNDING there. LVC-BPT's measured
     // average sub-path length is measured once and given to every shard (as the CLI's films
-    // record it): on lavapipe the measuring frame's count can differ between sessions (README,
-    // Testing), and other values weight the strategies differently. A shard that repeated the
+    // record it): on lavapipe the measuring frame's count can differ between sessions
+    // (docs/testing.md), and other values weight the strategies differently. A shard that repeated the
     // first frames, or a radius that restarted with each shard, would differ by the noise
     // (over 1e-3, checked below).
     let pm = [("PM_RADIUS", ConstValue::F32(0.05))];

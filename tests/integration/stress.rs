@@ -2,7 +2,7 @@
 //! at 8x8 to 32x32 pixels and 32 frames of 1 sample per pixel (the tolerances are in
 //! `lightgraph::stress`: Student-t limits from the spread of per-frame region means, exact
 //! comparisons where no randomness can enter). The GPU version is `lightgraph stress --scale
-//! 8 --spp 16` (README, "Testing").
+//! 8 --spp 16` (docs/testing.md).
 
 use crate::common::gpu;
 use lightgraph::stress::{Runner, Settings, cases::cases, estimators};

@@ -88,7 +88,7 @@ pub struct RenderArgs {
     pub reference: Option<PathBuf>,
     /// Feature buffers to write as further layers of the EXR, comma-separated: albedo, normal,
     /// depth, position (at each sample's first non-specular hit, averaged over the pixel's
-    /// samples that hit; see the README). Rendered by kernels of their own after the run.
+    /// samples that hit; see docs/usage.md). Rendered by kernels of their own after the run.
     #[arg(long, value_name = "LIST")]
     pub aov: Option<String>,
     /// Frame index of the first frame: renders frames FIRST .. FIRST + frames of the seed's
