@@ -1,9 +1,10 @@
 // Opens `render --serve`'s live page in headless Chromium (the system's, through playwright-core)
 // and follows the render to its end: no console error; the film is fetched anew as its version
-// changes (at least MIN_LOADS times); once the render is over, prints the canvas's pixels at the
-// points asked for, as JSON on stdout, for the caller to compare with the film written, and
-// optionally saves a screenshot. Usage: node live.mjs URL X,Y[;X,Y...] [SCREENSHOT]. Exits 1
-// naming every failure.
+// changes (at least MIN_LOADS times), after which it prints the line `watching` on stdout (the
+// caller may then end the render, however long it took the browser to start); once the render
+// is over, prints the canvas's pixels at the points asked for, as JSON on stdout, for the caller
+// to compare with the film written, and optionally saves a screenshot. Usage: node live.mjs URL
+// X,Y[;X,Y...] [SCREENSHOT]. Exits 1 naming every failure.
 import { withChromium } from "./chromium.mjs";
 
 const MIN_LOADS = 3;
@@ -26,6 +27,9 @@ async function follow(context) {
   page.on("console", (m) => { if (m.type() === "error") failures.push(`console error: ${m.text()}`); });
   page.on("pageerror", (e) => failures.push(`page error: ${e.message}`));
   await page.goto(url);
+  await page.waitForFunction((n) => window.lightgraphLive && window.lightgraphLive.loads >= n,
+    MIN_LOADS, { timeout: 120000, polling: 100 });
+  console.log("watching");
   await page.waitForFunction(() => window.lightgraphLive && window.lightgraphLive.status
     && window.lightgraphLive.status.finished && window.lightgraphLive.drawn === window.lightgraphLive.status.version,
     null, { timeout: 120000, polling: 100 });
