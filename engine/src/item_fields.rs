@@ -136,10 +136,11 @@ fn struct_body(text: &str, name: &str) -> Option<(usize, usize)> {
         });
         let rest = &text[i + name.len()..];
         let open = i + name.len() + rest.len() - rest.trim_start().len();
-        (is_struct && text[open..].starts_with('{')).then(|| {
-            let close = open + text[open..].find('}').expect("a struct's body ends");
-            (open + 1, close)
-        })
+        // An unclosed body is left for naga to report at its line.
+        let close = text[open..].find('}').map(|c| open + c);
+        close
+            .filter(|_| is_struct && text[open..].starts_with('{'))
+            .map(|close| (open + 1, close))
     })
 }
 
