@@ -68,6 +68,10 @@ pub fn report(args: &ExplainSpec) -> Result<String> {
         let spec = c.spec(&args.graph, Some(&layout), 1);
         let run = Run::with_scene(&spec, graph.clone(), (layout, decl), scenes.shared(kind))?;
         let (layout, opts) = (&run.layout, &run.options);
+        let profile = opts.layout.tuning.profile(gpu.as_ref().map(|g| g.info.name.as_str()));
+        if let Some((p, k)) = profile.and_then(|p| Some((p, p.knobs(&graph.name, layout)?))) {
+            writeln!(out, "tuning profile {}: {} ({})", p.name, k.summary(), k.why)?;
+        }
         let camera = lightgraph_scenes::CompiledScene::camera(&run.scene.scene, opts.width, opts.height);
         let externals = run.scene.compiled.resources(&camera);
         // A graph with measured constants (LVC-BPT's average light sub-path length) is

@@ -112,7 +112,13 @@ pub fn autotune(gpu: &Gpu, run: &Run, budget: Duration, report: impl FnMut(&Tria
 /// first with its compiled program. `report` sees each trial as it finishes.
 pub fn autotune_with(gpu: &Gpu, run: &Run, tuning: Tuning, mut report: impl FnMut(&Trial)) -> Result<Vec<Trial>> {
     let graph = &run.graph;
-    let base = graph.layouts[&graph.default_layout].clone();
+    // The default layout with the tuning profile's knobs: the candidates start from them.
+    let default = graph.layouts[&graph.default_layout].clone();
+    let base = run
+        .options
+        .layout
+        .tuning
+        .apply(Some(gpu), graph, &graph.default_layout, default);
     let candidates = lightgraph_engine::auto::legal_layouts(
         graph,
         &LayoutDecl {

@@ -16,6 +16,7 @@ use lightgraph::run::{
     SessionOptions,
 };
 use lightgraph::tev::LiveView;
+use lightgraph::tuning::Tuning;
 use lightgraph_engine::Graph;
 use lightgraph_engine::ir::StateStorage;
 use std::collections::BTreeMap;
@@ -156,7 +157,7 @@ pub struct Common {
     #[arg(long)]
     pub no_subgroups: bool,
     /// Keep wgpu's loop guards in the pass kernels (on) or leave them out (off): overrides
-    /// the layout's `loop_guards`, which is off in the layouts measured faster without them.
+    /// the layout's `loop_guards` and the tuning profile's.
     #[arg(long, value_parser = parse_on_off)]
     pub loop_guards: Option<bool>,
     /// Bind at most BYTES of a scene buffer at once, below the adapter's limit: geometry
@@ -164,6 +165,12 @@ pub struct Common {
     /// binding is (to test or measure the split on a small scene).
     #[arg(long, value_name = "BYTES")]
     pub max_binding: Option<u64>,
+    /// Tuning profile whose device knobs (loop guards, pool sizes, code variants that render
+    /// the same image) the graph's named layouts take: auto (the adapter's built-in profile),
+    /// none (the layouts as the graph writes them), a built-in profile's name, or a .ron
+    /// profile of one's own (docs/tuning.md). The options above win over it.
+    #[arg(long, value_parser = Tuning::parse, default_value = "auto")]
+    pub tuning: Tuning,
 }
 
 impl Common {
@@ -189,6 +196,7 @@ impl Common {
                 no_subgroups: self.no_subgroups,
                 loop_guards: self.loop_guards,
                 max_binding: self.max_binding,
+                tuning: self.tuning.clone(),
             },
             bvh: self.bvh,
             adapter: self.adapter.clone(),

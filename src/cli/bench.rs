@@ -62,7 +62,12 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     };
     let layouts: Vec<(String, lightgraph_engine::ir::LayoutDecl)> = match args.layouts.as_str() {
         "all" => graph.layouts.iter().map(|(n, d)| (n.clone(), d.clone())).collect(),
-        "auto" => lightgraph_engine::auto::legal_layouts(&graph, &graph.layouts[&graph.default_layout]),
+        "auto" => {
+            let default = graph.layouts[&graph.default_layout].clone();
+            let tuning = &c.run_options().overrides.tuning;
+            let base = tuning.apply(Some(&gpu), &graph, &graph.default_layout, default);
+            lightgraph_engine::auto::legal_layouts(&graph, &base)
+        }
         list => list
             .split(',')
             .map(|n| Ok((n.to_string(), Plan::new(&graph, n)?.layout)))

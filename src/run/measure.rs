@@ -18,11 +18,12 @@ pub(crate) struct Prepared {
     pub(crate) externals: BTreeMap<String, Vec<u8>>,
 }
 
-/// Checks the options and specializes `graph` in the layout `decl` for `scene`.
+/// Checks the options and specializes `graph` in the layout `decl` (called `layout`: a named
+/// layout as the graph writes it takes the tuning profile's knobs) for `scene`.
 pub(crate) fn prepare(
     gpu: &Gpu,
     graph: &Graph,
-    decl: LayoutDecl,
+    (layout, decl): (&str, LayoutDecl),
     scene: &LoadedScene,
     options: &SessionOptions,
 ) -> Result<Prepared> {
@@ -33,7 +34,9 @@ pub(crate) fn prepare(
     if paths > u32::MAX as u64 {
         bail!("{paths} paths per frame is more than 2^32; use fewer samples per frame");
     }
-    let decl = options.layout.apply(decl);
+    let decl = options
+        .layout
+        .apply(options.layout.tuning.apply(Some(gpu), graph, layout, decl));
     let mut flags = kernel_flags(device_flags(gpu), scene, options.layout.all_features);
     let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
     // The scene offers every scene resource; a graph takes those it declares.
@@ -118,7 +121,7 @@ pub fn measure_constants(
     if graph.measured.keys().all(|name| options.constants.contains_key(name)) {
         return Ok(BTreeMap::new());
     }
-    let Prepared { decl, spec, externals } = prepare(gpu, graph, decl, scene, options)?;
+    let Prepared { decl, spec, externals } = prepare(gpu, graph, (layout, decl), scene, options)?;
     measure_prepared(gpu, graph, layout, (&decl, &spec, &externals), options)
 }
 

@@ -51,6 +51,8 @@ pub struct LayoutOverrides {
     /// Bind at most this many bytes of a scene buffer at once (`--max-binding`), below the
     /// adapter's limit: a small scene's geometry splits as a large one's does.
     pub max_binding: Option<u64>,
+    /// The tuning profile whose device knobs the graph's named layouts take (`--tuning`).
+    pub tuning: crate::tuning::Tuning,
 }
 
 impl LayoutOverrides {

@@ -100,7 +100,7 @@ impl<'g> Session<'g> {
             decl,
             mut spec,
             externals,
-        } = prepare(gpu, graph, decl, scene, &options)?;
+        } = prepare(gpu, graph, (layout, decl), scene, &options)?;
         let measured = measure_prepared(gpu, graph, layout, (&decl, &spec, &externals), &options)?;
         spec.constants.extend(measured);
         let program = compile(graph, layout, &decl, &spec, &options.layout.target(gpu))?;
@@ -118,7 +118,7 @@ impl<'g> Session<'g> {
         scene: &LoadedScene,
         options: SessionOptions,
     ) -> Result<Session<'g>> {
-        let Prepared { externals, .. } = prepare(gpu, graph, decl, scene, &options)?;
+        let Prepared { externals, .. } = prepare(gpu, graph, (layout, decl), scene, &options)?;
         Self::instantiate(gpu, graph, layout, program, &externals, options)
     }
 

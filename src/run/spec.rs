@@ -359,7 +359,12 @@ impl Run {
         let (device, target) = gpu.map(|g| (device_flags(g), g.target())).unwrap_or_default();
         let flags = kernel_flags(device, &self.scene, self.options.layout.all_features);
         let spec = specialization(&self.graph, &self.scene.scene, &self.options, flags);
-        let decl = self.options.layout.apply(self.decl.clone());
+        let tuned = self
+            .options
+            .layout
+            .tuning
+            .apply(gpu, &self.graph, &self.layout, self.decl.clone());
+        let decl = self.options.layout.apply(tuned);
         let target = self.options.layout.on_target(target);
         lightgraph_engine::compile(&self.graph, &self.layout, &decl, &spec, &target)
             .map_err(|e| image_past_binding_limit(e.into(), &self.graph, (self.options.width, self.options.height)))

@@ -166,3 +166,31 @@ fn a_broken_link_and_a_missing_anchor_are_found() {
         ["x.md", "z.png"]
     );
 }
+
+/// Every knob and scene layout of the built-in tuning profiles links to the measurement that
+/// chose it: a heading of the repository's docs.
+#[test]
+fn every_tuning_knob_links_to_its_measurement() {
+    let root = Path::new(ROOT).join("README.md");
+    let mut problems = Vec::new();
+    let mut links = 0;
+    for p in lightgraph::tuning::built_in() {
+        let knobs = p
+            .layouts
+            .iter()
+            .flat_map(|(g, l)| l.iter().map(move |(l, k)| (format!("{g} {l}"), &k.why)));
+        let scenes = p.scenes.iter().map(|s| (format!("{} on {}", s.graph, s.scene), &s.why));
+        for (what, why) in knobs.chain(scenes) {
+            links += 1;
+            let problem = match why.starts_with("docs/") && why.contains('#') {
+                true => broken(&root, why),
+                false => Some(format!("'{why}' is no docs/...#anchor link")),
+            };
+            if let Some(problem) = problem {
+                problems.push(format!("data/tuning/{}.ron, {what}: {problem}", p.name));
+            }
+        }
+    }
+    assert!(links >= 30, "only {links} knobs found in the built-in profiles");
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}

@@ -6,6 +6,8 @@ use crate::common::{
     assert_same_render, borrowed, gpu, largest_relative_difference, measured, render, render_with_layout,
 };
 use lightgraph::run::{Image, LayoutOverrides, LoadedScene, Session, SessionOptions, load_graph, load_scene};
+use lightgraph::tuning::Tuning;
+use lightgraph_engine::ir::LayoutDecl;
 use lightgraph_engine::{ConstValue, Graph};
 
 #[test]
@@ -44,8 +46,24 @@ fn every_pt_layout_matches_naive_pt_sk() {
     }
 }
 
-/// Layouts that leave wgpu's loop guards out (`loop_guards: false`) render the image they
-/// render with the guards, to float rounding: the guards only end loops after 2^64 iterations.
+/// The H100's tuning profile (data/tuning/nvidia-h100.ron), which the default profile of every
+/// other adapter takes too.
+fn h100() -> LayoutOverrides {
+    LayoutOverrides {
+        tuning: Tuning::parse("nvidia-h100").unwrap(),
+        ..Default::default()
+    }
+}
+
+/// The layout `layout` of `graph` with the H100 profile's knobs.
+fn tuned(graph: &str, layout: &str) -> LayoutDecl {
+    let g = load_graph(graph).unwrap();
+    h100().tuning.apply(None, &g, layout, g.layouts[layout].clone())
+}
+
+/// Layouts whose tuning profile leaves wgpu's loop guards out (`loop_guards: false`) render
+/// the image they render with the guards and with no profile at all, to float rounding: the
+/// guards only end loops after 2^64 iterations.
 #[test]
 fn layouts_without_loop_guards_render_what_they_render_with_them() {
     let scene = load_scene("cornell-glossy-sun").unwrap();
@@ -55,31 +73,44 @@ fn layouts_without_loop_guards_render_what_they_render_with_them() {
         ("ppm", "PPMsk"),
         ("vcm", "VCMmk"),
     ] {
-        let decl = &load_graph(graph).unwrap().layouts[layout];
         assert!(
-            !decl.loop_guards,
-            "{layout} leaves the loop guards out (graphs/{graph}.ron)"
+            !tuned(graph, layout).loop_guards,
+            "{layout} leaves the loop guards out (data/tuning/nvidia-h100.ron)"
+        );
+        assert!(
+            load_graph(graph).unwrap().layouts[layout].loop_guards,
+            "graphs/{graph}.ron keeps no device knob"
         );
         let guarded = LayoutOverrides {
             loop_guards: Some(true),
-            ..Default::default()
+            ..h100()
         };
         assert!(
-            guarded.apply(decl.clone()).loop_guards,
-            "--loop-guards on overrides the layout"
+            guarded.apply(tuned(graph, layout)).loop_guards,
+            "--loop-guards on overrides the profile"
         );
         let with = render_with_layout(&scene, graph, layout, (24, 24), 2, 2, 42, &[], guarded);
-        let without = render(&scene, graph, layout, (24, 24), 2, 2, 42, &[]);
+        let without = render_with_layout(&scene, graph, layout, (24, 24), 2, 2, 42, &[], h100());
+        let untuned = LayoutOverrides {
+            tuning: Tuning::None,
+            ..Default::default()
+        };
+        let plain = render_with_layout(&scene, graph, layout, (24, 24), 2, 2, 42, &[], untuned);
         assert_same_render(
             &with,
             &without,
             &format!("{graph} {layout} with and without loop guards"),
         );
+        assert_same_render(
+            &plain,
+            &without,
+            &format!("{graph} {layout} with and without the tuning profile"),
+        );
     }
 }
 
-/// Layouts that visit the CWBVH's children by bit scan (`CWBVH_CHILD_SCAN`, set in their
-/// `constants`) render the image they render with the loop of eight slots: both test the
+/// Layouts that visit the CWBVH's children by bit scan (`CWBVH_CHILD_SCAN`, set by their
+/// tuning profile) render the image they render with the loop of eight slots: both test the
 /// same children against the same ray, so the images agree to float rounding.
 #[test]
 fn layouts_with_the_child_scan_render_what_the_loop_of_eight_renders() {
@@ -92,14 +123,13 @@ fn layouts_with_the_child_scan_render_what_the_loop_of_eight_renders() {
         ("bpt-lvc", "LVC-BPTsk"),
         ("vcm", "VCMsk"),
     ] {
-        let decl = &load_graph(graph).unwrap().layouts[layout];
         assert_eq!(
-            decl.constants.get("CWBVH_CHILD_SCAN"),
+            tuned(graph, layout).constants.get("CWBVH_CHILD_SCAN"),
             Some(&ConstValue::Bool(true)),
-            "{layout} visits the children by bit scan (graphs/{graph}.ron)"
+            "{layout} visits the children by bit scan (data/tuning/nvidia-h100.ron)"
         );
-        let scan = render(&scene, graph, layout, (24, 24), 2, 2, 42, &[]);
-        let unrolled = render(&scene, graph, layout, (24, 24), 2, 2, 42, &eight);
+        let scan = render_with_layout(&scene, graph, layout, (24, 24), 2, 2, 42, &[], h100());
+        let unrolled = render_with_layout(&scene, graph, layout, (24, 24), 2, 2, 42, &eight, h100());
         assert_same_render(&scan, &unrolled, &format!("{graph} {layout} with either child loop"));
     }
 }

@@ -48,5 +48,6 @@ mod subgroups;
 mod tev;
 mod textures;
 mod trace;
+mod tuning;
 mod vcm;
 mod verify;

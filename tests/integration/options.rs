@@ -6,7 +6,7 @@ use crate::cli::{fails, lightgraph, temp_dir};
 
 /// Runs with an option clap's value parsers refuse: exit code 2 (a usage error), an
 /// `error:` line, no panic; returns stderr.
-fn usage_error(args: &[&str]) -> String {
+pub(crate) fn usage_error(args: &[&str]) -> String {
     let out = lightgraph(args);
     let stderr = String::from_utf8_lossy(&out.stderr).to_string();
     assert_eq!(out.status.code(), Some(2), "{args:?} should be a usage error: {stderr}");

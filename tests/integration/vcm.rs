@@ -128,7 +128,7 @@ fn vcm_without_connections_renders_pbpm() {
 
 /// VCMmk stores its sub-paths between kernels, compacts them and queues the connections, yet
 /// takes the same random numbers, cache vertices and merges as VCMsk, also with two
-/// iterations a frame; VCMsk merges at the vertex (its layout sets VCM_MERGE_AT_VERTEX), VCMmk
+/// iterations a frame; VCMsk merges at the vertex (its tuning profile sets VCM_MERGE_AT_VERTEX), VCMmk
 /// in `vcm_gather` with the BSDF set up again from the pending merge, and VCMsk with the
 /// constant given false (its gather fused) renders the same too.
 #[test]

@@ -3,8 +3,8 @@
 
 use super::RenderArgs;
 use anyhow::Result;
+use lightgraph::layout_cache;
 use lightgraph::run::{Run, parse_bvh};
-use lightgraph::{layout_cache, measured_layouts};
 use lightgraph_engine::Gpu;
 use lightgraph_scenes::bvh::BvhKind;
 
@@ -54,16 +54,20 @@ pub fn choose_layout(gpu: &Gpu, run: &mut Run, args: &RenderArgs) -> Result<bool
 }
 
 /// Without `--layout` and with nothing cached: the layout measured fastest for this built-in
-/// scene on this adapter (`lightgraph::measured_layouts`), where one was.
+/// scene on this adapter, where the run's tuning profile has one (`lightgraph::tuning`).
 pub fn take_measured_default(gpu: &Gpu, run: &mut Run) -> Result<()> {
-    let Some(m) = measured_layouts::find(&run.spec.graph, &run.spec.scene, &gpu.info.name) else {
+    let tuning = run.options.layout.tuning.clone();
+    let Some(profile) = tuning.profile(Some(&gpu.info.name)) else {
+        return Ok(());
+    };
+    let Some(m) = profile.scene_layout(&run.spec.graph, &run.spec.scene) else {
         return Ok(());
     };
     run.relayout(&m.layout)?;
     eprintln!(
-        "layout {}: measured fastest for this scene on an {} ({:.1} against {:.1} Msamples/s for {}, {}; --layout NAME to choose)",
+        "layout {}: measured fastest for this scene by the tuning profile {} ({:.1} against {:.1} Msamples/s for {}, {}; --layout NAME to choose)",
         m.layout,
-        m.adapter,
+        profile.name,
         m.rate / 1e6,
         m.default_rate / 1e6,
         run.graph.default_layout,
