@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// The frames of a film given neither --frames nor --time.
-pub const DEFAULT_FRAMES: u32 = 64;
+const DEFAULT_FRAMES: u32 = 64;
 
 /// What differs between the commands that render a film: their defaults.
 pub struct FilmDefaults {
