@@ -91,6 +91,18 @@ impl Film {
         self.ranges.last().map_or(0, |r| r.1)
     }
 
+    /// The first frame index of a run that adds to this film: `given` (`--first-frame`), which
+    /// must come after every frame the film holds, else the end of those frames.
+    pub fn next_first_frame(&self, given: Option<u32>) -> Result<u32> {
+        let end = self.end_frame();
+        let first = given.map_or(end, u64::from);
+        if first < end {
+            bail!("--first-frame {first} is inside the frames the film holds (up to {end}); give {end} or more");
+        }
+        u32::try_from(first)
+            .map_err(|_| anyhow!("the film ends at frame {end}, past 2^32; start another with a new seed"))
+    }
+
     /// Adds the film `other` (read from `path`), made with the same settings over frames this
     /// one does not hold: the sums, frames and seconds add up, the layouts and adapters are
     /// listed once each, and numeric statistics (`rays`, `rejected_samples`) add up.

@@ -10,6 +10,7 @@ pub mod aov;
 pub mod asset_catalog;
 pub mod assets;
 pub mod bench;
+pub mod checkpoint;
 pub mod cli;
 #[cfg(feature = "mpi")]
 pub mod cluster;

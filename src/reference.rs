@@ -2,14 +2,15 @@
 //! run accumulated in f64 on the host, with its variance, written as a reference EXR with a
 //! PNG preview and resumable, on one GPU or several.
 
+use crate::checkpoint::{Checkpoint, Filmed, write_with_preview};
 use crate::drive::{Budget, Observer, Plan, Stopwatch, drive};
 use crate::film::{Film, film_settings};
 use crate::interrupt::stopped_by_signal;
 use crate::multi::{gpu_selectors, render_on_gpus};
 use crate::output::{check_out, shell_word, si};
-use crate::run::{Run, RunSpec, Session};
+use crate::run::{Run, RunSpec};
 use crate::tev::LiveView;
-use anyhow::{Result, bail};
+use anyhow::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph_engine::Gpu;
 use std::collections::BTreeMap;
@@ -31,11 +32,12 @@ pub struct ReferenceSpec {
     pub run: RunSpec,
     /// Render for this long (added to what a resumed reference has).
     pub time: Option<Duration>,
-    /// Render this many frames (when no time is given).
+    /// Render this many frames (when no time is given; the command line's `--frames` counts
+    /// the resumed film's too, and gives this the frames it lacks).
     pub frames: Option<u32>,
     /// The film to add samples to, and its path.
     pub resume: Option<(PathBuf, Film)>,
-    /// The EXR written ([`out_path`]); the PNG preview goes beside it.
+    /// The EXR written; the PNG preview goes beside it.
     pub out: PathBuf,
     /// Replace an existing `out` that is not the resumed film.
     pub force: bool,
@@ -49,24 +51,6 @@ pub struct ReferenceSpec {
     pub gpus: Option<String>,
     /// The tev address to stream the image to, if any.
     pub tev: Option<String>,
-}
-
-/// The film's path: `out`, else the resumed film's, else out/reference.exr.
-pub fn out_path(out: Option<&Path>, resume: Option<&Path>) -> PathBuf {
-    out.or(resume)
-        .map_or_else(|| PathBuf::from("out/reference.exr"), Path::to_path_buf)
-}
-
-/// The first frame index of this run: `given`, which must come after every frame the
-/// (resumed) film holds, or the end of those frames.
-fn first_frame(given: Option<u32>, film: &Film) -> Result<u32> {
-    let end = film.end_frame();
-    let first = given.map_or(end, u64::from);
-    if first < end {
-        bail!("--first-frame {first} is inside the frames the reference holds (up to {end}); give {end} or more");
-    }
-    u32::try_from(first)
-        .map_err(|_| anyhow::anyhow!("the reference ends at frame {end}, past 2^32; start another with a new seed"))
 }
 
 /// How often the GPU's f32 sums are moved into the host's f64 ones.
@@ -107,7 +91,7 @@ pub fn render(mut spec: ReferenceSpec) -> Result<()> {
     let size = (run.options.width, run.options.height);
     let resumed = spec.resume.take();
     let film = film(&spec, &run, resumed)?;
-    run.spec.first_frame = first_frame(spec.first_frame, &film)? as u64;
+    run.spec.first_frame = film.next_first_frame(spec.first_frame)? as u64;
     eprintln!(
         "scene {} (loaded in {:.2} s) | graph {} layout {} | {}x{} | {} spp so far",
         spec.run.scene,
@@ -136,17 +120,15 @@ pub fn render(mut spec: ReferenceSpec) -> Result<()> {
 }
 
 /// The command that goes on with the reference after a signal stopped this run, which began
-/// with the film's `(frames, seconds)` at `before`: the frames or the time left of this run.
+/// with the film's `(frames, seconds)` at `before`: the frames in all (as `--frames` counts
+/// them with `--resume`) or the time left of this run.
 fn resume_command(spec: &ReferenceSpec, film: &Film, before: (u64, f64)) -> String {
     let budget = match (spec.time, spec.frames) {
         (Some(t), _) => format!(
             "--time {}s",
             (t.as_secs_f64() - (film.seconds - before.1)).ceil().max(1.0)
         ),
-        (None, frames) => {
-            let left = u64::from(frames.unwrap_or(0)).saturating_sub(film.frames - before.0);
-            format!("--frames {}", left.max(1))
-        }
+        (None, frames) => format!("--frames {}", before.0 + u64::from(frames.unwrap_or(0))),
     };
     let gpus = spec
         .gpus
@@ -181,9 +163,7 @@ fn finish(target: Target, exposure: f32, resume: String) -> Result<()> {
     if let Some(mut v) = view {
         v.show(&film.mean());
     }
-    film.write(&out, "reference")?;
-    let png = out.with_extension("png");
-    crate::output::write_png(&png, &film.image(), exposure)?;
+    let png = write_with_preview(&film, &out, "reference", exposure)?;
     println!(
         "wrote {} and {}: {} spp in {:.1} s in all; noise (RMSE of the reference itself) {:.3e}",
         out.display(),
@@ -206,66 +186,61 @@ fn progress(film: &Film, spp_before: u64, size: (u32, u32), secs: f64) -> String
     format!("{spp} spp | {} samples/s", si(samples / secs))
 }
 
-/// The reference's observer on one GPU: takes the GPU's sums every [`ABSORB_EVERY`] and
-/// writes the film every `--checkpoint`, and moves the progress bar.
+/// The reference's observer on one GPU: takes the GPU's sums every [`ABSORB_EVERY`] for the
+/// live view and moves the progress bar (the checkpoints are [`Checkpoint`]'s).
 struct OneGpu<'a> {
-    target: &'a mut Target,
-    args: &'a ReferenceSpec,
+    bar: &'a ProgressBar,
+    view: &'a mut Option<LiveView>,
+    time: Option<Duration>,
     spp_before: u64,
     absorbed_at: Instant,
-    saved_at: Instant,
-    seconds_saved: f64,
 }
 
-impl Observer<Session<'_>> for OneGpu<'_> {
-    fn batch(&mut self, session: &mut Session, clock: &mut Stopwatch) -> Result<()> {
-        let (film, args) = (&mut self.target.film, self.args);
-        if self.absorbed_at.elapsed() >= ABSORB_EVERY || self.saved_at.elapsed() >= args.checkpoint {
-            film.absorb(&session.take_accumulation()?)?;
+impl Observer<Filmed<'_, '_>> for OneGpu<'_> {
+    fn batch(&mut self, filmed: &mut Filmed, clock: &mut Stopwatch) -> Result<()> {
+        if self.absorbed_at.elapsed() >= ABSORB_EVERY {
+            filmed.absorb()?;
             self.absorbed_at = Instant::now();
-            if let Some(v) = self.target.view.as_mut().filter(|v| v.due()) {
-                v.show(&film.mean());
+            if let Some(v) = self.view.as_mut().filter(|v| v.due()) {
+                v.show(&filmed.film.mean());
             }
         }
-        if self.saved_at.elapsed() >= args.checkpoint {
-            let now = clock.seconds();
-            film.seconds += now - self.seconds_saved;
-            self.seconds_saved = now;
-            film.write(&self.target.out, "reference")?;
-            self.saved_at = Instant::now();
-        }
-        let bar = &self.target.bar;
-        bar.set_message(progress(film, self.spp_before, film.size, clock.seconds()));
-        bar.set_position(match args.time {
+        let film = &filmed.film;
+        self.bar
+            .set_message(progress(film, self.spp_before, film.size, clock.seconds()));
+        self.bar.set_position(match self.time {
             Some(_) => clock.elapsed().as_millis() as u64,
-            None => session.frames as u64,
+            None => filmed.session.frames as u64,
         });
         Ok(())
     }
 }
 
 /// Renders `run` on one GPU (`--adapter`) into the target's film through the driver
-/// ([`OneGpu`] observing).
+/// ([`OneGpu`] and the [`Checkpoint`] observing).
 fn on_one_gpu(args: &ReferenceSpec, run: &Run, target: &mut Target) -> Result<()> {
     let gpu = Gpu::new(args.run.adapter.as_deref())?;
     eprintln!("{}", gpu.describe());
     list_once(&mut target.film.info, "adapter", &gpu.info.name);
     let mut session = run.session(&gpu)?;
-    let mut clock = Stopwatch::start();
+    let Target { film, out, bar, view } = target;
     let mut observer = OneGpu {
-        spp_before: target.film.samples_per_pixel(),
-        target,
-        args,
+        bar,
+        view,
+        time: args.time,
+        spp_before: film.samples_per_pixel(),
         absorbed_at: Instant::now(),
-        saved_at: Instant::now(),
-        seconds_saved: 0.0,
     };
-    drive(&mut session, Plan::new(budget(args)), &mut clock, &mut [&mut observer])?;
-    let seconds_saved = observer.seconds_saved;
-    let film = &mut target.film;
-    film.absorb(&session.take_accumulation()?)?;
-    film.seconds += clock.seconds() - seconds_saved;
-    Ok(())
+    let mut checkpoint = Checkpoint::new(Some(args.checkpoint), out, "reference", args.exposure);
+    let mut filmed = Filmed::new(&mut session, film);
+    let plan = Plan::new(budget(args));
+    drive(
+        &mut filmed,
+        plan,
+        &mut Stopwatch::start(),
+        &mut [&mut checkpoint, &mut observer],
+    )?;
+    filmed.absorb()
 }
 
 /// The budget `--time` or `--frames` (none: no frames) gives.
@@ -277,25 +252,23 @@ fn budget(args: &ReferenceSpec) -> Budget {
 }
 
 /// Renders `run` on the GPUs `spec` names (`--gpus`, lightgraph::multi) into the target's
-/// film, writing it every `--checkpoint` (with the seconds of the runs before this one).
+/// film, writing it every `--checkpoint` ([`Checkpoint`]; with the seconds of the runs
+/// before this one).
 fn on_several_gpus(args: &ReferenceSpec, run: &Run, spec: &str, target: &mut Target) -> Result<()> {
     let selectors = gpu_selectors(spec)?;
     let budget = budget(args);
     let spp_before = target.film.samples_per_pixel();
     let frames_before = target.film.frames;
     let start = Instant::now();
-    let mut saved_at = Instant::now();
     let (bar, out, view) = (&target.bar, &target.out, &mut target.view);
+    let mut checkpoint = Checkpoint::new(Some(args.checkpoint), out, "reference", args.exposure);
     let mut checkpoint_error = None;
     let (shares, _) = render_on_gpus(run, &selectors, budget, &mut target.film, |_, film| {
         if let Some(v) = view.as_mut().filter(|v| v.due()) {
             v.show(&film.mean());
         }
-        if saved_at.elapsed() >= args.checkpoint {
-            if let Err(e) = film.write(out, "reference") {
-                checkpoint_error.get_or_insert(e);
-            }
-            saved_at = Instant::now();
+        if let Err(e) = checkpoint.write_if_due(film) {
+            checkpoint_error.get_or_insert(e);
         }
         bar.set_message(progress(film, spp_before, film.size, start.elapsed().as_secs_f64()));
         bar.set_position(match args.time {

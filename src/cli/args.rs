@@ -57,9 +57,14 @@ impl GraphArg {
 }
 
 /// The options `compare` and `study` share, with one flag and default each; each command adds
-/// its budget, output folder and GPUs ([`CompareFlags::comparison`]).
+/// its time, output folder and GPUs ([`CompareFlags::comparison`]).
 #[derive(Args, Clone)]
 pub struct CompareFlags {
+    /// Count each run's set-up (pipeline creation, buffers, the first frame's compilation)
+    /// on its budget; by default its clock starts after it and a warm-up frame (thrown away),
+    /// and the set-up is reported beside it.
+    #[arg(long)]
+    pub setup_on_clock: bool,
     /// Error samples per decade of time (log-spaced from the first frame to the end, at
     /// least 12).
     #[arg(long, default_value_t = PER_DECADE, value_parser = count::<u32>, allow_negative_numbers = true)]
@@ -75,11 +80,14 @@ pub struct CompareFlags {
 }
 
 impl CompareFlags {
-    /// The comparison of these options with each run's `budget`, the output folder `out`
+    /// The comparison of these options with each run's `time`, the output folder `out`
     /// (replaced with `force`) and the GPUs `gpus`.
-    pub fn comparison(self, budget: RunBudget, out: PathBuf, gpus: Option<String>, force: bool) -> Comparison {
+    pub fn comparison(self, time: Duration, out: PathBuf, gpus: Option<String>, force: bool) -> Comparison {
         Comparison {
-            budget,
+            budget: RunBudget {
+                time,
+                setup_on_clock: self.setup_on_clock,
+            },
             per_decade: self.per_decade,
             seed: self.seed,
             tev: self.tev.tev,

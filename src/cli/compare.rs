@@ -4,7 +4,6 @@
 use super::args::*;
 use anyhow::Result;
 use clap::Args;
-use lightgraph::compare::RunBudget;
 use lightgraph::compare::html::html_path;
 use lightgraph::compare::render::{COMPARE_OUT, COMPARE_TIME, CompareSpec};
 use std::path::PathBuf;
@@ -25,11 +24,6 @@ pub struct CompareArgs {
     /// Wall-clock budget of each run.
     #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = duration_text(COMPARE_TIME))]
     pub time: Duration,
-    /// Count each run's set-up (pipeline creation, buffers, the first frame's compilation)
-    /// on its budget; by default its clock starts after it and a warm-up frame (thrown away),
-    /// and the set-up is reported beside it.
-    #[arg(long)]
-    pub setup_on_clock: bool,
     /// Continue the comparison in --out (after a signal stopped it): the runs whose curves
     /// are there are not rendered again; its settings must be these.
     #[arg(long)]
@@ -57,17 +51,13 @@ pub struct CompareArgs {
 impl CompareArgs {
     /// The comparison these arguments name.
     pub fn spec(self) -> CompareSpec {
-        let budget = RunBudget {
-            time: self.time,
-            setup_on_clock: self.setup_on_clock,
-        };
         CompareSpec {
             options: self.common.run_options(),
             runs: self.runs,
             reference: self.reference,
             resume: self.resume,
             baseline: self.baseline,
-            comparison: self.flags.comparison(budget, self.out, self.gpus, self.force),
+            comparison: self.flags.comparison(self.time, self.out, self.gpus, self.force),
         }
     }
 }

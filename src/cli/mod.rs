@@ -214,6 +214,61 @@ mod tests {
         assert_eq!(study["out"], quoted(STUDY_OUT));
     }
 
+    /// The command `words` parses to.
+    fn command(words: &[&str]) -> Command {
+        Cli::parse_from_args([&["lightgraph"], words].concat()).unwrap().command
+    }
+
+    /// `--setup-on-clock`, declared once for `compare` and `study`, reaches both budgets.
+    #[test]
+    fn setup_on_clock_reaches_compare_and_study() {
+        for on in [false, true] {
+            let flag: &[&str] = if on { &["--setup-on-clock"] } else { &[] };
+            let Command::Compare(compare) =
+                command(&[&["compare", "--runs", "pt", "--reference", "r.exr"], flag].concat())
+            else {
+                panic!("compare")
+            };
+            assert_eq!(compare.spec().comparison.budget.setup_on_clock, on);
+            let Command::Study(study) = command(&[&["study", "--scenes", "a"], flag].concat()) else {
+                panic!("study")
+            };
+            assert_eq!(study.spec().comparison.budget.setup_on_clock, on);
+        }
+    }
+
+    /// `render` and `reference` take the same film options, with their own defaults: a
+    /// reference's seed, file and checkpoints, and 64 frames for both.
+    #[test]
+    fn render_and_reference_share_the_film_options_with_their_defaults() {
+        let Command::Render(render) = command(&["render"]) else {
+            panic!("render")
+        };
+        let Command::Reference(reference) = command(&["reference"]) else {
+            panic!("reference")
+        };
+        assert_eq!(render.out(), Path::new("out/render.exr"));
+        assert_eq!((render.spec().seed, render.film.frames()), (1, 64));
+        assert_eq!(render.film.checkpoint(&super::render::RENDER), None);
+        let spec = reference.spec().unwrap();
+        assert_eq!(spec.out, Path::new("out/reference.exr"));
+        assert_eq!(
+            (spec.run.seed, spec.frames),
+            (crate::reference::REFERENCE_SEED, Some(64))
+        );
+        assert_eq!(spec.checkpoint, crate::reference::REFERENCE_CHECKPOINT);
+        let given = ["--frames", "5", "--seed", "9", "--out", "x.exr", "--checkpoint", "1m"];
+        let Command::Reference(reference) = command(&[&["reference"], &given[..]].concat()) else {
+            panic!("reference")
+        };
+        let spec = reference.spec().unwrap();
+        assert_eq!(
+            (spec.out.as_path(), spec.run.seed, spec.frames),
+            (Path::new("x.exr"), 9, Some(5))
+        );
+        assert_eq!(spec.checkpoint, Duration::from_secs(60));
+    }
+
     /// A default time shows on the command line as it is typed there and reads back the same.
     #[test]
     fn default_times_read_back() {

@@ -6,7 +6,6 @@
 use super::args::*;
 use anyhow::Result;
 use clap::Args;
-use lightgraph::compare::RunBudget;
 use lightgraph::study::DEFAULT_ESTIMATORS;
 use lightgraph::study::render::{LAYOUT_TIME, REFERENCE_GRAPH, REFERENCE_TIME, STUDY_OUT, STUDY_TIME, StudySpec};
 use std::path::PathBuf;
@@ -29,10 +28,6 @@ pub struct StudyArgs {
     /// Wall-clock budget of each estimator on each scene (rendering: its set-up is off the clock unless `--setup-on-clock`).
     #[arg(long, value_parser = super::checks::duration, allow_hyphen_values = true, default_value = duration_text(STUDY_TIME))]
     pub time: Duration,
-    /// Count each run's set-up (pipeline creation, buffers, the first frame's compilation)
-    /// on its budget.
-    #[arg(long)]
-    pub setup_on_clock: bool,
     /// Continue the study in --out (after a signal stopped it): scenes and runs whose results
     /// are there are not rendered again, layouts not measured again; its settings must be
     /// these.
@@ -80,10 +75,6 @@ pub struct StudyArgs {
 impl StudyArgs {
     /// The study these arguments name.
     pub fn spec(self) -> StudySpec {
-        let budget = RunBudget {
-            time: self.time,
-            setup_on_clock: self.setup_on_clock,
-        };
         StudySpec {
             options: self.common.run_options(),
             scenes: self.scenes,
@@ -96,7 +87,7 @@ impl StudyArgs {
             reference_time: self.reference_time,
             reference_frames: self.reference_frames,
             reference_spp: self.reference_spp,
-            comparison: self.flags.comparison(budget, self.out, self.gpus, self.force),
+            comparison: self.flags.comparison(self.time, self.out, self.gpus, self.force),
         }
     }
 }

@@ -123,16 +123,23 @@ fn sigterm_keeps_the_frames_of_a_render_on_gpus_and_of_a_reference() {
     assert!(kept.frames > 0 && kept.ranges.len() == 1, "{:?}", kept.ranges);
     render(&["--frames", FRAMES, "--gpus", "1", "--resume", gpus_s]);
     assert_eq!(Film::read(&gpus).unwrap().ranges, vec![(0, FRAMES.parse().unwrap())]);
-    let args = box_reference(&["--time", "10m", "--checkpoint", "100ms", "--out", reference_s]);
+    let total = "1000000";
+    let args = box_reference(&["--frames", total, "--checkpoint", "100ms", "--out", reference_s]);
     let (code, stderr) = interrupt_once_written(start(&args), &reference, "TERM");
     assert_eq!(code, Some(143), "{stderr}");
     assert!(
         stderr.contains("SIGTERM") && stderr.contains("reference --resume"),
         "{stderr}"
     );
+    // The command printed to go on asks for the run's frames in all, as --frames counts
+    // them with --resume (it printed the frames left).
+    let printed = printed_resume_command(&stderr);
+    assert!(printed.windows(2).any(|w| w == ["--frames", total]), "{printed:?}");
     let kept = Film::read(&reference).unwrap();
-    assert!(kept.frames > 0);
-    let run = lightgraph(&["reference", "--resume", reference_s, "--frames", "2"]);
+    assert!(kept.frames > 0 && kept.frames < 1_000_000, "{}", kept.frames);
+    // --frames is the film's total: two more than it holds renders two frames.
+    let two_more = (kept.frames + 2).to_string();
+    let run = lightgraph(&["reference", "--resume", reference_s, "--frames", &two_more]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     assert_eq!(Film::read(&reference).unwrap().frames, kept.frames + 2);
 }
@@ -165,11 +172,21 @@ fn outputs_never_overwrite_a_film_unless_asked() {
     assert_eq!(std::fs::metadata(&film).unwrap().modified().unwrap(), written);
     render(&["--frames", "3", "--out", film_s, "--force"]);
     assert_eq!(Film::read(&film).unwrap().frames, 3);
-    // A resumed film's settings are checked as merge checks them, and --frames is the total.
+    let written = std::fs::metadata(&film).unwrap().modified().unwrap();
+    // A resumed film's settings are checked as merge checks them, and --frames is the total:
+    // a film that holds as many or more is refused before any work.
     let err = fails(&["render", "--resume", film_s, "--spp", "2", "--frames", "6"]);
     assert!(err.contains("samples_per_frame is '1' there, '2' here"), "{err}");
-    let err = fails(&["render", "--resume", film_s, "--frames", "2"]);
-    assert!(err.contains("holds 3 frames"), "{err}");
+    for frames in ["2", "3"] {
+        let err = fails(&["render", "--resume", film_s, "--frames", frames]);
+        assert!(err.contains("holds 3 frames already"), "{err}");
+    }
+    let err = fails(&["render", "--resume", film_s, "--frames", "6", "--first-frame", "2"]);
+    assert!(
+        err.contains("--first-frame 2 is inside the frames the film holds (up to 3)"),
+        "{err}"
+    );
+    assert_eq!(std::fs::metadata(&film).unwrap().modified().unwrap(), written);
     let err = fails(&["merge", film_s, "--out", film_s]);
     assert!(err.contains("exists"), "{err}");
     let err = fails(&[
@@ -250,7 +267,7 @@ fn the_resume_command_a_stopped_timed_run_prints_works() {
     run_printed(&command);
     assert!(command.contains(&"--time".to_string()), "{command:?}");
     assert!(Film::read(&film).unwrap().frames > kept);
-    // A reference (whose --time or --frames is required) likewise.
+    // A reference likewise.
     let out = reference.to_str().unwrap();
     let args = box_reference(&["--time", "8s", "--checkpoint", "100ms", "--out", out]);
     let (code, stderr) = interrupt_once_written(start(&args), &reference, "TERM");

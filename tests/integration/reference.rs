@@ -21,8 +21,9 @@ fn a_resumed_reference_equals_one_rendered_at_once() {
     let whole = reference(&["--frames", "6"], &dir.join("whole.exr"));
     let part = dir.join("part.exr");
     reference(&["--frames", "2"], &part);
-    // Resuming takes the scene, resolution, spp and seed from the file.
-    let run = lightgraph(&["reference", "--resume", part.to_str().unwrap(), "--frames", "4"]);
+    // Resuming takes the scene, resolution, spp and seed from the file; --frames is the
+    // film's total, its 2 frames included.
+    let run = lightgraph(&["reference", "--resume", part.to_str().unwrap(), "--frames", "6"]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let resumed = Film::read(&part).unwrap();
     assert_eq!((resumed.frames, whole.frames), (6, 6));
@@ -58,19 +59,25 @@ fn settings_that_would_mix_estimates_are_refused() {
     let path = dir.join("ref.exr");
     reference(&["--frames", "1"], &path);
     let p = path.to_str().unwrap();
-    let err = fails(&["reference", "--resume", p, "--frames", "1", "--seed", "5"]);
+    let err = fails(&["reference", "--resume", p, "--frames", "2", "--seed", "5"]);
     assert!(
         err.contains("ref.exr") && err.contains("seed is '1000003' there, '5' here"),
         "{err}"
     );
-    let err = fails(&["reference", "--resume", p, "--frames", "1", "--max-path-length", "3"]);
+    let err = fails(&["reference", "--resume", p, "--frames", "2", "--max-path-length", "3"]);
     assert!(err.contains("constants is '' there, 'MAX_PATH_LENGTH=3' here"), "{err}");
-    let err = fails(&["reference", "--resume", p, "--frames", "1", "--first-frame", "0"]);
+    let err = fails(&["reference", "--resume", p, "--frames", "2", "--first-frame", "0"]);
     assert!(
-        err.contains("--first-frame 0 is inside the frames the reference holds (up to 1)"),
+        err.contains("--first-frame 0 is inside the frames the film holds (up to 1)"),
         "{err}"
     );
-    let err = fails(&["reference", "--resume", p, "--frames", "1", "--res", "8x8"]);
+    let err = fails(&["reference", "--resume", p, "--frames", "2", "--res", "8x8"]);
+    // --frames is the film's total: a film that holds as many is refused before any work.
+    let err_frames = fails(&["reference", "--resume", p, "--frames", "1"]);
+    assert!(
+        err_frames.contains("ref.exr: the film holds 1 frames already") && err_frames.contains("--frames 1"),
+        "{err_frames}"
+    );
     assert!(err.contains("the reference is 16x12, the render 8x8"), "{err}");
     // Runs with the reference's own seed would repeat its random numbers.
     let out = dir.join("cmp");
@@ -131,7 +138,7 @@ fn settings_that_would_mix_estimates_are_refused() {
         "--resume",
         render.to_str().unwrap(),
         "--frames",
-        "2",
+        "3",
         "--out",
         more.to_str().unwrap(),
     ]);
@@ -225,7 +232,7 @@ fn a_measured_constant_is_recorded_resumed_and_left_out_of_compare() {
     assert!(measured.starts_with("LVC_AVERAGE_LENGTH="), "measured: '{measured}'");
     assert_eq!(film.info["constants"], "");
     let p = path.to_str().unwrap();
-    let run = lightgraph(&["reference", "--resume", p, "--frames", "1"]);
+    let run = lightgraph(&["reference", "--resume", p, "--frames", "2"]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let resumed = Film::read(&path).unwrap();
     assert_eq!(
@@ -238,7 +245,7 @@ fn a_measured_constant_is_recorded_resumed_and_left_out_of_compare() {
         "--resume",
         p,
         "--frames",
-        "1",
+        "3",
         "--set",
         "LVC_AVERAGE_LENGTH=9",
     ]);

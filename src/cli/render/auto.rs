@@ -14,7 +14,7 @@ use lightgraph_scenes::bvh::BvhKind;
 /// again for the BVH it was measured with; else, without `--layout`, none (the graph's
 /// default), and with `--layout auto`, the fastest measured now (and stored).
 pub fn choose_layout(gpu: &Gpu, run: &mut Run, args: &RenderArgs) -> Result<bool> {
-    if args.layout.is_some() && !run.spec.auto_layout() {
+    if args.film.layout.is_some() && !run.spec.auto_layout() {
         return Ok(false);
     }
     let key = cache_key(gpu, run);

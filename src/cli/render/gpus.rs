@@ -1,9 +1,10 @@
 //! `render --gpus`: one run on several GPUs of the machine (lightgraph::multi), with a
 //! progress line of each GPU's rate and one film at the end.
 
-use super::{RenderArgs, budget, progress_bar, write_film};
+use super::{RENDER, RenderArgs, progress_bar, write_film};
 use crate::cli::args::{reference_mean, si};
 use anyhow::Result;
+use lightgraph::checkpoint::Checkpoint;
 use lightgraph::compare::ErrorSample;
 use lightgraph::film::Film;
 use lightgraph::interrupt::stopped_by_signal;
@@ -57,17 +58,12 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Fil
     let mut errors = Vec::new();
     let mut view = args.live(&out, (w, h), reference.as_deref())?;
     let frames_before = film.frames;
-    // The first checkpoint as soon as the first frames arrive, then one every `--checkpoint`.
-    let (mut saved_at, mut checkpoint_error) = (None::<Instant>, None);
-    let (shares, merging) = render_on_gpus(&run, &selectors, budget(args), &mut film, |shares, film| {
-        if let Some(every) = args.checkpoint
-            && film.frames > frames_before
-            && saved_at.is_none_or(|t| t.elapsed() >= every)
-        {
-            if let Err(e) = write_film(film, &out, args.exposure) {
-                checkpoint_error.get_or_insert(e);
-            }
-            saved_at = Some(Instant::now());
+    let every = args.film.checkpoint(&RENDER);
+    let mut checkpoint = Checkpoint::new(every, &out, "render", args.film.exposure);
+    let mut checkpoint_error = None;
+    let (shares, merging) = render_on_gpus(&run, &selectors, args.film.budget(), &mut film, |shares, film| {
+        if let Err(e) = checkpoint.write_if_due(film) {
+            checkpoint_error.get_or_insert(e);
         }
         if let Some(r) = &reference
             && error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
@@ -82,7 +78,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Fil
         if view.due() {
             view.show(&film.mean(), film.frames, &bar.message(), false);
         }
-        bar.set_position(match args.time {
+        bar.set_position(match args.film.time {
             Some(_) => start.elapsed().as_millis() as u64,
             None => film.frames - frames_before,
         });
@@ -108,7 +104,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Fil
     let rays = rays_before + shares.iter().map(|s| s.rays).sum::<u64>();
     film.info.insert("rays".into(), rays.to_string());
     film.seconds += seconds;
-    let png = write_film(&film, &out, args.exposure)?;
+    let png = write_film(&film, &out, args.film.exposure)?;
     if let Some(r) = &reference {
         let e = image_error(&film.mean(), r);
         eprintln!(

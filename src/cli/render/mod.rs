@@ -8,13 +8,14 @@ pub mod html;
 mod mpi;
 
 use super::args::*;
-use super::film::{frames_left, settings_from_film};
+use super::film::{FilmArgs, FilmDefaults};
 use anyhow::{Result, bail};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use lightgraph::aov::{Aov, AovRender};
+use lightgraph::checkpoint::{Checkpoint, Filmed, write_with_preview};
 use lightgraph::compare::ErrorSample;
-use lightgraph::drive::{Budget, Observer, Plan, Stopwatch, drive};
+use lightgraph::drive::{Observer, Plan, Stopwatch, drive};
 use lightgraph::film::{Film, film_settings};
 use lightgraph::interrupt;
 use lightgraph::interrupt::stopped_by_signal;
@@ -36,10 +37,8 @@ pub struct RenderArgs {
     pub graph: GraphArg,
     #[command(flatten)]
     pub tev: TevArg,
-    /// Kernel layout (default: the graph's); `auto` measures every legal layout first and
-    /// renders with the fastest.
-    #[arg(long)]
-    pub layout: Option<String>,
+    #[command(flatten)]
+    pub film: FilmArgs,
     /// Time each layout gets when --layout auto refines it (half of it to screen each legal
     /// layout).
     #[arg(long, value_parser = crate::cli::checks::duration, allow_hyphen_values = true, default_value = "300ms")]
@@ -48,40 +47,6 @@ pub struct RenderArgs {
     /// fastest layout (and store the new winner).
     #[arg(long)]
     pub retune: bool,
-    /// Render for this long (e.g. 10s, 2m) instead of a number of frames.
-    #[arg(long, value_parser = crate::cli::checks::duration, allow_hyphen_values = true)]
-    pub time: Option<Duration>,
-    /// Frames to render [default: 64]; with --resume, the run's total. Give --frames or
-    /// --time, not both.
-    #[arg(long, conflicts_with = "time", value_parser = crate::cli::checks::count::<u32>, allow_negative_numbers = true)]
-    pub frames: Option<u32>,
-    /// The frames this invocation renders: --frames, less those a resumed film holds.
-    #[arg(skip)]
-    pub frames_left: u32,
-    /// Seed of the random streams [default: 1, or the resumed film's].
-    #[arg(long)]
-    pub seed: Option<u32>,
-    /// Output EXR (the film; it must end in .exr) [default: the resumed film, else
-    /// out/render.exr]; a PNG preview is written beside it. An existing file is refused
-    /// unless --force or --resume names it.
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Replace an existing --out.
-    #[arg(long)]
-    pub force: bool,
-    /// Continue this film (from `render`, e.g. one a signal stopped): scene, graph,
-    /// resolution, samples per frame, seed and constants default to its own and must match
-    /// when given; the frames follow its last one. --frames counts the run's frames in all
-    /// (the film's included), --time this invocation's time.
-    #[arg(long, value_name = "FILM.exr")]
-    pub resume: Option<PathBuf>,
-    /// Write the film (and the PNG) every this often while rendering (e.g. 10m), so a run
-    /// that is killed keeps its frames up to the last checkpoint.
-    #[arg(long, value_parser = crate::cli::checks::duration, allow_hyphen_values = true)]
-    pub checkpoint: Option<Duration>,
-    /// Exposure of the PNG preview in stops.
-    #[arg(long, default_value_t = 0.0)]
-    pub exposure: f32,
     /// A reference EXR (from `lightgraph reference`): the progress line shows the error
     /// against it, measured about once a second.
     #[arg(long)]
@@ -91,16 +56,6 @@ pub struct RenderArgs {
     /// samples that hit; see docs/usage.md). Rendered by kernels of their own after the run.
     #[arg(long, value_name = "LIST")]
     pub aov: Option<String>,
-    /// Frame index of the first frame: renders frames FIRST .. FIRST + frames of the seed's
-    /// random streams, a shard of a longer run (`lightgraph merge` adds the shards' films).
-    #[arg(long, default_value_t = 0, conflicts_with = "resume")]
-    pub first_frame: u32,
-    /// Render on several GPUs at once: `all`, the first N adapters, or a comma-separated list
-    /// of adapter indices, PCI bus ids or names (see `lightgraph list`; one may repeat). Each
-    /// GPU claims batches of frames sized to its own speed; the host adds them into one film
-    /// (`--adapter` is then not used).
-    #[arg(long)]
-    pub gpus: Option<String>,
     /// Render across the ranks of an MPI job (`mpirun -n N lightgraph render --mpi ...`), one
     /// GPU per rank (the rank's index on its machine, or --adapter); rank 0 writes the film.
     #[cfg(feature = "mpi")]
@@ -113,30 +68,29 @@ pub struct RenderArgs {
     pub serve: Option<String>,
 }
 
-/// Where a render's film goes when --out and --resume are not given.
-const DEFAULT_OUT: &str = "out/render.exr";
-
-/// The frames of a render given neither --frames nor --time.
-const DEFAULT_FRAMES: u32 = 64;
+/// What a render's film defaults to: seed 1, out/render.exr, no checkpoints.
+pub const RENDER: FilmDefaults = FilmDefaults {
+    seed: 1,
+    out: "out/render.exr",
+    checkpoint: None,
+};
 
 impl RenderArgs {
     /// The film's path: --out, else the resumed film, else out/render.exr.
     pub fn out(&self) -> PathBuf {
-        self.out
-            .clone()
-            .or_else(|| self.resume.clone())
-            .unwrap_or_else(|| PathBuf::from(DEFAULT_OUT))
+        self.film.out(&RENDER)
     }
 
     /// Checks the film's path (see [`check_out`]) and, with --reference, its HTML report's
     /// (replaced with --force or when resuming the film).
     pub fn check_out(&self) -> Result<()> {
         let out = self.out();
-        check_out(&out, self.force, self.resume.as_deref())?;
+        let film = &self.film;
+        check_out(&out, film.force, film.resume.as_deref())?;
         match self.reference {
             Some(_) => output::check_outputs(
                 &[output::Output::File(&html::html_path(&out))],
-                self.force || self.resume.is_some(),
+                film.force || film.resume.is_some(),
                 None,
             ),
             None => Ok(()),
@@ -161,32 +115,25 @@ impl RenderArgs {
         })
     }
 
-    /// The run's frames in all: --frames, else 64.
-    pub fn frames(&self) -> u32 {
-        self.frames.unwrap_or(DEFAULT_FRAMES)
-    }
-
     /// The command that goes on with the film at `out` after a signal stopped this run once
     /// it rendered for `seconds`: the same frames in all, or the time left; `extra` adds
     /// options (` --gpus 2`).
     pub fn resume_command(&self, out: &Path, seconds: f64, extra: &str) -> String {
-        let budget = match self.time {
+        let budget = match self.film.time {
             Some(t) => format!("--time {}s", (t.as_secs_f64() - seconds).ceil().max(1.0)),
-            None => format!("--frames {}", self.frames()),
+            None => format!("--frames {}", self.film.frames()),
         };
         format!("lightgraph render --resume {} {budget}{extra}", shell_word(out))
     }
 
-    /// The seed: --seed (or the resumed film's), else 1.
-    pub fn seed(&self) -> u32 {
-        self.seed.unwrap_or(1)
-    }
-
     /// The run these arguments name.
     pub fn spec(&self) -> RunSpec {
+        let film = &self.film;
         RunSpec {
-            first_frame: self.first_frame as u64,
-            ..self.common.spec(self.graph.name(), self.layout.as_deref(), self.seed())
+            first_frame: film.first_frame() as u64,
+            ..self
+                .common
+                .spec(self.graph.name(), film.layout.as_deref(), film.seed(&RENDER))
         }
     }
 
@@ -196,7 +143,7 @@ impl RenderArgs {
         let opts = &run.options;
         let info = film_settings(&run.spec.scene, &run.graph, opts);
         let size = (opts.width, opts.height);
-        match (resumed, &self.resume) {
+        match (resumed, &self.film.resume) {
             (Some(film), Some(path)) => {
                 film.check_settings(&info, path)?;
                 film.check_size(path, size)?;
@@ -207,42 +154,25 @@ impl RenderArgs {
     }
 }
 
-/// Reads the film `--resume` names: the settings the command line leaves out become the
-/// film's, the run's frames follow the film's last one, and `--frames` (the run's total)
-/// becomes the frames left to render ([`RenderArgs::frames_left`]).
+/// Reads the film `--resume` names ([`FilmArgs::resume`]), refusing first what a resumed
+/// render cannot do.
 fn resume_film(args: &mut RenderArgs) -> Result<Option<Film>> {
-    args.frames_left = args.frames();
-    let Some(path) = args.resume.clone() else {
-        return Ok(None);
-    };
-    if args.aov.is_some() {
-        bail!("--aov renders its buffers over one invocation's frames: leave it out with --resume");
-    }
-    if args.layout.as_deref() == Some("auto") {
-        bail!("--layout auto measures layouts before a run: name the film's layout with --resume");
-    }
-    let film = Film::read(&path)?;
-    settings_from_film(&mut args.common, &mut args.graph, &mut args.seed, 1, &film);
-    if args.time.is_none() {
-        args.frames_left = frames_left(args.frames(), film.frames, Some(&path))?;
-        if args.frames_left == 0 {
-            bail!(
-                "{}: the film holds {} frames already; give a larger --frames (the run's total) or --time",
-                path.display(),
-                film.frames
-            );
+    if args.film.resume.is_some() {
+        if args.aov.is_some() {
+            bail!("--aov renders its buffers over one invocation's frames: leave it out with --resume");
+        }
+        if args.film.layout.as_deref() == Some("auto") {
+            bail!("--layout auto measures layouts before a run: name the film's layout with --resume");
         }
     }
-    args.first_frame = u32::try_from(film.end_frame())
-        .map_err(|_| anyhow::anyhow!("{}: the film ends past frame 2^32", path.display()))?;
-    Ok(Some(film))
+    args.film.resume(&mut args.common, &mut args.graph, &RENDER)
 }
 
 /// `lightgraph render`: sets the session up, renders progressively, writes the film and the
 /// PNG, and reports the rates. A signal (SIGINT, SIGTERM) ends the run after the frames in
 /// flight, with the film written.
 pub fn render(mut args: RenderArgs) -> Result<()> {
-    if args.aov.is_some() && (args.gpus.is_some() || mpi_asked(&args)) {
+    if args.aov.is_some() && (args.film.gpus.is_some() || mpi_asked(&args)) {
         bail!("--aov renders its buffers on one GPU: leave out --gpus and --mpi");
     }
     let resumed = resume_film(&mut args)?;
@@ -250,14 +180,14 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     if args.mpi {
         return mpi::render_with_mpi(&args, resumed);
     }
-    if let Some(spec) = &args.gpus {
+    if let Some(spec) = &args.film.gpus {
         return gpus::render_on_several_gpus(&args, spec, resumed);
     }
     let mut run = Run::load(&args.spec())?;
     // The output is checked (after the inputs, whose errors come first) before the device opens.
     args.check_out()?;
     let gpu = Gpu::new(run.spec.adapter.as_deref())?;
-    if !auto::choose_layout(&gpu, &mut run, &args)? && args.layout.is_none() {
+    if !auto::choose_layout(&gpu, &mut run, &args)? && args.film.layout.is_none() {
         auto::take_measured_default(&gpu, &mut run)?;
     }
     // Measured once, so that the film records the value (shards must share it to merge).
@@ -278,13 +208,16 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     }
     let mut session = run.session(&gpu)?;
     // A frame count that splits a group of frames rendered at once is refused before rendering.
-    session.check_frames(args.first_frame, if args.time.is_none() { args.frames_left } else { 0 })?;
+    let frames = if args.film.time.is_none() {
+        args.film.frames_left
+    } else {
+        0
+    };
+    session.check_frames(args.film.first_frame(), frames)?;
     let out = args.out();
     let mut view = args.live(&out, (w, h), reference.as_deref())?;
     let seconds_before = film.seconds;
     let mut progress = Progress {
-        film: &mut film,
-        out: &out,
         reference: reference.as_deref(),
         errors: Vec::new(),
         view: &mut view,
@@ -292,10 +225,8 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
         bar: progress_bar(&args),
         error_text: String::new(),
         error_at: None,
-        absorbed_at: Instant::now(),
-        saved_at: Instant::now(),
     };
-    let last_line = render_progressively(&mut session, &mut progress)?;
+    let last_line = render_progressively(&mut Filmed::new(&mut session, &mut film), &out, &mut progress)?;
     let mut errors = std::mem::take(&mut progress.errors);
     view.show(&film.mean(), film.frames, &format!("{last_line} | finished"), true);
     if let Some(r) = &reference {
@@ -315,9 +246,9 @@ pub fn render(mut args: RenderArgs) -> Result<()> {
     }
     add_statistics(&mut film, &session);
     if let Some(list) = &args.aov {
-        film.layers = feature_buffers(&gpu, &run.scene, &session, list, args.first_frame)?;
+        film.layers = feature_buffers(&gpu, &run.scene, &session, list, args.film.first_frame())?;
     }
-    let png = write_film(&film, &out, args.exposure)?;
+    let png = write_film(&film, &out, args.film.exposure)?;
     let seconds = film.seconds - seconds_before;
     report_rates(&session, seconds);
     println!("wrote {} and {}", out.display(), png.display());
@@ -347,19 +278,13 @@ fn add_statistics(film: &mut Film, session: &Session) {
 
 /// Writes `film` to `out` and its PNG preview beside it; returns the PNG's path.
 pub fn write_film(film: &Film, out: &Path, exposure: f32) -> Result<PathBuf> {
-    film.write(out, "render")?;
-    let png = out.with_extension("png");
-    output::write_png(&png, &film.image(), exposure)?;
-    Ok(png)
+    write_with_preview(film, out, "render", exposure)
 }
 
-/// Where a progressive render's results go while it runs: the film (on the host, in f64), its
-/// file (for checkpoints), the reference of the progress line's error and the live view. As
-/// the driver's observer it writes checkpoints, samples the error, moves the progress bar and
-/// feeds the live view after every batch.
+/// What a progressive render shows while it runs: as the driver's observer it samples the
+/// error against the reference, moves the progress bar and feeds the live view after every
+/// batch (the checkpoints are [`Checkpoint`]'s).
 struct Progress<'a> {
-    film: &'a mut Film,
-    out: &'a Path,
     reference: Option<&'a [[f32; 3]]>,
     /// The error against the reference, about once a second.
     errors: Vec<ErrorSample>,
@@ -368,40 +293,11 @@ struct Progress<'a> {
     bar: ProgressBar,
     error_text: String,
     error_at: Option<Instant>,
-    absorbed_at: Instant,
-    saved_at: Instant,
 }
 
-impl Progress<'_> {
-    /// The mean of every frame so far: the film's and the GPU's since the last checkpoint.
-    fn mean(&self, session: &Session) -> Result<Vec<[f32; 3]>> {
-        if self.film.frames == 0 {
-            return Ok(session.image()?.mean);
-        }
-        let mut all = self.film.clone();
-        all.absorb(&session.accumulation()?)?;
-        Ok(all.mean())
-    }
-
-    /// Moves the GPU's sums into the film and adds the seconds since the last time.
-    fn absorb(&mut self, session: &mut Session) -> Result<()> {
-        self.film.absorb(&session.take_accumulation()?)?;
-        self.film.seconds += self.absorbed_at.elapsed().as_secs_f64();
-        self.absorbed_at = Instant::now();
-        Ok(())
-    }
-}
-
-impl Observer<Session<'_>> for Progress<'_> {
-    fn batch(&mut self, session: &mut Session, clock: &mut Stopwatch) -> Result<()> {
-        let args = self.args;
-        if let Some(every) = args.checkpoint
-            && self.saved_at.elapsed() >= every
-        {
-            self.absorb(session)?;
-            write_film(self.film, self.out, args.exposure)?;
-            self.saved_at = Instant::now();
-        }
+impl Observer<Filmed<'_, '_>> for Progress<'_> {
+    fn batch(&mut self, filmed: &mut Filmed, clock: &mut Stopwatch) -> Result<()> {
+        let session = &*filmed.session;
         // Rates of the frames read back (one batch may still be running).
         let secs = clock.seconds();
         let (w, h) = (session.options.width as f64, session.options.height as f64);
@@ -409,7 +305,7 @@ impl Observer<Session<'_>> for Progress<'_> {
         if let Some(r) = self.reference
             && self.error_at.is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
         {
-            let error = image_error(&self.mean(session)?, r);
+            let error = image_error(&filmed.mean()?, r);
             self.error_text = format!(" | RMSE {:.4e}", error.rmse);
             self.error_at = Some(Instant::now());
             self.errors.push(ErrorSample {
@@ -427,11 +323,11 @@ impl Observer<Session<'_>> for Progress<'_> {
             self.error_text
         ));
         if self.view.due() {
-            let mean = self.mean(session)?;
-            let frames = self.film.frames + session.frames as u64;
+            let mean = filmed.mean()?;
+            let frames = filmed.film.frames + session.frames as u64;
             self.view.show(&mean, frames, &self.bar.message(), false);
         }
-        match args.time {
+        match self.args.film.time {
             Some(_) => self.bar.set_position(clock.elapsed().as_millis() as u64),
             None => self.bar.set_position(session.frames as u64),
         }
@@ -439,21 +335,27 @@ impl Observer<Session<'_>> for Progress<'_> {
     }
 }
 
-/// Renders `session` for `--time` or `--frames` into the film through the driver, with a
-/// progress bar of samples/s, rays/s and, against a reference, the RMSE (once a second), and
-/// the live view; writes the film every `--checkpoint`. Stops early, after the frames in
-/// flight, when a signal arrives. Returns the last progress line.
-fn render_progressively(session: &mut Session, progress: &mut Progress) -> Result<String> {
+/// Renders `filmed`'s session for `--time` or `--frames` into its film through the driver,
+/// with a progress bar of samples/s, rays/s and, against a reference, the RMSE (once a
+/// second), and the live view; writes the film to `out` every `--checkpoint`. Stops early,
+/// after the frames in flight, when a signal arrives. Returns the last progress line.
+fn render_progressively(filmed: &mut Filmed, out: &Path, progress: &mut Progress) -> Result<String> {
+    let film = &progress.args.film;
+    let mut checkpoint = Checkpoint::new(film.checkpoint(&RENDER), out, "render", film.exposure);
     let mut clock = Stopwatch::start();
-    let plan = Plan::new(budget(progress.args));
-    drive(session, plan, &mut clock, &mut [&mut *progress])?;
+    drive(
+        filmed,
+        Plan::new(film.budget()),
+        &mut clock,
+        &mut [&mut checkpoint, &mut *progress],
+    )?;
     progress.bar.finish();
-    progress.absorb(session)?;
+    filmed.absorb()?;
     if let Some(signal) = interrupt::requested() {
         eprintln!(
             "{} received: stopped after frame {}, writing the film",
             signal.name(),
-            progress.film.end_frame()
+            filmed.film.end_frame()
         );
     }
     Ok(progress.bar.message())
@@ -557,15 +459,8 @@ fn scene_size(scene: &LoadedScene) -> String {
 
 /// The progress bar of a render of `args`: over its time in milliseconds, else its frames.
 fn progress_bar(args: &RenderArgs) -> ProgressBar {
-    let bar = ProgressBar::new(args.time.map_or(args.frames_left as u64, |t| t.as_millis() as u64));
+    let film = &args.film;
+    let bar = ProgressBar::new(film.time.map_or(film.frames_left as u64, |t| t.as_millis() as u64));
     bar.set_style(ProgressStyle::with_template("{bar:30} {msg} ETA {eta}").expect("valid template"));
     bar
-}
-
-/// The budget of `args`: its time, else its frames.
-fn budget(args: &RenderArgs) -> Budget {
-    match args.time {
-        Some(t) => Budget::Time(t),
-        None => Budget::Frames(args.frames_left as u64),
-    }
 }

@@ -1,7 +1,7 @@
 //! `render --mpi` (cargo feature `mpi`): one run across the ranks of an MPI job, one GPU each
 //! (lightgraph::cluster); rank 0 shows the progress and writes the film.
 
-use super::{RenderArgs, budget, progress_bar, write_film};
+use super::{RenderArgs, progress_bar, write_film};
 use crate::cli::args::si;
 use anyhow::{Result, anyhow};
 use indicatif::ProgressBar;
@@ -46,7 +46,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Film>) -> Result<()> {
         &world,
         &run,
         args.common.adapter.as_deref(),
-        budget(args),
+        args.film.budget(),
         args.tev.tev.is_some() || args.serve.is_some(),
         &mut film,
         |p| {
@@ -63,7 +63,7 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Film>) -> Result<()> {
                 si(p.film.samples_per_pixel() as f64 * pixels / secs),
                 per_rank.join(", ")
             ));
-            bar.set_position(match args.time {
+            bar.set_position(match args.film.time {
                 Some(_) => start.elapsed().as_millis() as u64,
                 None => p.film.frames,
             });
@@ -93,11 +93,11 @@ pub fn render_with_mpi(args: &RenderArgs, resumed: Option<Film>) -> Result<()> {
     film.info
         .insert("rays".into(), outcome.rays_by_rank.iter().sum::<u64>().to_string());
     film.seconds = seconds;
-    if let (Some(mut whole), Some(path)) = (resumed, &args.resume) {
+    if let (Some(mut whole), Some(path)) = (resumed, &args.film.resume) {
         whole.merge(&film, path)?;
         film = whole;
     }
-    let png = write_film(&film, &out, args.exposure)?;
+    let png = write_film(&film, &out, args.film.exposure)?;
     report(&film, &outcome, pixels, setup_seconds);
     println!("wrote {} and {}", out.display(), png.display());
     if outcome.interrupted {
