@@ -58,7 +58,7 @@ impl Preset {
         <Preset as clap::ValueEnum>::from_str(name, false).map_err(|_| {
             let names: Vec<String> = <Preset as clap::ValueEnum>::value_variants()
                 .iter()
-                .filter_map(|p| clap::ValueEnum::to_possible_value(p))
+                .filter_map(clap::ValueEnum::to_possible_value)
                 .map(|v| format!("'{}'", v.get_name()))
                 .collect();
             format!("it must be one of {}", names.join(", "))
