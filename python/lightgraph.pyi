@@ -217,14 +217,15 @@ def verify(
     scenes: Optional[Sequence[str]] = None,
     graphs: Optional[Sequence[str]] = None,
     add: Optional[Sequence[str]] = None,
-    time: float = 10.0,
+    time: Optional[float] = None,
     frames: Optional[int] = None,
-    batches: int = 16,
-    block: int = 16,
+    batches: Optional[int] = None,
+    block: Optional[int] = None,
     res: Optional[Tuple[int, int]] = None,
     seed: int = 1,
     out: Path = "out/verify",
     adapter: Optional[str] = None,
+    preset: Optional[str] = None,
 ) -> Dict[str, Any]:
     """Every estimator on every scene in batches, every pair tested for a difference beyond
     their noise (``lightgraph verify``); writes verify.md, verify.csv, each run's image per
@@ -240,14 +241,20 @@ def verify(
         graphs: estimators, ``graph[:Layout][@NAME=VALUE...]`` (None: every built-in graph of
             radiance, and VCM's two halves alone).
         add: estimators verified besides those of ``graphs``, e.g. your own graph file.
-        time: seconds each estimator renders each scene, above zero.
-        frames: frames of each estimator on each scene instead of a time (reproducible).
-        batches: batches each run is split into, at least 2.
-        block: side of the blocks compared, in pixels, at least 1.
-        res: (width, height), each at least 1 (None: each scene's).
+        time: seconds each estimator renders each scene, above zero (None: the preset's
+            budget, else 10).
+        frames: frames of each estimator on each scene instead of a time (reproducible; it
+            wins over ``time``).
+        batches: batches each run is split into, at least 2 (None: the preset's, else 16).
+        block: side of the blocks compared, in pixels, at least 1 (None: the preset's, else 16).
+        res: (width, height), each at least 1 (None: the preset's, else each scene's).
         seed: the seed of the random streams, 0 to 4294967295.
         out: the folder of the verification.
         adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
+        preset: ``"lavapipe"`` or ``"gpu"``: the size, samples per pixel, budget, batches,
+            blocks and power of ``lightgraph verify --preset`` (lavapipe's for a software
+            rasteriser, gpu's for a GPU). Each of time, frames, batches, block and res given
+            wins.
     """
 
 def to_png(image: Image, exposure: float = 0.0) -> bytes:

@@ -17,6 +17,7 @@ use ::lightgraph::study::render::{
 };
 use ::lightgraph::study::{DEFAULT_ESTIMATORS, scene_folders};
 use ::lightgraph::verify::DEFAULT_SCENES as VERIFY_SCENES;
+use ::lightgraph::verify::preset::Preset;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -208,42 +209,50 @@ pub fn study<'py>(
 /// - graphs: estimators, `graph[:Layout][@NAME=VALUE...]` entries (None: every built-in
 ///   graph of radiance, and VCM's two halves alone).
 /// - add: estimators verified besides those of `graphs`, e.g. your own graph file.
-/// - time: seconds each estimator renders each scene, above zero.
-/// - frames: frames of each estimator on each scene instead of a time (reproducible).
-/// - batches: batches each run is split into, at least 2 (the samples of the errors).
-/// - block: side of the blocks compared, in pixels, at least 1.
-/// - res: (width, height), each at least 1 (None: each scene's).
+/// - time: seconds each estimator renders each scene, above zero (None: the preset's budget,
+///   else 10).
+/// - frames: frames of each estimator on each scene instead of a time (reproducible; it wins
+///   over `time`).
+/// - batches: batches each run is split into, at least 2 (the samples of the errors; None: the
+///   preset's, else 16).
+/// - block: side of the blocks compared, in pixels, at least 1 (None: the preset's, else 16).
+/// - res: (width, height), each at least 1 (None: the preset's, else each scene's).
+/// - preset: "lavapipe" or "gpu": the size, samples per pixel, budget, batches, blocks and
+///   power of `lightgraph verify --preset` (docs/verify.md; lavapipe's for a software
+///   rasteriser, gpu's for a GPU). Each of time, frames, batches, block and res given wins.
 /// - seed: the seed of the random streams, 0 to 4294967295.
 /// - out: the folder of the verification.
 /// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
 #[pyfunction]
-#[pyo3(signature = (scenes = None, graphs = None, add = None, time = 10.0, frames = None, batches = 16,
-    block = 16, res = None, seed = 1, out = PathBuf::from(VERIFY_OUT), adapter = None))]
+#[pyo3(signature = (scenes = None, graphs = None, add = None, time = None, frames = None, batches = None,
+    block = None, res = None, seed = 1, out = PathBuf::from(VERIFY_OUT), adapter = None, preset = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn verify<'py>(
     py: Python<'py>,
     scenes: Option<Vec<String>>,
     graphs: Option<Vec<String>>,
     add: Option<Vec<String>>,
-    time: f64,
+    time: Option<f64>,
     frames: Option<i64>,
-    batches: i64,
-    block: i64,
+    batches: Option<i64>,
+    block: Option<i64>,
     res: Option<(i64, i64)>,
     seed: i64,
     out: PathBuf,
     adapter: Option<&str>,
+    preset: Option<&str>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let time = checks::seconds("time", time)?;
+    let time = checks::seconds_opt("time", time)?;
     let frames = checks::count_opt("frames", frames)?;
-    let batches = checks::count("batches", batches)?;
-    if batches < 2 {
-        return Err(PyValueError::new_err(format!(
-            "batches={batches}: it must be at least 2"
-        )));
+    let batches = checks::count_opt("batches", batches)?;
+    if let Some(b) = batches.filter(|b| *b < 2) {
+        return Err(PyValueError::new_err(format!("batches={b}: it must be at least 2")));
     }
-    let (block, seed) = (checks::count("block", block)?, checks::seed("seed", seed)?);
+    let (block, seed) = (checks::count_opt("block", block)?, checks::seed("seed", seed)?);
     let res = checks::image(res, 1)?;
+    if let Some(name) = preset {
+        Preset::named(name).map_err(|e| PyValueError::new_err(format!("preset='{name}': {e}")))?;
+    }
     let scenes = scenes.unwrap_or_else(|| VERIFY_SCENES.split(',').map(str::to_string).collect());
     let folders = scene_folders(&scenes).map_err(err)?;
     let mut args: Vec<String> = vec![
@@ -253,12 +262,19 @@ pub fn verify<'py>(
         scenes.join(","),
     ];
     let mut flag = |name: &str, value: String| args.extend([format!("--{name}"), value]);
-    match frames {
-        Some(n) => flag("frames", n.to_string()),
-        None => flag("time", format!("{}ms", (time * 1000.0).round().max(1.0))),
+    match (frames, time) {
+        (Some(n), _) => flag("frames", n.to_string()),
+        (None, Some(t)) => flag("time", format!("{}ms", (t * 1000.0).round().max(1.0))),
+        (None, None) => {}
     }
-    flag("batches", batches.to_string());
-    flag("block", block.to_string());
+    for (name, value) in [("batches", batches), ("block", block)] {
+        if let Some(v) = value {
+            flag(name, v.to_string());
+        }
+    }
+    if let Some(name) = preset {
+        flag("preset", name.to_string());
+    }
     flag("seed", seed.to_string());
     flag("out", out.display().to_string());
     for (name, value) in [("graphs", graphs), ("add", add)] {

@@ -258,17 +258,21 @@ def test_a_study_returns_its_tables_and_images(tmp_path):
         lightgraph.study(["no-such-scene"], out=tmp_path / "bad")
 
 
-def test_verify_returns_its_table_and_images(tmp_path):
-    out = tmp_path / "verify"
-    found = lightgraph.verify(
+def verify_pt_layouts(out, **options):
+    """`verify` of path tracing's two layouts on the diffuse box, 8 frames in 4 batches."""
+    return lightgraph.verify(
         scenes=["cornell-diffuse"],
         graphs=["pt:NaivePTsk", "pt:NaivePTmk"],
         frames=8,
         batches=4,
-        block=8,
-        res=RES,
         out=out,
+        **options,
     )
+
+
+def test_verify_returns_its_table_and_images(tmp_path):
+    out = tmp_path / "verify"
+    found = verify_pt_layouts(out, block=8, res=RES)
     # 8 frames cannot decide the pair: the command's failure comes with the tables.
     assert "could not be decided" in found["failed"], found["failed"]
     assert found["summary"] == (out / "verify.md").read_text()
@@ -282,6 +286,18 @@ def test_verify_returns_its_table_and_images(tmp_path):
     refused(lambda: lightgraph.verify(batches=1, out=out), r"^batches=1: it must be at least 2")
     with pytest.raises(lightgraph.Error, match="no-such-scene"):
         lightgraph.verify(scenes=["no-such-scene"], graphs=["pt"], frames=8, res=RES, out=out)
+
+
+def test_verify_takes_a_preset_and_what_is_given_wins(tmp_path):
+    out = tmp_path / "verify"
+    found = verify_pt_layouts(out, block=16, preset="lavapipe")
+    # The preset's size (32 x 32) and power; the blocks of 16 given: 4 of them.
+    for image in found["scenes"]["cornell-diffuse"]["images"].values():
+        assert image.shape == (32, 32, 3)
+    assert "a 7.0% difference of the image mean and a 25% difference in the blocks holding 75%" in found["summary"]
+    assert list(found["table"]["blocks"]) == [4]
+    assert "| cornell-diffuse | pt:NaivePTsk | 8 |" in found["summary"], found["summary"]
+    refused(lambda: lightgraph.verify(preset="GPU", out=out), r"^preset='GPU': it must be one of 'lavapipe', 'gpu'$")
 
 
 def png_size(data):

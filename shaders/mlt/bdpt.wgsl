@@ -30,7 +30,7 @@ fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
     if (s == k) {
         r = mmlt_light_tracing(k, &camera_rng, &light_rng);
     } else {
-        r = MltPath(mmlt_camera_technique(&c, k, s, &camera_rng, &light_rng), c.pixel);
+        r = mlt_path_of(mmlt_camera_technique(&c, k, s, &camera_rng, &light_rng), vec3<f32>(0.0), c.pixel);
     }
     r.radiance *= f32(MAX_PATH_LENGTH) * f32(n);
     return r;
@@ -100,7 +100,7 @@ fn mmlt_light_subpath(lp: ptr<function, LightPath>, segments: u32, rng: ptr<func
 // The technique t = 1 (s = k): the light sub-path's vertex k - 1 segments from the light,
 // connected to the camera; it lands at the pixel it projects to.
 fn mmlt_light_tracing(k: u32, camera_rng: ptr<function, u32>, light_rng: ptr<function, u32>) -> MltPath {
-    var none = MltPath(vec3<f32>(0.0), 0u);
+    let none = mlt_path_of(vec3<f32>(0.0), vec3<f32>(0.0), 0u);
     var lp: LightPath;
     if (!mmlt_light_subpath(&lp, k - 1u, light_rng)) {
         return none;
@@ -111,5 +111,5 @@ fn mmlt_light_tracing(k: u32, camera_rng: ptr<function, u32>, light_rng: ptr<fun
     }
     let lens = camera_lens_sample(camera_rng);
     let ray = light_vertex_to_camera(light_vertex_at(lp, la.s), la.bsdf, mis_counts(1.0), lens);
-    return MltPath(mlt_unblocked(ray), ray.pixel);
+    return mlt_path_of(mlt_unblocked(ray), vec3<f32>(0.0), ray.pixel);
 }

@@ -13,7 +13,10 @@
 //    probability a = min(1, weight'/weight); both the proposal and the current state are
 //    splatted with their expected weights a and 1 - a (Veach's expected values), scaled by
 //    b / weight and by PATHS / (MLT_CHAINS MLT_MUTATIONS), so that a frame adds one
-//    sample per pixel per SAMPLES_PER_PIXEL to the film, as path tracing does.
+//    sample per pixel per SAMPLES_PER_PIXEL to the film, as path tracing does. With
+//    FILM_BIASED (Metropolised VCM) each splat's biased part, the path's `biased` light (its
+//    merges'), goes to the film's biased channel with the same factor: every path's light has
+//    the same weight, so that channel is the chains' estimate of the biased technique's image.
 
 // The bootstrap's item (it stores a weight and makes no item).
 struct MltBootstrap {
@@ -22,9 +25,8 @@ struct MltBootstrap {
 
 // A chain while it runs: its current path and the frame's splat scale.
 struct MltChain {
-    radiance: vec3<f32>,
+    path: MltPath,
     weight: f32,
-    pixel: u32,
     chain: u32,
     step: u32,     // steps run this frame
     scale: f32,    // b PATHS / (MLT_CHAINS MLT_MUTATIONS)
@@ -32,9 +34,8 @@ struct MltChain {
 
 // A chain between frames (mlt_states): its current path, and whether it was seeded.
 struct MltState {
-    radiance: vec3<f32>,
+    path: MltPath,
     weight: f32,
-    pixel: u32,
     seeded: u32,
 }
 
@@ -46,7 +47,7 @@ fn mlt_bootstrap(item: ptr<function, MltBootstrap>, index: u32) -> bool {
     let weight = mlt_weight(p.radiance);
     mlt_weights[index] = weight;
     if (MLT_INDEPENDENT && weight > 0.0) {
-        film_add(p.pixel, p.radiance * (f32(PATHS) / f32(MLT_BOOTSTRAP_PATHS)));
+        mlt_splat(p, f32(PATHS) / f32(MLT_BOOTSTRAP_PATHS));
     }
     return false;
 }
@@ -70,7 +71,7 @@ fn mlt_start(c: ptr<function, MltChain>, index: u32) -> bool {
     }
     let b = total / f32(MLT_BOOTSTRAP_PATHS);
     let scale = b * f32(PATHS) / (f32(MLT_CHAINS) * f32(MLT_MUTATIONS));
-    *c = MltChain(state.radiance, state.weight, state.pixel, index, 0u, scale);
+    *c = MltChain(state.path, state.weight, index, 0u, scale);
     return true;
 }
 
@@ -93,7 +94,7 @@ fn mlt_seed(chain: u32, total: f32) -> MltState {
     var src = PrimarySamples(PRIMARY_STREAM, 0u, key, 0u, 0u);
     let p = mlt_path(&src);
     primary_seed(chain, key);
-    return MltState(p.radiance, mlt_weight(p.radiance), p.pixel, 1u);
+    return MltState(p, mlt_weight(p.radiance), 1u);
 }
 
 // Pass `mlt_mutate` (Loop): one Metropolis-Hastings step of the chain.
@@ -109,18 +110,17 @@ fn mlt_mutate(c: ptr<function, MltChain>) -> bool {
     count(COUNTER_MLT_STEPS, 1u);
     count(COUNTER_MLT_LARGE_STEPS, u32(large));
     if (w > 0.0) {
-        film_add(p.pixel, p.radiance * (a * (*c).scale / w));
+        mlt_splat(p, a * (*c).scale / w);
     }
     if ((*c).weight > 0.0 && a < 1.0) {
-        film_add((*c).pixel, (*c).radiance * ((1.0 - a) * (*c).scale / (*c).weight));
+        mlt_splat((*c).path, (1.0 - a) * (*c).scale / (*c).weight);
     }
     if (accept_u < a) {
         count(COUNTER_MLT_ACCEPTED, 1u);
         primary_accept((*c).chain, key, large);
-        (*c).radiance = p.radiance;
+        (*c).path = p;
         (*c).weight = w;
-        (*c).pixel = p.pixel;
-        mlt_states[(*c).chain] = MltState(p.radiance, w, p.pixel, 1u);
+        mlt_states[(*c).chain] = MltState(p, w, 1u);
     }
     (*c).step += 1u;
     return (*c).step < MLT_MUTATIONS;

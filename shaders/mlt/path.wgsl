@@ -49,5 +49,5 @@ fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
             break;
         }
     }
-    return MltPath(radiance, pixel);
+    return mlt_path_of(radiance, vec3<f32>(0.0), pixel);
 }

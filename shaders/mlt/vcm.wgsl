@@ -18,38 +18,47 @@ fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
     var picks = stream_fresh();
     var c = camera_subpath_at_raster(&rng);
     let counts = vcm_counts();
-    var radiance = vec3<f32>(0.0);
+    var connected = vec3<f32>(0.0);
+    var merged = vec3<f32>(0.0);
     loop {
         camera_subpath_trace(&c);
         let found = camera_land(&c, counts);
-        radiance += found.emission;
+        connected += found.emission;
         let visit = camera_visit_at(&c, found.a, counts);
         if (!visit.alive) {
             break;
         }
-        radiance += mvcm_vertex(c, visit, counts, &picks);
+        connected += mvcm_connected(c, visit, counts, &picks);
+        merged += mvcm_merged(c, visit, counts);
         var scatter_rng = visit.rng;
         if (!camera_scatter(&c, visit.a, counts, &scatter_rng)) {
             break;
         }
         c.rng = scatter_rng;
     }
-    return MltPath(radiance, c.pixel);
+    // The merges are the biased part (graphs/mvcm.ron's FILM_BIASED), as in VCM's camera phase.
+    return mlt_path_of(connected + merged, merged, c.pixel);
 }
 
-// What camera vertex `visit` of sub-path `c` gathers, as `vcm_vertex` does: the light sample's
-// shadow ray, the connections (their picks from `picks`) and the merges, each unblocked one
+// What camera vertex `visit` of sub-path `c` gathers by connecting, as `vcm_vertex` does: the
+// light sample's shadow ray and the connections (their picks from `picks`), each unblocked one
 // MIS-weighted.
-fn mvcm_vertex(c: CameraSubpath, visit: CameraVisit, counts: MisCounts, picks: ptr<function, u32>) -> vec3<f32> {
+fn mvcm_connected(c: CameraSubpath, visit: CameraVisit, counts: MisCounts, picks: ptr<function, u32>) -> vec3<f32> {
     var r = mlt_unblocked(visit.direct);
     let n = lvc_connections_at(visit, VCM_CONNECT);
     let m = lvc_cached();
     for (var k = 0u; k < n; k += 1u) {
         r += mlt_unblocked(lvc_connection(c, visit, counts, m, rng_f32(picks)));
     }
-    if (VCM_MERGE && !visit.a.bsdf.is_delta) {
-        let pending = pending_merge_at(visit.a.s, -c.direction, c.throughput, c.d_vc, c.length);
-        r += vcm_merged(pending, c.d_vcm, visit.a.bsdf, 0u, counts);
-    }
     return r;
+}
+
+// What camera vertex `visit` of sub-path `c` gathers by merging (VCM_MERGE, at a non-delta
+// vertex), MIS-weighted as `vcm_vertex` weighs it.
+fn mvcm_merged(c: CameraSubpath, visit: CameraVisit, counts: MisCounts) -> vec3<f32> {
+    if (!VCM_MERGE || visit.a.bsdf.is_delta) {
+        return vec3<f32>(0.0);
+    }
+    let pending = pending_merge_at(visit.a.s, -c.direction, c.throughput, c.d_vc, c.length);
+    return vcm_merged(pending, c.d_vcm, visit.a.bsdf, 0u, counts);
 }

@@ -53,6 +53,18 @@ pub const DEFAULT: Power = Power {
 };
 
 impl Preset {
+    /// The preset `--preset` names `name` (`lavapipe` or `gpu`); else the names it takes.
+    pub fn named(name: &str) -> Result<Preset, String> {
+        <Preset as clap::ValueEnum>::from_str(name, false).map_err(|_| {
+            let names: Vec<String> = <Preset as clap::ValueEnum>::value_variants()
+                .iter()
+                .filter_map(clap::ValueEnum::to_possible_value)
+                .map(|v| format!("'{}'", v.get_name()))
+                .collect();
+            format!("it must be one of {}", names.join(", "))
+        })
+    }
+
     /// The preset's settings.
     pub fn power(self) -> Power {
         match self {
@@ -153,5 +165,12 @@ mod tests {
         assert!(matches!(gpu.amount, Amount::Time(t) if t == Duration::from_secs(4)));
         // Without a preset, the defaults.
         assert_eq!(Given::default().resolve(None), DEFAULT);
+    }
+
+    #[test]
+    fn a_preset_is_named_as_the_command_line_names_it() {
+        assert_eq!(Preset::named("lavapipe"), Ok(Preset::Lavapipe));
+        assert_eq!(Preset::named("gpu"), Ok(Preset::Gpu));
+        assert_eq!(Preset::named("GPU"), Err("it must be one of 'lavapipe', 'gpu'".into()));
     }
 }

@@ -436,8 +436,13 @@ fn allowance(out: &Path, scene: &str, a: &str, b: &str) -> f64 {
 }
 
 /// VCM's film sums its merges' light in the biased channel, and the bias allowed beside it is
-/// 1% of that light, not of the image (which Metropolised VCM, whose splats do not separate
-/// their merges, is still allowed); without merges nothing is declared biased.
+/// 1% of that light, not of the image; without merges nothing is declared biased. Metropolised
+/// VCM's chains carry their merges' light apart and splat it into the same channel with each
+/// splat's own factor, so its allowance estimates the same light as VCM's: at 256 frames (the
+/// radius shrunk to 0.25 of the first frame's) VCM's was 0.043-0.044% of the image over seeds
+/// 1-4 and MVCM's 0.040-0.043% (at 32 frames the chains' 0.048-0.061% against VCM's 0.067%);
+/// before MVCM had the channel it was allowed 1%, and at seed 1 a splat that left out the
+/// rejected state's merges gave 0.030% (VCM 0.043%), one that added them twice 0.083%.
 #[test]
 fn the_bias_allowed_is_that_of_the_merges_light() {
     let args = [
@@ -448,11 +453,14 @@ fn the_bias_allowed_is_that_of_the_merges_light() {
         PM_RADIUS[0],
         PM_RADIUS[1],
     ];
-    let (_, stderr, out, _) = verify_with("verify-bias-channel", &args, &frames("32"));
+    let (_, stderr, out, _) = verify_with("verify-bias-channel", &args, &frames("256"));
     let scene = "cornell-diffuse";
     let merges = allowance(&out, scene, "pt", "vcm");
     assert!(merges > 0.0 && merges < 0.008, "pt vs vcm: {merges} ({stderr})");
     assert_eq!(allowance(&out, scene, "pt", "vcm@VCM_MERGE=false"), 0.0);
-    let all = allowance(&out, scene, "pt", "mvcm");
-    assert!((all - 0.01).abs() < 0.002, "pt vs mvcm: {all}");
+    let chains = allowance(&out, scene, "pt", "mvcm");
+    assert!(
+        (0.8..1.25).contains(&(chains / merges)),
+        "pt vs mvcm: {chains}, pt vs vcm: {merges}"
+    );
 }
