@@ -258,14 +258,15 @@ pub enum Tuning {
 
 impl Tuning {
     /// `--tuning`'s value: `auto`, `none`, a built-in profile's name or a `.ron` file (read and
-    /// parsed now, so that a bad file is an error before any work).
-    pub fn parse(s: &str) -> Result<Tuning, String> {
+    /// parsed now, and checked against the graphs `load` loads, so that a bad file is an error
+    /// before any work).
+    pub fn parse(s: &str, load: impl Fn(&str) -> Result<Graph>) -> Result<Tuning, String> {
         match s {
             "auto" => Ok(Tuning::Adapter),
             "none" => Ok(Tuning::None),
             _ if s.ends_with(".ron") => {
                 let p = Profile::read(Path::new(s)).map_err(|e| format!("{e:#}"))?;
-                match p.problems(crate::run::load_graph).as_slice() {
+                match p.problems(load).as_slice() {
                     [] => Ok(Tuning::Profile(Arc::new(p))),
                     problems => Err(format!("{s}: {}", problems.join("; "))),
                 }
@@ -306,6 +307,12 @@ mod tests {
     use super::*;
 
     const H100: &str = "NVIDIA H100 80GB HBM3";
+
+    /// A built-in graph (not through crate::run, which depends on this module).
+    fn load(name: &str) -> Result<Graph> {
+        let (vfs, path) = crate::assets::graph_source(name).map_err(|e| anyhow!(e))?;
+        Ok(Graph::load(&vfs, &path)?)
+    }
     const LAVAPIPE: &str = "llvmpipe (LLVM 15.0.6, 256 bits)";
 
     #[test]
@@ -313,7 +320,7 @@ mod tests {
         for (name, text) in BUILT_IN {
             let p = Profile::parse(name, name, text).unwrap_or_else(|e| panic!("{e:#}"));
             assert_eq!(built_in_named(name), Some(&p));
-            let problems = p.problems(crate::run::load_graph);
+            let problems = p.problems(load);
             assert!(problems.is_empty(), "{problems:#?}");
         }
     }
@@ -338,7 +345,7 @@ mod tests {
 
     #[test]
     fn knobs_apply_to_a_named_layout_as_the_graph_writes_it_and_to_nothing_else() {
-        let graph = crate::run::load_graph("pt").unwrap();
+        let graph = load("pt").unwrap();
         let written = graph.layouts["NaivePTsk"].clone();
         assert!(
             written.loop_guards && written.constants.is_empty(),
@@ -369,7 +376,7 @@ mod tests {
         let scenes: Vec<String> = crate::assets::scene_names().into_iter().map(|(n, _)| n).collect();
         for p in built_in() {
             for m in &p.scenes {
-                let graph = crate::run::load_graph(&m.graph).unwrap();
+                let graph = load(&m.graph).unwrap();
                 assert_ne!(graph.default_layout, m.layout, "{m:?}");
                 assert!(scenes.contains(&m.scene), "{m:?}");
                 assert!(m.rate > 1.05 * m.default_rate, "{m:?}");
@@ -383,10 +390,10 @@ mod tests {
         assert!(format!("{e:#}").starts_with("mine.ron:3:"), "{e:#}");
         let e = Profile::parse("mine", "mine.ron", "(like: \"nvidia-a100\")").unwrap_err();
         assert!(format!("{e:#}").contains("'nvidia-a100'"), "{e:#}");
-        let e = Tuning::parse("amd").unwrap_err();
+        let e = Tuning::parse("amd", load).unwrap_err();
         assert!(e.contains("nvidia-h100") && e.contains(DEFAULT_PROFILE), "{e}");
         let mine = Profile::parse("mine", "mine.ron", "(layouts: {\"pt\": {\"NaivePTzz\": (loop_guards: false, constants: {\"CWBVH_CHILD_SCAN\": U32(1)}, why: \"\")}})").unwrap();
-        let problems = mine.problems(crate::run::load_graph);
+        let problems = mine.problems(load);
         assert_eq!(problems.len(), 2, "{problems:#?}");
     }
 }

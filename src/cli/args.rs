@@ -177,8 +177,13 @@ pub struct Common {
     /// the same image) the graph's named layouts take: auto (the adapter's built-in profile),
     /// none (the layouts as the graph writes them), a built-in profile's name, or a .ron
     /// profile of one's own (docs/tuning.md). The options above win over it.
-    #[arg(long, value_parser = Tuning::parse, default_value = "auto")]
+    #[arg(long, value_parser = parse_tuning, default_value = "auto")]
     pub tuning: Tuning,
+}
+
+/// `--tuning`'s value, a profile file checked against the graphs it names.
+fn parse_tuning(s: &str) -> Result<Tuning, String> {
+    Tuning::parse(s, lightgraph::run::load_graph)
 }
 
 impl Common {

@@ -50,7 +50,7 @@ fn every_pt_layout_matches_naive_pt_sk() {
 /// other adapter takes too.
 fn h100() -> LayoutOverrides {
     LayoutOverrides {
-        tuning: Tuning::parse("nvidia-h100").unwrap(),
+        tuning: Tuning::parse("nvidia-h100", load_graph).unwrap(),
         ..Default::default()
     }
 }
