@@ -24,9 +24,10 @@ pub fn markdown(graphs: &[Declared], to_root: &str) -> String {
                 format!("{link}, which extends `{}`, declares its own:", base.name)
             }
             Some(base) => {
-                let whose = match base.file == from.file {
-                    true => "its".to_string(),
-                    false => format!("`{}`'s", from.name),
+                let whose = if base.file == from.file {
+                    "its".to_string()
+                } else {
+                    format!("`{}`'s", from.name)
                 };
                 let end = if shown_above { " (above)." } else { ":" };
                 format!("{link} extends `{}` and keeps {whose} declaration{end}", base.name)
@@ -172,6 +173,11 @@ mod tests {
         assert!(
             alone.contains("(../graphs/sppm.ron)) extends `ppm` and keeps its declaration:\n\n- biased for"),
             "{alone}"
+        );
+        let chain = markdown(&[graph("c", Some(graph("sppm", Some(base()), None)), None)], "");
+        assert!(
+            chain.contains(" extends `sppm` and keeps `ppm`'s declaration:\n\n- biased for"),
+            "{chain}"
         );
         let none = markdown(&[graph("pt", None, None)], "");
         assert!(
