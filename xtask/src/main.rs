@@ -1,6 +1,5 @@
 //! `cargo xtask render | test`: the two commands of the README, on a fresh machine; and
-//! `cargo xtask docs [--check]`, the references generated from the code (`test` checks them
-//! first).
+//! `cargo xtask docs [--check]`, the docs generated from the code (`test` checks them first).
 //!
 //! `render` and `test` first make sure a Vulkan driver exists: when none is installed, Mesa's software
 //! driver (lavapipe, Debian package `mesa-vulkan-drivers`) is installed with apt-get if this
@@ -17,7 +16,7 @@ const INSTALL: &str = "apt-get install -y --no-install-recommends mesa-vulkan-dr
 
 fn usage() -> ExitCode {
     eprintln!(
-        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [--assets] [cargo test args]  run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do, the assets tier where the asset root does; --assets: fail without it)\n  vulkan                           only make sure a Vulkan driver is installed\n  docs [--check]                   write docs/reference/cli.md and graph-file.md from the code (--check: fail where the committed ones differ; `test` runs it first)\n  imports                          list each crate's import circles (tests/imports; fails on one not allowed)"
+        "usage: cargo xtask <command> [args]\n\n  render [lightgraph render args]  render the default scene (out/render.exr, out/render.png)\n  test [--assets] [cargo test args]  run the whole test suite (the MPI test where mpirun exists, the Python module's where numpy and pytest do, the assets tier where the asset root does; --assets: fail without it)\n  vulkan                           only make sure a Vulkan driver is installed\n  docs [--check]                   write docs/reference/cli.md, graph-file.md and the declared gaps of docs/estimators/*.md from the code (--check: fail where the committed ones differ; `test` runs it first)\n  imports                          list each crate's import circles (tests/imports; fails on one not allowed)"
     );
     ExitCode::from(2)
 }

@@ -1,8 +1,12 @@
-//! `cargo xtask docs [--check]`: the references generated from the code, docs/reference/cli.md
-//! (from clap's description of the command line, printed by the example `cli-reference`) and
-//! docs/reference/graph-file.md (from the doc comments of engine/src/ir.rs); `--check` fails
+//! `cargo xtask docs [--check]`: the docs generated from the code, docs/reference/cli.md
+//! (from clap's description of the command line, printed by the example `cli-reference`),
+//! docs/reference/graph-file.md (from the doc comments of engine/src/ir.rs) and the declared
+//! gaps on the pages of docs/estimators (from the graph files' `coverage:`); `--check` fails
 //! when the committed files differ from them.
 
+mod coverage;
+mod estimator_pages;
+mod gaps;
 mod graph_file;
 mod schema;
 
@@ -15,15 +19,17 @@ fn root() -> PathBuf {
 }
 
 /// Each generated file (a path from the root) with its contents.
-fn generated(root: &Path) -> Result<Vec<(&'static str, String)>, String> {
+fn generated(root: &Path) -> Result<Vec<(String, String)>, String> {
     let source = "engine/src/ir.rs";
     let text = std::fs::read_to_string(root.join(source)).map_err(|e| format!("cannot read {source}: {e}"))?;
     let schema = schema::read(&text).map_err(|e| format!("{source}: {e}"))?;
     let graph_file = graph_file::markdown(&schema).map_err(|e| format!("{source}: {e}"))?;
-    Ok(vec![
-        ("docs/reference/cli.md", cli_reference()?),
-        ("docs/reference/graph-file.md", graph_file),
-    ])
+    let mut docs = vec![
+        ("docs/reference/cli.md".to_string(), cli_reference()?),
+        ("docs/reference/graph-file.md".to_string(), graph_file),
+    ];
+    docs.extend(estimator_pages::generated(root)?);
+    Ok(docs)
 }
 
 /// The output of the example `cli-reference`, built with the test suite's packages and profile
@@ -59,7 +65,7 @@ fn cli_reference() -> Result<String, String> {
 
 /// The committed files under `root` that differ from `docs`, each with its first differing line,
 /// as one error that says how to regenerate them.
-fn check(root: &Path, docs: &[(&str, String)]) -> Result<(), String> {
+fn check(root: &Path, docs: &[(String, String)]) -> Result<(), String> {
     let mut stale = Vec::new();
     for (path, want) in docs {
         let have = std::fs::read_to_string(root.join(path)).unwrap_or_default();
@@ -73,7 +79,7 @@ fn check(root: &Path, docs: &[(&str, String)]) -> Result<(), String> {
         return Ok(());
     }
     Err(format!(
-        "the committed references differ from the code:\n{}\nregenerate them with `cargo xtask docs` and commit the result",
+        "the committed docs differ from the code:\n{}\nregenerate them with `cargo xtask docs` and commit the result",
         stale.join("\n")
     ))
 }
@@ -95,6 +101,9 @@ pub fn run(args: &[String]) -> ExitCode {
         }
         for (path, text) in &docs {
             let file = root.join(path);
+            if std::fs::read_to_string(&file).is_ok_and(|have| have == *text) {
+                continue;
+            }
             std::fs::create_dir_all(file.parent().unwrap())
                 .and_then(|_| std::fs::write(&file, text))
                 .map_err(|e| format!("cannot write {path}: {e}"))?;
@@ -113,7 +122,7 @@ pub fn run(args: &[String]) -> ExitCode {
 
 #[cfg(test)]
 mod tests {
-    use super::{check, graph_file, root, schema};
+    use super::{check, estimator_pages, graph_file, root, schema};
 
     /// The check passes on files equal to the generated ones and fails on a stale or missing
     /// one, naming it, the line where it differs, and the command that regenerates it.
@@ -122,8 +131,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("xtask-docs-check-{}", std::process::id()));
         std::fs::create_dir_all(dir.join("docs/reference")).unwrap();
         let docs = vec![
-            ("docs/reference/a.md", "# A\n\nfirst\n".to_string()),
-            ("docs/reference/b.md", "# B\n".to_string()),
+            ("docs/reference/a.md".to_string(), "# A\n\nfirst\n".to_string()),
+            ("docs/reference/b.md".to_string(), "# B\n".to_string()),
         ];
         std::fs::write(dir.join("docs/reference/a.md"), "# A\n\nfirst\n").unwrap();
         std::fs::write(dir.join("docs/reference/b.md"), "# B\n").unwrap();
@@ -144,7 +153,20 @@ mod tests {
         let root = root();
         let source = std::fs::read_to_string(root.join("engine/src/ir.rs")).unwrap();
         let md = graph_file::markdown(&schema::read(&source).unwrap()).unwrap();
-        let docs = vec![("docs/reference/graph-file.md", md)];
+        let docs = vec![("docs/reference/graph-file.md".to_string(), md)];
         check(&root, &docs).unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// The declared gaps on the committed pages of docs/estimators are the graph files'.
+    #[test]
+    fn the_estimator_pages_are_current() {
+        let root = root();
+        let pages = estimator_pages::generated(&root).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            pages
+                .iter()
+                .any(|(page, _)| page == "docs/estimators/photon-mapping.md")
+        );
+        check(&root, &pages).unwrap_or_else(|e| panic!("{e}"));
     }
 }
