@@ -145,14 +145,19 @@ def reference(
         spp: samples per pixel in each frame, at least 1.
         res: (width, height), each at least 1 (None: the scene's).
         seed: the seed of the random streams, 0 to 4294967295 (None: 1000003).
-        frames: frames to render, at least 1 (64 when neither frames nor time is given).
-        time: seconds to render for, above zero.
+        frames: the frames the film holds at the end, at least 1 (64 when neither frames
+            nor time is given); with resume, its frames included (a film of 64 frames
+            resumed with frames=256 gets 192 more; one that holds as many already raises
+            ValueError before any work).
+        time: seconds to render for, above zero (with resume, the time added to the film's).
         constants: graph constants to values, e.g. {"MAX_PATH_LENGTH": 8}; each must be a
             constant of the graph, of its type (u32, i32, f32 or bool).
         max_path_length: the longest path in segments, at least 1 (None: the scene's).
         bvh: "auto", "cwbvh" or "bvh2".
         adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
-        resume: a film to continue with more frames of the same random streams.
+        resume: a film to continue with more frames of the same random streams (its
+            resolution, seed and constants are the defaults of those not given; scene,
+            graph and spp must be its own).
     """
 
 def compare(

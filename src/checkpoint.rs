@@ -29,6 +29,8 @@ pub struct Filmed<'a, 'g> {
     pub session: &'a mut Session<'g>,
     /// The film (in f64) the session's sums go into when they are absorbed.
     pub film: &'a mut Film,
+    /// The frames the film held when the session began rendering into it.
+    film_frames_at_start: u64,
     absorbed_at: Instant,
 }
 
@@ -36,10 +38,17 @@ impl<'a, 'g> Filmed<'a, 'g> {
     /// The session rendering into `film`; the film's seconds count from now.
     pub fn new(session: &'a mut Session<'g>, film: &'a mut Film) -> Self {
         Filmed {
+            film_frames_at_start: film.frames,
             session,
             film,
             absorbed_at: Instant::now(),
         }
+    }
+
+    /// The frames of the film and the session together: those the film held at the start
+    /// and the session's, however many of them were absorbed into the film already.
+    pub fn frames_in_all(&self) -> u64 {
+        self.film_frames_at_start + self.session.frames as u64
     }
 
     /// Moves the GPU's sums into the film and adds the seconds since the last time.

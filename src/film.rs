@@ -20,6 +20,31 @@ pub const SETTINGS: [&str; 5] = ["scene", "graph", "samples_per_frame", "seed", 
 /// weights but not the image it converges to (so `compare` does not ask a reference for them).
 pub const OPTIONAL_SETTINGS: [&str; 1] = ["measured"];
 
+/// The frames a film rendered or resumed holds at the end when given neither frames nor a
+/// time (`--frames`, Python's `frames=`).
+pub const DEFAULT_FRAMES: u32 = 64;
+
+/// How a front end names the options of a run's length in its messages: the command line's
+/// `--frames 256`, Python's `frames=256`.
+pub struct LengthOptions {
+    /// The option of the frames the film holds at the end.
+    pub frames: &'static str,
+    /// The option of the time to render for.
+    pub time: &'static str,
+    /// The option of the film resumed.
+    pub resume: &'static str,
+    /// What joins an option to its value: " " on the command line, "=" in Python.
+    pub joiner: &'static str,
+}
+
+/// The command line's names: `--frames 256`.
+pub const CLI_LENGTH_OPTIONS: LengthOptions = LengthOptions {
+    frames: "--frames",
+    time: "--time",
+    resume: "--resume",
+    joiner: " ",
+};
+
 /// A film (a reference image) being accumulated in f64: per pixel the sum of the frames'
 /// estimates and of their squares, and the frame indices summed.
 #[derive(Debug, Clone)]
@@ -101,6 +126,28 @@ impl Film {
         }
         u32::try_from(first)
             .map_err(|_| anyhow!("the film ends at frame {end}, past 2^32; start another with a new seed"))
+    }
+
+    /// The frames a resumed run of `total` frames in all (its frames option, `options` naming
+    /// it) still has to render into this film, read from `path`; none left is an error that
+    /// names the file and says what to give.
+    pub fn frames_left(&self, total: u32, path: &Path, options: &LengthOptions) -> Result<u32> {
+        let (
+            held,
+            LengthOptions {
+                frames,
+                time,
+                resume,
+                joiner,
+            },
+        ) = (self.frames, options);
+        match u64::from(total).checked_sub(held) {
+            Some(left) if left > 0 => Ok(left as u32),
+            _ => bail!(
+                "{}: the film holds {held} frames already, and {frames}{joiner}{total} asks for {total} in all (with {resume}, {frames} counts the film's frames too, {DEFAULT_FRAMES} when not given): give a larger {frames}, or {time} to render for a while more",
+                path.display()
+            ),
+        }
     }
 
     /// Adds the film `other` (read from `path`), made with the same settings over frames this
@@ -463,6 +510,27 @@ impl RunOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_frames_left_are_the_total_less_the_films() {
+        let path = Path::new("film.exr");
+        let mut film = Film::new((1, 1), BTreeMap::new());
+        film.frames = 64;
+        assert_eq!(film.frames_left(256, path, &CLI_LENGTH_OPTIONS).unwrap(), 192);
+        for held in [256, 300] {
+            film.frames = held;
+            let err = film
+                .frames_left(256, path, &CLI_LENGTH_OPTIONS)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                err.starts_with(&format!("film.exr: the film holds {held} frames"))
+                    && err.contains("--frames 256 asks for 256")
+                    && err.contains("--time"),
+                "{err}"
+            );
+        }
+    }
 
     fn info() -> BTreeMap<String, String> {
         SETTINGS

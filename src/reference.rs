@@ -32,8 +32,9 @@ pub struct ReferenceSpec {
     pub run: RunSpec,
     /// Render for this long (added to what a resumed reference has).
     pub time: Option<Duration>,
-    /// Render this many frames (when no time is given; the command line's `--frames` counts
-    /// the resumed film's too, and gives this the frames it lacks).
+    /// Render this many frames (when no time is given): those added to a resumed film (the
+    /// command line's `--frames` and Python's `frames=` count its frames too, and give this
+    /// the frames it lacks: [`Film::frames_left`]).
     pub frames: Option<u32>,
     /// The film to add samples to, and its path.
     pub resume: Option<(PathBuf, Film)>,

@@ -18,13 +18,13 @@ mod tables;
 use ::lightgraph::cli::Cli;
 use ::lightgraph::drive::{Budget, Plan, Stopwatch, drive};
 use ::lightgraph::explain::{ExplainSpec, report};
-use ::lightgraph::film::Film;
+use ::lightgraph::film::{DEFAULT_FRAMES, Film, LengthOptions};
 use ::lightgraph::reference::{REFERENCE_CHECKPOINT, REFERENCE_SEED, ReferenceSpec, render as render_reference};
 use ::lightgraph::run::{Run, RunOptions, RunSpec, Session as RenderSession};
 use lightgraph_engine::Gpu;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyKeyboardInterrupt};
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
 use std::collections::HashMap;
@@ -333,6 +333,14 @@ fn render<'py>(
     Ok((s.image(py)?, s.stats(py)?))
 }
 
+/// How the module names the options of a run's length in its messages: `frames=256`.
+const PYTHON_LENGTH_OPTIONS: LengthOptions = LengthOptions {
+    frames: "frames",
+    time: "time",
+    resume: "resume",
+    joiner: "=",
+};
+
 /// Renders a reference film as `lightgraph reference` does (f64 sums and variance, the
 /// settings, a PNG preview) for `frames` frames or `time` seconds, writes it to `out`, and
 /// returns its mean image. A bad argument raises ValueError naming it, before any work.
@@ -346,14 +354,19 @@ fn render<'py>(
 /// - spp: samples per pixel in each frame, at least 1.
 /// - res: (width, height), each at least 1 (None: the scene's).
 /// - seed: the seed of the random streams, 0 to 4294967295 (None: 1000003).
-/// - frames: frames to render, at least 1 (64 when neither frames nor time is given).
-/// - time: seconds to render for, above zero.
+/// - frames: the frames the film holds at the end, at least 1 (64 when neither frames nor
+///   time is given); with resume, its frames included (a film of 64 frames resumed with
+///   frames=256 gets 192 more; one that holds as many already raises ValueError before any
+///   work).
+/// - time: seconds to render for, above zero (with resume, the time added to the film's).
 /// - constants: graph constants to values, e.g. {"MAX_PATH_LENGTH": 8}; each must be a
 ///   constant of the graph, of its type (u32, i32, f32 or bool).
 /// - max_path_length: the longest path in segments, at least 1 (None: the scene's).
 /// - bvh: "auto", "cwbvh" or "bvh2".
 /// - adapter: the GPU: an index, a PCI bus id or text of its name (None: the default).
-/// - resume: a film to continue with more frames of the same random streams.
+/// - resume: a film to continue with more frames of the same random streams (its
+///   resolution, seed and constants are the defaults of those not given; scene, graph and
+///   spp must be its own).
 #[pyfunction]
 #[pyo3(signature = (scene = "cornell-mitsuba", out = PathBuf::from("out/reference.exr"), graph = "pt", layout = None,
     spp = 1, res = None, seed = None, frames = None, time = None, constants = None, max_path_length = None,
@@ -393,10 +406,16 @@ fn reference<'py>(
     };
     let mut options = s.options(py, constants)?;
     let (mut graph, mut seed) = (Some(graph.to_string()), seed);
+    // The frames in all, as the CLI's --frames; the spec's are those this call adds.
+    let mut frames = frames.or(time.is_none().then_some(DEFAULT_FRAMES));
     let resume = match resume {
         Some(path) => {
             let film = Film::read(&path).map_err(err)?;
             options.from_film(&mut graph, &mut seed, REFERENCE_SEED, &film);
+            if let (Some(total), None) = (frames, time) {
+                let left = film.frames_left(total, &path, &PYTHON_LENGTH_OPTIONS);
+                frames = Some(left.map_err(|e| PyValueError::new_err(format!("{e:#}")))?);
+            }
             Some((path, film))
         }
         None => None,
@@ -405,7 +424,7 @@ fn reference<'py>(
     let spec = ReferenceSpec {
         run: options.spec(&graph, layout, seed.unwrap_or(REFERENCE_SEED)),
         time: time.map(Duration::from_secs_f64),
-        frames: frames.or(time.is_none().then_some(64)),
+        frames,
         resume,
         out: out.clone(),
         force: false,

@@ -225,6 +225,19 @@ def test_compare_returns_its_tables_and_images(tmp_path):
     np.testing.assert_array_equal(found["reference"], lightgraph.read(ref)[0])
 
 
+def test_reference_frames_with_resume_are_the_films_total(tmp_path):
+    ref = tmp_path / "ref.exr"
+    lightgraph.reference(scene="cornell-diffuse", out=ref, res=(16, 16), frames=4)
+    lightgraph.reference(scene="cornell-diffuse", resume=ref, out=ref, frames=6)
+    # 6 in all, as the CLI's --frames counts them with --resume (not 6 more).
+    assert lightgraph.read(ref)[1]["frames"] == 6
+    written = ref.stat().st_mtime_ns
+    with pytest.raises(ValueError, match=r"ref\.exr: the film holds 6 frames already, and frames=6 asks for 6 in all"):
+        lightgraph.reference(scene="cornell-diffuse", resume=ref, out=ref, frames=6)
+    # Refused before any work: the film is as it was.
+    assert ref.stat().st_mtime_ns == written and lightgraph.read(ref)[1]["frames"] == 6
+
+
 def test_explain_and_list():
     text = lightgraph.explain(graph="pt", layout="NaivePTmk", res=RES)
     assert "NaivePTmk" in text and "kernel" in text

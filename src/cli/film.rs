@@ -4,15 +4,12 @@
 
 use super::args::{Common, GraphArg};
 use super::checks::{count, duration};
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use lightgraph::drive::Budget;
-use lightgraph::film::Film;
-use std::path::{Path, PathBuf};
+use lightgraph::film::{CLI_LENGTH_OPTIONS, DEFAULT_FRAMES, Film};
+use std::path::PathBuf;
 use std::time::Duration;
-
-/// The frames of a film given neither --frames nor --time.
-const DEFAULT_FRAMES: u32 = 64;
 
 /// What differs between the commands that render a film: their defaults.
 pub struct FilmDefaults {
@@ -144,39 +141,9 @@ impl FilmArgs {
         options.from_film(&mut graph.graph, &mut self.seed, defaults.seed, &film);
         common.take(options);
         if self.time.is_none() {
-            self.frames_left = frames_left(self.frames(), film.frames, &path)?;
+            self.frames_left = film.frames_left(self.frames(), &path, &CLI_LENGTH_OPTIONS)?;
         }
         self.first_frame = Some(film.next_first_frame(self.first_frame)?);
         Ok(Some(film))
-    }
-}
-
-/// The frames a run of `total` frames still has to render when its film (at `path`) holds
-/// `held`; none left is an error that says what to give.
-fn frames_left(total: u32, held: u64, path: &Path) -> Result<u32> {
-    match u64::from(total).checked_sub(held) {
-        Some(left) if left > 0 => Ok(left as u32),
-        _ => bail!(
-            "{}: the film holds {held} frames already, and --frames {total} asks for {total} in all (with --resume, --frames counts the film's frames too, 64 when not given): give a larger --frames, or --time to render for a while more",
-            path.display()
-        ),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_frames_left_are_the_total_less_the_films() {
-        let path = Path::new("film.exr");
-        assert_eq!(frames_left(256, 64, path).unwrap(), 192);
-        for held in [256, 300] {
-            let err = frames_left(256, held, path).unwrap_err().to_string();
-            assert!(
-                err.contains(&format!("holds {held} frames")) && err.contains("--frames 256"),
-                "{err}"
-            );
-        }
     }
 }

@@ -18,9 +18,10 @@ use std::time::{Duration, Instant};
 /// The pixels the browser reads back.
 const PIXELS: [(usize, usize); 3] = [(0, 0), (8, 7), (15, 15)];
 
-/// Starts a 16 x 16 render of `seconds` serving at a free port, its film at `out`; returns the
-/// process and the page's URL (read from its stderr, which is drained on).
-fn serving_render(out: &Path, seconds: &str) -> (Child, String) {
+/// Starts a 16 x 16 render of `seconds` serving at a free port, its film at `out`, with the
+/// further options `more`; returns the process and the page's URL (read from its stderr,
+/// which is drained on).
+fn serving_render(out: &Path, seconds: &str, more: &[&str]) -> (Child, String) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_lightgraph"))
         .args([
             "render",
@@ -31,6 +32,7 @@ fn serving_render(out: &Path, seconds: &str) -> (Child, String) {
             "--time",
             seconds,
         ])
+        .args(more)
         .args(["--serve", "127.0.0.1:0", "--out"])
         .arg(out)
         .env("XDG_RUNTIME_DIR", std::env::temp_dir())
@@ -75,7 +77,7 @@ fn floats(bytes: &[u8]) -> Vec<f32> {
 }
 
 /// Polls the status until `done` holds, for at most five minutes.
-fn wait_for(url: &str, done: impl Fn(&Value) -> bool) -> Value {
+fn wait_for(url: &str, mut done: impl FnMut(&Value) -> bool) -> Value {
     let started = Instant::now();
     loop {
         let s = status(url);
@@ -95,7 +97,7 @@ fn render_serves_its_film_as_it_renders_and_the_last_one_equals_the_exr() {
     // With a browser, the render runs until the page has watched it (however long Chromium
     // takes to start on a busy machine) and is then stopped by SIGINT; without one, 8 s.
     let seconds = if browser.is_none() { "600s" } else { "8s" };
-    let (mut child, url) = serving_render(&out, seconds);
+    let (mut child, url) = serving_render(&out, seconds, &[]);
     let page = String::from_utf8(get(&url)).unwrap();
     assert!(
         page.contains("lightgraphLiveSources") && page.contains("film.f32"),
@@ -165,6 +167,30 @@ fn render_serves_its_film_as_it_renders_and_the_last_one_equals_the_exr() {
         }
     };
     assert_eq!((w, exr.len()), (16, 256));
+}
+
+/// A checkpoint after every batch (1 ms apart) moves the GPU's sums into the film each time:
+/// the frames served while rendering are still the run's (the "frame N" of its progress
+/// line), not the film's and the session's added (twice as many).
+#[test]
+fn the_served_frames_count_the_frames_a_checkpoint_absorbed_once() {
+    let out = temp_dir("serve-checkpoint").join("live.exr");
+    let (mut child, url) = serving_render(&out, "3s", &["--checkpoint", "1ms"]);
+    let mut rendering = Vec::new();
+    let last = wait_for(&url, |s| {
+        if s["finished"] != true && s["frames"].as_u64() > Some(0) {
+            rendering.push(s.clone());
+        }
+        s["finished"] == true
+    });
+    get(&format!("{url}film.f32"));
+    assert!(child.wait().unwrap().success());
+    assert!(!rendering.is_empty(), "no update while rendering before {last}");
+    for s in rendering.iter().chain([&last]) {
+        let line = s["status"].as_str().expect("a progress line");
+        let frame = line.strip_prefix("frame ").and_then(|l| l.split(' ').next());
+        assert_eq!(s["frames"].as_u64().map(|f| f.to_string()).as_deref(), frame, "{s}");
+    }
 }
 
 #[test]

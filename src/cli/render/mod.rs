@@ -324,8 +324,8 @@ impl Observer<Filmed<'_, '_>> for Progress<'_> {
         ));
         if self.view.due() {
             let mean = filmed.mean()?;
-            let frames = filmed.film.frames + session.frames as u64;
-            self.view.show(&mean, frames, &self.bar.message(), false);
+            self.view
+                .show(&mean, filmed.frames_in_all(), &self.bar.message(), false);
         }
         match self.args.film.time {
             Some(_) => self.bar.set_position(clock.elapsed().as_millis() as u64),
