@@ -85,13 +85,15 @@ impl Executor for Filmed<'_, '_> {
 }
 
 /// Writes a film and its PNG preview every `--checkpoint` while a drive renders into it (the
-/// first one a period after it was made); with no period, never.
+/// first one a period after it was made, or with the first frames: [`Checkpoint::at_first`]);
+/// with no period, never.
 pub struct Checkpoint<'a> {
     every: Option<Duration>,
     out: &'a Path,
     kind: &'static str,
     exposure: f32,
-    saved_at: Instant,
+    /// When the last checkpoint was written (None: none yet, and the first is due at once).
+    saved_at: Option<Instant>,
 }
 
 impl<'a> Checkpoint<'a> {
@@ -103,20 +105,28 @@ impl<'a> Checkpoint<'a> {
             out,
             kind,
             exposure,
-            saved_at: Instant::now(),
+            saved_at: Some(Instant::now()),
         }
+    }
+
+    /// These checkpoints with the first one due at once: on several GPUs, whose first batches
+    /// reach the host together and whose claims grow with their speed (a short render may
+    /// arrive in two batches), the first frames are kept as soon as they arrive.
+    pub fn at_first(self) -> Self {
+        Checkpoint { saved_at: None, ..self }
     }
 
     /// Whether the period has passed since the last checkpoint.
     pub fn due(&self) -> bool {
-        self.every.is_some_and(|every| self.saved_at.elapsed() >= every)
+        self.every
+            .is_some_and(|every| self.saved_at.is_none_or(|t| t.elapsed() >= every))
     }
 
     /// Writes `film` (up to date: on several GPUs, the host's) if a checkpoint is due.
     pub fn write_if_due(&mut self, film: &Film) -> Result<()> {
         if self.due() {
             write_with_preview(film, self.out, self.kind, self.exposure)?;
-            self.saved_at = Instant::now();
+            self.saved_at = Some(Instant::now());
         }
         Ok(())
     }
@@ -148,6 +158,15 @@ mod tests {
             Checkpoint::new(every, &out, "render", 0.0).write_if_due(&film).unwrap();
             assert!(!out.exists(), "written before its period ({every:?})");
         }
+        let hour = Some(Duration::from_secs(3600));
+        assert!(
+            Checkpoint::new(hour, &out, "render", 0.0).at_first().due(),
+            "at_first: due with the first frames"
+        );
+        assert!(
+            !Checkpoint::new(None, &out, "render", 0.0).at_first().due(),
+            "no period, no checkpoint"
+        );
         let mut checkpoint = Checkpoint::new(Some(Duration::ZERO), &out, "render", 0.0);
         assert!(checkpoint.due());
         checkpoint.write_if_due(&film).unwrap();

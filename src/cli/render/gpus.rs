@@ -59,7 +59,7 @@ pub fn render_on_several_gpus(args: &RenderArgs, spec: &str, resumed: Option<Fil
     let mut view = args.live(&out, (w, h), reference.as_deref())?;
     let frames_before = film.frames;
     let every = args.film.checkpoint(&RENDER);
-    let mut checkpoint = Checkpoint::new(every, &out, "render", args.film.exposure);
+    let mut checkpoint = Checkpoint::new(every, &out, "render", args.film.exposure).at_first();
     let mut checkpoint_error = None;
     let (shares, merging) = render_on_gpus(&run, &selectors, args.film.budget(), &mut film, |shares, film| {
         if let Err(e) = checkpoint.write_if_due(film) {
