@@ -168,7 +168,7 @@ fn sbpt_connect(pair: ptr<function, VertexPair>) -> bool {
     let bsdf = surface_bsdf(s, cv.towards);
     let c = CameraSubpath(
         cv.position, cv.pixel, -cv.towards, cv.length, cv.throughput, 0u, cv.d_vcm, cv.d_vc,
-        0.0, 0u, vec2<f32>(0.0),
+        PathHit(),
     );
     let ray = bpt_connect(c, s, bsdf, (*pair).light, mis_counts(1.0));
     if (!is_black(ray.contribution)) {
