@@ -265,14 +265,11 @@ struct CameraVertex {
     extent: f32,
     throughput: vec3<f32>,
     d_vcm: f32,
-    normal: vec3<f32>,          // geometric
+    normals: VertexNormals,
     d_vc: f32,
     towards: vec3<f32>,         // towards the previous vertex
     material: u32,
     tex: vec2<f32>,
     pixel: u32,
     length: u32,
-#if SHADING_NORMALS
-    shading: vec3<f32>,
-#endif
 }

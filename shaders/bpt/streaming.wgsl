@@ -123,27 +123,20 @@ fn camera_vertex_at(c: CameraSubpath, s: Surface) -> CameraVertex {
     v.extent = s.extent;
     v.throughput = c.throughput;
     v.d_vcm = c.d_vcm;
-    v.normal = s.normal;
+    v.normals = vertex_normals(s);
     v.d_vc = c.d_vc;
     v.towards = -c.direction;
     v.material = s.material;
     v.tex = s.tex;
     v.pixel = c.pixel;
     v.length = c.length;
-#if SHADING_NORMALS
-    v.shading = s.shading_normal;
-#endif
     return v;
 }
 
 // The surface a kept camera vertex lies on (what its BSDF and connections need of it).
 fn camera_vertex_surface(v: CameraVertex) -> Surface {
-#if SHADING_NORMALS
-    let shading = v.shading;
-#else
-    let shading = v.normal;
-#endif
-    return Surface(v.position, v.normal, v.material, -1, v.extent, v.tex, shading);
+    let n = v.normals;
+    return Surface(v.position, vertex_geometric_normal(n), v.material, -1, v.extent, v.tex, vertex_shading_normal(n));
 }
 
 // Every pair of stored vertices that makes a path of at most MAX_PATH_LENGTH segments, into

@@ -577,12 +577,14 @@ fn path_hit_surface(h: PathHit, o: vec3<f32>, d: vec3<f32>) -> Surface {
 // The normals a surface vertex keeps when a pass stores it to set its BSDF up again later:
 // the geometric normal and, in scenes with shading normals, the shading normal; elsewhere the
 // shading normal is the geometric one and is not stored. `VertexNormals` keeps them as they
-// are (PendingMerge), `PackedNormals` octahedrally packed (LightVertex). This is the one
-// place SHADING_NORMALS decides what a stored vertex holds.
+// are (CameraVertex, PendingMerge), in scalars, so that the record packs beside the fields
+// around it as a vec3 does (4-byte aligned: a struct of vec3s would pad each to 16 bytes);
+// `PackedNormals` keeps them octahedrally packed (LightVertex). This is the one place
+// SHADING_NORMALS decides what a stored vertex holds.
 #if SHADING_NORMALS
 struct VertexNormals {
-    geometric: vec3<f32>,
-    shading: vec3<f32>,
+    geometric: array<f32, 3>,
+    shading: array<f32, 3>,
 }
 
 struct PackedNormals {
@@ -592,12 +594,12 @@ struct PackedNormals {
 
 // The normals of surface `s` to store.
 fn vertex_normals(s: Surface) -> VertexNormals {
-    return VertexNormals(s.normal, s.shading_normal);
+    return VertexNormals(vertex_normal_words(s.normal), vertex_normal_words(s.shading_normal));
 }
 
 // The shading normal of stored normals.
 fn vertex_shading_normal(n: VertexNormals) -> vec3<f32> {
-    return n.shading;
+    return vertex_normal_of(n.shading);
 }
 
 // The normals of surface `s` to store, packed.
@@ -607,11 +609,14 @@ fn packed_normals(s: Surface) -> PackedNormals {
 
 // Packed normals as a vertex's BSDF is set up from them.
 fn unpacked_normals(n: PackedNormals) -> VertexNormals {
-    return VertexNormals(decode_octahedral(n.geometric), decode_octahedral(n.shading));
+    return VertexNormals(
+        vertex_normal_words(decode_octahedral(n.geometric)),
+        vertex_normal_words(decode_octahedral(n.shading)),
+    );
 }
 #else
 struct VertexNormals {
-    geometric: vec3<f32>,
+    geometric: array<f32, 3>,
 }
 
 struct PackedNormals {
@@ -619,11 +624,11 @@ struct PackedNormals {
 }
 
 fn vertex_normals(s: Surface) -> VertexNormals {
-    return VertexNormals(s.normal);
+    return VertexNormals(vertex_normal_words(s.normal));
 }
 
 fn vertex_shading_normal(n: VertexNormals) -> vec3<f32> {
-    return n.geometric;
+    return vertex_normal_of(n.geometric);
 }
 
 fn packed_normals(s: Surface) -> PackedNormals {
@@ -631,9 +636,23 @@ fn packed_normals(s: Surface) -> PackedNormals {
 }
 
 fn unpacked_normals(n: PackedNormals) -> VertexNormals {
-    return VertexNormals(decode_octahedral(n.geometric));
+    return VertexNormals(vertex_normal_words(decode_octahedral(n.geometric)));
 }
 #endif
+
+// The geometric normal of stored normals.
+fn vertex_geometric_normal(n: VertexNormals) -> vec3<f32> {
+    return vertex_normal_of(n.geometric);
+}
+
+// A normal as the scalars `VertexNormals` keeps, and back.
+fn vertex_normal_words(v: vec3<f32>) -> array<f32, 3> {
+    return array<f32, 3>(v.x, v.y, v.z);
+}
+
+fn vertex_normal_of(w: array<f32, 3>) -> vec3<f32> {
+    return vec3<f32>(w[0], w[1], w[2]);
+}
 
 fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
     let p = primitive_at(hit.primitive);
