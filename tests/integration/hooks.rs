@@ -37,15 +37,15 @@ fn mean(image: &Image) -> f64 {
     sum / (3 * image.mean.len()) as f64
 }
 
-/// The standard error of [`mean`], from the pixels' variances over the frames.
+/// The standard error of [`mean`], from the pixels' variances over the frames: the pixels
+/// independent, a pixel's three channels taken as fully correlated (an upper bound).
 fn standard_error(image: &Image) -> f64 {
     let sum: f64 = image
         .variance
         .iter()
-        .flat_map(|p| p[..3].iter())
-        .map(|v| *v as f64)
+        .map(|p| (p.iter().map(|v| (*v as f64).sqrt()).sum::<f64>() / 3.0).powi(2))
         .sum();
-    (sum / image.frames as f64).sqrt() / (3 * image.variance.len()) as f64
+    (sum / image.frames as f64).sqrt() / image.variance.len() as f64
 }
 
 #[test]
