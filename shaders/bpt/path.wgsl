@@ -17,9 +17,7 @@ struct CameraSubpath {
     rng: u32,
     d_vcm: f32,
     d_vc: f32,
-    hit_t: f32,                 // negative: the last ray escaped
-    hit_primitive: u32,
-    hit_uv: vec2<f32>,
+    hit: PathHit,               // the last traced ray's hit (t < 0: it escaped)
 }
 
 // NaiveBPT's item: a camera sub-path and the stored vertices of its sample's light sub-path.
@@ -40,7 +38,7 @@ fn camera_subpath_start(pixel: u32, rng: ptr<function, u32>) -> CameraSubpath {
 // A camera sub-path along `ray`, a ray through `pixel`, that goes on with the random stream `rng`.
 fn camera_subpath_along(ray: CameraRay, pixel: u32, rng: u32) -> CameraSubpath {
     let d_vcm = mis_clamp(mis_pow(f32(PIXELS) / camera_pdf_w(dot(ray.direction, camera.forward))));
-    return CameraSubpath(ray.origin, pixel, ray.direction, 0u, vec3<f32>(1.0), rng, d_vcm, 0.0, 0.0, 0u, vec2<f32>(0.0));
+    return CameraSubpath(ray.origin, pixel, ray.direction, 0u, vec3<f32>(1.0), rng, d_vcm, 0.0, PathHit());
 }
 
 // A camera sub-path through a raster position drawn as two continuous numbers of `rng`, then
@@ -58,13 +56,11 @@ fn camera_subpath_at_raster(rng: ptr<function, u32>) -> CameraSubpath {
 fn camera_subpath_trace(c: ptr<function, CameraSubpath>) {
     count(select(COUNTER_RAYS_EXTENSION, COUNTER_RAYS_PRIMARY, (*c).length == 0u), 1u);
     let hit = trace_closest((*c).origin, (*c).direction, INFINITE_DISTANCE);
-    (*c).hit_t = select(-1.0, hit.t, hit.found);
-    (*c).hit_primitive = hit.primitive;
-    (*c).hit_uv = hit.uv;
+    (*c).hit = path_hit(hit);
     (*c).length += 1u;
 }
 
-// Camera sub-path `c` arrives where its last ray went (hit_t < 0: it escaped). Adds the
+// Camera sub-path `c` arrives where its last ray went (hit.t < 0: it escaped). Adds the
 // emission found there (s = 0: the background or an area light), MIS-weighted with the
 // strategies counted as `counts`, to the film, and at a surface brings the MIS quantities
 // to the new vertex.
@@ -89,7 +85,7 @@ fn camera_land(c: ptr<function, CameraSubpath>, counts: MisCounts) -> CameraLand
     r.a.alive = false;
     r.emission = vec3<f32>(0.0);
     let direction = (*c).direction;
-    if ((*c).hit_t < 0.0) {
+    if (path_hit_escaped((*c).hit)) {
         let bg = background_radiance(direction);
         if (bg.w > 0.0) {
             let pmf = light_pmf(u32(scene.background));
@@ -98,8 +94,8 @@ fn camera_land(c: ptr<function, CameraSubpath>, counts: MisCounts) -> CameraLand
         }
         return r;
     }
-    let t = (*c).hit_t;
-    r.a.s = surface_at(Hit(t, (*c).hit_primitive, (*c).hit_uv, true), (*c).origin, direction);
+    let t = (*c).hit.t;
+    r.a.s = path_hit_surface((*c).hit, (*c).origin, direction);
     r.a.bsdf = surface_bsdf(r.a.s, -direction);
     if (!r.a.bsdf.valid) {
         return r;
@@ -269,14 +265,11 @@ struct CameraVertex {
     extent: f32,
     throughput: vec3<f32>,
     d_vcm: f32,
-    normal: vec3<f32>,          // geometric
+    normals: VertexNormals,
     d_vc: f32,
     towards: vec3<f32>,         // towards the previous vertex
     material: u32,
     tex: vec2<f32>,
     pixel: u32,
     length: u32,
-#if SHADING_NORMALS
-    shading: vec3<f32>,
-#endif
 }

@@ -123,27 +123,20 @@ fn camera_vertex_at(c: CameraSubpath, s: Surface) -> CameraVertex {
     v.extent = s.extent;
     v.throughput = c.throughput;
     v.d_vcm = c.d_vcm;
-    v.normal = s.normal;
+    v.normals = vertex_normals(s);
     v.d_vc = c.d_vc;
     v.towards = -c.direction;
     v.material = s.material;
     v.tex = s.tex;
     v.pixel = c.pixel;
     v.length = c.length;
-#if SHADING_NORMALS
-    v.shading = s.shading_normal;
-#endif
     return v;
 }
 
 // The surface a kept camera vertex lies on (what its BSDF and connections need of it).
 fn camera_vertex_surface(v: CameraVertex) -> Surface {
-#if SHADING_NORMALS
-    let shading = v.shading;
-#else
-    let shading = v.normal;
-#endif
-    return Surface(v.position, v.normal, v.material, -1, v.extent, v.tex, shading);
+    let n = v.normals;
+    return Surface(v.position, vertex_geometric_normal(n), v.material, -1, v.extent, v.tex, vertex_shading_normal(n));
 }
 
 // Every pair of stored vertices that makes a path of at most MAX_PATH_LENGTH segments, into
@@ -168,7 +161,7 @@ fn sbpt_connect(pair: ptr<function, VertexPair>) -> bool {
     let bsdf = surface_bsdf(s, cv.towards);
     let c = CameraSubpath(
         cv.position, cv.pixel, -cv.towards, cv.length, cv.throughput, 0u, cv.d_vcm, cv.d_vc,
-        0.0, 0u, vec2<f32>(0.0),
+        PathHit(),
     );
     let ray = bpt_connect(c, s, bsdf, (*pair).light, mis_counts(1.0));
     if (!is_black(ray.contribution)) {

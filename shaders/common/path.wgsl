@@ -11,9 +11,7 @@ struct CameraPath {
     rng: u32,
     last_pdf: f32,          // density of the last sampled direction, for MIS on hitting a light
     last_specular: u32,     // 1 after the camera or a delta lobe: no MIS on the next light hit
-    hit_t: f32,             // distance to the hit of the last traced ray; negative: it escaped
-    hit_primitive: u32,
-    hit_uv: vec2<f32>,
+    hit: PathHit,           // the last traced ray's hit (t < 0: it escaped)
 }
 
 // A next-event-estimation connection: if nothing blocks the segment, the contribution
@@ -55,5 +53,5 @@ var<private> path_vertex: PathVertex;
 
 // The surface the path's last ray hit.
 fn path_surface(path: CameraPath) -> Surface {
-    return surface_at(Hit(path.hit_t, path.hit_primitive, path.hit_uv, true), path.origin, path.direction);
+    return path_hit_surface(path.hit, path.origin, path.direction);
 }

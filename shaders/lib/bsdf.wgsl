@@ -33,6 +33,12 @@ struct Bsdf {
 #endif
 }
 
+// The BSDF of material `m` at a stored vertex of normals `n` (VertexNormals, in
+// shaders/lib/intersect.wgsl), reached from `towards_previous`.
+fn vertex_bsdf(m: Material, n: VertexNormals, towards_previous: vec3<f32>) -> Bsdf {
+    return bsdf_setup(m, vertex_geometric_normal(n), vertex_shading_normal(n), towards_previous);
+}
+
 // The lobes a part leaves out (`bsdf_diffuse_part`, `bsdf_glossy_part`), as bits of its
 // material's flags above the scene's MATERIAL_* bits. The glTF model reads them; the SmallVCM
 // lobes are left out by their probabilities alone.

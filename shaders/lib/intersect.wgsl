@@ -550,6 +550,110 @@ struct Surface {
     shading_normal: vec3<f32>,
 }
 
+// Where a path's last traced ray hit, as the path items carry it between passes (a `Hit`
+// without its bool, which cannot be stored): the distance, negative when the ray escaped, the
+// primitive and its barycentrics. CameraPath, CameraSubpath, LightPath and MergePath hold one.
+struct PathHit {
+    t: f32,
+    primitive: u32,
+    uv: vec2<f32>,
+}
+
+// The record of `hit`, a closest hit `trace_closest` found or not.
+fn path_hit(hit: Hit) -> PathHit {
+    return PathHit(select(-1.0, hit.t, hit.found), hit.primitive, hit.uv);
+}
+
+// Whether the ray escaped (hit nothing).
+fn path_hit_escaped(h: PathHit) -> bool {
+    return h.t < 0.0;
+}
+
+// The surface of a hit that was found, of the ray from `o` along `d`.
+fn path_hit_surface(h: PathHit, o: vec3<f32>, d: vec3<f32>) -> Surface {
+    return surface_at(Hit(h.t, h.primitive, h.uv, true), o, d);
+}
+
+// The normals a surface vertex keeps when a pass stores it to set its BSDF up again later:
+// the geometric normal and, in scenes with shading normals, the shading normal; elsewhere the
+// shading normal is the geometric one and is not stored. `VertexNormals` keeps them as they
+// are (CameraVertex, PendingMerge), in scalars, so that the record packs beside the fields
+// around it as a vec3 does (4-byte aligned: a struct of vec3s would pad each to 16 bytes);
+// `PackedNormals` keeps them octahedrally packed (LightVertex). This is the one place
+// SHADING_NORMALS decides what a stored vertex holds.
+#if SHADING_NORMALS
+struct VertexNormals {
+    geometric: array<f32, 3>,
+    shading: array<f32, 3>,
+}
+
+struct PackedNormals {
+    geometric: u32,
+    shading: u32,
+}
+
+// The normals of surface `s` to store.
+fn vertex_normals(s: Surface) -> VertexNormals {
+    return VertexNormals(vertex_normal_words(s.normal), vertex_normal_words(s.shading_normal));
+}
+
+// The shading normal of stored normals.
+fn vertex_shading_normal(n: VertexNormals) -> vec3<f32> {
+    return vertex_normal_of(n.shading);
+}
+
+// The normals of surface `s` to store, packed.
+fn packed_normals(s: Surface) -> PackedNormals {
+    return PackedNormals(encode_octahedral(s.normal), encode_octahedral(s.shading_normal));
+}
+
+// Packed normals as a vertex's BSDF is set up from them.
+fn unpacked_normals(n: PackedNormals) -> VertexNormals {
+    return VertexNormals(
+        vertex_normal_words(decode_octahedral(n.geometric)),
+        vertex_normal_words(decode_octahedral(n.shading)),
+    );
+}
+#else
+struct VertexNormals {
+    geometric: array<f32, 3>,
+}
+
+struct PackedNormals {
+    geometric: u32,
+}
+
+fn vertex_normals(s: Surface) -> VertexNormals {
+    return VertexNormals(vertex_normal_words(s.normal));
+}
+
+fn vertex_shading_normal(n: VertexNormals) -> vec3<f32> {
+    return vertex_normal_of(n.geometric);
+}
+
+fn packed_normals(s: Surface) -> PackedNormals {
+    return PackedNormals(encode_octahedral(s.normal));
+}
+
+fn unpacked_normals(n: PackedNormals) -> VertexNormals {
+    return VertexNormals(vertex_normal_words(decode_octahedral(n.geometric)));
+}
+#endif
+
+// The geometric normal of stored normals.
+fn vertex_geometric_normal(n: VertexNormals) -> vec3<f32> {
+    return vertex_normal_of(n.geometric);
+}
+
+// A normal as the scalars `VertexNormals` keeps, and back.
+fn vertex_normal_words(v: vec3<f32>) -> array<f32, 3> {
+    return array<f32, 3>(v.x, v.y, v.z);
+}
+
+fn vertex_normal_of(w: array<f32, 3>) -> vec3<f32> {
+    return vec3<f32>(w[0], w[1], w[2]);
+}
+
 fn surface_at(hit: Hit, o: vec3<f32>, d: vec3<f32>) -> Surface {
     let p = primitive_at(hit.primitive);
 #if SPHERES

@@ -53,30 +53,25 @@ struct LightPath {
     d_vcm: f32,
     d_vc: f32,
     is_finite: u32,         // 0: the light is at infinity (directional, background)
-    hit_t: f32,             // negative: the last ray escaped
-    hit_primitive: u32,
-    hit_uv: vec2<f32>,
+    hit: PathHit,           // the last traced ray's hit (t < 0: it escaped)
     index: u32,             // the sub-path's index in the frame
 }
 
 // A stored light sub-path vertex (48 bytes; 64 with shading normals): position moved off the
 // surface to the side the sub-path arrived from (the only side a connection can reach),
-// throughput, MIS quantities, the geometric normal and the direction towards the previous
-// vertex octahedrally packed, material index (24 bits) with the sub-path length (8 bits),
-// the texture coordinates wrapped to [0, 1) in 16 bits each (repeating textures look the
-// same), and the shading normal, octahedrally packed, in scenes with vertex normals.
+// throughput, MIS quantities, the normals (the shading one only in scenes with vertex
+// normals: PackedNormals) and the direction towards the previous vertex octahedrally packed,
+// material index (24 bits) with the sub-path length (8 bits), and the texture coordinates
+// wrapped to [0, 1) in 16 bits each (repeating textures look the same).
 struct LightVertex {
     position: vec3<f32>,
     d_vcm: f32,
     throughput: vec3<f32>,
     d_vc: f32,
-    normal: u32,
+    normals: PackedNormals,
     fix: u32,
     material_length: u32,
     tex: u32,
-#if SHADING_NORMALS
-    shading: u32,
-#endif
 }
 
 // Which stratum of the light a sub-path starts in: sub-path `index` of the `count` of frame
@@ -152,15 +147,13 @@ fn z_curve_compact(x: u32) -> u32 {
 fn light_path_trace(p: ptr<function, LightPath>) {
     count(COUNTER_RAYS_LIGHT, 1u);
     let hit = trace_closest((*p).origin, (*p).direction, INFINITE_DISTANCE);
-    (*p).hit_t = select(-1.0, hit.t, hit.found);
-    (*p).hit_primitive = hit.primitive;
-    (*p).hit_uv = hit.uv;
+    (*p).hit = path_hit(hit);
     (*p).length += 1u;
 }
 
 // The surface the sub-path's last ray hit.
 fn light_path_surface(p: LightPath) -> Surface {
-    return surface_at(Hit(p.hit_t, p.hit_primitive, p.hit_uv, true), p.origin, p.direction);
+    return path_hit_surface(p.hit, p.origin, p.direction);
 }
 
 // The BSDF at the hit, for importance transport.
@@ -173,7 +166,7 @@ fn light_path_bsdf(p: LightPath, s: Surface) -> Bsdf {
 // Brings the MIS quantities to the new vertex: area densities at the hit (distance squared,
 // except after a light at infinity, whose first segment has no finite length; the cosine).
 fn light_path_arrive(p: ptr<function, LightPath>, bsdf: Bsdf) {
-    let t = (*p).hit_t;
+    let t = (*p).hit.t;
     if ((*p).length > 1u || (*p).is_finite != 0u) {
         (*p).d_vcm = mis_clamp((*p).d_vcm * mis_pow(t * t));
     }
@@ -195,7 +188,7 @@ struct Arrival {
 fn light_path_land(p: ptr<function, LightPath>) -> Arrival {
     var a: Arrival;
     a.alive = false;
-    if ((*p).hit_t < 0.0) {
+    if (path_hit_escaped((*p).hit)) {
         return a;
     }
     a.s = light_path_surface(*p);
@@ -222,13 +215,10 @@ fn light_vertex_at(p: LightPath, s: Surface) -> LightVertex {
     v.d_vcm = p.d_vcm;
     v.throughput = p.throughput;
     v.d_vc = p.d_vc;
-    v.normal = encode_octahedral(s.normal);
+    v.normals = packed_normals(s);
     v.fix = encode_octahedral(towards);
     v.material_length = min(s.material, 0xffffffu) | (min(p.length, 255u) << 24u);
     v.tex = pack2x16unorm(fract(s.tex));
-#if SHADING_NORMALS
-    v.shading = encode_octahedral(s.shading_normal);
-#endif
     return v;
 }
 
@@ -240,12 +230,7 @@ fn light_vertex_length(v: LightVertex) -> u32 {
 // The BSDF at a stored vertex.
 fn light_vertex_bsdf(v: LightVertex) -> Bsdf {
     let m = material_at(v.material_length & 0xffffffu, unpack2x16unorm(v.tex));
-#if SHADING_NORMALS
-    let shading = v.shading;
-#else
-    let shading = v.normal;
-#endif
-    var bsdf = bsdf_setup(m, decode_octahedral(v.normal), decode_octahedral(shading), decode_octahedral(v.fix));
+    var bsdf = vertex_bsdf(m, unpacked_normals(v.normals), decode_octahedral(v.fix));
     bsdf.adjoint = true;
     return bsdf;
 }

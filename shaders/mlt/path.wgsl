@@ -24,7 +24,7 @@ fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath {
     var radiance = vec3<f32>(0.0);
     loop {
         trace(&path);
-        if (path.hit_t < 0.0) {
+        if (path_hit_escaped(path.hit)) {
             radiance += path_background_found(path);
             break;
         }

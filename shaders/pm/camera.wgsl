@@ -70,8 +70,7 @@ fn pm_extent() -> f32 {
 
 // A density estimation left pending at a camera vertex for a gather pass (photon mapping's
 // and VCM's): the vertex, what its BSDF is set up from (material, texture coordinates, the
-// geometric normal, the shading normal with SHADING_NORMALS, and the direction towards the
-// previous vertex), unrounded, so that the gather's BSDF
+// direction towards the previous vertex and the normals), unrounded, so that the gather's BSDF
 // is the one the vertex had (VCM merging at the vertex renders what PBPM and VCM's gather
 // render); the camera sub-path's throughput and dVM there, and its length (segments).
 struct PendingMerge {
@@ -79,13 +78,10 @@ struct PendingMerge {
     material: u32,
     throughput: vec3<f32>,
     d_vm: f32,
-    normal: vec3<f32>,
-    length: u32,
     fix: vec3<f32>,
+    length: u32,
     tex: vec2<f32>,
-#if SHADING_NORMALS
-    shading: vec3<f32>,
-#endif
+    normals: VertexNormals,
 }
 
 // The estimation to leave pending at surface `s`, reached from `towards`.
@@ -95,24 +91,16 @@ fn pending_merge_at(s: Surface, towards: vec3<f32>, throughput: vec3<f32>, d_vm:
     m.material = s.material;
     m.throughput = throughput;
     m.d_vm = d_vm;
-    m.normal = s.normal;
-    m.length = length;
     m.fix = towards;
+    m.length = length;
     m.tex = s.tex;
-#if SHADING_NORMALS
-    m.shading = s.shading_normal;
-#endif
+    m.normals = vertex_normals(s);
     return m;
 }
 
 // The BSDF at a pending estimation's vertex, as the camera sub-path set it up there.
 fn pending_merge_bsdf(m: PendingMerge) -> Bsdf {
-#if SHADING_NORMALS
-    let shading = m.shading;
-#else
-    let shading = m.normal;
-#endif
-    return bsdf_setup(material_at(m.material, m.tex), m.normal, shading, m.fix);
+    return vertex_bsdf(material_at(m.material, m.tex), m.normals, m.fix);
 }
 
 // A camera sub-path between passes, with the density estimation pending at its last vertex.
@@ -125,9 +113,7 @@ struct MergePath {
     rng: u32,
     d_vm: f32,
     flags: u32,
-    hit_t: f32,             // negative: the last ray escaped
-    hit_primitive: u32,
-    hit_uv: vec2<f32>,
+    hit: PathHit,           // the last traced ray's hit (t < 0: it escaped)
     merge: PendingMerge,
 }
 
@@ -167,9 +153,7 @@ fn pm_camera(p: ptr<function, MergePath>, index: u32) -> bool {
 fn pm_trace(p: ptr<function, MergePath>) -> bool {
     count(select(COUNTER_RAYS_EXTENSION, COUNTER_RAYS_PRIMARY, (*p).length == 0u), 1u);
     let hit = trace_closest((*p).origin, (*p).direction, INFINITE_DISTANCE);
-    (*p).hit_t = select(-1.0, hit.t, hit.found);
-    (*p).hit_primitive = hit.primitive;
-    (*p).hit_uv = hit.uv;
+    (*p).hit = path_hit(hit);
     (*p).length += 1u;
     return true;
 }
@@ -185,14 +169,14 @@ fn merge_counts_emission(p: MergePath) -> bool {
 fn pm_vertex(p: ptr<function, MergePath>) -> bool {
     (*p).flags &= ~(MERGE_PENDING | MERGE_ALIVE);
     let direction = (*p).direction;
-    if ((*p).hit_t < 0.0) {
+    if (path_hit_escaped((*p).hit)) {
         let bg = background_radiance(direction);
         if (bg.w > 0.0 && merge_counts_emission(*p)) {
             film_add((*p).pixel, (*p).throughput * bg.xyz);
         }
         return true;
     }
-    let s = surface_at(Hit((*p).hit_t, (*p).hit_primitive, (*p).hit_uv, true), (*p).origin, direction);
+    let s = path_hit_surface((*p).hit, (*p).origin, direction);
     let bsdf = surface_bsdf(s, -direction);
     if (s.light >= 0 && merge_counts_emission(*p)) {
         let le = area_light_radiance(u32(s.light), direction);

@@ -4,7 +4,7 @@
 // material.
 
 fn logic(path: ptr<function, CameraPath>) -> bool {
-    if ((*path).hit_t < 0.0) {
+    if (path_hit_escaped((*path).hit)) {
         let bg = path_background_found(*path);
         if (!is_black(bg)) {
             film_add((*path).pixel, bg);

@@ -3,9 +3,7 @@
 fn trace(path: ptr<function, CameraPath>) -> bool {
     count(select(COUNTER_RAYS_EXTENSION, COUNTER_RAYS_PRIMARY, (*path).length == 0u), 1u);
     let hit = trace_closest((*path).origin, (*path).direction, INFINITE_DISTANCE);
-    (*path).hit_t = select(-1.0, hit.t, hit.found);
-    (*path).hit_primitive = hit.primitive;
-    (*path).hit_uv = hit.uv;
+    (*path).hit = path_hit(hit);
     (*path).length += 1u;
     return true;
 }

@@ -176,10 +176,10 @@ fn vcm_reached_bucket(cell: vec3<i32>, position: vec3<f32>, radius: f32, iterati
 // the direction the light sub-path arrived from times its throughput, with VCM's weight
 // (Georgiev et al.: the light side's dVCM / eta + dVM p, the camera side's likewise, where
 // dVM = dVC / eta; PBPM's dVM alone without connections). Vertices that would make the path
-// longer than MAX_PATH_LENGTH are left out.
+// longer than MAX_PATH_LENGTH, and those `vcm_merges_vertex` declines, are left out.
 fn vcm_merge_vertex(m: ptr<function, Merge>, v: LightVertex, camera_d_vcm: f32, counts: MisCounts) {
     count(COUNTER_PM_FOUND, 1u);
-    if (light_vertex_length(v) + (*m).length > MAX_PATH_LENGTH) {
+    if (light_vertex_length(v) + (*m).length > MAX_PATH_LENGTH || !vcm_merges_vertex(*m, v)) {
         return;
     }
     let towards = decode_octahedral_24(octahedral_24(v.fix));
@@ -194,4 +194,14 @@ fn vcm_merge_vertex(m: ptr<function, Merge>, v: LightVertex, camera_d_vcm: f32, 
         w_camera = (camera_d_vcm + w_camera) / counts.merge;
     }
     (*m).sum += e.f * v.throughput * (1.0 / (w_light + 1.0 + w_camera));
+}
+
+// Hook: whether the merge `m` at a camera vertex (its position, radius, BSDF, camera sub-path
+// length and dVM) takes cached light vertex `v`, found within its radius, asked for every one
+// that keeps the path within MAX_PATH_LENGTH (`light_vertex_length`, `light_vertex_bsdf` read
+// its packed fields). Default: every such vertex. The MIS weights count every cached vertex
+// in range as merged, so one declined is light the image loses, not light another strategy
+// takes instead (a merge that takes none renders VCM without its merges' share).
+fn vcm_merges_vertex(m: Merge, v: LightVertex) -> bool {
+    return true;
 }

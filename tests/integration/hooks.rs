@@ -2,12 +2,16 @@
 //! progressive photon mapping to store caustic photons only, through the hook
 //! `pm_stores_photon` and a field it adds to the light sub-path (tests/data/graphs/
 //! ppm-caustic.ron, no function copied), rendered fused and split, beside maps of no photons
-//! and camera vertices that merge none (the hook `pm_merges_photon`); and the errors of hooks
-//! and fields that do not fit, each at its file and line.
+//! and camera vertices that merge none (the hook `pm_merges_photon`); VCM's merges that take
+//! no cached vertex (`vcm_merges_vertex`), another random-number source (`rng_u32`) and
+//! another Markov chain evaluator (`mlt_path`); and the errors of hooks and fields that do not
+//! fit, each at its file and line.
 
 use crate::bpt::sds_scene;
-use crate::common::{data, kernel_sources, render_with_layout};
-use lightgraph::run::{Image, LayoutOverrides, LoadedScene, load_scene};
+use crate::common::{
+    borrowed, data, gpu, kernel_sources, largest_relative_difference, measured, options, render, render_with_layout,
+};
+use lightgraph::run::{Image, LayoutOverrides, LoadedScene, Session, load_graph, load_scene};
 use lightgraph_engine::ir::StateStorage;
 use lightgraph_engine::{ConstValue, Graph, Layer};
 use std::path::PathBuf;
@@ -31,6 +35,17 @@ fn image(scene: &LoadedScene, graph: &str, layout: &str, state: StateStorage) ->
 fn mean(image: &Image) -> f64 {
     let sum: f64 = image.mean.iter().flat_map(|p| p[..3].iter()).map(|v| *v as f64).sum();
     sum / (3 * image.mean.len()) as f64
+}
+
+/// The standard error of [`mean`], from the pixels' variances over the frames: the pixels
+/// independent, a pixel's three channels taken as fully correlated (an upper bound).
+fn standard_error(image: &Image) -> f64 {
+    let sum: f64 = image
+        .variance
+        .iter()
+        .map(|p| (p.iter().map(|v| (*v as f64).sqrt()).sum::<f64>() / 3.0).powi(2))
+        .sum();
+    (sum / image.frames as f64).sqrt() / image.variance.len() as f64
 }
 
 #[test]
@@ -95,6 +110,97 @@ fn an_added_field_is_loaded_and_stored_in_split_kernels() {
     );
 }
 
+/// The per-pixel sums (RGB) of `graph`'s estimates in `layout` with `constants`, and of its
+/// biased channel's (VCM's merges' light): the diffuse box at 16x16, 2 samples per pixel, 2
+/// frames, seed 44.
+fn sums_and_merges(graph: &str, layout: &str, constants: &[(&str, ConstValue)]) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let scene = load_scene("cornell-diffuse").unwrap();
+    let loaded = load_graph(graph).unwrap();
+    let opts = options((16, 16), 2, 44, constants, Default::default());
+    let mut session = Session::new(gpu(), &loaded, layout, &scene, opts).unwrap();
+    for _ in 0..2 {
+        session.render_frame().unwrap();
+    }
+    let all = session.take_accumulation().unwrap();
+    let merges = session
+        .take_biased()
+        .unwrap()
+        .expect("VCM adds its merges to a biased channel");
+    let rgb = |s: &[f32; 4]| [0, 1, 2].map(|c| s[c] as f64);
+    (all.sum.iter().map(rgb).collect(), merges.iter().map(rgb).collect())
+}
+
+#[test]
+fn a_vcm_merge_that_takes_no_vertex_loses_the_merges_light_alone() {
+    let scene = load_scene("cornell-diffuse").unwrap();
+    for layout in ["VCMsk", "VCMmk"] {
+        // A radius at which merges find vertices at most pixels, and one measurement of the
+        // graph's constants for both runs (see `measured`).
+        let radius = ("PM_RADIUS", ConstValue::F32(0.05));
+        let owned = measured(&scene, "vcm", layout, ((16, 16), 2, 44), &[radius]);
+        let mut constants = borrowed(&owned);
+        constants.push(radius);
+        let (all, merges) = sums_and_merges("vcm", layout, &constants);
+        let (rest, none) = sums_and_merges(&test_graph("vcm-merges-nothing"), layout, &constants);
+        assert!(
+            none.iter().all(|p| *p == [0.0; 3]),
+            "{layout}: a merge took a vertex the hook declines"
+        );
+        let merged = merges.iter().filter(|p| p.iter().any(|v| *v > 0.0)).count();
+        assert!(merged > merges.len() / 2, "{layout}: VCM's merges lit {merged} pixels");
+        // Everything else is the same paths with the same weights: each pixel is VCM's less
+        // its merges' light, to the rounding of the sums and of the splats' atomic order.
+        for (i, ((a, r), m)) in all.iter().zip(&rest).zip(&merges).enumerate() {
+            for c in 0..3 {
+                let expected = a[c] - m[c];
+                assert!(
+                    (r[c] - expected).abs() <= 1e-4 * a[c].abs().max(1e-2),
+                    "{layout}: pixel {i} channel {c}: {} without merges, VCM {} less its merges {}",
+                    r[c],
+                    a[c],
+                    m[c]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn another_random_number_source_renders_the_same_estimate_from_other_numbers() {
+    let scene = load_scene("cornell-diffuse").unwrap();
+    let pcg = render(&scene, "pt", "NaivePTsk", (16, 16), 4, 8, 7, &[]).image;
+    let xorshift = render(&scene, &test_graph("pt-xorshift"), "NaivePTsk", (16, 16), 4, 8, 7, &[]).image;
+    let differs = largest_relative_difference(&pcg, &xorshift);
+    assert!(differs > 0.1, "the replaced rng_u32 drew the PCG's numbers: {differs}");
+    // The two image means agree within four standard errors.
+    let (a, b) = (mean(&pcg), mean(&xorshift));
+    let se = (standard_error(&pcg).powi(2) + standard_error(&xorshift).powi(2)).sqrt();
+    assert!(
+        (a - b).abs() < 4.0 * se,
+        "PCG mean {a}, xorshift mean {b}, standard error {se}"
+    );
+}
+
+#[test]
+fn a_replaced_chain_evaluator_is_the_one_the_chains_run() {
+    let scene = load_scene("cornell-diffuse").unwrap();
+    let image = render(
+        &scene,
+        &test_graph("pssmlt-first-pixel"),
+        "PSSMLTsk",
+        (16, 16),
+        1,
+        2,
+        7,
+        &[],
+    )
+    .image;
+    // Pixel 0 of the film, whichever corner of the image it is.
+    let lit: Vec<&[f32; 3]> = image.mean.iter().filter(|p| **p != [0.0; 3]).collect();
+    assert_eq!(lit.len(), 1, "the chains' splats went to {} pixels", lit.len());
+    assert!(lit[0].iter().all(|v| *v > 0.0), "{:?}", lit[0]);
+}
+
 /// A folder of its own for `files` (path, text) of a test.
 fn folder(test: &str, files: &[(&str, &str)]) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("lightgraph-hooks-{}-{test}", std::process::id()));
@@ -127,7 +233,13 @@ fn line_of(text: &str, needle: &str) -> usize {
 
 /// A graph extending ppm with `fields` (RON) for its `item_fields` and `hooks` for its hooks.
 fn extending(fields: &str, hooks: &str) -> String {
-    format!("(\n    extends: \"graphs/ppm.ron\",\n    item_fields: {{{fields}}},\n    hooks: {{{hooks}}},\n)\n")
+    extending_graph("ppm", fields, hooks)
+}
+
+/// A graph extending the built-in `base` with `fields` (RON) for its `item_fields` and `hooks`
+/// for its hooks.
+fn extending_graph(base: &str, fields: &str, hooks: &str) -> String {
+    format!("(\n    extends: \"graphs/{base}.ron\",\n    item_fields: {{{fields}}},\n    hooks: {{{hooks}}},\n)\n")
 }
 
 const STORES_BY_LENGTH: &str =
@@ -170,6 +282,38 @@ fn hooks_that_do_not_fit_are_errors_at_their_file_and_line() {
         err.starts_with(&at) && err.contains("my.wgsl defines no function 'pm_stores_photon'"),
         "{err}"
     );
+}
+
+#[test]
+fn replacements_of_other_signatures_are_errors_at_their_fn() {
+    for (base, hook, text, takes, expected) in [
+        (
+            "pssmlt",
+            "mlt_path",
+            "// The light only.\nfn mlt_path(src: ptr<function, PrimarySamples>) -> vec3<f32> {\n    return vec3<f32>(1.0);\n}\n",
+            "takes (ptr<function, PrimarySamples>) and returns vec3<f32>",
+            "`fn mlt_path(src: ptr<function, PrimarySamples>) -> MltPath` (shaders/mlt/path.wgsl:",
+        ),
+        (
+            "pt",
+            "rng_u32",
+            "// A counter.\nfn rng_u32(state: u32) -> u32 {\n    return state + 1u;\n}\n",
+            "takes (u32) and returns u32",
+            "`fn rng_u32(state: ptr<function, u32>) -> u32` (shaders/lib/rng.wgsl:",
+        ),
+        (
+            "vcm",
+            "vcm_merges_vertex",
+            "// Takes a photon.\nfn vcm_merges_vertex(m: Merge, photon: Photon) -> bool {\n    return true;\n}\n",
+            "takes (Merge, Photon) and returns bool",
+            "`fn vcm_merges_vertex(m: Merge, v: LightVertex) -> bool` (shaders/vcm/vcm.wgsl:",
+        ),
+    ] {
+        let g = extending_graph(base, "", &format!("\n        \"{hook}\": \"my.wgsl\",\n    "));
+        let err = load_error(&format!("signature-{hook}"), &g, &[("my.wgsl", text)]);
+        assert!(err.starts_with("my.wgsl:2:4:"), "{hook}: {err}");
+        assert!(err.contains(takes) && err.contains(expected), "{hook}: {err}");
+    }
 }
 
 #[test]
