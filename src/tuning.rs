@@ -151,10 +151,7 @@ impl Profile {
     /// The layout `layout` of `graph` with this profile's knobs, where `decl` is that layout as
     /// the graph writes it; any other layout (one the tuner or the layout cache made) as it is.
     pub fn apply(&self, graph: &Graph, layout: &str, decl: LayoutDecl) -> LayoutDecl {
-        let written = graph
-            .layouts
-            .get(layout)
-            .is_some_and(|w| format!("{w:?}") == format!("{decl:?}"));
+        let written = graph.layouts.get(layout).is_some_and(|w| *w == decl);
         match self.knobs(&graph.name, layout).filter(|_| written) {
             Some(k) => k.apply(decl),
             None => decl,

@@ -811,7 +811,7 @@ pub enum StateStorage {
 }
 
 /// A layout: how the passes become kernels. A graph file writes a [`LayoutWritten`].
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct LayoutDecl {
     /// What the layout is (e.g. the paper's name for it), shown by `explain`.

@@ -64,8 +64,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         "all" => graph.layouts.iter().map(|(n, d)| (n.clone(), d.clone())).collect(),
         "auto" => {
             let default = graph.layouts[&graph.default_layout].clone();
-            let tuning = &c.run_options().overrides.tuning;
-            let base = tuning.apply(Some(&gpu), &graph, &graph.default_layout, default);
+            let base = c.tuning.apply(Some(&gpu), &graph, &graph.default_layout, default);
             lightgraph_engine::auto::legal_layouts(&graph, &base)
         }
         list => list

@@ -34,9 +34,7 @@ pub(crate) fn prepare(
     if paths > u32::MAX as u64 {
         bail!("{paths} paths per frame is more than 2^32; use fewer samples per frame");
     }
-    let decl = options
-        .layout
-        .apply(options.layout.tuning.apply(Some(gpu), graph, layout, decl));
+    let decl = options.layout.resolve(Some(gpu), graph, layout, decl);
     let mut flags = kernel_flags(device_flags(gpu), scene, options.layout.all_features);
     let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
     // The scene offers every scene resource; a graph takes those it declares.

@@ -75,6 +75,12 @@ impl LayoutOverrides {
 }
 
 impl LayoutOverrides {
+    /// The layout `layout` (`decl`) of `graph` as it compiles on `gpu` (None: no GPU): the
+    /// tuning profile's knobs, then these overrides.
+    pub fn resolve(&self, gpu: Option<&Gpu>, graph: &Graph, layout: &str, decl: LayoutDecl) -> LayoutDecl {
+        self.apply(self.tuning.apply(gpu, graph, layout, decl))
+    }
+
     /// `decl` with these overrides applied.
     pub fn apply(&self, mut decl: LayoutDecl) -> LayoutDecl {
         if self.threads.is_some() {

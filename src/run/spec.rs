@@ -179,8 +179,8 @@ pub struct Run {
 /// A program compiled for a run, with what it was compiled for: a session takes it only while
 /// the run still names all of it.
 struct Compiled {
-    /// The layout's name and the layout (as Debug text: `LayoutDecl` has no equality).
-    layout: (String, String),
+    /// The layout's name and the layout.
+    layout: (String, LayoutDecl),
     /// The scene (the run's own, not one loaded again for another BVH).
     scene: Arc<LoadedScene>,
     /// The options, measured constants included.
@@ -311,7 +311,7 @@ impl Run {
                 }
             }
             Compiled {
-                layout: (name.clone(), format!("{decl:?}")),
+                layout: (name.clone(), decl.clone()),
                 scene: self.scene.clone(),
                 options: self.options.clone(),
                 adapter: gpu.describe(),
@@ -324,7 +324,7 @@ impl Run {
     /// The program compiled already for the run as it is now on `gpu`, if any.
     fn compiled_for(&self, gpu: &Gpu) -> Option<&Program> {
         let c = self.compiled.as_ref()?;
-        let same = c.layout == (self.layout.clone(), format!("{:?}", self.decl))
+        let same = (&c.layout.0, &c.layout.1) == (&self.layout, &self.decl)
             && Arc::ptr_eq(&c.scene, &self.scene)
             && c.options == self.options
             && c.adapter == gpu.describe();
@@ -359,12 +359,10 @@ impl Run {
         let (device, target) = gpu.map(|g| (device_flags(g), g.target())).unwrap_or_default();
         let flags = kernel_flags(device, &self.scene, self.options.layout.all_features);
         let spec = specialization(&self.graph, &self.scene.scene, &self.options, flags);
-        let tuned = self
+        let decl = self
             .options
             .layout
-            .tuning
-            .apply(gpu, &self.graph, &self.layout, self.decl.clone());
-        let decl = self.options.layout.apply(tuned);
+            .resolve(gpu, &self.graph, &self.layout, self.decl.clone());
         let target = self.options.layout.on_target(target);
         lightgraph_engine::compile(&self.graph, &self.layout, &decl, &spec, &target)
             .map_err(|e| image_past_binding_limit(e.into(), &self.graph, (self.options.width, self.options.height)))
