@@ -47,6 +47,8 @@ pub mod material_flags {
     /// reflectance are a table in `plastic_tables` ([`crate::build::plastic`]) at the offset
     /// `phong_exponent` holds.
     pub const ROUGH_PLASTIC: u32 = 512;
+    /// An index-matched boundary between media: rays cross it without a vertex (MEDIA).
+    pub const NULL: u32 = 1024;
 }
 
 /// Primitive kinds, as `Primitive::kind` stores them.
@@ -403,4 +405,42 @@ pub fn encode_octahedral(n: [f32; 3]) -> u32 {
     }
     let snorm = |v: f32| ((v.clamp(-1.0, 1.0) * 32767.0).round() as i16) as u16 as u32;
     snorm(x) | snorm(y) << 16
+}
+
+/// A homogeneous medium (`Medium` in WGSL), see [`crate::model::media::Medium`]: its
+/// coefficients already scaled.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, Pod, Zeroable)]
+pub struct GpuMedium {
+    /// Scattering coefficient σs per channel.
+    pub sigma_s: [f32; 3],
+    /// The Henyey-Greenstein mean cosine (0: isotropic).
+    pub g: f32,
+    /// Extinction coefficient σt = σa + σs per channel.
+    pub sigma_t: [f32; 3],
+    /// Reserved for the kind of medium (0: homogeneous).
+    pub kind: u32,
+}
+
+/// The media of a material's two sides (`vec2<i32>` in WGSL): indices into the media, -1 for
+/// vacuum.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuMaterialMedia {
+    /// The medium behind the surface (opposite its normal).
+    pub interior: i32,
+    /// The medium in front of it.
+    pub exterior: i32,
+}
+
+/// Scene-wide facts of media (`MediaInfo` in WGSL).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, Pod, Zeroable)]
+pub struct GpuMediaInfo {
+    /// The medium the camera is in, or -1 (vacuum).
+    pub camera_medium: i32,
+    /// How many media there are.
+    pub count: u32,
+    /// Padding to 16 bytes.
+    pub pad: [u32; 2],
 }

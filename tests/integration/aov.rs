@@ -70,6 +70,8 @@ fn textured_plane() -> LoadedScene {
         }],
         lights: vec![],
         integrator: Integrator::default(),
+        media: Default::default(),
+        camera_medium: None,
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),

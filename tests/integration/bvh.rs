@@ -164,6 +164,8 @@ fn scene_of(shapes: Vec<Shape>) -> Scene {
             scale: 1.0,
         }],
         integrator: Integrator::default(),
+        media: Default::default(),
+        camera_medium: None,
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),

@@ -31,6 +31,8 @@ fn scene(
         shapes,
         lights,
         integrator: Integrator::default(),
+        media: Default::default(),
+        camera_medium: None,
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),

@@ -1,6 +1,6 @@
 //! The rules a scene must satisfy wherever it comes from (a RON file, a glTF asset, a Mitsuba
 //! file): a field of view in (0, 180) degrees, at most one environment light and spot cones
-//! within 0 to 90 degrees, and, once its imports are resolved, geometry and light.
+//! within 0 to 90 degrees, and, once its imports are resolved, geometry, light and sound media.
 
 use super::{Light, Scene, Shape};
 
@@ -53,5 +53,5 @@ pub(crate) fn check_resolved(scene: &Scene) -> Result<(), String> {
     if !emissive && scene.lights.is_empty() {
         return Err("the scene has no light: add an emissive shape or a light (Point, Directional, Background)".into());
     }
-    Ok(())
+    super::media::check_media(scene).map_err(|(_, message)| message)
 }

@@ -4,6 +4,7 @@
 pub mod checks;
 pub mod environment;
 pub mod framing;
+pub mod media;
 pub mod placement;
 pub mod texture;
 
@@ -50,6 +51,13 @@ pub struct Scene {
     /// Lights that are not emissive shapes.
     #[serde(default)]
     pub lights: Vec<Light>,
+    /// Participating media by name (docs/media.md): materials name them as the `interior`
+    /// and `exterior` of their surfaces, and `camera_medium` as the camera's.
+    #[serde(default)]
+    pub media: BTreeMap<String, media::Medium>,
+    /// The medium the camera is in (a name of `media`); none: vacuum.
+    #[serde(default)]
+    pub camera_medium: Option<String>,
     /// Path-sampling settings the scene was specified with.
     #[serde(default)]
     pub integrator: Integrator,
@@ -173,6 +181,17 @@ pub struct Material {
     /// glTF's metallic-roughness model; when present it replaces the SmallVCM lobes above.
     #[serde(default)]
     pub pbr: Option<Pbr>,
+    /// The medium behind the surface (opposite its normal; inside a sphere or a closed mesh
+    /// wound outwards), a name of the scene's `media`; none: vacuum.
+    #[serde(default)]
+    pub interior: Option<String>,
+    /// The medium in front of the surface (the side its normal faces); none: vacuum.
+    #[serde(default)]
+    pub exterior: Option<String>,
+    /// An index-matched boundary between media (Mitsuba's `null`): rays cross it unchanged,
+    /// without a path vertex, into its `interior` or `exterior`. It has no lobes.
+    #[serde(default)]
+    pub null: bool,
 }
 
 /// glTF 2.0's metallic-roughness material: a diffuse base under a microfacet specular layer
@@ -332,6 +351,9 @@ impl Default for Material {
             ior: mirror_ior(),
             two_sided: false,
             pbr: None,
+            interior: None,
+            exterior: None,
+            null: false,
         }
     }
 }

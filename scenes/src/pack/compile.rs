@@ -66,6 +66,10 @@ pub struct CompiledScene {
     pub clipped_primitives: usize,
     /// Whether the camera has a thin lens (depth of field).
     pub thin_lens: bool,
+    /// The participating media, each material's sides' media and the camera's.
+    pub media: super::media::PackedMedia,
+    /// Whether the scene has media or index-matched boundaries (the MEDIA feature).
+    pub uses_media: bool,
 }
 
 impl CompiledScene {
@@ -100,6 +104,7 @@ impl CompiledScene {
                     .map_err(|e| format!("material '{name}': {e}"))
             })
             .collect::<Result<Vec<_>, String>>()?;
+        let media = super::media::pack(scene)?;
         let plastic_tables = if tables.data.is_empty() { vec![0.0] } else { tables.data };
         let flatten::Geometry {
             primitives: prims,
@@ -164,6 +169,8 @@ impl CompiledScene {
             bvh_time,
             clipped_primitives,
             thin_lens: scene.camera.as_ref().is_some_and(|c| c.lens.is_some()),
+            media,
+            uses_media: crate::model::media::uses_media(scene),
         })
     }
 }

@@ -56,6 +56,10 @@ pub const ALL: &[(&str, &str)] = &[
     ),
     ("LIGHT_BACKGROUND", "a constant background"),
     ("LIGHT_ENVIRONMENT", "an environment map"),
+    (
+        "MEDIA",
+        "participating media: free-flight sampling, transmittance, phase functions, index-matched boundaries",
+    ),
 ];
 
 /// The features `scene` uses, as flag names.
@@ -149,6 +153,7 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
     );
     add("LIGHT_BACKGROUND", has(light_kind::BACKGROUND));
     add("LIGHT_ENVIRONMENT", has(light_kind::ENVIRONMENT));
+    add("MEDIA", scene.uses_media);
     out
 }
 

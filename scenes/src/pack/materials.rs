@@ -14,7 +14,8 @@ pub(crate) fn gpu_material(
     textures: &[texture::Texture],
     tables: &mut plastic::PlasticTables,
 ) -> Result<GpuMaterial, String> {
-    let two_sided = if m.two_sided { gpu::material_flags::TWO_SIDED } else { 0 };
+    let side_flags = if m.two_sided { gpu::material_flags::TWO_SIDED } else { 0 }
+        | if m.null { gpu::material_flags::NULL } else { 0 };
     Ok(match &m.pbr {
         None => GpuMaterial {
             diffuse: m.diffuse,
@@ -22,7 +23,7 @@ pub(crate) fn gpu_material(
             phong: m.phong,
             ior: m.ior,
             mirror: m.mirror,
-            flags: two_sided,
+            flags: side_flags,
             ..GpuMaterial::default()
         },
         Some(p) => {
@@ -54,7 +55,7 @@ pub(crate) fn gpu_material(
                 ior: p.ior,
                 mirror: eta,
                 phong: k,
-                flags: two_sided | gpu::material_flags::PBR | mask | thin | rough_plastic | pbr_model_flags(p),
+                flags: side_flags | gpu::material_flags::PBR | mask | thin | rough_plastic | pbr_model_flags(p),
                 emission: p.emission,
                 metallic: p.metallic,
                 roughness: p.roughness,

@@ -6,6 +6,7 @@
 pub mod compile;
 pub mod features;
 pub mod materials;
+pub mod media;
 pub mod resources;
 pub mod split;
 pub mod textures;

@@ -73,6 +73,12 @@ impl CompiledScene {
             "attributes".to_string(),
             bytemuck::cast_slice(&self.attributes).to_vec(),
         );
+        out.insert("media".to_string(), bytemuck::cast_slice(&self.media.media).to_vec());
+        out.insert(
+            "material_media".to_string(),
+            bytemuck::cast_slice(&self.media.material_media).to_vec(),
+        );
+        out.insert("media_info".to_string(), bytemuck::bytes_of(&self.media.info).to_vec());
         out.insert("textures".to_string(), bytemuck::cast_slice(&self.textures).to_vec());
         out.insert("texels".to_string(), bytemuck::cast_slice(&self.texels).to_vec());
         out

@@ -3,6 +3,7 @@
 
 use crate::error::SceneError;
 use crate::model::checks::{check_fov, check_lights};
+use crate::model::media::check_media;
 use crate::model::{Scene, Shape, placement};
 
 fn locate(text: &str, needle: &str) -> Option<(usize, usize)> {
@@ -63,6 +64,7 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
         ));
     }
     check_lights(&scene.lights).map_err(|(needle, message)| err(needle, message))?;
+    check_media(&scene).map_err(|(needle, message)| err(&needle, message))?;
     if !scene.gltf_instances.is_empty() && scene.gltf.is_none() {
         return Err(err(
             "gltf_instances",

@@ -27,6 +27,8 @@ pub fn scene_from_gltf(path: &std::path::Path) -> Result<(Scene, Vec<String>), S
         shapes: Vec::new(),
         lights: Vec::new(),
         integrator: Default::default(),
+        media: BTreeMap::new(),
+        camera_medium: None,
         gltf: Some(file.clone()),
         gltf_diffuse: false,
         gltf_instances: Vec::new(),

@@ -124,6 +124,8 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         shapes: builder.shapes,
         lights,
         integrator,
+        media: BTreeMap::new(),
+        camera_medium: None,
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),
