@@ -16,6 +16,9 @@ usage="usage: $0 SMALLUPBP_CHECKOUT [BUILD_DIR]"
 [ $# -ge 1 ] && [ $# -le 2 ] || { echo "$usage" >&2; exit 2; }
 src=$(cd "$1" 2>/dev/null && pwd) || { echo "build.sh: $1: no such folder" >&2; exit 2; }
 build=${2:-$here/build}
+case "$here$src$build" in
+    *[[:space:]]*) echo "build.sh: the checkout, build and script paths must not contain spaces" >&2; exit 2 ;;
+esac
 for f in SmallUPBP/src/SmallUPBP.cxx embree-2.0/embree/embree.cpp \
          OpenEXR/src/OpenEXR/IlmImf/ImfRgbaFile.cpp; do
     [ -f "$src/$f" ] || { echo "build.sh: $src/$f missing: not a SmallUPBP checkout?" >&2; exit 2; }
@@ -25,7 +28,7 @@ CC=${CC:-gcc}
 JOBS=${JOBS:-$(nproc)}
 OPT=${OPT:-"-O3 -msse4.2"}
 NICE=${NICE:-10}
-for tool in "$CXX" "$CC" python3 ar; do
+for tool in "$CXX" "$CC" python3; do
     command -v "$tool" >/dev/null || { echo "build.sh: $tool not found" >&2; exit 2; }
 done
 echo 'int main(){return 0;}' | "$CXX" -fopenmp -x c++ - -o /dev/null 2>/dev/null \
@@ -50,7 +53,7 @@ EXR_INC="-I$exr/config -I$exr/Half -I$exr/Iex -I$exr/IexMath -I$exr/IlmThread -I
 CXXFLAGS_EXR="-std=c++11 $OPT -DNDEBUG -w $EXR_INC"
 CFLAGS_ZLIB="$OPT -DNDEBUG -w -I$exr/zlib"
 CXXFLAGS_EMB="-std=c++11 $OPT -DNDEBUG -w -flax-vector-conversions -include x86intrin.h -I$emb -I$build/gen"
-CXXFLAGS_SUP="-std=c++11 $OPT -fopenmp -w -Wno-narrowing -flax-vector-conversions \
+CXXFLAGS_SUP="-std=c++11 $OPT -DNDEBUG -fopenmp -w -Wno-narrowing -flax-vector-conversions \
  -include $here/linux_compat.h -I$sup -I$emb $EXR_INC"
 
 # compile OUT_DIR LIST_FILE COMPILER FLAGS...: each source named in LIST_FILE (relative to
@@ -127,8 +130,9 @@ compile "$build/obj" "$build/gen/smallupbp.list" "$CXX" $CXXFLAGS_SUP
 
 # --- OpenEXR 2.2 (static, Linux configuration in config/) --------------------------------
 cd "$exr"
-ls Half/half.cpp Iex/*.cpp IexMath/*.cpp Imath/*.cpp IlmImf/Imf*.cpp IlmImfUtil/*.cpp \
-   IlmThread/*.cpp | grep -v Win32 > "$build/gen/exr.list"
+# (Not IlmImfUtil, which the Visual Studio project also compiles: SmallUPBP does not use it.)
+ls Half/half.cpp Iex/*.cpp IexMath/*.cpp Imath/*.cpp IlmImf/Imf*.cpp IlmThread/*.cpp \
+    | grep -v Win32 > "$build/gen/exr.list"
 ls zlib/*.c > "$build/gen/zlib.list"
 if [ ! -f IlmImf/dwaLookups.h ]; then
     # A generated table that the repository ships; regenerate it when a copy lacks it.
