@@ -16,12 +16,12 @@ class PortError(Exception):
     pass
 
 
-def replace(path, old, new, count=None):
-    """Replace `old` by `new` in `path`; `count` = expected number of occurrences (None: >= 1)."""
+def replace(path, old, new, count):
+    """Replace `old` by `new` in `path`, expecting exactly `count` occurrences."""
     text = path.read_text(encoding="latin-1")
     found = text.count(old)
-    if found == 0 or (count is not None and found != count):
-        raise PortError(f"{path}: expected {count or 'some'} of {old!r}, found {found}")
+    if found != count:
+        raise PortError(f"{path}: expected {count} of {old!r}, found {found}")
     path.write_text(text.replace(old, new), encoding="latin-1")
 
 
@@ -83,6 +83,7 @@ def fix_includes(path, src):
 
 
 def port_smallupbp(src):
+    """The edits to SmallUPBP's own sources (`src` = its SmallUPBP/src folder)."""
     for path in sorted(src.rglob("*")):
         if path.suffix in (".hxx", ".cxx", ".h"):
             fix_includes(path, src)
