@@ -13,7 +13,12 @@ fn path_through_media(path: ptr<function, CameraPath>) {
     (*path).vertex = VERTEX_SURFACE;
     for (var i = 0u; i < MEDIA_MAX_CROSSINGS; i++) {
         let escaped = path_hit_escaped((*path).hit);
-        let flight = medium_free_flight((*path).medium, select((*path).hit.t, INFINITE_DISTANCE, escaped), rng_f32(&rng));
+        // No number is drawn in vacuum: a scene without media renders as it does without MEDIA.
+        var u = 0.0;
+        if ((*path).medium != VACUUM) {
+            u = rng_f32(&rng);
+        }
+        let flight = medium_free_flight((*path).medium, select((*path).hit.t, INFINITE_DISTANCE, escaped), u);
         (*path).throughput *= flight.weight;
         if (flight.scattered) {
             (*path).hit.t = flight.t;

@@ -355,6 +355,12 @@ fn render_runs(
         let decl = e.graph.layouts[&e.layout].clone();
         let kind = scenes.load_for(args.common.bvh, &e.layout, &decl)?;
         kinds.get_or_insert_with(|| scene_kinds(&scenes.get(kind).compiled));
+        // A graph that does not handle a feature of the scene (participating media) renders
+        // nothing here; the others are compared with each other.
+        if let Err(why) = lightgraph::run::checks::graph_handles_scene(&e.graph, scenes.get(kind)) {
+            eprintln!("verify: {scene}: {} left out: {why}", e.label);
+            continue;
+        }
         let loaded = (decl, scenes.shared(kind));
         let run = render_run(args, gpu, loaded, e, i as u32).with_context(|| format!("estimator {}", e.label))?;
         let stem = args.out.join(folder).join(lightgraph::compare::file_stem(&e.label));

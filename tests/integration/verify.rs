@@ -464,3 +464,19 @@ fn the_bias_allowed_is_that_of_the_merges_light() {
         "pt vs mvcm: {chains}, pt vs vcm: {merges}"
     );
 }
+
+#[test]
+fn graphs_that_do_not_handle_media_are_left_out_of_a_media_scene() {
+    let args = ["--graphs", "pt,bpt-lvc,vcm", "--scenes", "media-fog"];
+    let (status, stderr, out, rows) = verify_with("verify-media", &args, &frames("8"));
+    assert_eq!(status, Some(0), "{stderr}");
+    for graph in ["bpt-lvc", "vcm"] {
+        assert!(
+            stderr.contains(&format!("media-fog: {graph} left out: graph '{graph}' does not handle participating media")),
+            "{stderr}"
+        );
+    }
+    // Path tracing rendered the scene; no pair was left to compare.
+    assert!(out.join("media-fog/pt.exr").exists(), "{stderr}");
+    assert!(rows.is_empty(), "{rows:?}");
+}
