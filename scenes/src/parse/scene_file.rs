@@ -3,6 +3,7 @@
 
 use crate::error::SceneError;
 use crate::model::checks::{check_fov, check_lights};
+use crate::model::enclosure::check_enclosures;
 use crate::model::media::check_media;
 use crate::model::{Scene, Shape, placement};
 
@@ -65,6 +66,7 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
     }
     check_lights(&scene.lights).map_err(|(needle, message)| err(needle, message))?;
     check_media(&scene).map_err(|(needle, message)| err(&needle, message))?;
+    check_enclosures(&scene).map_err(|(needle, message)| err(&needle, message))?;
     if !scene.gltf_instances.is_empty() && scene.gltf.is_none() {
         return Err(err(
             "gltf_instances",
@@ -143,5 +145,32 @@ pub(crate) mod tests {
         // Spheres do not emit: a field a shape does not have is refused, not ignored.
         let e = error(&BASE.replace("material: \"m\")", "material: \"m\", emission: (1.0, 1.0, 1.0))"));
         assert!(e.starts_with("s.ron:4:") && e.contains("emission"), "{e}");
+    }
+
+    #[test]
+    fn media_parse_and_an_open_boundary_is_refused_at_its_material() {
+        let with_media = |shape: &str| {
+            BASE.replace(
+                "materials: {",
+                "media: { \"fog\": (sigma_a: (0.1, 0.1, 0.1), sigma_s: (0.5, 0.5, 0.5), phase: HenyeyGreenstein(g: 0.3)) },\n    \
+                 camera_medium: \"fog\",\n    materials: {\n        \"box\": (null: true, interior: \"fog\"),",
+            )
+            .replace("shapes: [", &format!("shapes: [{shape}, "))
+        };
+        let scene = parse_scene(
+            "s.ron",
+            &with_media("Sphere(center: (0.0, 0.0, 0.0), radius: 5.0, material: \"box\")"),
+        )
+        .unwrap();
+        assert_eq!(scene.camera_medium.as_deref(), Some("fog"));
+        assert_eq!(scene.media["fog"].phase.g(), 0.3);
+        assert_eq!(scene.materials["box"].interior.as_deref(), Some("fog"));
+        let e = error(&with_media(
+            "Quad(corners: ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0)), material: \"box\")",
+        ));
+        assert!(
+            e.starts_with("s.ron:6:9: medium 'fog' is not enclosed") && e.contains("material 'box'"),
+            "{e}"
+        );
     }
 }

@@ -1,7 +1,8 @@
 //! Mitsuba scene files (XML, format versions 0.5 to 3.x, as Bitterli's scene collection and
 //! Mitsuba 3 write them) imported into the scene model: shapes ([`shapes`], [`serialized`]
 //! meshes) with their `to_world` transforms ([`transform`]), `shapegroup`s placed by
-//! `instance`s, bsdfs ([`materials`]), emitters ([`emitters`]), the perspective sensor and its film
+//! `instance`s, bsdfs ([`materials`]), homogeneous media ([`media`]) inside and outside shapes
+//! and around the sensor, emitters ([`emitters`]), the perspective sensor and its film
 //! ([`camera`]), the integrator's `max_depth`, `<default>` parameters and `$name`
 //! substitution, and `<ref>`s by id ([`xml`]).
 //!
@@ -13,6 +14,7 @@ pub mod camera;
 pub mod emitters;
 pub mod export;
 pub mod materials;
+pub mod media;
 pub mod mesh;
 pub mod serialized;
 pub mod shapes;
@@ -24,6 +26,7 @@ use crate::error::SceneError;
 use crate::model::{Integrator, Rgb, Scene, Shape};
 use glam::{Mat4, Vec3};
 use materials::Materials;
+use media::Media;
 use roxmltree::Node;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -75,7 +78,11 @@ const MAX_INSTANCING: u32 = 8;
 /// What the shapes of a scene add up to.
 struct Builder {
     materials: Materials,
+    media: Media,
     shapes: Vec<Shape>,
+    /// A file of format 0.x: a shape with a medium and no bsdf is an index-matched boundary
+    /// (Mitsuba 0.6's `null`), not Mitsuba 3's diffuse.
+    legacy: bool,
 }
 
 fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene> {
@@ -92,29 +99,40 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
     }
     let mut builder = Builder {
         materials: Materials::default(),
+        media: Media::default(),
         shapes: Vec::new(),
+        legacy: major == Some(0),
     };
     let mut lights = Vec::new();
     let mut camera = None;
+    let mut camera_medium = None;
     let mut integrator = Integrator::default();
+    let mut path_integrator = None;
     for node in root.children().filter(|n| n.is_element()) {
         match node.tag_name().name() {
             "default" => ctx.add_default(node)?,
-            "integrator" => integrator.max_path_length = max_depth(ctx, node)?.unwrap_or(integrator.max_path_length),
+            "integrator" => {
+                integrator.max_path_length = max_depth(ctx, node)?.unwrap_or(integrator.max_path_length);
+                path_integrator = (ctx.plugin_type(node)? == "path").then_some(node);
+            }
             "sensor" => {
                 if camera.is_some() {
                     ctx.warn(node, "a second sensor is ignored");
                 } else {
                     camera = Some(camera::sensor(ctx, node)?);
+                    if let Some(medium) = camera::medium(ctx, node)? {
+                        camera_medium = Some(builder.media.name_of(ctx, medium)?);
+                    }
                 }
             }
             "shape" => shape(ctx, &mut builder, node, Mat4::IDENTITY, 0)?,
             "emitter" => lights.extend(emitters::light(ctx, node)?),
             // Used where they are referenced.
-            "bsdf" | "texture" => {}
+            "bsdf" | "texture" | "medium" | "phase" => {}
             _ => ctx.warn(node, "unsupported element: ignored"),
         }
     }
+    unused_media(ctx, root, &builder.media);
     let mut scene = Scene {
         description: format!("the Mitsuba scene {}", ctx.file),
         camera: None,
@@ -124,8 +142,8 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         shapes: builder.shapes,
         lights,
         integrator,
-        media: BTreeMap::new(),
-        camera_medium: None,
+        media: builder.media.media,
+        camera_medium,
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),
@@ -143,17 +161,36 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
             scene.camera = Some(crate::model::framing::default_camera(&scene));
         }
     }
+    if let Some(node) = path_integrator
+        && crate::model::media::uses_media(&scene)
+    {
+        ctx.warn(
+            node,
+            "Mitsuba's path integrator renders no media (its volpath does): lightgraph renders them",
+        );
+    }
     crate::model::checks::check_lights(&scene.lights).map_err(|(_, message)| ctx.error(root, message))?;
     crate::model::checks::check_resolved(&scene).map_err(|message| ctx.error(root, message))?;
     Ok(scene)
 }
 
+/// Warns about the top-level media no shape or sensor refers to.
+fn unused_media(ctx: &mut Context, root: Node, media: &Media) {
+    for node in root.children().filter(|n| n.has_tag_name("medium")) {
+        if !node.attribute("id").is_some_and(|id| media.media.contains_key(id)) {
+            ctx.warn(node, "no shape or sensor refers to this medium: ignored");
+        }
+    }
+}
+
 /// An integrator's `max_depth` (Mitsuba's -1, unlimited, is capped at 100 with a warning);
-/// the integrator itself is lightgraph's graph, so another type is warned about.
+/// the integrator itself is lightgraph's graph, so a type other than `path` and `volpath` is
+/// warned about.
 fn max_depth(ctx: &mut Context, node: Node) -> Result<Option<u32>> {
     let kind = ctx.plugin_type(node)?;
     let props = Props::new(node);
-    if kind != "path" {
+    let path = matches!(kind.as_str(), "path" | "volpath");
+    if !path {
         ctx.warn(
             node,
             format!("the integrator '{kind}' is not used: --graph chooses the estimator (max_depth is kept)"),
@@ -168,7 +205,7 @@ fn max_depth(ctx: &mut Context, node: Node) -> Result<Option<u32>> {
         Some(0) => return Err(ctx.error(node, "max_depth 0 renders nothing")),
         Some(d) => Some(d.min(100_000) as u32),
     };
-    if kind == "path" {
+    if path {
         props.finish(ctx);
     }
     Ok(depth)
@@ -211,10 +248,7 @@ fn shape<'a, 'i>(
         _ => {}
     }
     let emitters = props.nested(ctx, "emitter")?;
-    let material = match props.nested(ctx, "bsdf")?.first() {
-        Some(&bsdf) => b.materials.name_of(ctx, bsdf)?,
-        None => b.materials.default_name(!emitters.is_empty()),
-    };
+    let material = material(ctx, b, &props, !emitters.is_empty())?;
     let mut emission: Option<Rgb> = None;
     for emitter in emitters {
         emission = emitters::area(ctx, emitter)?;
@@ -274,6 +308,41 @@ fn shape<'a, 'i>(
     }
     props.finish(ctx);
     Ok(())
+}
+
+/// The material of a shape: its bsdf (or the default one) with its `interior` and `exterior`
+/// media, a variant of the bsdf's material named after them (`glass (interior: water)`).
+/// Without a bsdf, a shape with a medium is Mitsuba 3's default diffuse, or in a 0.x file
+/// Mitsuba 0.6's index-matched boundary (`null`).
+fn material<'a, 'i>(ctx: &mut Context<'a, 'i>, b: &mut Builder, props: &Props<'a, 'i>, emits: bool) -> Result<String> {
+    let mut sides = Vec::new();
+    for slot in ["interior", "exterior"] {
+        if let Some(node) = media::slot(ctx, props, slot)? {
+            sides.push((slot, b.media.name_of(ctx, node)?));
+        }
+    }
+    let base = match props.nested(ctx, "bsdf")?.first() {
+        Some(&bsdf) => b.materials.name_of(ctx, bsdf)?,
+        None if b.legacy && !emits && !sides.is_empty() => b.materials.null_name(),
+        None => b.materials.default_name(emits),
+    };
+    if sides.is_empty() {
+        return Ok(base);
+    }
+    let described: Vec<String> = sides.iter().map(|(slot, m)| format!("{slot}: {m}")).collect();
+    let name = format!("{base} ({})", described.join(", "));
+    if !b.materials.materials.contains_key(&name) {
+        let mut m = b.materials.materials[&base].clone();
+        for (slot, medium) in sides {
+            *if slot == "interior" {
+                &mut m.interior
+            } else {
+                &mut m.exterior
+            } = Some(medium);
+        }
+        b.materials.materials.insert(name.clone(), m);
+    }
+    Ok(name)
 }
 
 /// The scale of `m` when it is a rotation, uniform scale and translation.
@@ -407,7 +476,7 @@ mod tests {
             "{w}"
         );
         assert!(
-            w.contains("version-0.5.xml:52:2: <medium type=\"homogeneous\" id=\"fog\">: unsupported element"),
+            w.contains("version-0.5.xml:52:2: <medium type=\"homogeneous\" id=\"fog\">: no shape or sensor refers to this medium: ignored"),
             "{w}"
         );
         assert_eq!(
