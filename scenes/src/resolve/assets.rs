@@ -77,10 +77,13 @@ fn fetch_help(asset: &str, root: Option<&std::path::Path>) -> String {
 }
 
 /// Makes every glTF material of `scene` (named `gltf:...`) a pure Lambertian: no specular
-/// layer (index of refraction 1), no metal, no transmission; base colour and alpha stay.
+/// layer (index of refraction 1), no metal, no transmission and so no medium inside; base
+/// colour and alpha stay.
 fn make_diffuse(scene: &mut Scene) {
     let gltf = scene.materials.iter_mut().filter(|(name, _)| name.starts_with("gltf:"));
-    for p in gltf.filter_map(|(_, m)| m.pbr.as_mut()) {
+    for (_, m) in gltf {
+        m.interior = None;
+        let Some(p) = m.pbr.as_mut() else { continue };
         p.ior = 1.0;
         p.metallic = 0.0;
         p.transmission = 0.0;
