@@ -148,6 +148,27 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn the_media_example_of_the_usage_guide_parses() {
+        let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/usage.md")).unwrap();
+        let block = guide
+            .split("```ron")
+            .skip(1)
+            .find(|b| b.contains("camera_medium"))
+            .and_then(|b| b.split("```").next())
+            .expect("a RON example of media in docs/usage.md");
+        let text = format!(
+            "Scene(\n    camera: (position: (0.0, 0.0, 3.0), look: Target((0.0, 0.0, 0.0)), up: (0.0, 1.0, 0.0), fov_degrees: 40.0),\n\
+             {block}\n    shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 10.0, material: \"fog-box\"), \
+             Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, material: \"glass\")],\n\
+             lights: [Point(position: (0.0, 2.0, 0.0), intensity: (1.0, 1.0, 1.0))],\n)"
+        );
+        let scene = parse_scene("usage.md", &text).unwrap();
+        assert_eq!(scene.camera_medium.as_deref(), Some("fog"));
+        assert_eq!(scene.materials["glass"].interior.as_deref(), Some("juice"));
+        assert!(scene.materials["fog-box"].null);
+    }
+
+    #[test]
     fn media_parse_and_an_open_boundary_is_refused_at_its_material() {
         let with_media = |shape: &str| {
             BASE.replace(
