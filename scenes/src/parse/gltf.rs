@@ -727,7 +727,7 @@ impl MaterialImport<'_> {
     fn attenuation(&mut self, name: &str, m: &gltf::Material) -> Result<Option<String>, String> {
         let Some(volume) = m.volume() else { return Ok(None) };
         let (color, distance) = (volume.attenuation_color(), volume.attenuation_distance());
-        if color.iter().any(|c| !(0.0..=1.0).contains(c)) || !(distance > 0.0) {
+        if color.iter().any(|c| !(0.0..=1.0).contains(c)) || distance.is_nan() || distance <= 0.0 {
             return Err(format!(
                 "material '{name}': KHR_materials_volume's attenuationColor {color:?} must lie in [0, 1] and its attenuationDistance {distance} be positive"
             ));

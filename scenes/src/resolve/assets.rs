@@ -90,3 +90,35 @@ fn make_diffuse(scene: &mut Scene) {
         p.textures.metallic_roughness = None;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Material, Pbr};
+
+    #[test]
+    fn diffuse_gltf_materials_lose_their_transmission_and_the_medium_inside() {
+        let mut scene = crate::parse::scene_file::parse_scene("s.ron", crate::parse::scene_file::tests::BASE).unwrap();
+        let glass = Material {
+            pbr: Some(Pbr {
+                transmission: 1.0,
+                ..Default::default()
+            }),
+            interior: Some("gltf:glass".into()),
+            ..Default::default()
+        };
+        scene.materials.insert("gltf:glass".into(), glass.clone());
+        scene.materials.insert("mine".into(), glass);
+        make_diffuse(&mut scene);
+        let m = &scene.materials["gltf:glass"];
+        assert_eq!(
+            (m.pbr.as_ref().unwrap().transmission, m.interior.as_deref()),
+            (0.0, None)
+        );
+        assert_eq!(
+            scene.materials["mine"].interior.as_deref(),
+            Some("gltf:glass"),
+            "the scene's own stay"
+        );
+    }
+}

@@ -70,13 +70,7 @@ impl Materials {
     /// The name of the material of bsdf `node` (a `<bsdf>` element), converting it on first
     /// use.
     pub fn name_of<'a, 'i>(&mut self, ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<String> {
-        let name = match node.attribute("id") {
-            Some(id) => id.to_string(),
-            None => {
-                let (l, c) = ctx.at(node);
-                format!("mitsuba:{l}:{c}")
-            }
-        };
+        let name = ctx.name(node);
         if !self.materials.contains_key(&name) {
             let material = self.bsdf(ctx, node, 0)?;
             self.materials.insert(name.clone(), material);

@@ -21,13 +21,7 @@ pub struct Media {
 impl Media {
     /// The name of the medium of `node` (a `<medium>` element), converting it on first use.
     pub fn name_of<'a, 'i>(&mut self, ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<String> {
-        let name = match node.attribute("id") {
-            Some(id) => id.to_string(),
-            None => {
-                let (l, c) = ctx.at(node);
-                format!("mitsuba:{l}:{c}")
-            }
-        };
+        let name = ctx.name(node);
         if !self.media.contains_key(&name) {
             let medium = medium(ctx, node)?;
             self.media.insert(name.clone(), medium);
@@ -159,7 +153,7 @@ fn phase(ctx: &mut Context, node: Node) -> Result<Phase> {
         "isotropic" => Phase::Isotropic,
         "hg" => {
             let g = props.float(ctx, "g")?.unwrap_or(0.8);
-            if !(g.abs() < 1.0) {
+            if g.abs() >= 1.0 {
                 let at = props.get("g").unwrap_or(node);
                 return Err(ctx.error(at, format!("g {g} is not within (-1, 1)")));
             }
@@ -178,16 +172,20 @@ fn phase(ctx: &mut Context, node: Node) -> Result<Phase> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::data;
     use super::super::{Imported, load, parse};
     use crate::error::SceneError;
     use crate::model::Shape;
     use crate::model::media::{Medium, Phase};
-    use std::path::Path;
 
-    fn data(name: &str) -> std::path::PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../tests/data/mitsuba")
-            .join(name)
+    /// An isotropic medium.
+    fn isotropic(sigma_a: [f32; 3], sigma_s: [f32; 3], scale: f32) -> Medium {
+        Medium {
+            sigma_a,
+            sigma_s,
+            scale,
+            phase: Phase::Isotropic,
+        }
     }
 
     /// Imports a scene of format `version` whose body is `body`, lit by a constant emitter.
@@ -207,24 +205,8 @@ mod tests {
         assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
         let scene = &imported.scene;
         assert_eq!(scene.camera_medium.as_deref(), Some("fog"));
-        assert_eq!(
-            scene.media["fog"],
-            Medium {
-                sigma_a: [0.1; 3],
-                sigma_s: [0.1; 3],
-                scale: 1.0,
-                phase: Phase::Isotropic
-            }
-        );
-        assert_eq!(
-            scene.media["juice"],
-            Medium {
-                sigma_a: [0.5, 2.0, 4.0],
-                sigma_s: [0.0; 3],
-                scale: 2.0,
-                phase: Phase::Isotropic
-            }
-        );
+        assert_eq!(scene.media["fog"], isotropic([0.1; 3], [0.1; 3], 1.0));
+        assert_eq!(scene.media["juice"], isotropic([0.5, 2.0, 4.0], [0.0; 3], 2.0));
         // The nested medium of the second sphere (line 48), named by its position.
         let smoke = &scene.media["mitsuba:48:3"];
         assert_eq!(smoke.phase, Phase::HenyeyGreenstein { g: 0.6 });
@@ -259,15 +241,7 @@ mod tests {
                     <float name=\"sigmaS\" value=\"0.5\"/><float name=\"scale\" value=\"10\"/></medium>\
                     <shape type=\"sphere\"><ref name=\"interior\" id=\"m\"/></shape>";
         let scene = import("0.6.0", body).unwrap().scene;
-        assert_eq!(
-            scene.media["m"],
-            Medium {
-                sigma_a: [0.1, 0.2, 0.3],
-                sigma_s: [0.5; 3],
-                scale: 10.0,
-                phase: Phase::Isotropic
-            }
-        );
+        assert_eq!(scene.media["m"], isotropic([0.1, 0.2, 0.3], [0.5; 3], 10.0));
         let material = scene.shapes[0].material();
         assert_eq!(material, "mitsuba:null (interior: m)");
         assert!(scene.materials[material].null);

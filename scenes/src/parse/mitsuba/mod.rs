@@ -359,11 +359,12 @@ fn similarity_scale(m: Mat4) -> Option<f32> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::{FovAxis, Light};
 
-    fn data(name: &str) -> std::path::PathBuf {
+    /// The test data file `name`.
+    pub(crate) fn data(name: &str) -> std::path::PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../tests/data/mitsuba")
             .join(name)
