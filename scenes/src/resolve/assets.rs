@@ -97,6 +97,24 @@ mod tests {
     use crate::model::{Material, Pbr};
 
     #[test]
+    fn a_mitsuba_files_media_and_sensor_medium_join_the_scene() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data");
+        let text = |media: &str| format!("Scene(mitsuba: \"mitsuba/media.xml\", media: {{ {media} }})");
+        let mut scene = crate::parse::scene_file::parse_scene("s.ron", &text("")).unwrap();
+        resolve_gltf(&mut scene, "s.ron", Some(&root)).unwrap();
+        assert_eq!(scene.camera_medium.as_deref(), Some("fog"), "with the file's sensor");
+        let media: Vec<&str> = scene.media.keys().map(String::as_str).collect();
+        assert_eq!(media, ["fog", "juice", "mitsuba:48:3"]);
+        let mut scene = crate::parse::scene_file::parse_scene("s.ron", &text("\"fog\": ()")).unwrap();
+        let e = resolve_gltf(&mut scene, "s.ron", Some(&root)).unwrap_err();
+        assert!(
+            e.message
+                .contains("its medium 'fog' has the name of one of the scene's"),
+            "{e}"
+        );
+    }
+
+    #[test]
     fn diffuse_gltf_materials_lose_their_transmission_and_the_medium_inside() {
         let mut scene = crate::parse::scene_file::parse_scene("s.ron", crate::parse::scene_file::tests::BASE).unwrap();
         let glass = Material {
