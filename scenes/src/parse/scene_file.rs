@@ -148,6 +148,16 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn the_media_test_scene_parses_and_compiles() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/scenes/media-boundaries.ron");
+        let scene = parse_scene(path, &std::fs::read_to_string(path).unwrap()).unwrap();
+        crate::model::checks::check_resolved(&scene).unwrap();
+        assert_eq!(scene.media.len(), 3);
+        assert_eq!(scene.materials["smoke-ball"].exterior.as_deref(), Some("fog"));
+        crate::pack::compile::CompiledScene::new(&scene).unwrap();
+    }
+
+    #[test]
     fn the_media_example_of_the_usage_guide_parses() {
         let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/usage.md")).unwrap();
         let block = guide
