@@ -313,7 +313,7 @@ mod tests {
              <ref name=\"interior\" id=\"m\"/></shape>",
         );
         assert!(
-            e.starts_with("t.xml:1:1: <scene>: medium 'm' is not enclosed")
+            e.starts_with("t.xml:2:36: <shape type=\"rectangle\">: medium 'm' is not enclosed")
                 && e.contains("material 'window (interior: m)' has it as its interior"),
             "{e}"
         );

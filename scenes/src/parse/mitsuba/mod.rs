@@ -28,7 +28,7 @@ use glam::{Mat4, Vec3};
 use materials::Materials;
 use media::Media;
 use roxmltree::Node;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 use xml::{Context, Props, Result};
 
@@ -76,10 +76,13 @@ pub fn parse(file: &str, dir: &Path, text: &str) -> std::result::Result<Imported
 const MAX_INSTANCING: u32 = 8;
 
 /// What the shapes of a scene add up to.
-struct Builder {
+struct Builder<'a, 'i> {
     materials: Materials,
     media: Media,
     shapes: Vec<Shape>,
+    /// The first shape element of each material with media, where an error about its
+    /// boundary is reported.
+    bounding: HashMap<String, Node<'a, 'i>>,
     /// A file of format 0.x: a shape with a medium and no bsdf is an index-matched boundary
     /// (Mitsuba 0.6's `null`), not Mitsuba 3's diffuse.
     legacy: bool,
@@ -101,6 +104,7 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         materials: Materials::default(),
         media: Media::default(),
         shapes: Vec::new(),
+        bounding: HashMap::new(),
         legacy: major == Some(0),
     };
     let mut lights = Vec::new();
@@ -170,6 +174,11 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         );
     }
     crate::model::checks::check_lights(&scene.lights).map_err(|(_, message)| ctx.error(root, message))?;
+    // An open boundary is reported at the first shape of its material.
+    crate::model::enclosure::check_enclosures(&scene).map_err(|(material, message)| {
+        let shape = builder.bounding.get(material.trim_matches('"')).copied();
+        ctx.error(shape.unwrap_or(root), message)
+    })?;
     crate::model::checks::check_resolved(&scene).map_err(|message| ctx.error(root, message))?;
     Ok(scene)
 }
@@ -214,7 +223,7 @@ fn max_depth(ctx: &mut Context, node: Node) -> Result<Option<u32>> {
 /// Adds the triangles of shape `node` (or of the shapes an instance places) under `parent`.
 fn shape<'a, 'i>(
     ctx: &mut Context<'a, 'i>,
-    b: &mut Builder,
+    b: &mut Builder<'a, 'i>,
     node: Node<'a, 'i>,
     parent: Mat4,
     depth: u32,
@@ -314,7 +323,12 @@ fn shape<'a, 'i>(
 /// media, a variant of the bsdf's material named after them (`glass (interior: water)`).
 /// Without a bsdf, a shape with a medium is Mitsuba 3's default diffuse, or in a 0.x file
 /// Mitsuba 0.6's index-matched boundary (`null`).
-fn material<'a, 'i>(ctx: &mut Context<'a, 'i>, b: &mut Builder, props: &Props<'a, 'i>, emits: bool) -> Result<String> {
+fn material<'a, 'i>(
+    ctx: &mut Context<'a, 'i>,
+    b: &mut Builder<'a, 'i>,
+    props: &Props<'a, 'i>,
+    emits: bool,
+) -> Result<String> {
     let mut sides = Vec::new();
     for slot in ["interior", "exterior"] {
         if let Some(node) = media::slot(ctx, props, slot)? {
@@ -341,6 +355,7 @@ fn material<'a, 'i>(ctx: &mut Context<'a, 'i>, b: &mut Builder, props: &Props<'a
             } = Some(medium);
         }
         b.materials.materials.insert(name.clone(), m);
+        b.bounding.insert(name.clone(), props.node());
     }
     Ok(name)
 }
