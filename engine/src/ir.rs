@@ -131,6 +131,11 @@ pub struct Coverage {
     /// condition; every other class is held to an unbiased estimator's standard.
     #[serde(default)]
     pub biased: Vec<BiasDecl>,
+    /// Scene features, in the application's notation, that the graph's estimate accounts for
+    /// where the application asks graphs to say so (lightgraph's `"media"`: participating
+    /// media); the application refuses a scene with a feature the graph does not handle.
+    #[serde(default)]
+    pub handles: Vec<String>,
 }
 
 /// A graph's claim that its estimate of one class of samples is biased at a finite budget.
@@ -387,6 +392,11 @@ pub struct CatalogFile {
     /// Resources the catalog's passes use.
     #[serde(default)]
     pub resources: BTreeMap<String, ResourceDecl>,
+    /// Resources that join a graph including this file (or using one of its passes) only
+    /// where a pass that derives its reads and writes uses them, with the kernels' flags (data of a feature most inputs lack,
+    /// which kernels without the feature then neither declare nor bind).
+    #[serde(default)]
+    pub candidates: BTreeMap<String, ResourceDecl>,
     /// Counters the catalog's passes count.
     #[serde(default)]
     pub counters: Vec<String>,

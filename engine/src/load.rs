@@ -509,6 +509,11 @@ impl Parts {
         for (name, r) in &inc.resources {
             self.resources.add(sources, "resource", name, r, Rank::Include, path)?;
         }
+        for (name, r) in &inc.candidates {
+            self.candidates
+                .entry(name.clone())
+                .or_insert_with(|| (r.clone(), path.to_string()));
+        }
         Ok(())
     }
 
@@ -530,6 +535,11 @@ impl Parts {
                     .add(sources, "derived constant", name, e, Rank::Catalog, &p.origin)?;
             }
             add_checks(&mut self.checks, &cat.checks, &p.origin);
+            for (name, r) in &cat.candidates {
+                self.candidates
+                    .entry(name.clone())
+                    .or_insert_with(|| (r.clone(), p.origin.clone()));
+            }
             for (name, r) in &cat.resources {
                 if d.reads.contains(name) || d.writes.contains(name) {
                     self.resources

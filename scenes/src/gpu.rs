@@ -433,7 +433,7 @@ pub struct GpuMaterialMedia {
     pub exterior: i32,
 }
 
-/// Scene-wide facts of media (`MediaInfo` in WGSL).
+/// Scene-wide facts of media (`media_info`, a `vec4<i32>` in WGSL: the camera's medium in x).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, Pod, Zeroable)]
 pub struct GpuMediaInfo {

@@ -223,7 +223,11 @@ fn bpt_direct(p: CameraSubpath, s: Surface, bsdf: Bsdf, u: f32, uv: vec2<f32>, c
 // counts `counts.connect` times against the others (see `bpt_hit_weight`), a merge at
 // either end `counts.merge` times.
 fn bpt_connect(p: CameraSubpath, s: Surface, bsdf: Bsdf, v: LightVertex, counts: MisCounts) -> ShadowRay {
+#if MEDIA
+    var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), VACUUM);
+#else
     var ray = ShadowRay(s.position, p.pixel, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
+#endif
     let to_light = v.position - s.position;
     let distance2 = dot(to_light, to_light);
     if (!(distance2 > 0.0)) {

@@ -12,7 +12,18 @@ struct CameraPath {
     last_pdf: f32,          // density of the last sampled direction, for MIS on hitting a light
     last_specular: u32,     // 1 after the camera or a delta lobe: no MIS on the next light hit
     hit: PathHit,           // the last traced ray's hit (t < 0: it escaped)
+#if MEDIA
+    medium: i32,            // the medium the ray travels in (-1: vacuum)
+    vertex: u32,            // what `trace` found: VERTEX_SURFACE at the hit, or VERTEX_MEDIUM at hit.t in `medium`
+    gap: f32,               // distance from the path's last vertex to `origin` (boundaries crossed), for MIS
+#endif
 }
+
+#if MEDIA
+// The kinds of a camera path's next vertex.
+const VERTEX_SURFACE: u32 = 0u;
+const VERTEX_MEDIUM: u32 = 1u;
+#endif
 
 // A next-event-estimation connection: if nothing blocks the segment, the contribution
 // reaches the pixel.
@@ -22,6 +33,9 @@ struct ShadowRay {
     direction: vec3<f32>,
     distance: f32,
     contribution: vec3<f32>,
+#if MEDIA
+    medium: i32,            // the medium the ray starts in (-1: vacuum)
+#endif
 }
 
 // The side of a surface that `towards` points to.
@@ -33,7 +47,11 @@ fn side_normal(n: vec3<f32>, towards: vec3<f32>) -> vec3<f32> {
 // starts off the side the light is on), carrying `contribution` to `pixel`.
 fn light_sample_ray(s: Surface, ill: Illumination, pixel: u32, contribution: vec3<f32>) -> ShadowRay {
     let origin = offset_ray_origin(s.position, side_normal(s.normal, ill.direction), s.extent);
+#if MEDIA
+    return ShadowRay(origin, pixel, ill.direction, light_shadow_distance(s.position, origin, ill), contribution, VACUUM);
+#else
     return ShadowRay(origin, pixel, ill.direction, light_shadow_distance(s.position, origin, ill), contribution);
+#endif
 }
 
 // The surface and BSDF at a camera path's last hit as `logic` set them up, for `material` when

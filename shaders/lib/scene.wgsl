@@ -124,6 +124,19 @@ const MATERIAL_CONDUCTOR: u32 = 128u;   // PBR metal of a complex index: eta in 
 const MATERIAL_SMITH_SEPARABLE: u32 = 256u; // PBR masking-shadowing G1(o) G1(i) (Mitsuba's)
 const MATERIAL_ROUGH_PLASTIC: u32 = 512u;   // MATERIAL_PLASTIC with its rough coating's table (BSDF_ROUGH_PLASTIC)
 
+#if MEDIA
+const MATERIAL_NULL: u32 = 1024u;           // an index-matched boundary between media, crossed without a vertex
+
+// A homogeneous participating medium, its coefficients scaled (`media` holds each as two
+// vec4s: `medium_at` in shaders/lib/media.wgsl).
+struct Medium {
+    sigma_s: vec3<f32>,     // scattering coefficient per channel
+    g: f32,                 // Henyey-Greenstein mean cosine (0: isotropic)
+    sigma_t: vec3<f32>,     // extinction coefficient per channel
+    kind: u32,              // 0: homogeneous
+}
+#endif
+
 // One material slot's texture: its image at texels[offset ..] (width x height, rows from the
 // top, RGBA8 with R in the low byte), sampled at uv' = (dot(row0, (u, v, 1)),
 // dot(row1, (u, v, 1))) (KHR_texture_transform).

@@ -241,7 +241,11 @@ fn light_vertex_bsdf(v: LightVertex) -> Bsdf {
 // when the camera cannot see the vertex. A thin lens's point is picked with density
 // 1 / lens area, which cancels the lens area in its importance: the pinhole's formula holds.
 fn light_vertex_to_camera(v: LightVertex, bsdf: Bsdf, counts: MisCounts, lens: vec2<f32>) -> ShadowRay {
+#if MEDIA
+    var ray = ShadowRay(v.position, 0u, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), VACUUM);
+#else
     var ray = ShadowRay(v.position, 0u, vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0));
+#endif
     let lens_point = camera_lens_point(lens);
     let raster = camera_raster(v.position, lens_point);
     if (raster.z <= 0.0 || !bsdf.valid) {

@@ -35,7 +35,13 @@ fn material_next_event(path: CameraPath, v: PathVertex, light_u: f32, light_uv: 
     if (!ill.is_delta) {
         w = mis_weight(ill.pdf * pick, e.pdf_forward * material_mis_continuation(bsdf));
     }
+#if MEDIA
+    var ray = light_sample_ray(s, ill, path.pixel, path.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick * ill.pdf)));
+    ray.medium = medium_after(s.material, s.normal, ill.direction, path.medium);
+    return ray;
+#else
     return light_sample_ray(s, ill, path.pixel, path.throughput * ill.radiance * e.f * (w * e.cos_gen / (pick * ill.pdf)));
+#endif
 }
 
 // The path's next direction from the BSDF at `v` (sampled with `u`), then Russian roulette
@@ -62,5 +68,9 @@ fn material_scatter(path: ptr<function, CameraPath>, v: PathVertex, u: vec3<f32>
     (*path).last_specular = select(0u, 1u, smp.specular);
     (*path).origin = offset_ray_origin(s.position, side_normal(s.normal, smp.direction), s.extent);
     (*path).direction = smp.direction;
+#if MEDIA
+    (*path).medium = medium_after(s.material, s.normal, smp.direction, (*path).medium);
+    (*path).gap = 0.0;
+#endif
     return true;
 }

@@ -30,7 +30,11 @@ fn path_light_found(path: CameraPath, s: Surface, bsdf: Bsdf) -> vec3<f32> {
     }
     var w = 1.0;
     if (path.last_specular == 0u) {
+#if MEDIA
+        let light_pdf = le.w * (path.gap + path.hit.t) * (path.gap + path.hit.t) / abs(bsdf.fix.z);
+#else
         let light_pdf = le.w * path.hit.t * path.hit.t / abs(bsdf.fix.z);
+#endif
         w = mis_weight(path.last_pdf, light_pdf * light_pmf(u32(s.light)));
     }
     return path.throughput * w * le.xyz;

@@ -23,5 +23,10 @@ fn generate(path: ptr<function, CameraPath>, index: u32) -> bool {
     (*path).rng = rng;
     (*path).last_pdf = 1.0;
     (*path).last_specular = 1u;
+#if MEDIA
+    (*path).medium = media_info.x;
+    (*path).vertex = VERTEX_SURFACE;
+    (*path).gap = 0.0;
+#endif
     return true;
 }

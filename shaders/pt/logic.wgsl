@@ -4,6 +4,11 @@
 // material.
 
 fn logic(path: ptr<function, CameraPath>) -> bool {
+#if MEDIA
+    if ((*path).vertex == VERTEX_MEDIUM) {
+        return (*path).length < MAX_PATH_LENGTH;
+    }
+#endif
     if (path_hit_escaped((*path).hit)) {
         let bg = path_background_found(*path);
         if (!is_black(bg)) {

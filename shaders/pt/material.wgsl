@@ -8,6 +8,11 @@
 // registers during that traversal.
 
 fn material(path: ptr<function, CameraPath>) -> bool {
+#if MEDIA
+    if ((*path).vertex == VERTEX_MEDIUM) {
+        return material_in_medium(path);
+    }
+#endif
     let v = path_vertex_taken(*path);
     var rng = (*path).rng;
     let light_u = rng_f32(&rng);
@@ -35,3 +40,22 @@ fn path_vertex_taken(path: CameraPath) -> PathVertex {
     let s = path_surface(path);
     return PathVertex(s, surface_bsdf(s, -path.direction), false);
 }
+
+#if MEDIA
+// The pass at a scattering in the path's medium: next-event estimation and a direction from
+// the phase function (shaders/pt/medium_bounce.wgsl), the shadow ray emitted last as above.
+fn material_in_medium(path: ptr<function, CameraPath>) -> bool {
+    var rng = (*path).rng;
+    let light_u = rng_f32(&rng);
+    let light_uv = rng_vec2(&rng);
+    let u = rng_vec2(&rng);
+    let roulette_u = rng_f32(&rng);
+    (*path).rng = rng;
+    let shadow = medium_next_event(*path, light_u, light_uv);
+    let goes_on = medium_scatter(path, u, roulette_u);
+    if (!is_black(shadow.contribution)) {
+        emit_shadow(shadow);
+    }
+    return goes_on;
+}
+#endif

@@ -37,7 +37,8 @@ pub(crate) fn prepare(
     let decl = options.layout.resolve(Some(gpu), graph, layout, decl);
     let mut flags = kernel_flags(device_flags(gpu), scene, options.layout.all_features);
     let camera = CompiledScene::camera(&scene.scene, options.width, options.height);
-    // The scene offers every scene resource; a graph takes those it declares.
+    // The scene offers every scene resource; a graph takes those it declares, and the
+    // candidates its passes may use (the engine leaves aside those they do not).
     let mut externals = scene.compiled.resources(&camera);
     let limit = adapter_binding_limit(gpu);
     let chunk_limit = options.layout.max_binding.map_or(limit, |m| m.min(limit));
@@ -47,7 +48,9 @@ pub(crate) fn prepare(
     externals.retain(|name, _| {
         graph
             .resource(name)
-            .is_some_and(|r| r.decl.scope == lightgraph_engine::ir::Scope::External)
+            .map(|r| &r.decl)
+            .or_else(|| graph.declared.candidates.get(name))
+            .is_some_and(|r| r.scope == lightgraph_engine::ir::Scope::External)
     });
     check_scene_fits(gpu, scene, limit, &externals)?;
     let spec = specialization(graph, &scene.scene, options, flags);

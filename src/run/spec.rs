@@ -85,6 +85,7 @@ impl RunSpec {
         let (width, height) = self.res.unwrap_or(scene.scene.resolution);
         let spp = self.spp;
         checks::image_fits(width, height, spp).map_err(|e| anyhow!("--res {width}x{height} with --spp {spp}: {e}"))?;
+        checks::graph_handles_scene(graph, scene).map_err(|e| anyhow!("{}: {e}", self.scene))?;
         let mut constants = parse_sets(&self.sets, graph, "--set ")?;
         if let Some(n) = self.max_path_length {
             constants.insert("MAX_PATH_LENGTH".into(), ConstValue::U32(n));

@@ -24,6 +24,7 @@ mod layout_cache;
 mod layouts;
 mod lights;
 mod lost_work;
+mod media;
 mod mitsuba;
 mod mitsuba_bsdf;
 mod mlt;

@@ -118,10 +118,12 @@ impl Buffers {
     }
 
     /// Buffers of the external resources the live graph uses, filled with the host's data.
+    /// Data for a candidate resource that no pass of the program uses is left aside.
     fn upload_externals(&mut self, gpu: &Gpu, program: &Program, externals: &BTreeMap<String, Vec<u8>>) -> Result<()> {
         let g = &program.plan.graph;
         for name in externals.keys() {
-            if g.resource(name).is_none_or(|r| r.decl.scope != Scope::External) {
+            let unused_candidate = g.resource(name).is_none() && g.declared.candidates.contains_key(name);
+            if !unused_candidate && g.resource(name).is_none_or(|r| r.decl.scope != Scope::External) {
                 return Err(Error::Runtime(format!(
                     "data given for '{name}', which graph '{}' has no external resource of that name",
                     g.name

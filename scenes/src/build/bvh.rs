@@ -83,7 +83,9 @@ pub fn build(boxes: &[(Vec3A, Vec3A)]) -> Result<Bvh, String> {
     };
     let root = &src[0];
     if root.prim_count > 0 {
-        // A single leaf: a root whose right child is empty.
+        // A single leaf: a root whose right child is empty. The traversal's slab test takes
+        // the empty box for one that holds everything, so the right child is the same leaf
+        // again (testing its primitives twice finds no other hit), never a node to descend to.
         let i = push_inner(&mut nodes);
         let n = &mut nodes[i];
         n.left_min = root.aabb.min.into();
@@ -92,8 +94,8 @@ pub fn build(boxes: &[(Vec3A, Vec3A)]) -> Result<Bvh, String> {
         n.left_count = root.prim_count;
         n.right_min = EMPTY_MIN;
         n.right_max = EMPTY_MAX;
-        n.right_count = 0;
-        n.right_first = u32::MAX;
+        n.right_count = root.prim_count;
+        n.right_first = root.first_index;
         depth = 1;
     } else {
         let i = push_inner(&mut nodes);

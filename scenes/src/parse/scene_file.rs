@@ -142,6 +142,47 @@ pub(crate) mod tests {
         assert!(e.contains("radius"), "{e}");
         let e = error(&BASE.replace("fov_degrees: 40.0", "fov_degrees: 40.0,,"));
         assert!(e.starts_with("s.ron:2:"), "{e}");
+        // Media: bad coefficients and phases, unknown names, null boundaries with lobes.
+        let media = |medium: &str, material: &str| {
+            BASE.replace(
+                "materials: { \"m\": (diffuse: (0.5, 0.5, 0.5)) },",
+                &format!("media: {{ \"fog\": {medium} }},\n    materials: {{ \"m\": {material} }},"),
+            )
+        };
+        let e = error(&media(
+            "(sigma_s: (1.0, -1.0, 1.0))",
+            "(null: true, interior: Some(\"fog\"))",
+        ));
+        assert!(
+            e.starts_with("s.ron:3:") && e.contains("medium 'fog'") && e.contains("sigma_s"),
+            "{e}"
+        );
+        let e = error(&media(
+            "(phase: HenyeyGreenstein(g: 1.0))",
+            "(null: true, interior: Some(\"fog\"))",
+        ));
+        assert!(e.starts_with("s.ron:3:") && e.contains("(-1, 1)"), "{e}");
+        let e = error(&media(
+            "(sigma_s: (1.0, 1.0, 1.0))",
+            "(null: true, exterior: Some(\"smoke\"))",
+        ));
+        assert!(
+            e.starts_with("s.ron:4:") && e.contains("unknown medium 'smoke' (media: fog)"),
+            "{e}"
+        );
+        let e = error(&media(
+            "(sigma_s: (1.0, 1.0, 1.0))",
+            "(null: true, diffuse: (0.5, 0.5, 0.5))",
+        ));
+        assert!(e.starts_with("s.ron:4:") && e.contains("null"), "{e}");
+        let e = error(
+            &media("(sigma_s: (1.0, 1.0, 1.0))", "(diffuse: (0.5, 0.5, 0.5))")
+                .replace("    lights:", "    camera_medium: Some(\"mist\"),\n    lights:"),
+        );
+        assert!(
+            e.contains("camera_medium") && e.contains("unknown medium 'mist'"),
+            "{e}"
+        );
         // Spheres do not emit: a field a shape does not have is refused, not ignored.
         let e = error(&BASE.replace("material: \"m\")", "material: \"m\", emission: (1.0, 1.0, 1.0))"));
         assert!(e.starts_with("s.ron:4:") && e.contains("emission"), "{e}");
