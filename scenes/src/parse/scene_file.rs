@@ -199,24 +199,28 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn the_media_example_of_the_usage_guide_parses() {
-        let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/usage.md")).unwrap();
+    fn the_media_example_of_the_media_guide_parses_and_encloses_its_media() {
+        let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/media.md")).unwrap();
         let block = guide
             .split("```ron")
             .skip(1)
             .find(|b| b.contains("camera_medium"))
             .and_then(|b| b.split("```").next())
-            .expect("a RON example of media in docs/usage.md");
-        let text = format!(
-            "Scene(\n    camera: (position: (0.0, 0.0, 3.0), look: Target((0.0, 0.0, 0.0)), up: (0.0, 1.0, 0.0), fov_degrees: 40.0),\n\
-             {block}\n    shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 10.0, material: \"fog-box\"), \
-             Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, material: \"glass\")],\n\
-             lights: [Point(position: (0.0, 2.0, 0.0), intensity: (1.0, 1.0, 1.0))],\n)"
-        );
-        let scene = parse_scene("usage.md", &text).unwrap();
+            .expect("a RON example of media in docs/media.md");
+        // Its placeholder line for the camera, shapes and lights, filled in.
+        let rest = "    camera: (position: (0.0, 0.0, 3.0), look: Target((0.0, 0.0, 0.0)), up: (0.0, 1.0, 0.0), fov_degrees: 40.0),\n\
+                    shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 10.0, material: \"smoke-boundary\"), \
+                    Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, material: \"milk-glass\")],\n\
+                    lights: [Point(position: (0.0, 2.0, 0.0), intensity: (1.0, 1.0, 1.0))],";
+        let text: Vec<&str> = block
+            .lines()
+            .map(|line| if line.contains("as usual") { rest } else { line })
+            .collect();
+        let scene = parse_scene("media.md", &text.join("\n")).unwrap();
+        crate::model::checks::check_resolved(&scene).unwrap();
         assert_eq!(scene.camera_medium.as_deref(), Some("fog"));
-        assert_eq!(scene.materials["glass"].interior.as_deref(), Some("juice"));
-        assert!(scene.materials["fog-box"].null);
+        assert_eq!(scene.materials["milk-glass"].interior.as_deref(), Some("smoke"));
+        assert!(scene.materials["smoke-boundary"].null);
     }
 
     #[test]
