@@ -28,12 +28,13 @@ import peer_images
 
 def prepared_xml(path, width, height, spp):
     """The scene file's text with its film at width x height, a box filter and `spp` samples,
-    and Mitsuba's `path` integrator (another integrator, such as a path-guiding one, becomes
-    `path` with the same maximum depth: lightgraph reads only the depth)."""
+    and Mitsuba's `path` integrator, or `volpath` where the file has it (the path tracer with
+    participating media); another integrator, such as a path-guiding one, becomes `path` with
+    the same maximum depth: lightgraph reads only the depth."""
     tree = ET.parse(path)
     root = tree.getroot()
     integrator = root.find("integrator")
-    if integrator is not None and integrator.get("type") != "path":
+    if integrator is not None and integrator.get("type") not in ("path", "volpath"):
         depth = [c for c in integrator if c.get("name") in ("max_depth", "maxDepth")]
         for child in list(integrator):
             integrator.remove(child)

@@ -3,9 +3,10 @@
 //! (isotropic and forward scattering). Each compares a region's mean with the exact value
 //! within 3 standard errors, as tests/integration/analytic.rs does, with the same demand on
 //! the standard error (under 1.5% of the value). Also: every layout renders a media scene alike
-//! to float rounding, and graphs that do not handle media refuse such a scene.
+//! to float rounding, graphs that do not handle media refuse such a scene, and kernels for a
+//! scene without media hold no media code or buffer.
 
-use crate::common::{assert_analytic, assert_same_render, data, region, render};
+use crate::common::{assert_analytic, assert_same_render, data, kernel_sources, region, render};
 use lightgraph::run::{LoadedScene, RunSpec, load_graph, load_scene};
 
 fn scene(name: &str) -> LoadedScene {
@@ -102,4 +103,26 @@ fn graphs_that_do_not_handle_media_refuse_a_scene_with_them() {
     }
     let pt = load_graph("pt").unwrap();
     RunSpec::default().options(&s, &pt).expect("pt handles media");
+}
+
+#[test]
+fn kernels_for_a_scene_without_media_hold_no_media_code_or_buffer() {
+    let plain = load_scene("cornell-diffuse").unwrap();
+    let fog = load_scene("media-fog").unwrap();
+    for layout in ["NaivePTsk", "WavefrontPT"] {
+        let with = kernel_sources("pt", layout, &fog, &[], false);
+        let without = kernel_sources("pt", layout, &plain, &[], false);
+        for word in [
+            "material_media",
+            "media_info",
+            "fn medium_free_flight",
+            "fn media_shadow_transmittance",
+        ] {
+            assert!(with.contains(word), "{layout}: the media scene's kernels lack {word}");
+            assert!(
+                !without.contains(word),
+                "{layout}: cornell-diffuse's kernels hold {word}"
+            );
+        }
+    }
 }

@@ -28,6 +28,7 @@ import os
 import shlex
 import subprocess
 import sys
+import time
 
 import numpy as np
 
@@ -49,14 +50,20 @@ def size(res):
 
 
 def reference(args):
+    import drjit as dr
     import mitsuba as mi
 
     width, height = size(args.res)
     os.makedirs(args.out, exist_ok=True)
+    # On one CPU (e.g. under `taskset -c 1`) Dr.Jit's pool has no worker thread, and Mitsuba's
+    # EXR writer, which hands its work to that pool, waits forever: give it one.
+    dr.set_thread_count(max(dr.thread_count(), 2))
     for path in scenes(args.scenes):
         name = peer_images.scene_name(path)
+        start = time.monotonic()
         mean, variance = mitsuba_scenes.render_passes(path, width, height, args.spp, args.passes, args.variant,
                                                       progress=False)
+        seconds = time.monotonic() - start
         image = mi.Bitmap(
             np.concatenate([mean, variance], axis=-1).astype(np.float32),
             channel_names=["R", "G", "B", "variance.R", "variance.G", "variance.B"],
@@ -67,7 +74,7 @@ def reference(args):
         meta["lightgraph.renderer"] = f"Mitsuba {mi.MI_VERSION} ({args.variant})"
         meta["lightgraph.scene"] = f"bench/peers/fidelity/scenes/{os.path.basename(path)}"
         image.write(os.path.join(args.out, f"{name}.exr"))
-        print(f"{name}: {args.passes} x {args.spp} spp, mean {mean.mean():.5f}", flush=True)
+        print(f"{name}: {args.passes} x {args.spp} spp in {seconds:.0f} s, mean {mean.mean():.5f}", flush=True)
 
 
 def lightgraph(args):

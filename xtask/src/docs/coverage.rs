@@ -31,6 +31,9 @@ pub struct Coverage {
     /// The classes of paths whose estimate is biased at a finite budget.
     #[serde(default)]
     pub biased: Vec<Claim>,
+    /// The scene features the graph declares it handles (lightgraph's `media`).
+    #[serde(default)]
+    pub handles: Vec<String>,
 }
 
 /// One class of paths a graph misses or samples with bias (`MissDecl`, `BiasDecl`).

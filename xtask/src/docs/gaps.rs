@@ -59,6 +59,13 @@ fn items(coverage: &Coverage) -> String {
     if coverage.misses.is_empty() && coverage.biased.is_empty() {
         out.push_str("- no gap declared: every path is held to an unbiased estimator's standard\n");
     }
+    for feature in &coverage.handles {
+        out.push_str(&wrap(
+            &format!("handles {feature} (scenes with them are refused by graphs that do not)"),
+            "- ",
+            "  ",
+        ));
+    }
     out
 }
 
