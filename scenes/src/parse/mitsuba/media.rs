@@ -177,6 +177,7 @@ mod tests {
     use crate::error::SceneError;
     use crate::model::Shape;
     use crate::model::media::{Medium, Phase};
+    use std::path::Path;
 
     /// An isotropic medium.
     fn isotropic(sigma_a: [f32; 3], sigma_s: [f32; 3], scale: f32) -> Medium {
@@ -232,6 +233,37 @@ mod tests {
         );
         assert!(m("boundary").null, "the bsdf itself stays as it is");
         crate::pack::compile::CompiledScene::new(scene).unwrap();
+    }
+
+    #[test]
+    fn the_fidelity_suites_media_scenes_import_without_warnings() {
+        // Mitsuba 3's own scenes of media (bench/peers/fidelity, rendered there by volpath).
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../bench/peers/fidelity/scenes");
+        let mut scenes: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with("media-"))
+            .collect();
+        scenes.sort();
+        assert!(scenes.len() >= 6, "{scenes:?}");
+        for path in &scenes {
+            let imported = load(path).unwrap();
+            assert!(
+                imported.warnings.is_empty(),
+                "{}: {:?}",
+                path.display(),
+                imported.warnings
+            );
+            assert!(!imported.scene.media.is_empty(), "{}", path.display());
+        }
+        // The fog around the camera: sigma_t 0.15 of albedo 0.8.
+        let fog = load(&dir.join("media-fog-camera.xml")).unwrap().scene;
+        assert_eq!(fog.camera_medium.as_deref(), Some("fog"));
+        let m = &fog.media["fog"];
+        assert!(
+            (m.sigma_s[0] - 0.12).abs() < 1e-6 && (m.sigma_a[0] - 0.03).abs() < 1e-6,
+            "{m:?}"
+        );
     }
 
     #[test]
