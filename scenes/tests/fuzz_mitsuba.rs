@@ -1,5 +1,6 @@
 //! Fuzzing of Mitsuba scene files with proptest: the committed test scenes
-//! (`tests/data/mitsuba`, every feature the importer reads in Mitsuba 3's and 0.5's names)
+//! (`tests/data/mitsuba`, every feature the importer reads in Mitsuba 3's and 0.5's names,
+//! and media)
 //! are mutated (text edits, and token-aware edits of numbers, attribute strings, words and
 //! elements) and go through [`mitsuba::parse`] (with their OBJ, PLY and PNG files beside
 //! them) and [`CompiledScene::with_bvh`] for both BVH kinds.
@@ -35,7 +36,8 @@ const XML: Dialect = Dialect {
     strings: &[
         "", "x", "$res", "$", "$$", "checker", "pair", "floor", "models/quad.obj", "models/tetra.ply",
         "textures/checker.png", "../nowhere.obj", "diagonal", "larger", "y", "Au", "none", "water", "beckmann",
-        "shapegroup", "instance", "sphere", "area", "envmap", "1e400", "é",
+        "shapegroup", "instance", "sphere", "area", "envmap", "1e400", "é", "homogeneous", "heterogeneous",
+        "hg", "isotropic", "interior", "exterior", "null", "fog", "juice", "boundary", "volpath",
     ],
 };
 
@@ -47,7 +49,7 @@ fn data() -> PathBuf {
 fn seeds() -> &'static [(String, String)] {
     static SEEDS: OnceLock<Vec<(String, String)>> = OnceLock::new();
     SEEDS.get_or_init(|| {
-        ["all-features.xml", "version-0.5.xml"]
+        ["all-features.xml", "version-0.5.xml", "media.xml"]
             .iter()
             .map(|name| (name.to_string(), std::fs::read_to_string(data().join(name)).unwrap()))
             .collect()

@@ -41,8 +41,6 @@ impl BvhKind {
     }
 }
 
-const EMPTY_MIN: [f32; 3] = [1e30; 3];
-const EMPTY_MAX: [f32; 3] = [-1e30; 3];
 
 /// A built BVH: nodes (root first) and the primitive order leaves refer to.
 #[derive(Debug, Clone)]
@@ -83,17 +81,18 @@ pub fn build(boxes: &[(Vec3A, Vec3A)]) -> Result<Bvh, String> {
     };
     let root = &src[0];
     if root.prim_count > 0 {
-        // A single leaf: a root whose right child is empty. The traversal's slab test takes
-        // the empty box for one that holds everything, so the right child is the same leaf
-        // again (testing its primitives twice finds no other hit), never a node to descend to.
+        // A single leaf: a root with the leaf as both children. The traversal has no empty
+        // child (its slab test takes an inverted box for one that holds everything, and an
+        // inner child would be a node to descend to); testing the primitives twice finds no
+        // other hit.
         let i = push_inner(&mut nodes);
         let n = &mut nodes[i];
         n.left_min = root.aabb.min.into();
         n.left_max = root.aabb.max.into();
         n.left_first = root.first_index;
         n.left_count = root.prim_count;
-        n.right_min = EMPTY_MIN;
-        n.right_max = EMPTY_MAX;
+        n.right_min = n.left_min;
+        n.right_max = n.left_max;
         n.right_count = root.prim_count;
         n.right_first = root.first_index;
         depth = 1;
@@ -349,20 +348,22 @@ pub(crate) mod tests {
             nodes_seen[index] += 1;
             depth = depth.max(d);
             let node = &bvh.nodes[index];
+            // A tree of one leaf has it as both children of the root: the right is seen once.
+            let single_leaf = node.left_count > 0 && (node.left_first, node.left_count) == (node.right_first, node.right_count);
             for (lo, hi, first, count) in [
                 (node.left_min, node.left_max, node.left_first, node.left_count),
                 (node.right_min, node.right_max, node.right_first, node.right_count),
-            ] {
+            ]
+            .into_iter()
+            .take(if single_leaf { 1 } else { 2 })
+            {
                 if count == 0 {
-                    if first != u32::MAX {
-                        let child = &bvh.nodes[first as usize];
-                        for (clo, chi) in [(child.left_min, child.left_max), (child.right_min, child.right_max)] {
-                            let empty = clo[0] > chi[0];
-                            let inside = contains(lo, hi, (Vec3A::from(clo), Vec3A::from(chi)));
-                            assert!(empty || inside, "n = {n}: a child box must contain its node's boxes");
-                        }
-                        stack.push((first as usize, d + 1));
+                    let child = &bvh.nodes[first as usize];
+                    for (clo, chi) in [(child.left_min, child.left_max), (child.right_min, child.right_max)] {
+                        let inside = contains(lo, hi, (Vec3A::from(clo), Vec3A::from(chi)));
+                        assert!(inside, "n = {n}: a child box must contain its node's boxes");
                     }
+                    stack.push((first as usize, d + 1));
                     continue;
                 }
                 for i in first..first + count {

@@ -1,6 +1,7 @@
 //! The rules a scene must satisfy wherever it comes from (a RON file, a glTF asset, a Mitsuba
 //! file): a field of view in (0, 180) degrees, at most one environment light and spot cones
-//! within 0 to 90 degrees, and, once its imports are resolved, geometry, light and sound media.
+//! within 0 to 90 degrees, and, once its imports are resolved, geometry, light and sound media
+//! enclosed by closed surfaces ([`super::enclosure`]).
 
 use super::{Light, Scene, Shape};
 
@@ -44,7 +45,8 @@ pub(crate) fn check_lights(lights: &[Light]) -> Result<(), (&'static str, String
     Ok(())
 }
 
-/// Checks that a scene with its glTF asset imported has geometry and light.
+/// Checks that a scene with its imports resolved has geometry and light, and sound media, each
+/// enclosed by closed surfaces.
 pub(crate) fn check_resolved(scene: &Scene) -> Result<(), String> {
     if scene.shapes.is_empty() {
         return Err("the scene is empty: it has no shapes".into());
@@ -53,5 +55,6 @@ pub(crate) fn check_resolved(scene: &Scene) -> Result<(), String> {
     if !emissive && scene.lights.is_empty() {
         return Err("the scene has no light: add an emissive shape or a light (Point, Directional, Background)".into());
     }
-    super::media::check_media(scene).map_err(|(_, message)| message)
+    super::media::check_media(scene).map_err(|(_, message)| message)?;
+    super::enclosure::check_enclosures(scene).map_err(|(_, message)| message)
 }

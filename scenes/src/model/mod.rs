@@ -2,6 +2,7 @@
 //! lights and integrator settings.
 
 pub mod checks;
+pub mod enclosure;
 pub mod environment;
 pub mod framing;
 pub mod media;

@@ -3,12 +3,14 @@
 //! and texture coordinates; metallic-roughness materials ([`Pbr`]) with their base-colour,
 //! metallic-roughness and emissive textures (KHR_texture_transform), alpha mask,
 //! KHR_materials_emissive_strength, KHR_materials_transmission (thin-walled, or through a solid
-//! volume with KHR_materials_volume: `MaterialImport::thin_walled`), KHR_materials_ior and
+//! volume with KHR_materials_volume: `MaterialImport::thin_walled`, its attenuation an
+//! absorbing medium inside: `MaterialImport::attenuation`), KHR_materials_ior and
 //! KHR_materials_specular (as an index of refraction, `MaterialImport::specular_ior`); and
 //! the perspective cameras the scene's nodes place, and the KHR_lights_punctual lights of its
 //! nodes ([`punctual_light`]). Other extensions the file uses are reported as warnings.
 
 use crate::model::CornerTangents;
+use crate::model::media::Medium;
 use crate::model::texture::{NormalTexture, PbrTextures, Texture, TextureRef, Wrap};
 use crate::model::{Camera, FovAxis, Light, Look, Material, Pbr, Rgb, Shape, SpotFalloff};
 use crate::parse::tangents;
@@ -24,6 +26,9 @@ pub struct Imported {
     pub shapes: Vec<Shape>,
     /// Materials by name (`gltf:NAME` or `gltf:#INDEX`).
     pub materials: BTreeMap<String, Material>,
+    /// The absorbing media inside transmissive volumes (KHR_materials_volume), each named
+    /// after its material.
+    pub media: BTreeMap<String, Medium>,
     /// Triangles imported.
     pub triangles: usize,
     /// KHR_lights_punctual lights placed by their nodes.
@@ -634,10 +639,16 @@ impl MaterialImport<'_> {
         }
         let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
         let ior = self.specular_ior(&name, m, m.ior().unwrap_or(1.5), transmission);
-        let thin_walled = self.thin_walled(&name, m, transmission);
+        let thin_walled = self.thin_walled(m, transmission);
+        let interior = if transmission > 0.0 && !thin_walled {
+            self.attenuation(&name, m)?
+        } else {
+            None
+        };
         self.out.materials.insert(
             name.clone(),
             Material {
+                interior,
                 two_sided: m.double_sided(),
                 pbr: Some(Pbr {
                     base_color: [factor[0], factor[1], factor[2]],
@@ -702,23 +713,39 @@ impl MaterialImport<'_> {
     /// KHR_materials_volume, or with thickness 0, passes through an infinitely thin sheet; a
     /// positive thickness makes the mesh the boundary of a solid volume, which refracts. The
     /// thickness's value and texture serve renderers that do not trace the volume's geometry
-    /// (lightgraph does); its attenuation (Beer-Lambert absorption inside the volume) is not
-    /// rendered: warned, the volume is clear.
-    fn thin_walled(&mut self, name: &str, m: &gltf::Material, transmission: f32) -> bool {
-        if transmission <= 0.0 {
-            return false;
-        }
-        let Some(volume) = m.volume() else { return true };
-        if volume.thickness_factor() <= 0.0 {
-            return true;
-        }
+    /// (lightgraph does).
+    fn thin_walled(&self, m: &gltf::Material, transmission: f32) -> bool {
+        transmission > 0.0 && m.volume().is_none_or(|v| v.thickness_factor() <= 0.0)
+    }
+
+    /// The medium inside the solid volume of material `name` (named after it; the material's
+    /// `interior`): KHR_materials_volume's Beer-Lambert attenuation, light of colour c left
+    /// after distance d, as the absorption coefficient -ln(c) / d, without scattering (a
+    /// channel of colour 0, which absorbs everything, as -ln(1e-6) / d). None for a white
+    /// colour or an infinite distance (the defaults): a clear volume. A colour outside [0, 1]
+    /// or a distance that is not positive is an error.
+    fn attenuation(&mut self, name: &str, m: &gltf::Material) -> Result<Option<String>, String> {
+        let Some(volume) = m.volume() else { return Ok(None) };
         let (color, distance) = (volume.attenuation_color(), volume.attenuation_distance());
-        if distance.is_finite() && color != [1.0; 3] {
-            self.out.warnings.push(format!(
-                "material '{name}': KHR_materials_volume's attenuation (colour {color:?} at distance {distance}) is not rendered: the volume is clear"
+        if color.iter().any(|c| !(0.0..=1.0).contains(c)) || distance.is_nan() || distance <= 0.0 {
+            return Err(format!(
+                "material '{name}': KHR_materials_volume's attenuationColor {color:?} must lie in [0, 1] and its attenuationDistance {distance} be positive"
             ));
         }
-        false
+        if distance.is_infinite() || color == [1.0; 3] {
+            return Ok(None);
+        }
+        let sigma_a = color.map(|c| -c.max(1e-6).ln() / distance);
+        self.out.media.insert(
+            name.to_string(),
+            Medium {
+                sigma_a,
+                sigma_s: [0.0; 3],
+                scale: 1.0,
+                phase: Default::default(),
+            },
+        );
+        Ok(Some(name.to_string()))
     }
 
     /// The reference a material slot makes to a texture, converting its image on first use.
@@ -962,31 +989,108 @@ mod tests {
         assert!(!thin(json!({"KHR_materials_volume": {"thicknessFactor": 0.0}})));
     }
 
-    #[test]
-    fn a_volume_attenuation_is_warned_about_naming_the_material() {
-        let volume = |attenuation: Value| {
-            let mut v = json!({"thicknessFactor": 0.1});
-            v.as_object_mut()
-                .unwrap()
-                .extend(attenuation.as_object().unwrap().clone());
-            let extensions =
+    /// The interior medium of the Cornell box's first material ('floor') made a transmissive
+    /// volume of thickness 0.1 with `attenuation`, and the media imported.
+    fn volume_medium(test: &str, attenuation: Value) -> Result<(Option<String>, BTreeMap<String, Medium>), String> {
+        let mut v = json!({"thicknessFactor": 0.1});
+        v.as_object_mut()
+            .unwrap()
+            .extend(attenuation.as_object().unwrap().clone());
+        let imported = import_edited(test, |doc, _| {
+            doc["materials"][0]["extensions"] =
                 json!({"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_volume": v});
-            let (p, warnings) = with_material_extensions("attenuation", extensions);
-            assert!(!p.thin_walled);
-            warnings
-                .into_iter()
-                .filter(|w| w.contains("KHR_materials_volume"))
-                .collect::<Vec<_>>()
-        };
-        assert_eq!(
-            volume(json!({"attenuationColor": [0.5, 0.8, 1.0], "attenuationDistance": 0.2})),
-            [
-                "material 'gltf:floor': KHR_materials_volume's attenuation (colour [0.5, 0.8, 1.0] at distance 0.2) is not rendered: the volume is clear"
-            ]
+            doc["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_volume"]);
+        })?;
+        assert!(imported.warnings.is_empty(), "{:?}", imported.warnings);
+        Ok((imported.materials["gltf:floor"].interior.clone(), imported.media))
+    }
+
+    #[test]
+    fn a_volume_attenuation_is_an_absorbing_medium_inside_named_after_the_material() {
+        let (interior, media) = volume_medium(
+            "attenuation",
+            json!({"attenuationColor": [0.5, 0.25, 1.0], "attenuationDistance": 0.2}),
+        )
+        .unwrap();
+        assert_eq!(interior.as_deref(), Some("gltf:floor"));
+        let m = &media["gltf:floor"];
+        // Light of colour c is left after the distance: exp(-sigma_a d) = c.
+        let left: Vec<f32> = m.sigma_a.iter().map(|s| (-s * 0.2).exp()).collect();
+        assert!(
+            left.iter().zip([0.5, 0.25, 1.0]).all(|(l, c)| (l - c).abs() < 1e-6),
+            "{left:?}"
         );
+        assert_eq!((m.sigma_s, m.scale), ([0.0; 3], 1.0));
         // No absorption: a white colour, or an infinite distance (the defaults).
-        assert!(volume(json!({"attenuationDistance": 0.2})).is_empty());
-        assert!(volume(json!({"attenuationColor": [0.5, 0.8, 1.0]})).is_empty());
+        for (test, attenuation) in [
+            ("attenuation-white", json!({"attenuationDistance": 0.2})),
+            ("attenuation-far", json!({"attenuationColor": [0.5, 0.8, 1.0]})),
+        ] {
+            let (interior, media) = volume_medium(test, attenuation).unwrap();
+            assert!(interior.is_none() && media.is_empty(), "{test}");
+        }
+        let e = volume_medium(
+            "attenuation-bad",
+            json!({"attenuationColor": [1.5, 0.8, 1.0], "attenuationDistance": 1.0}),
+        )
+        .unwrap_err();
+        assert!(
+            e.contains(
+                "material 'gltf:floor': KHR_materials_volume's attenuationColor [1.5, 0.8, 1.0] must lie in [0, 1]"
+            ),
+            "{e}"
+        );
+    }
+
+    /// Writes a glTF of one tetrahedron (the first `faces` of its four, each face with
+    /// vertices of its own) of a transmissive material with an attenuating volume; returns
+    /// its path.
+    fn tetrahedron(test: &str, faces: usize) -> std::path::PathBuf {
+        let p = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let corners = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let bytes: Vec<u8> = corners[..faces]
+            .iter()
+            .flatten()
+            .flat_map(|&i| p[i])
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        let doc = json!({
+            "asset": {"version": "2.0"},
+            "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_volume"],
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+            "materials": [{"name": "glass", "extensions": {
+                "KHR_materials_transmission": {"transmissionFactor": 1.0},
+                "KHR_materials_volume": {"thicknessFactor": 1.0, "attenuationColor": [0.5, 0.5, 0.5], "attenuationDistance": 1.0}
+            }}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": faces * 3, "type": "VEC3",
+                           "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0]}],
+            "bufferViews": [{"buffer": 0, "byteLength": bytes.len()}],
+            "buffers": [{"uri": "t.bin", "byteLength": bytes.len()}]
+        });
+        let dir = std::env::temp_dir().join(format!("lightgraph-gltf-{test}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("t.bin"), bytes).unwrap();
+        std::fs::write(dir.join("t.gltf"), doc.to_string()).unwrap();
+        dir.join("t.gltf")
+    }
+
+    #[test]
+    fn a_volume_must_be_closed_by_position_though_its_vertices_are_split() {
+        let closed = tetrahedron("closed-volume", 4);
+        let (scene, _) = crate::resolve::scene_from_gltf(&closed).unwrap();
+        std::fs::remove_dir_all(closed.parent().unwrap()).unwrap();
+        assert_eq!(scene.materials["gltf:glass"].interior.as_deref(), Some("gltf:glass"));
+        assert!(scene.media.contains_key("gltf:glass"));
+        let open = tetrahedron("open-volume", 3);
+        let e = crate::resolve::scene_from_gltf(&open).unwrap_err().to_string();
+        std::fs::remove_dir_all(open.parent().unwrap()).unwrap();
+        assert!(
+            e.contains("medium 'gltf:glass' is not enclosed")
+                && e.contains("material 'gltf:glass' has it as its interior"),
+            "{e}"
+        );
     }
 
     #[test]

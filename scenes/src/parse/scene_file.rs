@@ -3,6 +3,7 @@
 
 use crate::error::SceneError;
 use crate::model::checks::{check_fov, check_lights};
+use crate::model::enclosure::check_enclosures;
 use crate::model::media::check_media;
 use crate::model::{Scene, Shape, placement};
 
@@ -65,6 +66,7 @@ pub fn parse_scene(file: &str, text: &str) -> Result<Scene, SceneError> {
     }
     check_lights(&scene.lights).map_err(|(needle, message)| err(needle, message))?;
     check_media(&scene).map_err(|(needle, message)| err(&needle, message))?;
+    check_enclosures(&scene).map_err(|(needle, message)| err(&needle, message))?;
     if !scene.gltf_instances.is_empty() && scene.gltf.is_none() {
         return Err(err(
             "gltf_instances",
@@ -184,5 +186,67 @@ pub(crate) mod tests {
         // Spheres do not emit: a field a shape does not have is refused, not ignored.
         let e = error(&BASE.replace("material: \"m\")", "material: \"m\", emission: (1.0, 1.0, 1.0))"));
         assert!(e.starts_with("s.ron:4:") && e.contains("emission"), "{e}");
+    }
+
+    #[test]
+    fn the_media_test_scene_parses_and_compiles() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/scenes/media-boundaries.ron");
+        let scene = parse_scene(path, &std::fs::read_to_string(path).unwrap()).unwrap();
+        crate::model::checks::check_resolved(&scene).unwrap();
+        assert_eq!(scene.media.len(), 3);
+        assert_eq!(scene.materials["smoke-ball"].exterior.as_deref(), Some("fog"));
+        crate::pack::compile::CompiledScene::new(&scene).unwrap();
+    }
+
+    #[test]
+    fn the_media_example_of_the_media_guide_parses_and_encloses_its_media() {
+        let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/media.md")).unwrap();
+        let block = guide
+            .split("```ron")
+            .skip(1)
+            .find(|b| b.contains("camera_medium"))
+            .and_then(|b| b.split("```").next())
+            .expect("a RON example of media in docs/media.md");
+        // Its placeholder line for the camera, shapes and lights, filled in.
+        let rest = "    camera: (position: (0.0, 0.0, 3.0), look: Target((0.0, 0.0, 0.0)), up: (0.0, 1.0, 0.0), fov_degrees: 40.0),\n\
+                    shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 10.0, material: \"smoke-boundary\"), \
+                    Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, material: \"milk-glass\")],\n\
+                    lights: [Point(position: (0.0, 2.0, 0.0), intensity: (1.0, 1.0, 1.0))],";
+        let text: Vec<&str> = block
+            .lines()
+            .map(|line| if line.contains("as usual") { rest } else { line })
+            .collect();
+        let scene = parse_scene("media.md", &text.join("\n")).unwrap();
+        crate::model::checks::check_resolved(&scene).unwrap();
+        assert_eq!(scene.camera_medium.as_deref(), Some("fog"));
+        assert_eq!(scene.materials["milk-glass"].interior.as_deref(), Some("smoke"));
+        assert!(scene.materials["smoke-boundary"].null);
+    }
+
+    #[test]
+    fn media_parse_and_an_open_boundary_is_refused_at_its_material() {
+        let with_media = |shape: &str| {
+            BASE.replace(
+                "materials: {",
+                "media: { \"fog\": (sigma_a: (0.1, 0.1, 0.1), sigma_s: (0.5, 0.5, 0.5), phase: HenyeyGreenstein(g: 0.3)) },\n    \
+                 camera_medium: \"fog\",\n    materials: {\n        \"box\": (null: true, interior: \"fog\"),",
+            )
+            .replace("shapes: [", &format!("shapes: [{shape}, "))
+        };
+        let scene = parse_scene(
+            "s.ron",
+            &with_media("Sphere(center: (0.0, 0.0, 0.0), radius: 5.0, material: \"box\")"),
+        )
+        .unwrap();
+        assert_eq!(scene.camera_medium.as_deref(), Some("fog"));
+        assert_eq!(scene.media["fog"].phase.g(), 0.3);
+        assert_eq!(scene.materials["box"].interior.as_deref(), Some("fog"));
+        let e = error(&with_media(
+            "Quad(corners: ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 0.0), (0.0, 1.0, 0.0)), material: \"box\")",
+        ));
+        assert!(
+            e.starts_with("s.ron:6:9: medium 'fog' is not enclosed") && e.contains("material 'box'"),
+            "{e}"
+        );
     }
 }

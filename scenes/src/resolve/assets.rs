@@ -77,13 +77,66 @@ fn fetch_help(asset: &str, root: Option<&std::path::Path>) -> String {
 }
 
 /// Makes every glTF material of `scene` (named `gltf:...`) a pure Lambertian: no specular
-/// layer (index of refraction 1), no metal, no transmission; base colour and alpha stay.
+/// layer (index of refraction 1), no metal, no transmission and so no medium inside; base
+/// colour and alpha stay.
 fn make_diffuse(scene: &mut Scene) {
     let gltf = scene.materials.iter_mut().filter(|(name, _)| name.starts_with("gltf:"));
-    for p in gltf.filter_map(|(_, m)| m.pbr.as_mut()) {
+    for (_, m) in gltf {
+        m.interior = None;
+        let Some(p) = m.pbr.as_mut() else { continue };
         p.ior = 1.0;
         p.metallic = 0.0;
         p.transmission = 0.0;
         p.textures.metallic_roughness = None;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Material, Pbr};
+
+    #[test]
+    fn a_mitsuba_files_media_and_sensor_medium_join_the_scene() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data");
+        let text = |media: &str| format!("Scene(mitsuba: \"mitsuba/media.xml\", media: {{ {media} }})");
+        let mut scene = crate::parse::scene_file::parse_scene("s.ron", &text("")).unwrap();
+        resolve_gltf(&mut scene, "s.ron", Some(&root)).unwrap();
+        assert_eq!(scene.camera_medium.as_deref(), Some("fog"), "with the file's sensor");
+        let media: Vec<&str> = scene.media.keys().map(String::as_str).collect();
+        assert_eq!(media, ["fog", "juice", "mitsuba:48:3"]);
+        let mut scene = crate::parse::scene_file::parse_scene("s.ron", &text("\"fog\": ()")).unwrap();
+        let e = resolve_gltf(&mut scene, "s.ron", Some(&root)).unwrap_err();
+        assert!(
+            e.message
+                .contains("its medium 'fog' has the name of one of the scene's"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn diffuse_gltf_materials_lose_their_transmission_and_the_medium_inside() {
+        let mut scene = crate::parse::scene_file::parse_scene("s.ron", crate::parse::scene_file::tests::BASE).unwrap();
+        let glass = Material {
+            pbr: Some(Pbr {
+                transmission: 1.0,
+                ..Default::default()
+            }),
+            interior: Some("gltf:glass".into()),
+            ..Default::default()
+        };
+        scene.materials.insert("gltf:glass".into(), glass.clone());
+        scene.materials.insert("mine".into(), glass);
+        make_diffuse(&mut scene);
+        let m = &scene.materials["gltf:glass"];
+        assert_eq!(
+            (m.pbr.as_ref().unwrap().transmission, m.interior.as_deref()),
+            (0.0, None)
+        );
+        assert_eq!(
+            scene.materials["mine"].interior.as_deref(),
+            Some("gltf:glass"),
+            "the scene's own stay"
+        );
     }
 }

@@ -1,5 +1,5 @@
-//! Imported scenes merged into a scene: their textures, materials, shapes (glTF's placed by
-//! `gltf_instances`), lights and camera.
+//! Imported scenes merged into a scene: their textures, materials, media, shapes (glTF's
+//! placed by `gltf_instances`), lights and camera.
 
 use super::placement;
 use crate::error::SceneError;
@@ -8,29 +8,35 @@ use crate::model::{self, Scene};
 use crate::parse::{gltf, mitsuba};
 use std::collections::BTreeMap;
 
-/// Imports the Mitsuba scene file at `path` into `scene`: its shapes, materials, textures
-/// and emitters join the scene's, and its sensor is the camera unless the scene has one.
-/// Its approximations are printed to stderr as warnings.
+/// Imports the Mitsuba scene file at `path` into `scene`: its shapes, materials, media,
+/// textures and emitters join the scene's, and its sensor (with the medium it is in) is the
+/// camera unless the scene has one. Its approximations are printed to stderr as warnings.
 pub(crate) fn add_mitsuba(scene: &mut Scene, path: &std::path::Path) -> Result<(), SceneError> {
     let imported = mitsuba::load(path)?;
     for warning in &imported.warnings {
         eprintln!("warning: {warning}");
     }
     let mut imported = imported.scene;
+    let clash = |what: &str, name: &String| SceneError {
+        file: path.display().to_string(),
+        at: None,
+        message: format!("its {what} '{name}' has the name of one of the scene's: rename the scene's"),
+    };
     if let Some(name) = imported.materials.keys().find(|n| scene.materials.contains_key(*n)) {
-        return Err(SceneError {
-            file: path.display().to_string(),
-            at: None,
-            message: format!("its material '{name}' has the name of one of the scene's: rename the scene's"),
-        });
+        return Err(clash("material", name));
+    }
+    if let Some(name) = imported.media.keys().find(|n| scene.media.contains_key(*n)) {
+        return Err(clash("medium", name));
     }
     offset_textures(&mut imported.materials, scene.textures.len() as u32);
     scene.textures.append(&mut imported.textures);
     scene.materials.append(&mut imported.materials);
+    scene.media.append(&mut imported.media);
     scene.shapes.append(&mut imported.shapes);
     scene.lights.append(&mut imported.lights);
     if scene.camera.is_none() {
         scene.camera = imported.camera;
+        scene.camera_medium = imported.camera_medium;
     }
     Ok(())
 }
@@ -89,7 +95,14 @@ pub(crate) fn add_gltf(scene: &mut Scene, path: &std::path::Path) -> Result<Vec<
         check_fov(found.camera.fov_degrees).map_err(|e| format!("{}: camera {}: {e}", path.display(), found.index))?;
         scene.camera = Some(found.camera.clone());
     }
+    if let Some(name) = imported.media.keys().find(|n| scene.media.contains_key(*n)) {
+        return Err(format!(
+            "{}: its medium '{name}' has the name of one of the scene's: rename the scene's",
+            path.display()
+        ));
+    }
     scene.materials.extend(imported.materials);
+    scene.media.extend(imported.media);
     scene
         .shapes
         .extend(placement::place(imported.shapes, &scene.gltf_instances));

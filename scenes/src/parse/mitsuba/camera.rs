@@ -2,7 +2,8 @@
 //! up and +X to the image's left (its look-at frame), which is lightgraph's camera
 //! (right = forward x up) when `to_world` does not mirror; a mirroring one would flip the
 //! image left to right and is warned about. `fov_axis` x, y and smaller map directly;
-//! `diagonal` and `larger` are converted to the horizontal field of view of the film.
+//! `diagonal` and `larger` are converted to the horizontal field of view of the film. The
+//! medium the sensor is in is its nested `<medium>` ([`medium`]).
 
 use super::transform;
 use super::xml::{Context, Props, Result};
@@ -23,6 +24,8 @@ pub fn sensor<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<(
         Some(&film) => film_size(ctx, film)?,
         None => (768, 576),
     };
+    // Read by `medium`.
+    props.nested(ctx, "medium")?;
     let m = transform::to_world(ctx, &props)?;
     let left = m.transform_vector3(Vec3::X);
     let up = m.transform_vector3(Vec3::Y);
@@ -52,6 +55,15 @@ pub fn sensor<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<(
     };
     let axis = props.string(ctx, "fov_axis")?.unwrap_or_else(|| "x".into());
     finish(ctx, &props, (m, lens), fov, &axis, size)
+}
+
+/// The medium sensor `node` is in (a nested `<medium>` or a `<ref>` to one); none: vacuum.
+pub fn medium<'a, 'i>(ctx: &Context<'a, 'i>, node: Node<'a, 'i>) -> Result<Option<Node<'a, 'i>>> {
+    match Props::new(node).nested(ctx, "medium")?[..] {
+        [] => Ok(None),
+        [one] => Ok(Some(one)),
+        _ => Err(ctx.error(node, "a sensor is in one medium")),
+    }
 }
 
 /// A `thinlens` sensor's lens: `aperture_radius` (required, as in Mitsuba 3) and

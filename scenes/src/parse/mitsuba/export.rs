@@ -9,8 +9,13 @@
 //! left), PLY texture coordinates as lightgraph's (Mitsuba 3's too: (0, 0) at the image's top
 //! left; a PLY's are not flipped, an OBJ's would be), materials as one-sided `diffuse` (`twosided` for two-sided ones) with
 //! the base colour as an sRGB `bitmap`, alpha masks as `mask` with a binary opacity bitmap
-//! (the texels' alpha against the cut-off).
+//! (the texels' alpha against the cut-off). Media are `homogeneous` media (`sigma_t` over its
+//! largest channel, that factor in `scale`, and `albedo`) with an `isotropic` or `hg` phase,
+//! referred to as the `interior` and `exterior` of the shapes of materials that have them and
+//! by the sensor in one; `null` materials are `null` bsdfs; a scene with media is rendered by
+//! `volpath` (Mitsuba's `path` renders no media).
 
+use crate::model::media::{Medium, Phase, uses_media};
 use crate::model::texture::{Texture, TextureRef, Wrap, linear_to_srgb8, srgb_to_linear};
 use crate::model::{Camera, FovAxis, Light, Look, Material, Rgb, RussianRoulette, Scene, Shape, Vec3};
 use std::collections::BTreeMap;
@@ -51,23 +56,38 @@ pub fn export(scene: &Scene, size: (u32, u32)) -> Result<Exported, String> {
     let mut out = Writer::default();
     out.line("<scene version=\"3.0.0\">");
     out.integrator(scene);
-    let camera = scene.camera.as_ref().ok_or("the scene has no camera")?;
-    out.sensor(camera, size);
-    for light in &scene.lights {
-        out.light(light)?;
-    }
     let mut used: Vec<&str> = scene.shapes.iter().map(Shape::material).collect();
     used.sort();
     used.dedup();
+    let mut materials = Vec::new();
     for name in used {
         let material = scene
             .materials
             .get(name)
             .ok_or_else(|| format!("a shape uses material '{name}', which the scene does not define"))?;
+        materials.push((name, material));
+    }
+    let sides = materials.iter().flat_map(|(_, m)| [&m.interior, &m.exterior]);
+    for name in sides.chain([&scene.camera_medium]).flatten() {
+        if !out.media.contains_key(name) {
+            let medium = scene
+                .media
+                .get(name)
+                .ok_or_else(|| format!("medium '{name}' is used but the scene does not define it"))?;
+            out.medium(name, medium);
+        }
+    }
+    let camera = scene.camera.as_ref().ok_or("the scene has no camera")?;
+    let camera_medium = scene.camera_medium.as_ref().map(|name| out.media[name].clone());
+    out.sensor(camera, size, camera_medium.as_deref());
+    for light in &scene.lights {
+        out.light(light)?;
+    }
+    for (name, material) in &materials {
         out.material(name, material, &scene.textures)?;
     }
     for (i, shape) in scene.shapes.iter().enumerate() {
-        out.shape(i, shape)?;
+        out.shape(i, shape, &scene.materials[shape.material()])?;
     }
     out.line("</scene>");
     Ok(Exported {
@@ -85,6 +105,8 @@ struct Writer {
     notes: Vec<String>,
     /// Material name to its XML id.
     ids: BTreeMap<String, String>,
+    /// Medium name to its XML id.
+    media: BTreeMap<String, String>,
     /// Written images by (texture, kind) to their file name.
     images: BTreeMap<(u32, &'static str), String>,
 }
@@ -95,7 +117,8 @@ impl Writer {
         self.xml.push('\n');
     }
 
-    /// The `path` integrator with the scene's path length and Russian roulette.
+    /// The `path` integrator (`volpath` for a scene with media) with the scene's path length
+    /// and Russian roulette.
     fn integrator(&mut self, scene: &Scene) {
         let settings = &scene.integrator;
         let rr_depth = match settings.russian_roulette {
@@ -119,15 +142,50 @@ impl Writer {
                 "MIS: Mitsuba's path integrator uses the power heuristic, the scene the balance heuristic".into(),
             );
         }
+        let kind = if uses_media(scene) { "volpath" } else { "path" };
         let _ = writeln!(
             self.xml,
-            "  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"{}\"/>\n    <integer name=\"rr_depth\" value=\"{rr_depth}\"/>\n    <boolean name=\"hide_emitters\" value=\"false\"/>\n  </integrator>",
+            "  <integrator type=\"{kind}\">\n    <integer name=\"max_depth\" value=\"{}\"/>\n    <integer name=\"rr_depth\" value=\"{rr_depth}\"/>\n    <boolean name=\"hide_emitters\" value=\"false\"/>\n  </integrator>",
             settings.max_path_length
         );
     }
 
-    /// The pinhole camera with a box-filtered float film of `size`.
-    fn sensor(&mut self, camera: &Camera, size: (u32, u32)) {
+    /// Medium `name` as a homogeneous medium with the id shapes and the sensor refer to:
+    /// `sigma_t` over its largest channel (within [0, 1], as Mitsuba's spectral variants want
+    /// an `rgb`) with that factor in `scale`, and the `albedo` sigma_s / sigma_t (0 where
+    /// nothing is in the way).
+    fn medium(&mut self, name: &str, m: &Medium) {
+        let id = format!("medium{}", self.media.len());
+        self.media.insert(name.to_string(), id.clone());
+        let sigma_t: Rgb = std::array::from_fn(|c| m.sigma_a[c] + m.sigma_s[c]);
+        let largest = sigma_t.iter().fold(0.0f32, |a, &b| a.max(b));
+        let (sigma_t, scale) = if largest > 0.0 {
+            (sigma_t.map(|t| t / largest), m.scale * largest)
+        } else {
+            (sigma_t, m.scale)
+        };
+        let albedo: Rgb = std::array::from_fn(|c| {
+            let t = m.sigma_a[c] + m.sigma_s[c];
+            if t > 0.0 { m.sigma_s[c] / t } else { 0.0 }
+        });
+        let phase = match m.phase {
+            Phase::Isotropic => "<phase type=\"isotropic\"/>".to_string(),
+            Phase::HenyeyGreenstein { g } => {
+                format!("<phase type=\"hg\">\n      <float name=\"g\" value=\"{g}\"/>\n    </phase>")
+            }
+        };
+        let _ = writeln!(
+            self.xml,
+            "  <!-- {} -->\n  <medium type=\"homogeneous\" id=\"{id}\">\n    {}\n    {}\n    <float name=\"scale\" value=\"{scale}\"/>\n    {phase}\n  </medium>",
+            name.replace("--", "- -"),
+            rgb_element("sigma_t", sigma_t),
+            rgb_element("albedo", albedo),
+        );
+    }
+
+    /// The pinhole camera with a box-filtered float film of `size`, in the medium of id
+    /// `medium`.
+    fn sensor(&mut self, camera: &Camera, size: (u32, u32), medium: Option<&str>) {
         let target = match camera.look {
             Look::Target(t) => t,
             Look::Forward(d) => std::array::from_fn(|i| camera.position[i] + d[i]),
@@ -137,9 +195,10 @@ impl Writer {
             FovAxis::Vertical => "y",
             FovAxis::Smaller => "smaller",
         };
+        let medium = medium.map(|id| format!("\n    <ref id=\"{id}\"/>")).unwrap_or_default();
         let _ = writeln!(
             self.xml,
-            "  <sensor type=\"perspective\">\n    <float name=\"fov\" value=\"{}\"/>\n    <string name=\"fov_axis\" value=\"{axis}\"/>\n    <transform name=\"to_world\">\n      <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    </transform>\n    <sampler type=\"independent\">\n      <integer name=\"sample_count\" value=\"16\"/>\n    </sampler>\n    <film type=\"hdrfilm\">\n      <integer name=\"width\" value=\"{}\"/>\n      <integer name=\"height\" value=\"{}\"/>\n      <string name=\"pixel_format\" value=\"rgb\"/>\n      <string name=\"component_format\" value=\"float32\"/>\n      <rfilter type=\"box\"/>\n    </film>\n  </sensor>",
+            "  <sensor type=\"perspective\">{medium}\n    <float name=\"fov\" value=\"{}\"/>\n    <string name=\"fov_axis\" value=\"{axis}\"/>\n    <transform name=\"to_world\">\n      <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    </transform>\n    <sampler type=\"independent\">\n      <integer name=\"sample_count\" value=\"16\"/>\n    </sampler>\n    <film type=\"hdrfilm\">\n      <integer name=\"width\" value=\"{}\"/>\n      <integer name=\"height\" value=\"{}\"/>\n      <string name=\"pixel_format\" value=\"rgb\"/>\n      <string name=\"component_format\" value=\"float32\"/>\n      <rfilter type=\"box\"/>\n    </film>\n  </sensor>",
             camera.fov_degrees,
             list(camera.position),
             list(target),
@@ -175,11 +234,19 @@ impl Writer {
         Ok(())
     }
 
-    /// Material `name` as a diffuse bsdf (in `twosided` and `mask` as it needs) with the id
-    /// its shapes refer to.
+    /// Material `name` as a diffuse bsdf (in `twosided` and `mask` as it needs), or a `null`
+    /// one, with the id its shapes refer to.
     fn material(&mut self, name: &str, m: &Material, textures: &[Texture]) -> Result<(), String> {
         let id = format!("mat{}", self.ids.len());
         self.ids.insert(name.to_string(), id.clone());
+        if m.null {
+            let _ = writeln!(
+                self.xml,
+                "  <!-- {} -->\n  <bsdf type=\"null\" id=\"{id}\"/>",
+                name.replace("--", "- -")
+            );
+            return Ok(());
+        }
         let (reflectance, opacity) = match &m.pbr {
             Some(p) => {
                 if p.metallic > 0.0 || p.transmission > 0.0 || p.ior != 1.0 || p.emission.iter().any(|&e| e > 0.0) {
@@ -297,8 +364,9 @@ impl Writer {
         ))
     }
 
-    /// Shape `i` as a PLY mesh (or an analytic sphere) with its material and emission.
-    fn shape(&mut self, i: usize, shape: &Shape) -> Result<(), String> {
+    /// Shape `i` as a PLY mesh (or an analytic sphere) with its material `m`, the material's
+    /// media and its emission.
+    fn shape(&mut self, i: usize, shape: &Shape, m: &Material) -> Result<(), String> {
         let id = self
             .ids
             .get(shape.material())
@@ -337,7 +405,13 @@ impl Writer {
                 )
             })
             .unwrap_or_default();
-        let _ = writeln!(self.xml, "  {head}\n    <ref id=\"{id}\"/>{emitter}\n  </shape>");
+        let mut media = String::new();
+        for (slot, medium) in [("interior", &m.interior), ("exterior", &m.exterior)] {
+            if let Some(name) = medium {
+                let _ = write!(media, "\n    <ref name=\"{slot}\" id=\"{}\"/>", self.media[name]);
+            }
+        }
+        let _ = writeln!(self.xml, "  {head}\n    <ref id=\"{id}\"/>{media}{emitter}\n  </shape>");
         Ok(())
     }
 
@@ -542,6 +616,64 @@ mod tests {
             unread.is_empty(),
             "the importer reads all of it but rr_depth: {unread:?}"
         );
+    }
+
+    #[test]
+    fn media_export_with_their_boundaries_and_import_back_the_same() {
+        let data = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/mitsuba/media.xml");
+        let scene = super::super::load(Path::new(data)).unwrap().scene;
+        let exported = export(&scene, (8, 8)).unwrap();
+        assert!(
+            exported.xml.contains("<integrator type=\"volpath\">"),
+            "{}",
+            exported.xml
+        );
+        assert!(
+            export(&cornell(), (8, 8))
+                .unwrap()
+                .xml
+                .contains("<integrator type=\"path\">")
+        );
+        let dir = std::env::temp_dir().join(format!("lightgraph-export-media-{}", std::process::id()));
+        write(&scene, (8, 8), &dir).unwrap();
+        let back = super::super::load(&dir.join("scene.xml"));
+        std::fs::remove_dir_all(&dir).unwrap();
+        let back = back.unwrap();
+        let unexpected: Vec<_> = back.warnings.iter().filter(|w| !w.contains("rr_depth")).collect();
+        assert!(unexpected.is_empty(), "{unexpected:?}");
+        let back = back.scene;
+        // The same medium on each side of each shape, and around the camera.
+        let same = |a: Option<&String>, s: &Scene, b: Option<&String>, t: &Scene| match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => {
+                let (m, n) = (&s.media[a], &t.media[b]);
+                let close = |x: Rgb, y: Rgb| (0..3).all(|c| (x[c] - y[c]).abs() <= 1e-6 * x[c].max(1.0));
+                close(m.sigma_t(), n.sigma_t()) && close(m.sigma_s_scaled(), n.sigma_s_scaled()) && m.phase == n.phase
+            }
+            _ => false,
+        };
+        assert!(same(
+            scene.camera_medium.as_ref(),
+            &scene,
+            back.camera_medium.as_ref(),
+            &back
+        ));
+        assert_eq!(back.shapes.len(), scene.shapes.len());
+        for (a, b) in scene.shapes.iter().zip(&back.shapes) {
+            let (m, n) = (&scene.materials[a.material()], &back.materials[b.material()]);
+            assert!(
+                same(m.interior.as_ref(), &scene, n.interior.as_ref(), &back),
+                "{}",
+                a.material()
+            );
+            assert!(
+                same(m.exterior.as_ref(), &scene, n.exterior.as_ref(), &back),
+                "{}",
+                a.material()
+            );
+            assert_eq!(m.null, n.null, "{}", a.material());
+        }
+        assert!(scene.materials.values().any(|m| m.null) && scene.media.len() == 3);
     }
 
     #[test]

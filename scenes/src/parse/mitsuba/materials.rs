@@ -62,17 +62,15 @@ pub const DEFAULT: &str = "mitsuba:default";
 /// bsdf of an emitter: reflectance 0).
 pub const DEFAULT_EMITTER: &str = "mitsuba:default-emitter";
 
+/// The name of the index-matched boundary that Mitsuba 0.6 gives a shape with a medium and
+/// no bsdf.
+pub const NULL: &str = "mitsuba:null";
+
 impl Materials {
     /// The name of the material of bsdf `node` (a `<bsdf>` element), converting it on first
     /// use.
     pub fn name_of<'a, 'i>(&mut self, ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<String> {
-        let name = match node.attribute("id") {
-            Some(id) => id.to_string(),
-            None => {
-                let (l, c) = ctx.at(node);
-                format!("mitsuba:{l}:{c}")
-            }
-        };
+        let name = ctx.name(node);
         if !self.materials.contains_key(&name) {
             let material = self.bsdf(ctx, node, 0)?;
             self.materials.insert(name.clone(), material);
@@ -89,6 +87,12 @@ impl Materials {
             ..Default::default()
         });
         name.to_string()
+    }
+
+    /// The name of the index-matched boundary ([`NULL`]), adding it on first use.
+    pub fn null_name(&mut self) -> String {
+        self.materials.entry(NULL.to_string()).or_insert_with(null);
+        NULL.to_string()
     }
 
     fn bsdf<'a, 'i>(&mut self, ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>, depth: u32) -> Result<Material> {
@@ -149,6 +153,7 @@ impl Materials {
                 p.plastic = Some(Plastic { nonlinear });
                 m
             }
+            "null" => null(),
             "twosided" => {
                 let inner = props.nested(ctx, "bsdf")?;
                 let Some(&first) = inner.first() else {
@@ -319,6 +324,14 @@ impl Materials {
         };
         props.finish(ctx);
         Ok(Some(r))
+    }
+}
+
+/// An index-matched boundary: no lobes, crossed without a path vertex.
+fn null() -> Material {
+    Material {
+        null: true,
+        ..Default::default()
     }
 }
 

@@ -1,7 +1,8 @@
 //! Mitsuba scene files (XML, format versions 0.5 to 3.x, as Bitterli's scene collection and
 //! Mitsuba 3 write them) imported into the scene model: shapes ([`shapes`], [`serialized`]
 //! meshes) with their `to_world` transforms ([`transform`]), `shapegroup`s placed by
-//! `instance`s, bsdfs ([`materials`]), emitters ([`emitters`]), the perspective sensor and its film
+//! `instance`s, bsdfs ([`materials`]), homogeneous media ([`media`]) inside and outside shapes
+//! and around the sensor, emitters ([`emitters`]), the perspective sensor and its film
 //! ([`camera`]), the integrator's `max_depth`, `<default>` parameters and `$name`
 //! substitution, and `<ref>`s by id ([`xml`]).
 //!
@@ -13,6 +14,7 @@ pub mod camera;
 pub mod emitters;
 pub mod export;
 pub mod materials;
+pub mod media;
 pub mod mesh;
 pub mod serialized;
 pub mod shapes;
@@ -24,8 +26,9 @@ use crate::error::SceneError;
 use crate::model::{Integrator, Rgb, Scene, Shape};
 use glam::{Mat4, Vec3};
 use materials::Materials;
+use media::Media;
 use roxmltree::Node;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 use xml::{Context, Props, Result};
 
@@ -73,9 +76,16 @@ pub fn parse(file: &str, dir: &Path, text: &str) -> std::result::Result<Imported
 const MAX_INSTANCING: u32 = 8;
 
 /// What the shapes of a scene add up to.
-struct Builder {
+struct Builder<'a, 'i> {
     materials: Materials,
+    media: Media,
     shapes: Vec<Shape>,
+    /// The first shape element of each material with media, where an error about its
+    /// boundary is reported.
+    bounding: HashMap<String, Node<'a, 'i>>,
+    /// A file of format 0.x: a shape with a medium and no bsdf is an index-matched boundary
+    /// (Mitsuba 0.6's `null`), not Mitsuba 3's diffuse.
+    legacy: bool,
 }
 
 fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene> {
@@ -92,29 +102,41 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
     }
     let mut builder = Builder {
         materials: Materials::default(),
+        media: Media::default(),
         shapes: Vec::new(),
+        bounding: HashMap::new(),
+        legacy: major == Some(0),
     };
     let mut lights = Vec::new();
     let mut camera = None;
+    let mut camera_medium = None;
     let mut integrator = Integrator::default();
+    let mut path_integrator = None;
     for node in root.children().filter(|n| n.is_element()) {
         match node.tag_name().name() {
             "default" => ctx.add_default(node)?,
-            "integrator" => integrator.max_path_length = max_depth(ctx, node)?.unwrap_or(integrator.max_path_length),
+            "integrator" => {
+                integrator.max_path_length = max_depth(ctx, node)?.unwrap_or(integrator.max_path_length);
+                path_integrator = (ctx.plugin_type(node)? == "path").then_some(node);
+            }
             "sensor" => {
                 if camera.is_some() {
                     ctx.warn(node, "a second sensor is ignored");
                 } else {
                     camera = Some(camera::sensor(ctx, node)?);
+                    if let Some(medium) = camera::medium(ctx, node)? {
+                        camera_medium = Some(builder.media.name_of(ctx, medium)?);
+                    }
                 }
             }
             "shape" => shape(ctx, &mut builder, node, Mat4::IDENTITY, 0)?,
             "emitter" => lights.extend(emitters::light(ctx, node)?),
             // Used where they are referenced.
-            "bsdf" | "texture" => {}
+            "bsdf" | "texture" | "medium" | "phase" => {}
             _ => ctx.warn(node, "unsupported element: ignored"),
         }
     }
+    unused_media(ctx, root, &builder.media);
     let mut scene = Scene {
         description: format!("the Mitsuba scene {}", ctx.file),
         camera: None,
@@ -124,8 +146,8 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
         shapes: builder.shapes,
         lights,
         integrator,
-        media: BTreeMap::new(),
-        camera_medium: None,
+        media: builder.media.media,
+        camera_medium,
         gltf: None,
         gltf_diffuse: false,
         gltf_instances: Vec::new(),
@@ -143,17 +165,41 @@ fn import<'a, 'i>(ctx: &mut Context<'a, 'i>, root: Node<'a, 'i>) -> Result<Scene
             scene.camera = Some(crate::model::framing::default_camera(&scene));
         }
     }
+    if let Some(node) = path_integrator
+        && crate::model::media::uses_media(&scene)
+    {
+        ctx.warn(
+            node,
+            "Mitsuba's path integrator renders no media (its volpath does): lightgraph renders them",
+        );
+    }
     crate::model::checks::check_lights(&scene.lights).map_err(|(_, message)| ctx.error(root, message))?;
+    // An open boundary is reported at the first shape of its material.
+    crate::model::enclosure::check_enclosures(&scene).map_err(|(material, message)| {
+        let shape = builder.bounding.get(material.trim_matches('"')).copied();
+        ctx.error(shape.unwrap_or(root), message)
+    })?;
     crate::model::checks::check_resolved(&scene).map_err(|message| ctx.error(root, message))?;
     Ok(scene)
 }
 
+/// Warns about the top-level media no shape or sensor refers to.
+fn unused_media(ctx: &mut Context, root: Node, media: &Media) {
+    for node in root.children().filter(|n| n.has_tag_name("medium")) {
+        if !node.attribute("id").is_some_and(|id| media.media.contains_key(id)) {
+            ctx.warn(node, "no shape or sensor refers to this medium: ignored");
+        }
+    }
+}
+
 /// An integrator's `max_depth` (Mitsuba's -1, unlimited, is capped at 100 with a warning);
-/// the integrator itself is lightgraph's graph, so another type is warned about.
+/// the integrator itself is lightgraph's graph, so a type other than `path` and `volpath` is
+/// warned about.
 fn max_depth(ctx: &mut Context, node: Node) -> Result<Option<u32>> {
     let kind = ctx.plugin_type(node)?;
     let props = Props::new(node);
-    if kind != "path" {
+    let path = matches!(kind.as_str(), "path" | "volpath");
+    if !path {
         ctx.warn(
             node,
             format!("the integrator '{kind}' is not used: --graph chooses the estimator (max_depth is kept)"),
@@ -168,7 +214,7 @@ fn max_depth(ctx: &mut Context, node: Node) -> Result<Option<u32>> {
         Some(0) => return Err(ctx.error(node, "max_depth 0 renders nothing")),
         Some(d) => Some(d.min(100_000) as u32),
     };
-    if kind == "path" {
+    if path {
         props.finish(ctx);
     }
     Ok(depth)
@@ -177,7 +223,7 @@ fn max_depth(ctx: &mut Context, node: Node) -> Result<Option<u32>> {
 /// Adds the triangles of shape `node` (or of the shapes an instance places) under `parent`.
 fn shape<'a, 'i>(
     ctx: &mut Context<'a, 'i>,
-    b: &mut Builder,
+    b: &mut Builder<'a, 'i>,
     node: Node<'a, 'i>,
     parent: Mat4,
     depth: u32,
@@ -211,10 +257,7 @@ fn shape<'a, 'i>(
         _ => {}
     }
     let emitters = props.nested(ctx, "emitter")?;
-    let material = match props.nested(ctx, "bsdf")?.first() {
-        Some(&bsdf) => b.materials.name_of(ctx, bsdf)?,
-        None => b.materials.default_name(!emitters.is_empty()),
-    };
+    let material = material(ctx, b, &props, !emitters.is_empty())?;
     let mut emission: Option<Rgb> = None;
     for emitter in emitters {
         emission = emitters::area(ctx, emitter)?;
@@ -276,6 +319,47 @@ fn shape<'a, 'i>(
     Ok(())
 }
 
+/// The material of a shape: its bsdf (or the default one) with its `interior` and `exterior`
+/// media, a variant of the bsdf's material named after them (`glass (interior: water)`).
+/// Without a bsdf, a shape with a medium is Mitsuba 3's default diffuse, or in a 0.x file
+/// Mitsuba 0.6's index-matched boundary (`null`).
+fn material<'a, 'i>(
+    ctx: &mut Context<'a, 'i>,
+    b: &mut Builder<'a, 'i>,
+    props: &Props<'a, 'i>,
+    emits: bool,
+) -> Result<String> {
+    let mut sides = Vec::new();
+    for slot in ["interior", "exterior"] {
+        if let Some(node) = media::slot(ctx, props, slot)? {
+            sides.push((slot, b.media.name_of(ctx, node)?));
+        }
+    }
+    let base = match props.nested(ctx, "bsdf")?.first() {
+        Some(&bsdf) => b.materials.name_of(ctx, bsdf)?,
+        None if b.legacy && !emits && !sides.is_empty() => b.materials.null_name(),
+        None => b.materials.default_name(emits),
+    };
+    if sides.is_empty() {
+        return Ok(base);
+    }
+    let described: Vec<String> = sides.iter().map(|(slot, m)| format!("{slot}: {m}")).collect();
+    let name = format!("{base} ({})", described.join(", "));
+    if !b.materials.materials.contains_key(&name) {
+        let mut m = b.materials.materials[&base].clone();
+        for (slot, medium) in sides {
+            *if slot == "interior" {
+                &mut m.interior
+            } else {
+                &mut m.exterior
+            } = Some(medium);
+        }
+        b.materials.materials.insert(name.clone(), m);
+        b.bounding.insert(name.clone(), props.node());
+    }
+    Ok(name)
+}
+
 /// The scale of `m` when it is a rotation, uniform scale and translation.
 fn similarity_scale(m: Mat4) -> Option<f32> {
     let [x, y, z] = [Vec3::X, Vec3::Y, Vec3::Z].map(|a| m.transform_vector3(a));
@@ -290,11 +374,12 @@ fn similarity_scale(m: Mat4) -> Option<f32> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::{FovAxis, Light};
 
-    fn data(name: &str) -> std::path::PathBuf {
+    /// The test data file `name`.
+    pub(crate) fn data(name: &str) -> std::path::PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../tests/data/mitsuba")
             .join(name)
@@ -407,7 +492,7 @@ mod tests {
             "{w}"
         );
         assert!(
-            w.contains("version-0.5.xml:52:2: <medium type=\"homogeneous\" id=\"fog\">: unsupported element"),
+            w.contains("version-0.5.xml:52:2: <medium type=\"homogeneous\" id=\"fog\">: no shape or sensor refers to this medium: ignored"),
             "{w}"
         );
         assert_eq!(

@@ -148,13 +148,13 @@ pub fn sphere(center: Vec3, radius: f32) -> Mesh {
     let mut uvs = Vec::new();
     for j in 0..=nv {
         let theta = PI * j as f64 / nv as f64;
+        // Each pole's vertices at one position (sin π is not 0 in floating point either).
+        let sin_theta = if j == 0 || j == nv { 0.0 } else { theta.sin() };
         for i in 0..=nu {
-            let phi = 2.0 * PI * i as f64 / nu as f64;
-            directions.push(DVec3::new(
-                theta.sin() * phi.cos(),
-                theta.sin() * phi.sin(),
-                theta.cos(),
-            ));
+            // The seam's last column repeats the first's positions exactly (sin 2π is not
+            // 0 in floating point), so that the mesh is closed (`model::enclosure`).
+            let phi = 2.0 * PI * (i % nu) as f64 / nu as f64;
+            directions.push(DVec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), theta.cos()));
             uvs.push([i as f32 / nu as f32, j as f32 / nv as f32]);
         }
     }
@@ -446,6 +446,23 @@ mod tests {
         let c = center.as_dvec3();
         let worst = points(&s).map(|p| ((p - c).length() - 2.0).abs()).fold(0.0, f64::max);
         assert!(worst < 1e-4 * 2.0, "the mesh strays {worst} from the sphere");
+    }
+
+    #[test]
+    fn sphere_and_cube_meshes_are_closed() {
+        // Every edge, by its corners' positions, is used twice: they can enclose a medium.
+        for (name, mesh) in [("sphere", sphere(Vec3::ZERO, 1.0)), ("cube", cube())] {
+            let mut uses = std::collections::HashMap::new();
+            for t in &mesh.indices {
+                let p = t.map(|i| mesh.positions[i as usize].to_array().map(|c| (c + 0.0).to_bits()));
+                for k in 0..3 {
+                    let (a, b) = (p[k], p[(k + 1) % 3]);
+                    *uses.entry(if a < b { (a, b) } else { (b, a) }).or_insert(0) += 1;
+                }
+            }
+            let open = uses.values().filter(|&&n| n % 2 == 1).count();
+            assert_eq!(open, 0, "{name}: {open} open edges");
+        }
     }
 
     #[test]

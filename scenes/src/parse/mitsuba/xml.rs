@@ -84,6 +84,18 @@ impl<'a, 'input> Context<'a, 'input> {
         (p.row as usize, p.col as usize)
     }
 
+    /// The name of the element `node` stands for: its id, or `mitsuba:LINE:COLUMN` when it has
+    /// none.
+    pub fn name(&self, node: Node) -> String {
+        match node.attribute("id") {
+            Some(id) => id.to_string(),
+            None => {
+                let (l, c) = self.at(node);
+                format!("mitsuba:{l}:{c}")
+            }
+        }
+    }
+
     /// An error at `node`.
     pub fn error(&self, node: Node, message: impl Into<String>) -> Error {
         Error {
