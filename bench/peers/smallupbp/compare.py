@@ -72,11 +72,16 @@ def parse_args():
             ap.error(f"{exe}: not an executable file")
     if not a.ron.is_file():
         ap.error(f"{a.ron}: no such scene file")
-    if not a.reuse:
-        try:
-            import OpenEXR  # noqa: F401
-        except ImportError:
-            ap.error("the Python module OpenEXR is missing (pip install OpenEXR)")
+    if a.reuse:
+        wanted = [a.out / f"sup-s{a.scene}-seed{1000 + k}.exr" for k in range(a.runs)]
+        wanted += [a.out / f"lg-s{a.scene}-seed{s}.exr" for s in a.lg_seeds]
+        missing = [str(p) for p in wanted if not p.is_file()]
+        if missing:
+            ap.error(f"--reuse: missing {', '.join(missing)}")
+    try:
+        import OpenEXR  # noqa: F401
+    except ImportError:
+        ap.error("the Python module OpenEXR is missing (pip install OpenEXR)")
     return a
 
 
