@@ -8,8 +8,7 @@
 //! when nothing differs and the test could have seen a difference of the mean of 2% (a scene
 //! too noisy for that fails too: give it more frames). Scenes named `approx-*` are known
 //! approximations, measured on the GPU (docs/mitsuba.md), not tested here.
-//! Scenes named `media-*` (participating media) have references but are not rendered until the
-//! path tracer samples media (issue 59).
+//! Scenes named `media-*` hold participating media (Mitsuba's `volpath`; docs/media.md).
 
 use crate::common::{data, render_batches};
 use lightgraph::output::read_exr;
@@ -36,8 +35,9 @@ fn suite() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("bench/peers/fidelity/scenes")
 }
 
-/// The suite's scenes that have a reference (every `.xml` but the `approx-*` ones), by name.
-fn referenced_scenes() -> Vec<String> {
+/// The exact scenes of the suite, each with a reference (every `.xml` but the `approx-*` ones;
+/// the participating media's `media-*` among them), by name.
+fn exact_scenes() -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(suite())
         .unwrap()
         .filter_map(|e| {
@@ -48,17 +48,6 @@ fn referenced_scenes() -> Vec<String> {
         .collect();
     names.sort();
     names
-}
-
-/// Whether `name` is a scene of participating media (`media-*`), which the test does not render yet.
-fn awaits_media(name: &str) -> bool {
-    name.starts_with("media-")
-}
-
-/// The exact scenes the test renders, by name.
-fn exact_scenes() -> Vec<String> {
-    // media: enabled when the path tracer samples media (issue 59)
-    referenced_scenes().into_iter().filter(|n| !awaits_media(n)).collect()
 }
 
 /// The reference of `name`, binned 2 x 2 to `SIZE` pixels: its estimates, and its passes.
@@ -124,18 +113,10 @@ fn every_exact_scene_of_the_suite_renders_as_mitsuba_3() {
             (path.extension()? == "exr").then(|| path.file_stem().unwrap().to_str().unwrap().to_string())
         })
         .collect();
-    let referenced = referenced_scenes();
+    let referenced = &scenes;
     let mut stale: Vec<&String> = references.iter().filter(|r| !referenced.contains(r)).collect();
     stale.sort();
     assert!(stale.is_empty(), "references of no exact scene of the suite: {stale:?}");
-    let waiting: Vec<&String> = referenced.iter().filter(|n| awaits_media(n)).collect();
-    for name in &waiting {
-        assert!(
-            references.contains(name),
-            "{name}: no reference: run fidelity.py reference"
-        );
-    }
-    eprintln!("not rendered until the path tracer samples media (issue 59): {waiting:?}");
     assert!(scenes.len() >= 20, "the suite has {} exact scenes", scenes.len());
     let settings = TestSettings {
         alpha: 0.01,

@@ -472,7 +472,9 @@ fn graphs_that_do_not_handle_media_are_left_out_of_a_media_scene() {
     assert_eq!(status, Some(0), "{stderr}");
     for graph in ["bpt-lvc", "vcm"] {
         assert!(
-            stderr.contains(&format!("media-fog: {graph} left out: graph '{graph}' does not handle participating media")),
+            stderr.contains(&format!(
+                "media-fog: {graph} left out: graph '{graph}' does not handle participating media"
+            )),
             "{stderr}"
         );
     }

@@ -41,7 +41,6 @@ impl BvhKind {
     }
 }
 
-
 /// A built BVH: nodes (root first) and the primitive order leaves refer to.
 #[derive(Debug, Clone)]
 pub struct Bvh {
@@ -349,7 +348,8 @@ pub(crate) mod tests {
             depth = depth.max(d);
             let node = &bvh.nodes[index];
             // A tree of one leaf has it as both children of the root: the right is seen once.
-            let single_leaf = node.left_count > 0 && (node.left_first, node.left_count) == (node.right_first, node.right_count);
+            let single_leaf =
+                node.left_count > 0 && (node.left_first, node.left_count) == (node.right_first, node.right_count);
             for (lo, hi, first, count) in [
                 (node.left_min, node.left_max, node.left_first, node.left_count),
                 (node.right_min, node.right_max, node.right_first, node.right_count),

@@ -72,7 +72,7 @@ pub fn check_medium(m: &Medium) -> Result<(), String> {
         return Err(format!("scale {} must be finite and not negative", m.scale));
     }
     let g = m.phase.g();
-    if !(g.abs() < 1.0) {
+    if g.is_nan() || g.abs() >= 1.0 {
         return Err(format!("the Henyey-Greenstein g {g} must lie in (-1, 1)"));
     }
     Ok(())
