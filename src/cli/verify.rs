@@ -357,7 +357,7 @@ fn render_runs(
         kinds.get_or_insert_with(|| scene_kinds(&scenes.get(kind).compiled));
         // A graph that does not handle a feature of the scene (participating media) renders
         // nothing here; the others are compared with each other.
-        if let Err(why) = lightgraph::run::checks::graph_handles_scene(&e.graph, scenes.get(kind)) {
+        if let Err(why) = lightgraph::run::graph_handles_scene(&e.graph, scenes.get(kind)) {
             eprintln!("verify: {scene}: {} left out: {why}", e.label);
             continue;
         }

@@ -14,35 +14,6 @@ const HOST_CONSTANTS: [&str; 5] = ["WIDTH", "HEIGHT", "PIXELS", "SAMPLES_PER_PIX
 /// the image made of them (f32 mean and variance, 48).
 pub const HOST_BYTES_PER_PIXEL: u64 = 128;
 
-/// Scene features a graph renders only where its coverage says it `handles` them: the
-/// feature flag, the word a graph declares, and what the feature is.
-const DECLARED_FEATURES: [(&str, &str, &str); 1] = [(
-    "MEDIA",
-    "media",
-    "participating media or index-matched (null) boundaries",
-)];
-
-/// Checks that `graph` handles every feature of `scene` that graphs must declare (coverage's
-/// `handles`), naming the feature and the built-in graphs that do.
-pub fn graph_handles_scene(graph: &Graph, scene: &crate::run::LoadedScene) -> Result<(), String> {
-    let used = lightgraph_scenes::features::used(&scene.compiled);
-    for (flag, word, what) in DECLARED_FEATURES {
-        let handles = |g: &Graph| g.declared.file.coverage.handles.iter().any(|h| h == word);
-        if used.contains(flag) && !handles(graph) {
-            let able: Vec<String> = crate::assets::graph_names()
-                .into_iter()
-                .filter(|name| crate::run::load_graph(name).is_ok_and(|g| handles(&g)))
-                .collect();
-            return Err(format!(
-                "graph '{}' does not handle {what}, which the scene has; render it with {} (docs/media.md)",
-                graph.declared.file.name,
-                able.join(", ")
-            ));
-        }
-    }
-    Ok(())
-}
-
 /// Parses a count of at least 1 that fits `T` (a value parser for frames, samples, sizes).
 pub fn count<T: TryFrom<u64>>(s: &str) -> Result<T, String> {
     let v: i128 = s

@@ -1,7 +1,9 @@
 //! Loading a run's graph: a built-in name or a `.ron` file, its constants' names checked
-//! against the flags the host sets, and the layout a run names.
+//! against the flags the host sets, the layout a run names, and whether it handles a scene's
+//! features.
 
 use crate::run::options::FLOAT32_ATOMIC_FLAG;
+use crate::run::scene::LoadedScene;
 use anyhow::{Result, anyhow};
 use lightgraph_engine::Graph;
 use lightgraph_engine::ir::LayoutDecl;
@@ -38,4 +40,33 @@ fn check_constant_names(graph: &Graph) -> Result<()> {
 pub fn named_layout(graph: &Graph, name: Option<&str>) -> Result<(String, LayoutDecl)> {
     let name = name.unwrap_or(&graph.default_layout);
     Ok((name.to_string(), graph.layout(name)?.clone()))
+}
+
+/// Scene features a graph renders only where its coverage says it `handles` them: the
+/// feature flag, the word a graph declares, and what the feature is.
+const DECLARED_FEATURES: [(&str, &str, &str); 1] = [(
+    "MEDIA",
+    "media",
+    "participating media or index-matched (null) boundaries",
+)];
+
+/// Checks that `graph` handles every feature of `scene` that graphs must declare (coverage's
+/// `handles`), naming the feature and the built-in graphs that do.
+pub fn graph_handles_scene(graph: &Graph, scene: &LoadedScene) -> Result<(), String> {
+    let used = lightgraph_scenes::features::used(&scene.compiled);
+    for (flag, word, what) in DECLARED_FEATURES {
+        let handles = |g: &Graph| g.declared.file.coverage.handles.iter().any(|h| h == word);
+        if used.contains(flag) && !handles(graph) {
+            let able: Vec<String> = crate::assets::graph_names()
+                .into_iter()
+                .filter(|name| load_graph(name).is_ok_and(|g| handles(&g)))
+                .collect();
+            return Err(format!(
+                "graph '{}' does not handle {what}, which the scene has; render it with {} (docs/media.md)",
+                graph.declared.file.name,
+                able.join(", ")
+            ));
+        }
+    }
+    Ok(())
 }

@@ -21,7 +21,7 @@ pub mod scene;
 pub mod session;
 pub mod spec;
 
-pub use graph::{load_graph, named_layout};
+pub use graph::{graph_handles_scene, load_graph, named_layout};
 pub use measure::measure_constants;
 pub use options::{
     LayoutOverrides, SessionOptions, device_flags, kernel_flags, parse_sets, scene_constants, specialization,

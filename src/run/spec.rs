@@ -4,7 +4,7 @@
 
 use crate::run::checks;
 use crate::run::checks::image_past_binding_limit;
-use crate::run::graph::{load_graph, named_layout};
+use crate::run::graph::{graph_handles_scene, load_graph, named_layout};
 use crate::run::measure::measure_constants;
 use crate::run::options::{LayoutOverrides, SessionOptions, device_flags, kernel_flags, parse_sets, specialization};
 use crate::run::scene::{BvhChoice, LoadedScene, Scenes, load_scene_with};
@@ -85,7 +85,7 @@ impl RunSpec {
         let (width, height) = self.res.unwrap_or(scene.scene.resolution);
         let spp = self.spp;
         checks::image_fits(width, height, spp).map_err(|e| anyhow!("--res {width}x{height} with --spp {spp}: {e}"))?;
-        checks::graph_handles_scene(graph, scene).map_err(|e| anyhow!("{}: {e}", self.scene))?;
+        graph_handles_scene(graph, scene).map_err(|e| anyhow!("{}: {e}", self.scene))?;
         let mut constants = parse_sets(&self.sets, graph, "--set ")?;
         if let Some(n) = self.max_path_length {
             constants.insert("MAX_PATH_LENGTH".into(), ConstValue::U32(n));
