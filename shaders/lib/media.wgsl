@@ -73,10 +73,9 @@ fn medium_free_flight(m: i32, t_surface: f32, u: f32) -> FreeFlight {
     return FreeFlight(t_surface, false, select(vec3<f32>(0.0), tr / p, p > 0.0));
 }
 
-// The probability that a path goes on after scattering in medium `m` with the albedo
+// The probability that a path goes on after scattering in `medium` with the albedo
 // roulette rule: the largest single-scattering albedo.
-fn medium_continuation(m: i32) -> f32 {
-    let medium = medium_at(m);
+fn medium_continuation(medium: Medium) -> f32 {
     return clamp(max_component(medium.sigma_s / max(medium.sigma_t, vec3<f32>(1e-30))), 0.0, 1.0);
 }
 

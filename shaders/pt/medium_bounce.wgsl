@@ -12,7 +12,7 @@ fn medium_vertex_position(path: CameraPath) -> vec3<f32> {
 }
 
 // The factor of the continuation probability in the phase densities used for MIS.
-fn medium_mis_continuation(medium: i32) -> f32 {
+fn medium_mis_continuation(medium: Medium) -> f32 {
     return select(1.0, medium_continuation(medium), RR_ALBEDO);
 }
 
@@ -29,10 +29,11 @@ fn medium_next_event(path: CameraPath, light_u: f32, light_uv: vec2<f32>) -> Sha
     if (is_black(ill.radiance)) {
         return none;
     }
-    let f = phase_hg(medium_at(path.medium).g, path.direction, ill.direction);
+    let medium = medium_at(path.medium);
+    let f = phase_hg(medium.g, path.direction, ill.direction);
     var w = 1.0;
     if (!ill.is_delta) {
-        w = mis_weight(ill.pdf * picked.probability, f * medium_mis_continuation(path.medium));
+        w = mis_weight(ill.pdf * picked.probability, f * medium_mis_continuation(medium));
     }
     let contribution = path.throughput * ill.radiance * (f * w / (picked.probability * ill.pdf));
     return ShadowRay(position, path.pixel, ill.direction, light_shadow_distance(position, position, ill), contribution, path.medium);
@@ -41,11 +42,11 @@ fn medium_next_event(path: CameraPath, light_u: f32, light_uv: vec2<f32>) -> Sha
 // The path's next direction from the phase function at its scattering (sampled with `u`),
 // then Russian roulette with `roulette_u`; false when the path ends.
 fn medium_scatter(path: ptr<function, CameraPath>, u: vec2<f32>, roulette_u: f32) -> bool {
-    let g = medium_at((*path).medium).g;
-    let direction = sample_phase_hg(g, (*path).direction, u);
+    let medium = medium_at((*path).medium);
+    let direction = sample_phase_hg(medium.g, (*path).direction, u);
     var q = 1.0;
     if (RR_ALBEDO) {
-        q = medium_continuation((*path).medium);
+        q = medium_continuation(medium);
     } else if ((*path).length >= RR_START) {
         q = min(max_component((*path).throughput), RR_MAX);
     }
@@ -53,7 +54,7 @@ fn medium_scatter(path: ptr<function, CameraPath>, u: vec2<f32>, roulette_u: f32
         return false;
     }
     (*path).throughput /= q;
-    (*path).last_pdf = phase_hg(g, (*path).direction, direction) * medium_mis_continuation((*path).medium);
+    (*path).last_pdf = phase_hg(medium.g, (*path).direction, direction) * medium_mis_continuation(medium);
     (*path).last_specular = 0u;
     (*path).origin = medium_vertex_position(*path);
     (*path).direction = direction;

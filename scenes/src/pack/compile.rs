@@ -68,8 +68,6 @@ pub struct CompiledScene {
     pub thin_lens: bool,
     /// The participating media, each material's sides' media and the camera's.
     pub media: super::media::PackedMedia,
-    /// Whether the scene has media or index-matched boundaries (the MEDIA feature).
-    pub uses_media: bool,
 }
 
 impl CompiledScene {
@@ -170,7 +168,6 @@ impl CompiledScene {
             clipped_primitives,
             thin_lens: scene.camera.as_ref().is_some_and(|c| c.lens.is_some()),
             media,
-            uses_media: crate::model::media::uses_media(scene),
         })
     }
 }

@@ -153,7 +153,10 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
     );
     add("LIGHT_BACKGROUND", has(light_kind::BACKGROUND));
     add("LIGHT_ENVIRONMENT", has(light_kind::ENVIRONMENT));
-    add("MEDIA", scene.uses_media);
+    add(
+        "MEDIA",
+        scene.media.info.count > 0 || scene.materials.iter().any(|m| m.flags & material_flags::NULL != 0),
+    );
     out
 }
 
