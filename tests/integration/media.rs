@@ -1,5 +1,6 @@
 //! Participating media in the path tracer (docs/media.md), against closed forms: the
-//! transmittance through an absorbing sphere, and furnaces in media that absorb nothing
+//! transmittance through an absorbing sphere, single scattering in a half-space under a
+//! distant light (isotropic and Henyey-Greenstein), and furnaces in media that absorb nothing
 //! (isotropic and forward scattering). Each compares a region's mean with the exact value
 //! within 3 standard errors, as tests/integration/analytic.rs does, with the same demand on
 //! the standard error (under 1.5% of the value). Also: every layout renders a media scene alike
@@ -63,6 +64,31 @@ fn an_absorbing_sphere_transmits_the_background_by_beer_lambert() {
         }
     }
     assert_analytic("absorbing sphere", mean, se, expected, 3.0, 0.0);
+}
+
+/// Henyey-Greenstein's phase function at the cosine `cos` between the direction light travels
+/// before and after scattering (forward scattering for g > 0).
+fn henyey_greenstein(g: f64, cos: f64) -> f64 {
+    (1.0 - g * g) / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5))
+}
+
+#[test]
+fn single_scattering_in_a_half_space_matches_its_closed_form() {
+    // A vertical camera ray into a half-space of albedo a under a distant light of irradiance
+    // E travelling at angle theta_l from the vertical: scattered once at depth z, the light
+    // comes in through z / mu_l of medium, so L = a p E sigma_t int exp(-sigma_t z (1 + 1 /
+    // mu_l)) dz = a p E mu_l / (mu_l + 1), whatever sigma_t. Here mu_l = 0.5 and light turns
+    // from (sin 60, 0, -cos 60) to (0, 0, 1): cos = -0.5. The 1-degree pinhole makes every ray
+    // vertical to 0.01% of this value.
+    let albedo = [0.5, 0.8, 1.0];
+    let irradiance = [1.0, 2.0, 4.0];
+    for (name, g) in [("media-half-space-isotropic", 0.0), ("media-half-space-hg", 0.5)] {
+        let r = render(&scene(name), "pt", "NaivePTsk", (16, 16), 4, 64, 11, &[]);
+        let (mean, se, _) = region(&r.image, |_, _| true);
+        let p = henyey_greenstein(g, -0.5);
+        let expected = [0, 1, 2].map(|c| albedo[c] * p * irradiance[c] * 0.5 / 1.5);
+        assert_analytic(name, mean, se, expected, 3.0, 0.0);
+    }
 }
 
 #[test]
