@@ -74,12 +74,16 @@ pub fn stress(args: StressArgs) -> Result<()> {
     for case in &selected {
         for graph in &graphs {
             let o = runner.run(case, graph);
-            let mark = if o.passed { "ok" } else { "FAILED" };
+            let mark = match (&o.left_out, o.passed) {
+                (Some(_), _) => "left out",
+                (None, true) => "ok",
+                (None, false) => "FAILED",
+            };
             eprintln!(
                 "  {:<34} {:<6} {:<7} {} ({:.1} s)",
                 o.scene, o.graph, mark, o.statistic, o.seconds
             );
-            for f in &o.failures {
+            for f in o.failures.iter().chain(&o.left_out) {
                 eprintln!("      {f}");
             }
             if let Some(image) = &o.image {

@@ -47,6 +47,10 @@ pub enum Expectation {
     /// ρ I h / (π (d² + h²)^1.5) at distance d from its foot, averaged over each pixel; the
     /// pixels within three pixel widths of the foot are not checked.
     PointLightOverPlane,
+    /// A scene that absorbs nothing in a uniform environment L, where samples are not each L
+    /// (a medium's next-event estimation shares the environment with phase sampling by MIS):
+    /// L everywhere, region by region.
+    Environment,
 }
 
 /// A stress scene and its invariant.
@@ -99,6 +103,11 @@ pub fn cases() -> Vec<Case> {
         case("stress-glass-ior-3", Furnace(1e-7), (32, 32)),
         case("stress-ggx-roughness-1e-4", Furnace(1e-7), (32, 32)),
         case("stress-point-light-1e-6-above", Expect(PointLightOverPlane), (32, 32)),
+        case("stress-media-scaled-1e-4", SameAs("media-sphere"), (32, 32)),
+        case("stress-media-scaled-1e4", SameAs("media-sphere"), (32, 32)),
+        case("stress-media-fog-1e-6", SameAs("cornell-diffuse"), (32, 32)),
+        case("stress-media-furnace-g0.999", Expect(Environment), (16, 16)),
+        case("stress-media-furnace-g-0.999", Expect(Environment), (16, 16)),
     ]
 }
 
@@ -158,6 +167,7 @@ impl Expectation {
         let o = origin(cam);
         let bg = background(scene);
         match self {
+            Expectation::Environment => pixels.map(|_| Some((bg, bg))).collect(),
             Expectation::EmissiveEnclosure => {
                 let le = match first_shape(scene) {
                     Shape::Quad { emission: Some(e), .. } => e[0] as f64,
