@@ -130,7 +130,7 @@ pub fn check_enclosures(scene: &Scene) -> Result<(), (String, String)> {
                     e.count += 1;
                     e.balance += if front { -up } else { up };
                     e.shape = s;
-                    if e.count % 2 == 0 && e.balance == 0 {
+                    if e.count.is_multiple_of(2) && e.balance == 0 {
                         edges.remove(&(m, low, high));
                     }
                 }
