@@ -7,7 +7,8 @@
 //! The conventions are the importer's ([`super`]), so that importing the export renders the
 //! original: the camera as a `lookat` (Mitsuba's +Z forward, +Y up, +X to the image's
 //! left), PLY texture coordinates as lightgraph's (Mitsuba 3's too: (0, 0) at the image's top
-//! left; a PLY's are not flipped, an OBJ's would be), materials as one-sided `diffuse` (`twosided` for two-sided ones) with
+//! left; a PLY's are not flipped, an OBJ's would be), smooth glass as `dielectric` and perfect
+//! mirrors as `conductor` (material `none`), other materials as one-sided `diffuse` (`twosided` for two-sided ones) with
 //! the base colour as an sRGB `bitmap`, alpha masks as `mask` with a binary opacity bitmap
 //! (the texels' alpha against the cut-off). Media are `homogeneous` media (`sigma_t` over its
 //! largest channel, that factor in `scale`, and `albedo`) with an `isotropic` or `hg` phase,
@@ -234,8 +235,8 @@ impl Writer {
         Ok(())
     }
 
-    /// Material `name` as a diffuse bsdf (in `twosided` and `mask` as it needs), or a `null`
-    /// one, with the id its shapes refer to.
+    /// Material `name` as a diffuse bsdf (in `twosided` and `mask` as it needs), a specular
+    /// one (glass, mirror) or a `null` one, with the id its shapes refer to.
     fn material(&mut self, name: &str, m: &Material, textures: &[Texture]) -> Result<(), String> {
         let id = format!("mat{}", self.ids.len());
         self.ids.insert(name.to_string(), id.clone());
@@ -270,6 +271,15 @@ impl Writer {
                     )),
                 };
                 (reflectance, opacity)
+            }
+            None if is_pure_specular(m) => {
+                let _ = writeln!(
+                    self.xml,
+                    "  <!-- {} -->\n  {}",
+                    name.replace("--", "- -"),
+                    specular_bsdf(m, &id)
+                );
+                return Ok(());
             }
             None => {
                 if m.phong.iter().chain(&m.mirror).any(|&v| v > 0.0) {
@@ -483,6 +493,38 @@ fn ply_bytes(
     Ok(bytes)
 }
 
+/// A material of the mirror/dielectric lobe alone (SmallVCM's glass and mirror): no diffuse or
+/// Phong lobe, no glTF model.
+fn is_pure_specular(m: &Material) -> bool {
+    m.pbr.is_none() && m.diffuse.iter().chain(&m.phong).all(|&v| v == 0.0) && m.mirror.iter().any(|&v| v > 0.0)
+}
+
+/// The Mitsuba bsdf of a pure specular material, with id `id`: smooth glass (`ior` > 0) as a
+/// `dielectric` of that index against 1 (lightgraph scales its reflection by `mirror` and its
+/// refraction by nothing, as `specular_reflectance` does), a perfect mirror as a `conductor`
+/// of material `none` (reflectance 1) times `mirror`, in `twosided` where the material is.
+fn specular_bsdf(m: &Material, id: &str) -> String {
+    let tint = if m.mirror == [1.0; 3] {
+        String::new()
+    } else {
+        format!("\n      {}", rgb_element("specular_reflectance", m.mirror))
+    };
+    if m.ior > 0.0 {
+        return format!(
+            "<bsdf type=\"dielectric\" id=\"{id}\">\n      <float name=\"int_ior\" value=\"{}\"/>\n      <float name=\"ext_ior\" value=\"1\"/>{tint}\n    </bsdf>",
+            m.ior
+        );
+    }
+    let mirror =
+        format!("<bsdf type=\"conductor\">\n      <string name=\"material\" value=\"none\"/>{tint}\n    </bsdf>");
+    let bsdf = if m.two_sided {
+        format!("<bsdf type=\"twosided\">\n    {mirror}\n    </bsdf>")
+    } else {
+        mirror
+    };
+    bsdf.replacen("<bsdf", &format!("<bsdf id=\"{id}\""), 1)
+}
+
 /// The texture `r` refers to.
 fn texture_of<'t>(r: &TextureRef, textures: &'t [Texture]) -> Result<&'t Texture, String> {
     textures
@@ -674,6 +716,60 @@ mod tests {
             assert_eq!(m.null, n.null, "{}", a.material());
         }
         assert!(scene.materials.values().any(|m| m.null) && scene.media.len() == 3);
+    }
+
+    #[test]
+    fn glass_and_mirrors_export_as_dielectric_and_conductor_and_import_back() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/cornell/cornell-glossy-background.ron");
+        let scene = crate::parse::scene_file::parse_scene(path, &std::fs::read_to_string(path).unwrap()).unwrap();
+        let exported = export(&scene, (8, 8)).unwrap();
+        assert!(
+            exported.xml.contains("type=\"dielectric\"")
+                && exported.xml.contains("<float name=\"int_ior\" value=\"1.6\"/>")
+                && exported.xml.contains("<string name=\"material\" value=\"none\"/>"),
+            "{}",
+            exported.xml
+        );
+        assert!(
+            !exported
+                .notes
+                .iter()
+                .any(|n| n.contains("'glass'") || n.contains("'mirror'")),
+            "{:?}",
+            exported.notes
+        );
+        let dir = std::env::temp_dir().join(format!("lightgraph-export-glass-{}", std::process::id()));
+        write(&scene, (8, 8), &dir).unwrap();
+        let back = super::super::load(&dir.join("scene.xml"));
+        std::fs::remove_dir_all(&dir).unwrap();
+        let back = back.unwrap().scene;
+        for (a, b) in scene.shapes.iter().zip(&back.shapes) {
+            let (m, n) = (&scene.materials[a.material()], &back.materials[b.material()]);
+            if !is_pure_specular(m) {
+                continue;
+            }
+            let p = n
+                .pbr
+                .as_ref()
+                .expect("Mitsuba's dielectric and conductor import as glTF's model");
+            if m.ior > 0.0 {
+                assert_eq!((p.transmission, p.roughness), (1.0, 0.0), "{}", a.material());
+                assert!(
+                    (p.ior - m.ior).abs() < 1e-6,
+                    "{}: ior {} for {}",
+                    a.material(),
+                    p.ior,
+                    m.ior
+                );
+            } else {
+                assert_eq!(
+                    (p.metallic, p.roughness, p.base_color),
+                    (1.0, 0.0, m.mirror),
+                    "{}",
+                    a.material()
+                );
+            }
+        }
     }
 
     #[test]
