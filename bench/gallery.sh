@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The gallery of docs/gallery/: every scene file of scenes/cornell, scenes/gltf and scenes/study, every
+# The gallery of docs/gallery/: every scene file of scenes/cornell, scenes/gltf, scenes/media and scenes/study, every
 # glTF asset of the shared scenes given bare on the command line (default camera, default
 # environment when it has no light), and every Mitsuba scene file (scene.xml) of the shared
 # scenes, rendered with PT on the GPU machine from the repo root
@@ -23,7 +23,7 @@ shot() {
     echo "FAIL $name: $(tail -2 "$work/$name.log" | tr '\n' ' ')"
   fi
 }
-for f in scenes/cornell/*.ron scenes/gltf/*.ron scenes/study/*.ron; do
+for f in scenes/cornell/*.ron scenes/gltf/*.ron scenes/media/*.ron scenes/study/*.ron; do
   [ -e "$out/$(basename "$f" .ron).png" ] && continue
   shot "$(basename "$f" .ron)" --scene "$(basename "$f" .ron)"
 done

@@ -6,7 +6,7 @@
 Renders SmallUPBP's built-in scene SCENE_NUMBER with its unbiased volumetric path tracer
 (`-a vptmis`) RUNS times on one thread, each run with its own seed (`-seed`, which seeds the
 path tracer's Mersenne twister: thread k of a run gets seed + k), and lightgraph's `render` of
-SCENE.ron (the same scene in lightgraph's format) with each seed of --lg-seeds. SmallUPBP's
+SCENE.ron (the same scene in lightgraph's format; with --graph, another estimator than pt) with each seed of --lg-seeds. SmallUPBP's
 standard errors come from the spread of its runs (Student t, RUNS - 1 degrees of freedom),
 lightgraph's from the films' `variance` channel (the per-pixel variance of the mean).
 
@@ -38,6 +38,8 @@ def parse_args():
     ap.add_argument("ron", type=Path, help="the same scene in lightgraph's format")
     ap.add_argument("--sup", required=True, type=Path, help="SmallUPBP executable")
     ap.add_argument("--lg", required=True, type=Path, help="lightgraph executable")
+    ap.add_argument("--graph", default="pt",
+                    help="lightgraph's estimator (default pt; any graph that handles media)")
     ap.add_argument("--res", default="64x64", help="image size WxH (default 64x64)")
     ap.add_argument("--runs", type=int, default=8, help="SmallUPBP runs (default 8)")
     ap.add_argument("--iterations", type=int, default=1000,
@@ -74,7 +76,7 @@ def parse_args():
         ap.error(f"{a.ron}: no such scene file")
     if a.reuse:
         wanted = [a.out / f"sup-s{a.scene}-seed{1000 + k}.exr" for k in range(a.runs)]
-        wanted += [a.out / f"lg-s{a.scene}-seed{s}.exr" for s in a.lg_seeds]
+        wanted += [lg_image(a, s) for s in a.lg_seeds]
         missing = [str(p) for p in wanted if not p.is_file()]
         if missing:
             ap.error(f"--reuse: missing {', '.join(missing)}")
@@ -106,17 +108,23 @@ def render_smallupbp(a, seed):
     return np.dstack([img[c] for c in "RGB"])
 
 
+def lg_image(a, seed):
+    """lightgraph's film of one seed: lg-sN-seedS.exr for pt, lg-GRAPH-sN-seedS.exr for another graph."""
+    graph = "" if a.graph == "pt" else f"{a.graph}-"
+    return a.out / f"lg-{graph}s{a.scene}-seed{seed}.exr"
+
+
 def render_lightgraph(a, seed):
     """lightgraph's film: (mean, variance of the mean), each H x W x 3."""
     import OpenEXR
 
-    path = a.out / f"lg-s{a.scene}-seed{seed}.exr"
+    path = lg_image(a, seed)
     if not a.reuse:
         env = dict(os.environ)
         env.setdefault("XDG_RUNTIME_DIR", "/tmp")
-        run([a.lg, "render", "--scene", a.ron, "--res", a.res, "--frames", a.frames, "--seed", seed,
+        run([a.lg, "render", "--scene", a.ron, "--graph", a.graph, "--res", a.res, "--frames", a.frames, "--seed", seed,
              "--max-path-length", a.max_length, "--out", path, "--force"], env)
-        print(f"compare.py: lightgraph seed {seed}: {a.frames} frames", file=sys.stderr)
+        print(f"compare.py: lightgraph {a.graph} seed {seed}: {a.frames} frames", file=sys.stderr)
     ch = OpenEXR.File(str(path)).channels()
     return ch["RGB"].pixels.astype(np.float64), ch["variance"].pixels.astype(np.float64)
 
