@@ -40,11 +40,12 @@ fn light_start_medium(origin: vec3<f32>) -> i32 {
     return media_info.x;
 }
 
-// Puts a sub-path that `light_path_start_stratified` started into the medium of its light. A
-// light at infinity (the background, a directional light) sends nothing through a medium
-// around the scene: its light crosses an infinite distance of it (the transmittance of a
-// channel without extinction, 1, in the others 0), as a camera path sees it.
-fn light_path_start_in_media(p: ptr<function, LightPath>) {
+// Puts a sub-path that `light_path_start_stratified` started into the medium of its light;
+// false when it carries no light there. A light at infinity (the background, a directional
+// light) sends nothing through a medium around the scene: its light crosses an infinite
+// distance of it (the transmittance of a channel without extinction, 1, in the others 0), as
+// a camera path sees it.
+fn light_path_start_in_media(p: ptr<function, LightPath>) -> bool {
     (*p).medium = light_start_medium((*p).origin);
     (*p).vertex = VERTEX_SURFACE;
     (*p).gap = 0.0;
@@ -52,6 +53,7 @@ fn light_path_start_in_media(p: ptr<function, LightPath>) {
         let clear = medium_at((*p).medium).sigma_t == vec3<f32>(0.0);
         (*p).throughput *= select(vec3<f32>(0.0), vec3<f32>(1.0), clear);
     }
+    return !is_black((*p).throughput);
 }
 
 // After the sub-path's ray was traced: its free flight through media to its next vertex, a

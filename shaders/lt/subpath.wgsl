@@ -116,9 +116,10 @@ fn light_path_start_stratified(p: ptr<function, LightPath>, rng: ptr<function, u
     }
     (*p).is_finite = select(0u, 1u, e.is_finite);
 #if MEDIA
-    light_path_start_in_media(p);
-#endif
+    return light_path_start_in_media(p);
+#else
     return true;
+#endif
 }
 
 // Whether a sub-path `light_path_start_stratified` started left a delta light: its d_vc is 0

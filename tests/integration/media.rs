@@ -134,6 +134,37 @@ fn every_light_tracing_layout_renders_a_media_scene_alike() {
     }
 }
 
+/// A sky behind a fog that fills all space lights nothing (its light crosses an infinite
+/// distance of fog): path tracing renders black, and light tracing, whose sub-paths from the
+/// sky would start in the fog at the scene's bounding sphere, too. Without the fog the floor is
+/// lit, in both.
+#[test]
+fn a_sky_behind_an_unbounded_fog_lights_nothing() {
+    let path = data("scenes/media-unbounded-fog.ron");
+    let clear = std::env::temp_dir().join(format!("lightgraph-clear-sky-{}.ron", std::process::id()));
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(
+        &clear,
+        text.replace("camera_medium: Some(\"fog\")", "camera_medium: None"),
+    )
+    .unwrap();
+    let (fog, sky) = (
+        scene("media-unbounded-fog"),
+        load_scene(clear.to_str().unwrap()).unwrap(),
+    );
+    std::fs::remove_file(&clear).unwrap();
+    for (graph, layout) in [("pt", "NaivePTsk"), ("lt", "LTsk")] {
+        let dark = render(&fog, graph, layout, (8, 8), 1, 4, 3, &[]);
+        assert!(
+            dark.image.mean.iter().all(|p| *p == [0.0; 3]),
+            "{graph}: light through the fog"
+        );
+        let lit = render(&sky, graph, layout, (8, 8), 1, 4, 3, &[]);
+        let (mean, _, _) = region(&lit.image, |_, _| true);
+        assert!(mean[0] > 0.1, "{graph}: the floor under a clear sky is dark ({mean:?})");
+    }
+}
+
 #[test]
 fn graphs_that_do_not_handle_media_refuse_a_scene_with_them() {
     let s = load_scene("media-fog").unwrap();
