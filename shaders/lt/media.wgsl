@@ -11,7 +11,12 @@
 // medium on the near side of the first surface whose material bounds a medium; the camera's
 // where no surface on the way does (surfaces that bound none leave a ray in its medium).
 // A segment crossing more than MEDIA_MAX_CROSSINGS surfaces that bound none takes the camera's.
+// In a scene without media (index-matched boundaries alone, or every feature compiled in) all
+// is vacuum, and no ray is traced.
 fn light_start_medium(origin: vec3<f32>) -> i32 {
+    if (media_info.y == 0) {
+        return VACUUM;
+    }
     let to_camera = camera.position - origin;
     var left = length(to_camera);
     if (!(left > 0.0)) {

@@ -8,9 +8,9 @@
 //! kernels for a scene without media hold no media code or buffer.
 
 use crate::bpt::direct_light_blocks;
-use crate::common::{assert_analytic, assert_same_render, data, kernel_sources, region, render};
+use crate::common::{assert_analytic, assert_same_render, data, kernel_sources, region, render, render_with_layout};
 use crate::frames::{render_frames, worst_z};
-use lightgraph::run::{LoadedScene, RunSpec, load_graph, load_scene};
+use lightgraph::run::{LayoutOverrides, LoadedScene, RunSpec, load_graph, load_scene};
 
 fn scene(name: &str) -> LoadedScene {
     load_scene(data(&format!("scenes/{name}.ron")).to_str().unwrap()).unwrap()
@@ -163,6 +163,21 @@ fn a_sky_behind_an_unbounded_fog_lights_nothing() {
         let (mean, _, _) = region(&lit.image, |_, _| true);
         assert!(mean[0] > 0.1, "{graph}: the floor under a clear sky is dark ({mean:?})");
     }
+}
+
+/// Light tracing with every feature compiled in (media among them) renders a scene without
+/// media as its specialised kernels do, tracing the same rays: no medium is looked up for a
+/// light where the scene has none.
+#[test]
+fn light_tracing_with_media_compiled_in_renders_a_scene_without_them_alike() {
+    let s = load_scene("cornell-diffuse").unwrap();
+    let plain = render(&s, "lt", "LTsk", (16, 16), 1, 2, 5, &[]);
+    let all = LayoutOverrides {
+        all_features: true,
+        ..Default::default()
+    };
+    let general = render_with_layout(&s, "lt", "LTsk", (16, 16), 1, 2, 5, &[], all);
+    assert_same_render(&plain, &general, "cornell-diffuse: lt with every feature");
 }
 
 #[test]
