@@ -53,7 +53,6 @@ fn light_start_medium(origin: vec3<f32>) -> i32 {
 fn light_path_start_in_media(p: ptr<function, LightPath>) -> bool {
     (*p).medium = light_start_medium((*p).origin);
     (*p).vertex = VERTEX_SURFACE;
-    (*p).gap = 0.0;
     if ((*p).is_finite == 0u && (*p).medium != VACUUM) {
         let clear = medium_at((*p).medium).sigma_t == vec3<f32>(0.0);
         (*p).throughput *= select(vec3<f32>(0.0), vec3<f32>(1.0), clear);
@@ -63,15 +62,15 @@ fn light_path_start_in_media(p: ptr<function, LightPath>) -> bool {
 
 // After the sub-path's ray was traced: its free flight through media to its next vertex, a
 // scattering in its medium (VERTEX_MEDIUM) or the surface hit beyond index-matched boundaries.
+// The distance the ray's origin moves past boundaries (`gap`) is not kept: no MIS here.
 fn light_path_through_media(p: ptr<function, LightPath>) {
     var rng = (*p).rng;
-    var f = MediaFlight((*p).origin, (*p).direction, (*p).hit, (*p).medium, VERTEX_SURFACE, (*p).gap, (*p).throughput);
+    var f = MediaFlight((*p).origin, (*p).direction, (*p).hit, (*p).medium, VERTEX_SURFACE, 0.0, (*p).throughput);
     flight_through_media(&f, &rng, COUNTER_RAYS_LIGHT);
     (*p).origin = f.origin;
     (*p).hit = f.hit;
     (*p).medium = f.medium;
     (*p).vertex = f.vertex;
-    (*p).gap = f.gap;
     (*p).throughput = f.throughput;
     (*p).rng = rng;
 }
@@ -116,7 +115,6 @@ fn light_path_scatter_in_medium(p: ptr<function, LightPath>, medium: Medium, pos
     (*p).throughput /= q;
     (*p).origin = position;
     (*p).direction = sample_phase_hg(medium.g, (*p).direction, u);
-    (*p).gap = 0.0;
     return true;
 }
 

@@ -58,7 +58,6 @@ struct LightPath {
 #if MEDIA
     medium: i32,            // the medium the ray travels in (-1: vacuum; shaders/lt/media.wgsl)
     vertex: u32,            // what the ray found: VERTEX_SURFACE at the hit, or VERTEX_MEDIUM at hit.t in `medium`
-    gap: f32,               // distance from the sub-path's last vertex to `origin` (boundaries crossed)
 #endif
 }
 
@@ -350,7 +349,6 @@ fn light_path_scatter(p: ptr<function, LightPath>, s: Surface, bsdf: Bsdf, count
     (*p).d_vc = r.d_vc;
 #if MEDIA
     (*p).medium = medium_after(s.material, s.normal, r.direction, (*p).medium);
-    (*p).gap = 0.0;
 #endif
     return true;
 }
