@@ -55,6 +55,10 @@ struct LightPath {
     is_finite: u32,         // 0: the light is at infinity (directional, background)
     hit: PathHit,           // the last traced ray's hit (t < 0: it escaped)
     index: u32,             // the sub-path's index in the frame
+#if MEDIA
+    medium: i32,            // the medium the ray travels in (-1: vacuum; shaders/lt/media.wgsl)
+    vertex: u32,            // what the ray found: VERTEX_SURFACE at the hit, or VERTEX_MEDIUM at hit.t in `medium`
+#endif
 }
 
 // A stored light sub-path vertex (48 bytes; 64 with shading normals): position moved off the
@@ -110,7 +114,11 @@ fn light_path_start_stratified(p: ptr<function, LightPath>, rng: ptr<function, u
         (*p).d_vc = mis_clamp(mis_pow(e.cos_light / emission_pdf));
     }
     (*p).is_finite = select(0u, 1u, e.is_finite);
+#if MEDIA
+    return light_path_start_in_media(p);
+#else
     return true;
+#endif
 }
 
 // Whether a sub-path `light_path_start_stratified` started left a delta light: its d_vc is 0
@@ -149,6 +157,9 @@ fn light_path_trace(p: ptr<function, LightPath>) {
     let hit = trace_closest((*p).origin, (*p).direction, INFINITE_DISTANCE);
     (*p).hit = path_hit(hit);
     (*p).length += 1u;
+#if MEDIA
+    light_path_through_media(p);
+#endif
 }
 
 // The surface the sub-path's last ray hit.
@@ -336,5 +347,8 @@ fn light_path_scatter(p: ptr<function, LightPath>, s: Surface, bsdf: Bsdf, count
     (*p).throughput = r.throughput;
     (*p).d_vcm = r.d_vcm;
     (*p).d_vc = r.d_vc;
+#if MEDIA
+    (*p).medium = medium_after(s.material, s.normal, r.direction, (*p).medium);
+#endif
     return true;
 }

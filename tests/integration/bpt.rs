@@ -18,7 +18,7 @@ use lightgraph_scenes::bvh::BvhKind;
 
 /// The blocks in which the camera sees a light directly (path tracing with paths of one
 /// segment: only directly visible emission is nonzero); light tracing cannot render those.
-fn direct_light_blocks(scene: &LoadedScene, size: u32, n: u32) -> Vec<bool> {
+pub fn direct_light_blocks(scene: &LoadedScene, size: u32, n: u32) -> Vec<bool> {
     let direct = render(
         scene,
         "pt",

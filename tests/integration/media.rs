@@ -3,12 +3,15 @@
 //! distant light (isotropic and Henyey-Greenstein), and furnaces in media that absorb nothing
 //! (isotropic and forward scattering). Each compares a region's mean with the exact value
 //! within 3 standard errors, as tests/integration/analytic.rs does, with the same demand on
-//! the standard error (under 1.5% of the value). Also: every layout renders a media scene alike
-//! to float rounding, graphs that do not handle media refuse such a scene, and kernels for a
-//! scene without media hold no media code or buffer.
+//! the standard error (under 1.5% of the value). Also: light tracing agrees with path tracing
+//! in media (as tests/integration/bpt.rs compares them), every layout of each renders a media
+//! scene alike to float rounding, graphs that do not handle media refuse such a scene, and
+//! kernels for a scene without media hold no media code or buffer.
 
-use crate::common::{assert_analytic, assert_same_render, data, kernel_sources, region, render};
-use lightgraph::run::{LoadedScene, RunSpec, load_graph, load_scene};
+use crate::bpt::direct_light_blocks;
+use crate::common::{assert_analytic, assert_same_render, data, kernel_sources, region, render, render_with_layout};
+use crate::frames::{render_frames, worst_z};
+use lightgraph::run::{LayoutOverrides, LoadedScene, RunSpec, load_graph, load_scene};
 
 fn scene(name: &str) -> LoadedScene {
     load_scene(data(&format!("scenes/{name}.ron")).to_str().unwrap()).unwrap()
@@ -111,37 +114,137 @@ fn every_path_tracing_layout_renders_a_media_scene_alike() {
     }
 }
 
+/// Light tracing against path tracing on `media-lights`: light sub-paths start in two media,
+/// neither the camera's (an area light in a box of fog, another inside a null sphere of
+/// coloured absorbing juice in the fog), scatter in the fog by Henyey-Greenstein, light the
+/// floor and cross the null boundaries on their way to the camera, medium vertices connected
+/// to it as surface ones are. The per-block means of 48 independent frames agree within 4
+/// combined standard errors (the statistics of light tracing against path tracing in
+/// tests/integration/bpt.rs: |t| > 4 about once in 4000 per block and channel), outside any
+/// block where the camera sees a light (La E, which light tracing cannot sample; none here).
+/// 16 samples a pixel a frame keep every block's standard error under 5% of its mean. The
+/// test sees a wrong start medium: sub-paths started in the camera's (vacuum) instead of their
+/// light's differ by up to 172 standard errors.
+#[test]
+fn light_tracing_agrees_with_path_tracing_in_media() {
+    let s = scene("media-lights");
+    let (size, n) = (32, 4);
+    let pt = render_frames(&s, "pt", "NaivePTsk", size, 16, 48, 61, n);
+    let lt = render_frames(&s, "lt", "LTsk", size, 16, 48, 62, n);
+    let keep: Vec<bool> = direct_light_blocks(&s, size, n).iter().map(|d| !d).collect();
+    assert!(
+        keep.iter().filter(|k| **k).count() >= 12,
+        "too few blocks left: {keep:?}"
+    );
+    let z = worst_z(
+        &lt,
+        &pt,
+        &keep,
+        &vec![false; keep.len()],
+        0.05,
+        "media-lights: lt vs pt",
+    );
+    assert!(
+        z < 4.0,
+        "light tracing differs from path tracing in media by {z:.2} standard errors"
+    );
+}
+
+#[test]
+fn every_light_tracing_layout_renders_a_media_scene_alike() {
+    let s = scene("media-lights");
+    let base = render(&s, "lt", "LTsk", (16, 16), 1, 2, 9, &[]);
+    for layout in ["LTmk", "StreamingLTmk"] {
+        let other = render(&s, "lt", layout, (16, 16), 1, 2, 9, &[]);
+        assert_same_render(&base, &other, &format!("media-lights: LTsk and {layout}"));
+    }
+}
+
+/// A sky behind a fog that fills all space lights nothing (its light crosses an infinite
+/// distance of fog): path tracing renders black, and light tracing, whose sub-paths from the
+/// sky would start in the fog at the scene's bounding sphere, too. Without the fog the floor is
+/// lit, in both.
+#[test]
+fn a_sky_behind_an_unbounded_fog_lights_nothing() {
+    let path = data("scenes/media-unbounded-fog.ron");
+    let clear = std::env::temp_dir().join(format!("lightgraph-clear-sky-{}.ron", std::process::id()));
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(
+        &clear,
+        text.replace("camera_medium: Some(\"fog\")", "camera_medium: None"),
+    )
+    .unwrap();
+    let (fog, sky) = (
+        scene("media-unbounded-fog"),
+        load_scene(clear.to_str().unwrap()).unwrap(),
+    );
+    std::fs::remove_file(&clear).unwrap();
+    for (graph, layout) in [("pt", "NaivePTsk"), ("lt", "LTsk")] {
+        let dark = render(&fog, graph, layout, (8, 8), 1, 4, 3, &[]);
+        assert!(
+            dark.image.mean.iter().all(|p| *p == [0.0; 3]),
+            "{graph}: light through the fog"
+        );
+        let lit = render(&sky, graph, layout, (8, 8), 1, 4, 3, &[]);
+        let (mean, _, _) = region(&lit.image, |_, _| true);
+        assert!(mean[0] > 0.1, "{graph}: the floor under a clear sky is dark ({mean:?})");
+    }
+}
+
+/// Light tracing with every feature compiled in (media among them) renders a scene without
+/// media as its specialised kernels do, tracing the same rays: no medium is looked up for a
+/// light where the scene has none.
+#[test]
+fn light_tracing_with_media_compiled_in_renders_a_scene_without_them_alike() {
+    let s = load_scene("cornell-diffuse").unwrap();
+    let plain = render(&s, "lt", "LTsk", (16, 16), 1, 2, 5, &[]);
+    let all = LayoutOverrides {
+        all_features: true,
+        ..Default::default()
+    };
+    let general = render_with_layout(&s, "lt", "LTsk", (16, 16), 1, 2, 5, &[], all);
+    assert_same_render(&plain, &general, "cornell-diffuse: lt with every feature");
+}
+
 #[test]
 fn graphs_that_do_not_handle_media_refuse_a_scene_with_them() {
     let s = load_scene("media-fog").unwrap();
-    for graph in ["bpt-lvc", "vcm", "lt"] {
+    for graph in ["bpt-lvc", "vcm"] {
         let g = load_graph(graph).unwrap();
         let spec = RunSpec {
             scene: "media-fog".into(),
             ..RunSpec::default()
         };
         let e = spec.options(&s, &g).expect_err("refused").to_string();
+        let able = e.split("render it with ").nth(1).unwrap_or("");
         assert!(
-            e.contains(&format!("graph '{graph}' does not handle participating media"))
-                && e.contains("render it with pt"),
+            e.contains(&format!("graph '{graph}' does not handle participating media")) && able.starts_with("lt, pt "),
             "{e}"
         );
     }
-    let pt = load_graph("pt").unwrap();
-    RunSpec::default().options(&s, &pt).expect("pt handles media");
+    for graph in ["pt", "lt"] {
+        let g = load_graph(graph).unwrap();
+        RunSpec::default().options(&s, &g).expect("handles media");
+    }
 }
 
 #[test]
 fn kernels_for_a_scene_without_media_hold_no_media_code_or_buffer() {
     let plain = load_scene("cornell-diffuse").unwrap();
     let fog = load_scene("media-fog").unwrap();
-    for layout in ["NaivePTsk", "WavefrontPT"] {
-        let with = kernel_sources("pt", layout, &fog, &[], false);
-        let without = kernel_sources("pt", layout, &plain, &[], false);
+    for (graph, layout) in [
+        ("pt", "NaivePTsk"),
+        ("pt", "WavefrontPT"),
+        ("lt", "LTsk"),
+        ("lt", "StreamingLTmk"),
+    ] {
+        let with = kernel_sources(graph, layout, &fog, &[], false);
+        let without = kernel_sources(graph, layout, &plain, &[], false);
         for word in [
             "material_media",
             "media_info",
             "fn medium_free_flight",
+            "fn flight_through_media",
             "fn media_shadow_transmittance",
         ] {
             assert!(with.contains(word), "{layout}: the media scene's kernels lack {word}");
