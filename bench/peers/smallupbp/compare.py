@@ -11,7 +11,8 @@ standard errors come from the spread of its runs (Student t, RUNS - 1 degrees of
 lightgraph's from the films' `variance` channel (the per-pixel variance of the mean).
 
 Compared, per channel, over the pixels that see no light source (both images below
---light-threshold in every channel: the light's own radiance would swamp the means): the image
+--light-threshold in every channel: the light's own radiance would swamp the means; with
+--light-margin N, nor within N pixels of such a pixel): the image
 mean, and the means of BLOCK x BLOCK pixel blocks, each by Welch's t. The verdict is
 "agree" unless the image mean or a block rejects at ALPHA, with Holm's correction over the
 blocks. It first checks that the images are aligned (neither flipped nor mirrored) and writes
@@ -51,6 +52,10 @@ def parse_args():
                     help="maximum path length in segments, both sides (-l, --max-path-length; default 10)")
     ap.add_argument("--block", type=int, default=8, help="block size in pixels (default 8)")
     ap.add_argument("--alpha", type=float, default=0.01, help="test level (default 0.01)")
+    ap.add_argument("--light-margin", type=int, default=0,
+                    help="also leave out the pixels within this many pixels of a light pixel (default 0; "
+                         "1 for light tracing, which misses the light seen directly: the pixels at the "
+                         "light's edge see a part of it below the threshold)")
     ap.add_argument("--light-threshold", type=float, default=1.0,
                     help="pixels at or above this in a channel are the light's (default 1.0)")
     ap.add_argument("--out", type=Path, default=Path("out/smallupbp-compare"),
@@ -209,6 +214,14 @@ def main():
     df_sup, df_lg = a.runs - 1, n_lg * a.frames - 1
     sup_mean = sup_runs.mean(axis=0)
     unlit = (sup_mean.max(axis=2) < a.light_threshold) & (lg_mean.max(axis=2) < a.light_threshold)
+    for _ in range(a.light_margin):
+        lit = ~unlit
+        grown = lit.copy()
+        grown[1:] |= lit[:-1]
+        grown[:-1] |= lit[1:]
+        grown[:, 1:] |= lit[:, :-1]
+        grown[:, :-1] |= lit[:, 1:]
+        unlit = ~grown
     align = check_alignment(sup_mean, lg_mean, unlit)
     exr_image.write_png(str(a.out / f"side-s{a.scene}.png"),
                         np.concatenate([sup_mean, np.ones_like(sup_mean[:, :2]), lg_mean], axis=1))
