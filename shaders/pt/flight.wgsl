@@ -1,7 +1,8 @@
 #if MEDIA
 // A camera path's free flight to its next vertex through participating media (MEDIA;
-// docs/media.md), for pass `trace`. Media are homogeneous; a free flight picks the distance by
-// one channel's extinction and weights it by all three (shaders/lib/media.wgsl).
+// docs/media.md), for pass `trace`. In a homogeneous medium a free flight picks the distance by
+// one channel's extinction and weights it by all three (shaders/lib/media.wgsl); in a grid
+// medium (MEDIA_GRID) it is delta tracking (shaders/lib/media_grid.wgsl).
 
 // After `trace` found the closest hit of the path's ray: the free flight through the path's
 // medium up to that hit. The path scatters in the medium (VERTEX_MEDIUM at hit.t) or reaches
@@ -18,7 +19,12 @@ fn path_through_media(path: ptr<function, CameraPath>) {
         if ((*path).medium != VACUUM) {
             u = rng_f32(&rng);
         }
+#if MEDIA_GRID
+        // Delta tracking in a grid medium draws more numbers after `u` (shaders/lib/media_grid.wgsl).
+        let flight = media_free_flight((*path).medium, (*path).origin, (*path).direction, select((*path).hit.t, INFINITE_DISTANCE, escaped), u, &rng);
+#else
         let flight = medium_free_flight((*path).medium, select((*path).hit.t, INFINITE_DISTANCE, escaped), u);
+#endif
         (*path).throughput *= flight.weight;
         if (flight.scattered) {
             (*path).hit.t = flight.t;
