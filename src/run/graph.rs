@@ -50,11 +50,7 @@ const DECLARED_FEATURES: [(&str, &str, &str); 2] = [
         "media",
         "participating media or index-matched (null) boundaries",
     ),
-    (
-        "MEDIA_GRID",
-        "media-grid",
-        "heterogeneous media (density grids)",
-    ),
+    ("MEDIA_GRID", "media-grid", "heterogeneous media (density grids)"),
 ];
 
 /// Checks that `graph` handles every feature of `scene` that graphs must declare (coverage's

@@ -70,10 +70,16 @@ impl VolumeGrid {
             ));
         }
         if &bytes[..3] != b"VOL" {
-            return Err(format!("not a .vol file: it starts with {:?}, not \"VOL\"", &bytes[..3]));
+            return Err(format!(
+                "not a .vol file: it starts with {:?}, not \"VOL\"",
+                &bytes[..3]
+            ));
         }
         if bytes[3] != 3 {
-            return Err(format!("version {} of the .vol format: only version 3 is read", bytes[3]));
+            return Err(format!(
+                "version {} of the .vol format: only version 3 is read",
+                bytes[3]
+            ));
         }
         let int = |at: usize| i32::from_le_bytes(bytes[at..at + 4].try_into().expect("four bytes"));
         let encoding = int(4);
@@ -122,6 +128,20 @@ impl VolumeGrid {
     }
 }
 
+impl VolumeGrid {
+    /// The grid in Mitsuba's `.vol` format, as [`VolumeGrid::from_vol`] reads it.
+    pub fn to_vol(&self) -> Vec<u8> {
+        let mut out = b"VOL\x03".to_vec();
+        for i in [1, self.res[0], self.res[1], self.res[2], 1] {
+            out.extend(i.to_le_bytes());
+        }
+        for f in self.bbox.iter().flatten().chain(&self.data) {
+            out.extend(f.to_le_bytes());
+        }
+        out
+    }
+}
+
 /// The inverse of the affine map `m` (three rows), or None where it is singular.
 pub fn invert_affine(m: &[[f32; 4]; 3]) -> Option<[[f32; 4]; 3]> {
     let a = |r: usize, c: usize| m[r][c] as f64;
@@ -149,17 +169,14 @@ pub fn invert_affine(m: &[[f32; 4]; 3]) -> Option<[[f32; 4]; 3]> {
 pub mod tests {
     use super::*;
 
-    /// A `.vol` file of one channel: its header (magic, version, encoding, resolution,
-    /// channels, a unit box) and `data`.
-    pub fn vol_bytes(res: [i32; 3], data: &[f32]) -> Vec<u8> {
-        let mut out = b"VOL\x03".to_vec();
-        for i in [1, res[0], res[1], res[2], 1] {
-            out.extend(i.to_le_bytes());
+    /// A `.vol` file of `res` voxels holding `data`, whose box is (0, 0, 0)-(1, 2, 3).
+    pub fn vol_bytes(res: [u32; 3], data: &[f32]) -> Vec<u8> {
+        VolumeGrid {
+            res,
+            bbox: [[0.0; 3], [1.0, 2.0, 3.0]],
+            data: data.to_vec(),
         }
-        for f in [0f32, 0.0, 0.0, 1.0, 2.0, 3.0].iter().chain(data) {
-            out.extend(f.to_le_bytes());
-        }
-        out
+        .to_vol()
     }
 
     #[test]
@@ -186,10 +203,17 @@ pub mod tests {
         assert!(with(20, &3i32.to_le_bytes()).contains("3 channels"));
         assert!(with(8, &0i32.to_le_bytes()).contains("resolution [0, 2, 2]"));
         let e = VolumeGrid::from_vol(&good[..good.len() - 4]).unwrap_err();
-        assert!(e.contains("76 bytes, but a 2x2x2 grid of one float32 channel takes 80"), "{e}");
+        assert!(
+            e.contains("76 bytes, but a 2x2x2 grid of one float32 channel takes 80"),
+            "{e}"
+        );
         assert!(with(48 + 4 * 5, &(-1f32).to_le_bytes()).contains("density -1 of voxel (1, 0, 1)"));
         assert!(with(48, &f32::NAN.to_le_bytes()).contains("voxel (0, 0, 0)"));
-        assert!(VolumeGrid::from_vol(&good[..10]).unwrap_err().contains("shorter than a .vol header"));
+        assert!(
+            VolumeGrid::from_vol(&good[..10])
+                .unwrap_err()
+                .contains("shorter than a .vol header")
+        );
     }
 
     #[test]

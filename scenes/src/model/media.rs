@@ -109,15 +109,19 @@ fn check_grid(m: &Medium, grid: &DensityGrid) -> Result<(), String> {
 /// Reads the density grid of every medium that has one and has not read it, with `read`
 /// (which takes the grid's `file` as the scene writes it). An error gives the medium's name
 /// to locate and the message, naming the medium and the file.
-pub fn load_grids(
-    scene: &mut Scene,
-    read: impl Fn(&str) -> Result<Vec<u8>, String>,
-) -> Result<(), (String, String)> {
+pub fn load_grids(scene: &mut Scene, read: impl Fn(&str) -> Result<Vec<u8>, String>) -> Result<(), (String, String)> {
     for (name, m) in &mut scene.media {
-        let Some(grid) = m.grid.as_mut().filter(|g| g.volume.is_none()) else { continue };
+        let Some(grid) = m.grid.as_mut().filter(|g| g.volume.is_none()) else {
+            continue;
+        };
         let volume = read(&grid.file)
             .and_then(|bytes| VolumeGrid::from_vol(&bytes))
-            .map_err(|e| (format!("\"{name}\""), format!("medium '{name}': grid '{}': {e}", grid.file)))?;
+            .map_err(|e| {
+                (
+                    format!("\"{name}\""),
+                    format!("medium '{name}': grid '{}': {e}", grid.file),
+                )
+            })?;
         grid.volume = Some(Arc::new(volume));
     }
     Ok(())

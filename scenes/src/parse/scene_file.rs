@@ -300,7 +300,12 @@ pub(crate) mod tests {
             .to_string();
         assert!(e.contains("medium 'cloud': grid 'c.vol': c.vol not found"), "{e}");
         // A coloured extinction cannot be delta-tracked by one distance.
-        let e = error(&with_grid(&grid.replace("sigma_a: (0.5, 0.5, 0.5)", "sigma_a: (0.5, 0.1, 0.5)")));
-        assert!(e.starts_with("s.ron:4:9: medium 'cloud': a density grid needs a grey extinction"), "{e}");
+        let e = error(&with_grid(
+            &grid.replace("sigma_a: (0.5, 0.5, 0.5)", "sigma_a: (0.5, 0.1, 0.5)"),
+        ));
+        assert!(
+            e.starts_with("s.ron:4:9: medium 'cloud': a density grid needs a grey extinction"),
+            "{e}"
+        );
     }
 }

@@ -154,7 +154,11 @@ mod tests {
     #[test]
     fn bad_heterogeneous_media_are_errors_naming_the_file_and_element() {
         let dir = folder("errors");
-        std::fs::write(dir.join("bad.vol"), b"VOX\x03 and more bytes than a header has, surely more than 48").unwrap();
+        std::fs::write(
+            dir.join("bad.vol"),
+            b"VOX\x03 and more bytes than a header has, surely more than 48",
+        )
+        .unwrap();
         let grid = |props: &str| {
             format!(
                 "<medium type=\"heterogeneous\" name=\"interior\">\n<volume type=\"gridvolume\" name=\"sigma_t\">\n{props}</volume></medium>"

@@ -53,7 +53,9 @@ fn medium<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<Mediu
         _ => {
             return Err(ctx.error(
                 node,
-                format!("the medium type '{kind}' is not supported (issue 59): only homogeneous and heterogeneous media"),
+                format!(
+                    "the medium type '{kind}' is not supported (issue 59): only homogeneous and heterogeneous media"
+                ),
             ));
         }
     }
