@@ -423,8 +423,8 @@ pub struct GpuMedium {
     pub kind: u32,
 }
 
-/// A heterogeneous medium's density grid (`media_grids`, five vec4s in WGSL, read by
-/// `density_grid_at` in shaders/lib/media.wgsl).
+/// A heterogeneous medium's density grid and its majorant grid (`media_grids`, six vec4s in
+/// WGSL, read by `density_grid_at` in shaders/lib/media_grid.wgsl).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuDensityGrid {
@@ -434,12 +434,15 @@ pub struct GpuDensityGrid {
     pub res: [u32; 3],
     /// Where its densities start in `media_density`.
     pub offset: u32,
-    /// The largest density: the majorant, times the medium's extinction.
-    pub max_density: f32,
+    /// Cells of its majorant grid along x, y and z.
+    pub cells: [u32; 3],
+    /// Where the majorant grid's densities (the largest density each cell can see, x
+    /// fastest) start in `media_density`.
+    pub majorant_offset: u32,
     /// 0: trilinear; 1: nearest.
     pub nearest: u32,
     /// Padding to 16 bytes.
-    pub pad: [u32; 2],
+    pub pad: [u32; 3],
 }
 
 /// The media of a material's two sides (`vec2<i32>` in WGSL): indices into the media, -1 for

@@ -2,32 +2,36 @@
 // Heterogeneous media (MEDIA_GRID; docs/media.md): a medium whose `kind` k > 0 has the density
 // grid k - 1 of `media_grids`, its coefficients per unit density and its extinction grey.
 // Free flights are sampled by delta tracking and shadow rays' transmittance estimated by ratio
-// tracking, both against the grid's one majorant (its largest density), over the part of the
-// ray inside the grid's box; outside the box the density is zero.
+// tracking, both against a coarse grid of majorants (the largest density each cell can see)
+// walked cell by cell (DDA) over the part of the ray inside the grid's box; outside the box
+// the density is zero.
 
 // The most tentative collisions one tracking takes; a free flight that would take more ends the
-// path, a transmittance estimate is zero (a bias only in media far denser than their majorant
-// steps: docs/media.md).
+// path, a transmittance estimate is zero (docs/media.md).
 const GRID_MAX_STEPS: u32 = 4096u;
+// More than the cells a ray crosses in a majorant grid (at most 16 an axis).
+const MAJORANT_WALK_CELLS: u32 = 64u;
 
-// A density grid as `media_grids` holds it (five vec4s: GpuDensityGrid in scenes/src/gpu.rs).
+// A density grid as `media_grids` holds it (six vec4s: GpuDensityGrid in scenes/src/gpu.rs).
 struct DensityGrid {
     to_grid_x: vec4<f32>,   // rows of the affine map from the world to the unit cube
     to_grid_y: vec4<f32>,
     to_grid_z: vec4<f32>,
     res: vec3<u32>,         // voxels along x, y, z
     offset: u32,            // its first density in `media_density`
-    max_density: f32,       // the majorant of its densities
+    cells: vec3<u32>,       // cells of its majorant grid along x, y, z
+    majorant_offset: u32,   // its first majorant in `media_density`
     nearest: bool,          // nearest voxel instead of trilinear interpolation
 }
 
 fn density_grid_at(g: u32) -> DensityGrid {
-    let base = 5u * g;
-    let r = media_grids[base + 3u];
-    let m = media_grids[base + 4u];
+    let base = 6u * g;
+    let r = bitcast<vec4<u32>>(media_grids[base + 3u]);
+    let c = bitcast<vec4<u32>>(media_grids[base + 4u]);
+    let f = bitcast<vec4<u32>>(media_grids[base + 5u]);
     return DensityGrid(
         media_grids[base], media_grids[base + 1u], media_grids[base + 2u],
-        bitcast<vec3<u32>>(r.xyz), bitcast<u32>(r.w), m.x, bitcast<u32>(m.y) != 0u,
+        r.xyz, r.w, c.xyz, c.w, f.x != 0u,
     );
 }
 
@@ -81,29 +85,90 @@ fn grid_ray(grid: DensityGrid, origin: vec3<f32>, d: vec3<f32>, t_end: f32) -> G
     let b = (1.0 - o) / safe;
     let near = max(max_component(min(a, b)), 0.0);
     let far = min(min(min(max(a.x, b.x), max(a.y, b.y)), max(a.z, b.z)), t_end);
-    return GridRay(o, v, vec2<f32>(near, far));
+    return GridRay(o, safe, vec2<f32>(near, far));
+}
+
+// A walk along a grid ray through the cells of the majorant grid (Amanatides and Woo's DDA):
+// the cell at `t`, and where the ray leaves it along each axis.
+struct MajorantWalk {
+    cell: vec3<i32>,
+    step: vec3<i32>,
+    t_next: vec3<f32>,
+    t_delta: vec3<f32>,
+    t: f32,
+    t_end: f32,
+}
+
+fn majorant_walk(grid: DensityGrid, ray: GridRay) -> MajorantWalk {
+    let n = vec3<f32>(grid.cells);
+    let cell = clamp(vec3<i32>(floor((ray.o + ray.t.x * ray.d) * n)), vec3<i32>(0), vec3<i32>(grid.cells) - 1);
+    let up = ray.d > vec3<f32>(0.0);
+    let bound = (vec3<f32>(cell) + select(vec3<f32>(0.0), vec3<f32>(1.0), up)) / n;
+    return MajorantWalk(
+        cell, select(vec3<i32>(-1), vec3<i32>(1), up), (bound - ray.o) / ray.d, abs(1.0 / (ray.d * n)),
+        ray.t.x, ray.t.y,
+    );
+}
+
+// The majorant density of the walk's cell.
+fn majorant_at(grid: DensityGrid, cell: vec3<i32>) -> f32 {
+    let c = vec3<u32>(clamp(cell, vec3<i32>(0), vec3<i32>(grid.cells) - 1));
+    return media_density[grid.majorant_offset + (c.z * grid.cells.y + c.y) * grid.cells.x + c.x];
+}
+
+// Moves the walk to the next tentative collision, `tau` further in optical depth of the
+// majorant (extinction `sigma_t` per unit density times each cell's majorant density): returns
+// the majorant density there, or 0 where the walk reaches its end first.
+fn majorant_walk_to(grid: DensityGrid, sigma_t: f32, walk: ptr<function, MajorantWalk>, tau: f32) -> f32 {
+    var left = tau;
+    for (var i = 0u; i < MAJORANT_WALK_CELLS; i++) {
+        let tn = (*walk).t_next;
+        let end = min(min(min(tn.x, tn.y), tn.z), (*walk).t_end);
+        let bound = majorant_at(grid, (*walk).cell);
+        let depth = sigma_t * bound * max(end - (*walk).t, 0.0);
+        if (depth > left) {
+            (*walk).t += left / (sigma_t * bound);
+            return bound;
+        }
+        left -= depth;
+        (*walk).t = end;
+        if (end >= (*walk).t_end) {
+            return 0.0;
+        }
+        var axis = vec3<bool>(false, false, true);
+        if (tn.x <= tn.y && tn.x <= tn.z) {
+            axis = vec3<bool>(true, false, false);
+        } else if (tn.y <= tn.z) {
+            axis = vec3<bool>(false, true, false);
+        }
+        (*walk).cell += select(vec3<i32>(0), (*walk).step, axis);
+        (*walk).t_next += select(vec3<f32>(0.0), (*walk).t_delta, axis);
+    }
+    (*walk).t = (*walk).t_end;
+    return 0.0;
 }
 
 // A free flight by delta tracking through grid medium `medium` towards a surface at
-// `t_surface`: tentative collisions at the majorant's rate, each real with the probability
-// density / majorant. The first distance uses `u`, later numbers come from `rng`. The weight
-// is the albedo where the path scatters (grey extinction), 1 where it reaches the surface.
+// `t_surface`: tentative collisions at the rate of the majorant grid, each real with the
+// probability density / majorant. The first distance uses `u`, later numbers come from `rng`.
+// The weight is the albedo where the path scatters (grey extinction), 1 where it reaches the
+// surface.
 fn grid_free_flight(medium: Medium, origin: vec3<f32>, d: vec3<f32>, t_surface: f32, u: f32, rng: ptr<function, u32>) -> FreeFlight {
     let grid = density_grid_at(medium.kind - 1u);
     let ray = grid_ray(grid, origin, d, t_surface);
-    let majorant = grid.max_density * medium.sigma_t.x;
-    if (ray.t.x >= ray.t.y || majorant <= 0.0) {
-        return FreeFlight(t_surface, false, vec3<f32>(1.0));
+    let passed = FreeFlight(t_surface, false, vec3<f32>(1.0));
+    if (ray.t.x >= ray.t.y || medium.sigma_t.x <= 0.0) {
+        return passed;
     }
-    var t = ray.t.x;
+    var walk = majorant_walk(grid, ray);
     var v = u;
     for (var i = 0u; i < GRID_MAX_STEPS; i++) {
-        t -= log(max(1.0 - v, 1e-30)) / majorant;
-        if (t >= ray.t.y) {
-            return FreeFlight(t_surface, false, vec3<f32>(1.0));
+        let bound = majorant_walk_to(grid, medium.sigma_t.x, &walk, -log(max(1.0 - v, 1e-30)));
+        if (bound <= 0.0) {
+            return passed;
         }
-        if (rng_f32(rng) * grid.max_density < grid_density(grid, ray.o + t * ray.d)) {
-            return FreeFlight(t, true, medium.sigma_s / medium.sigma_t.x);
+        if (rng_f32(rng) * bound < grid_density(grid, ray.o + walk.t * ray.d)) {
+            return FreeFlight(walk.t, true, medium.sigma_s / medium.sigma_t.x);
         }
         v = rng_f32(rng);
     }
@@ -111,23 +176,22 @@ fn grid_free_flight(medium: Medium, origin: vec3<f32>, d: vec3<f32>, t_surface: 
 }
 
 // The transmittance of grid medium `medium` from `origin` along `d` for `t_end`, estimated by
-// ratio tracking: the product of 1 - density / majorant over tentative collisions at the
-// majorant's rate, drawn from `rng`.
+// ratio tracking: the product of 1 - density / majorant over tentative collisions at the rate
+// of the majorant grid, drawn from `rng`.
 fn grid_transmittance(medium: Medium, origin: vec3<f32>, d: vec3<f32>, t_end: f32, rng: ptr<function, u32>) -> f32 {
     let grid = density_grid_at(medium.kind - 1u);
     let ray = grid_ray(grid, origin, d, t_end);
-    let majorant = grid.max_density * medium.sigma_t.x;
-    if (ray.t.x >= ray.t.y || majorant <= 0.0) {
+    if (ray.t.x >= ray.t.y || medium.sigma_t.x <= 0.0) {
         return 1.0;
     }
-    var t = ray.t.x;
+    var walk = majorant_walk(grid, ray);
     var tr = 1.0;
     for (var i = 0u; i < GRID_MAX_STEPS; i++) {
-        t -= log(max(1.0 - grid_rng_f32(rng), 1e-30)) / majorant;
-        if (t >= ray.t.y) {
+        let bound = majorant_walk_to(grid, medium.sigma_t.x, &walk, -log(max(1.0 - grid_rng_f32(rng), 1e-30)));
+        if (bound <= 0.0) {
             return tr;
         }
-        tr *= max(1.0 - grid_density(grid, ray.o + t * ray.d) / grid.max_density, 0.0);
+        tr *= max(1.0 - grid_density(grid, ray.o + walk.t * ray.d) / bound, 0.0);
         if (tr <= 0.0) {
             return 0.0;
         }

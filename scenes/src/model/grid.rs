@@ -50,11 +50,47 @@ pub struct VolumeGrid {
     pub data: Vec<f32>,
 }
 
+/// The most cells of a majorant grid along an axis.
+pub const MAJORANT_CELLS: u32 = 16;
+
 impl VolumeGrid {
-    /// The largest density: a majorant of the trilinear interpolation and of the nearest
-    /// voxel alike.
-    pub fn max(&self) -> f32 {
-        self.data.iter().fold(0.0, |m, &d| m.max(d))
+    /// The coarse grid of majorants over the unit cube: up to [`MAJORANT_CELLS`] cells an axis
+    /// (no more than the voxels), each holding the largest density of the voxels that a
+    /// trilinear or nearest lookup anywhere in the cell reads (clamped at the faces).
+    pub fn majorants(&self) -> VolumeGrid {
+        let cells = self.res.map(|r| r.min(MAJORANT_CELLS));
+        // The voxels a lookup in cell c of n along an axis of `res` voxels reads: from the
+        // one below the cell's low end's centre to the one above its high end's.
+        let span = |c: u32, n: u32, res: u32| -> (usize, usize) {
+            let voxel = |u: f64| (u * res as f64 - 0.5).floor();
+            let lo = voxel(c as f64 / n as f64).max(0.0) as usize;
+            let hi = (voxel((c + 1) as f64 / n as f64) + 1.0).clamp(0.0, (res - 1) as f64) as usize;
+            (lo, hi)
+        };
+        let mut data = Vec::with_capacity(cells.iter().product::<u32>() as usize);
+        let (rx, ry) = (self.res[0] as usize, self.res[1] as usize);
+        for cz in 0..cells[2] {
+            let (z0, z1) = span(cz, cells[2], self.res[2]);
+            for cy in 0..cells[1] {
+                let (y0, y1) = span(cy, cells[1], self.res[1]);
+                for cx in 0..cells[0] {
+                    let (x0, x1) = span(cx, cells[0], self.res[0]);
+                    let mut m = 0f32;
+                    for z in z0..=z1 {
+                        for y in y0..=y1 {
+                            let row = (z * ry + y) * rx;
+                            m = self.data[row + x0..=row + x1].iter().fold(m, |m, &d| m.max(d));
+                        }
+                    }
+                    data.push(m);
+                }
+            }
+        }
+        VolumeGrid {
+            res: cells,
+            bbox: self.bbox,
+            data,
+        }
     }
 
     /// Reads Mitsuba's `.vol` format: 'V', 'O', 'L', version 3, then little-endian int32s
@@ -185,7 +221,6 @@ pub mod tests {
         let g = VolumeGrid::from_vol(&vol_bytes([2, 3, 4], &data)).unwrap();
         assert_eq!(g.res, [2, 3, 4]);
         assert_eq!(g.data, data);
-        assert_eq!(g.max(), 23.0);
         assert_eq!(g.bbox, [[0.0; 3], [1.0, 2.0, 3.0]]);
     }
 
@@ -214,6 +249,68 @@ pub mod tests {
                 .unwrap_err()
                 .contains("shorter than a .vol header")
         );
+    }
+
+    /// The trilinear density of `g` at `u` in the unit cube (voxel centres at (i + 0.5) / res,
+    /// clamped), as shaders/lib/media_grid.wgsl looks it up.
+    fn trilinear(g: &VolumeGrid, u: [f64; 3]) -> f64 {
+        let s: [f64; 3] = std::array::from_fn(|k| u[k] * g.res[k] as f64 - 0.5);
+        let voxel = |i: [i64; 3]| {
+            let c: [usize; 3] = std::array::from_fn(|k| i[k].clamp(0, g.res[k] as i64 - 1) as usize);
+            g.data[(c[2] * g.res[1] as usize + c[1]) * g.res[0] as usize + c[0]] as f64
+        };
+        let mut sum = 0.0;
+        for corner in 0..8 {
+            let mut w = 1.0;
+            let i: [i64; 3] = std::array::from_fn(|k| {
+                let up = (corner >> k) & 1 == 1;
+                let f = s[k] - s[k].floor();
+                w *= if up { f } else { 1.0 - f };
+                s[k].floor() as i64 + up as i64
+            });
+            sum += w * voxel(i);
+        }
+        sum
+    }
+
+    #[test]
+    fn majorants_bound_every_lookup_in_their_cell_and_are_tight_on_a_constant_grid() {
+        // A grid of 37 x 5 x 20 pseudo-random densities, most of them zero.
+        let res = [37u32, 5, 20];
+        let mut state = 12345u32;
+        let data: Vec<f32> = (0..res.iter().product::<u32>())
+            .map(|_| {
+                state = state.wrapping_mul(1664525).wrapping_add(1013904223);
+                let v = (state >> 8) as f32 / 16777216.0;
+                if v < 0.8 { 0.0 } else { v }
+            })
+            .collect();
+        let g = VolumeGrid {
+            res,
+            bbox: [[0.0; 3], [1.0; 3]],
+            data,
+        };
+        let m = g.majorants();
+        assert_eq!(m.res, [16, 5, 16]);
+        for i in 0..200_000u32 {
+            let u: [f64; 3] =
+                std::array::from_fn(|k| ((i as f64 + 0.5) * [0.754877666, 0.569840291, 0.362437524][k]).fract());
+            let c: [usize; 3] = std::array::from_fn(|k| ((u[k] * m.res[k] as f64) as usize).min(m.res[k] as usize - 1));
+            let bound = m.data[(c[2] * m.res[1] as usize + c[1]) * m.res[0] as usize + c[0]] as f64;
+            let nearest: [usize; 3] =
+                std::array::from_fn(|k| ((u[k] * res[k] as f64) as usize).min(res[k] as usize - 1));
+            let near = g.data[(nearest[2] * res[1] as usize + nearest[1]) * res[0] as usize + nearest[0]] as f64;
+            assert!(trilinear(&g, u) <= bound + 1e-6 && near <= bound, "{u:?} in cell {c:?}");
+        }
+        // Cells of zeros stay zero (the point of the grid), and a constant grid's are its value.
+        assert!(m.data.iter().filter(|&&d| d == 0.0).count() > 0);
+        let flat = VolumeGrid {
+            res: [4, 4, 4],
+            bbox: [[0.0; 3], [1.0; 3]],
+            data: vec![2.0; 64],
+        }
+        .majorants();
+        assert!(flat.data.iter().all(|&d| d == 2.0));
     }
 
     #[test]

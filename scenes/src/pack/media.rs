@@ -108,14 +108,21 @@ fn pack_grid(m: &Medium, density: &mut Vec<f32>) -> Result<GpuDensityGrid, Strin
         .ok_or_else(|| format!("its grid '{}' was not read", grid.file))?;
     let to_grid = invert_affine(&grid.to_world)
         .ok_or_else(|| format!("its grid's to_world {:?} is not invertible", grid.to_world))?;
-    let offset = u32::try_from(density.len()).map_err(|_| "the density grids exceed 2^32 voxels".to_string())?;
+    let at = |density: &Vec<f32>| {
+        u32::try_from(density.len()).map_err(|_| "the density grids exceed 2^32 values".to_string())
+    };
+    let offset = at(density)?;
     density.extend_from_slice(&volume.data);
+    let majorant_offset = at(density)?;
+    let majorants = volume.majorants();
+    density.extend_from_slice(&majorants.data);
     Ok(GpuDensityGrid {
         to_grid,
         res: volume.res,
         offset,
-        max_density: volume.max(),
+        cells: majorants.res,
+        majorant_offset,
         nearest: (grid.filter == GridFilter::Nearest) as u32,
-        pad: [0; 2],
+        pad: [0; 3],
     })
 }
