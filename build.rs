@@ -1,4 +1,5 @@
-//! Embeds the graphs, pass catalogs, WGSL sources and scene files in the binary, so the
+//! Embeds the graphs, pass catalogs, WGSL sources and scene files (and the density grids of
+//! built-in scenes) in the binary, so the
 //! tool runs from anywhere (the GPU machine gets only the binary). Files added to those
 //! folders are picked up without Rust changes.
 
@@ -21,6 +22,16 @@ fn collect(dir: &Path, suffixes: &[&str], out: &mut Vec<PathBuf>) {
     }
 }
 
+/// The path of `f` below `root`, with `/` between its parts.
+fn virtual_path(root: &Path, f: &Path) -> String {
+    f.strip_prefix(root)
+        .expect("collected below the root")
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().to_string())
+        .collect::<Vec<_>>()
+        .join("/")
+}
+
 fn main() {
     let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
@@ -37,15 +48,23 @@ fn main() {
         "/// Files built into the binary: (virtual path, contents).\npub static FILES: &[(&str, &str)] = &[\n",
     );
     for f in &files {
-        let rel = f.strip_prefix(&root).expect("collected below the root");
-        let virtual_path = rel
-            .components()
-            .map(|c| c.as_os_str().to_string_lossy().to_string())
-            .collect::<Vec<_>>()
-            .join("/");
         let _ = writeln!(
             code,
-            "    ({virtual_path:?}, include_str!({:?})),",
+            "    ({:?}, include_str!({:?})),",
+            virtual_path(&root, f),
+            f.display().to_string()
+        );
+    }
+    code.push_str("];\n");
+    // Binary files of built-in scenes: density grids (`.vol`).
+    let mut binaries = Vec::new();
+    collect(&root.join("scenes"), &[".vol"], &mut binaries);
+    code.push_str("/// Binary files built into the binary: (virtual path, bytes).\npub static BINARY_FILES: &[(&str, &[u8])] = &[\n");
+    for f in &binaries {
+        let _ = writeln!(
+            code,
+            "    ({:?}, include_bytes!({:?})),",
+            virtual_path(&root, f),
             f.display().to_string()
         );
     }

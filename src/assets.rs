@@ -13,6 +13,28 @@ pub fn builtin() -> Vfs {
     Vfs::new(vec![Layer::Embedded(embedded::FILES)])
 }
 
+/// The bytes of the built-in binary file at `virtual_path` (a built-in scene's density grid).
+pub fn builtin_binary(virtual_path: &str) -> Option<&'static [u8]> {
+    embedded::BINARY_FILES
+        .iter()
+        .find(|(p, _)| *p == virtual_path)
+        .map(|(_, bytes)| *bytes)
+}
+
+/// A file a scene names (a density grid), relative to the scene file `scene_file`: on disk
+/// beside it, else built in beside a built-in scene.
+pub fn scene_relative_file(scene_file: &str, name: &str) -> Result<Vec<u8>, String> {
+    let dir = Path::new(scene_file).parent().unwrap_or(Path::new(""));
+    let path = dir.join(name);
+    if path.is_file() {
+        return std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()));
+    }
+    let virtual_path = path.to_string_lossy().replace('\\', "/");
+    builtin_binary(&virtual_path)
+        .map(<[u8]>::to_vec)
+        .ok_or_else(|| format!("{} not found (it is read relative to the scene file)", path.display()))
+}
+
 /// A graph given on the command line: a built-in name (`pt`) or a `.ron` file on disk, whose
 /// folder is searched first for the files it names. Returns the file system and the virtual
 /// path of the graph.

@@ -418,8 +418,31 @@ pub struct GpuMedium {
     pub g: f32,
     /// Extinction coefficient σt = σa + σs per channel.
     pub sigma_t: [f32; 3],
-    /// Reserved for the kind of medium (0: homogeneous).
+    /// The kind of medium: 0 homogeneous; k > 0: heterogeneous, the density grid k - 1 of
+    /// `media_grids` (then the coefficients are per unit density).
     pub kind: u32,
+}
+
+/// A heterogeneous medium's density grid and its majorant grid (`media_grids`, six vec4s in
+/// WGSL, read by `density_grid_at` in shaders/lib/media_grid.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuDensityGrid {
+    /// Rows of the affine map from the world to the unit cube the grid fills.
+    pub to_grid: [[f32; 4]; 3],
+    /// Voxels along x, y and z.
+    pub res: [u32; 3],
+    /// Where its densities start in `media_density`.
+    pub offset: u32,
+    /// Cells of its majorant grid along x, y and z.
+    pub cells: [u32; 3],
+    /// Where the majorant grid's densities (the largest density each cell can see, x
+    /// fastest) start in `media_density`.
+    pub majorant_offset: u32,
+    /// 0: trilinear; 1: nearest.
+    pub nearest: u32,
+    /// Padding to 16 bytes.
+    pub pad: [u32; 3],
 }
 
 /// The media of a material's two sides (`vec2<i32>` in WGSL): indices into the media, -1 for

@@ -34,6 +34,6 @@ pub use model::framing::default_camera;
 pub use model::{environment, texture};
 pub use pack::compile::CompiledScene;
 pub use pack::{features, split};
-pub use parse::scene_file::parse_scene;
+pub use parse::scene_file::{parse_scene, read_grids};
 pub use parse::{gltf, mitsuba};
 pub use resolve::{resolve_gltf, scene_from_gltf};

@@ -1,8 +1,9 @@
 #if MEDIA
 // A sub-path's free flight to its next vertex through participating media (MEDIA;
 // docs/media.md), shared by camera paths (shaders/pt/flight.wgsl) and light sub-paths
-// (shaders/lt/media.wgsl). Media are homogeneous; a free flight picks the distance by one
-// channel's extinction and weights it by all three (shaders/lib/media.wgsl).
+// (shaders/lt/media.wgsl). In a homogeneous medium a free flight picks the distance by one
+// channel's extinction and weights it by all three (shaders/lib/media.wgsl); in a grid medium
+// (MEDIA_GRID) it is delta tracking (shaders/lib/media_grid.wgsl).
 
 // A ray between two vertices of a sub-path, as it goes through media: where it starts, the
 // closest hit traced for it, the medium it travels in, what it found (VERTEX_SURFACE at the
@@ -33,7 +34,12 @@ fn flight_through_media(f: ptr<function, MediaFlight>, rng: ptr<function, u32>, 
         if ((*f).medium != VACUUM) {
             u = rng_f32(rng);
         }
+#if MEDIA_GRID
+        // Delta tracking in a grid medium draws more numbers after `u` (shaders/lib/media_grid.wgsl).
+        let flight = media_free_flight((*f).medium, (*f).origin, (*f).direction, select((*f).hit.t, INFINITE_DISTANCE, escaped), u, rng);
+#else
         let flight = medium_free_flight((*f).medium, select((*f).hit.t, INFINITE_DISTANCE, escaped), u);
+#endif
         (*f).throughput *= flight.weight;
         if (flight.scattered) {
             (*f).hit.t = flight.t;

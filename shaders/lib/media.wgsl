@@ -101,23 +101,34 @@ fn sample_phase_hg(g: f32, d_in: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
 }
 
 // The transmittance of a shadow ray from `origin` along `d` for `distance` that starts in
-// medium `m`, through index-matched boundaries (crossed, changing media) and media; zero where
-// any other surface blocks it. At most MEDIA_MAX_CROSSINGS boundaries are crossed.
+// medium `m`, through index-matched boundaries (crossed, changing media) and media (estimated
+// by ratio tracking in grid media, MEDIA_GRID); zero where any other surface blocks it. At most MEDIA_MAX_CROSSINGS boundaries are crossed.
 fn media_shadow_transmittance(origin: vec3<f32>, d: vec3<f32>, distance: f32, m: i32) -> vec3<f32> {
     var o = origin;
     var left = distance;
     var medium = m;
     var tr = vec3<f32>(1.0);
+#if MEDIA_GRID
+    var rng = grid_shadow_rng(origin, d, distance);
+#endif
     for (var i = 0u; i < MEDIA_MAX_CROSSINGS; i++) {
         let hit = trace_closest(o, d, left);
         if (!hit.found) {
+#if MEDIA_GRID
+            return tr * media_transmittance(medium, o, d, left, &rng);
+#else
             return tr * medium_transmittance(medium, left);
+#endif
         }
         let s = surface_at(hit, o, d);
         if (!material_is_null(s.material)) {
             return vec3<f32>(0.0);
         }
+#if MEDIA_GRID
+        tr *= media_transmittance(medium, o, d, hit.t, &rng);
+#else
         tr *= medium_transmittance(medium, hit.t);
+#endif
         medium = medium_after(s.material, s.normal, d, medium);
         let next = offset_ray_origin(s.position, side_normal(s.normal, d), s.extent);
         left -= length(next - o);

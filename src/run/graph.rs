@@ -44,11 +44,14 @@ pub fn named_layout(graph: &Graph, name: Option<&str>) -> Result<(String, Layout
 
 /// Scene features a graph renders only where its coverage says it `handles` them: the
 /// feature flag, the word a graph declares, and what the feature is.
-const DECLARED_FEATURES: [(&str, &str, &str); 1] = [(
-    "MEDIA",
-    "media",
-    "participating media or index-matched (null) boundaries",
-)];
+const DECLARED_FEATURES: [(&str, &str, &str); 2] = [
+    (
+        "MEDIA",
+        "media",
+        "participating media or index-matched (null) boundaries",
+    ),
+    ("MEDIA_GRID", "media-grid", "heterogeneous media (density grids)"),
+];
 
 /// Checks that `graph` handles every feature of `scene` that graphs must declare (coverage's
 /// `handles`), naming the feature and the built-in graphs that do.

@@ -69,6 +69,9 @@ impl LoadedScene {
     pub fn parse(file: &str, text: &str, kind: BvhKind, assets: Option<&std::path::Path>) -> Result<LoadedScene> {
         let start = Instant::now();
         let mut scene = parse_scene(file, text)?;
+        lightgraph_scenes::read_grids(&mut scene, file, text, |name| {
+            crate::assets::scene_relative_file(file, name)
+        })?;
         lightgraph_scenes::resolve_gltf(&mut scene, file, assets)?;
         Self::compile(file.to_string(), scene, kind, start)
     }

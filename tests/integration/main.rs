@@ -25,6 +25,7 @@ mod layouts;
 mod lights;
 mod lost_work;
 mod media;
+mod media_grid;
 mod mitsuba;
 mod mitsuba_bsdf;
 mod mlt;

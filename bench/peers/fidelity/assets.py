@@ -5,12 +5,16 @@ outputs are committed): sky.exr, a 64 x 32 sky of a blue-to-white gradient with 
 wide: both renderers' importance sampling of the map works on the same bilinear radiance), under
 the rough plastic sphere; grid.png, an 8 x 8 sRGB texture of distinct colours (its texels tell
 filters and wrap modes apart); sphere.obj, a unit sphere of 16 x 32 quads with the sphere's
-normals at its vertices; star.obj, a flat six-pointed star (a concave mesh emitter).
+normals at its vertices; star.obj, a flat six-pointed star (a concave mesh emitter); blob.vol,
+a 24^3 density grid (Mitsuba's .vol format) of three overlapping smooth lobes, zero at its faces,
+peak 1, for media-grid-blob. It also writes the built-in scene media-cloud's grid,
+scenes/media/cloud.vol: 24^3, eight random lobes (seeded), peak 1.
 
     python3 bench/peers/fidelity/assets.py      # needs numpy and mitsuba (for the EXR/PNG writers)
 """
 import math
 import os
+import struct
 
 import numpy as np
 
@@ -61,6 +65,37 @@ def grid():
     return (rng.integers(20, 236, size=(8, 8, 3))).astype(np.uint8)
 
 
+def lobes(n, centres, widths, weights):
+    """An n^3 grid (z, y, x) of the sum of Gaussian lobes at voxel centres, less its largest
+    value on the faces (so zero there and beyond), scaled to a peak of 1."""
+    u = (np.arange(n) + 0.5) / n
+    z, y, x = np.meshgrid(u, u, u, indexing="ij")
+    d = np.zeros((n, n, n))
+    for (cx, cy, cz), s, w in zip(centres, widths, weights):
+        d += w * np.exp(-((x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2) / (2 * s * s))
+    faces = max(d[0].max(), d[-1].max(), d[:, 0].max(), d[:, -1].max(), d[:, :, 0].max(), d[:, :, -1].max())
+    d = np.maximum(d - faces, 0.0)
+    return d / d.max()
+
+
+def vol_bytes(density):
+    """Mitsuba's .vol format of a (z, y, x) grid: 'VOL', version 3, encoding 1 (float32), the
+    resolution (x, y, z), one channel, the unit box, the densities x fastest."""
+    nz, ny, nx = density.shape
+    header = b"VOL" + bytes([3]) + struct.pack("<5i", 1, nx, ny, nz, 1) + struct.pack("<6f", 0, 0, 0, 1, 1, 1)
+    return header + density.astype("<f4").tobytes()
+
+
+def blob():
+    return lobes(24, [(0.5, 0.45, 0.5), (0.33, 0.6, 0.42), (0.66, 0.58, 0.6)], [0.18, 0.11, 0.12], [1.0, 0.7, 0.6])
+
+
+def cloud():
+    rng = np.random.default_rng(59)
+    centres = 0.3 + 0.4 * rng.random((8, 3))
+    return lobes(24, centres, 0.08 + 0.06 * rng.random(8), 0.5 + 0.5 * rng.random(8))
+
+
 def sphere_obj(rows=16, columns=32):
     lines = ["# unit sphere, 16 x 32 quads, vertex normals (bench/peers/fidelity/assets.py)"]
     for j in range(rows + 1):
@@ -105,6 +140,10 @@ def main():
         f.write(sphere_obj())
     with open(os.path.join(HERE, "star.obj"), "w") as f:
         f.write(star_obj())
+    with open(os.path.join(HERE, "blob.vol"), "wb") as f:
+        f.write(vol_bytes(blob()))
+    with open(os.path.join(HERE, "..", "..", "..", "..", "..", "scenes", "media", "cloud.vol"), "wb") as f:
+        f.write(vol_bytes(cloud()))
 
 
 if __name__ == "__main__":

@@ -221,6 +221,7 @@ mod tests {
             sigma_s: [0.5; 3],
             scale: 1.0,
             phase: Default::default(),
+            grid: None,
         };
         let material = |interior: bool| Material {
             null: true,

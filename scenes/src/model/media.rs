@@ -1,12 +1,16 @@
 //! Participating media: homogeneous media with a phase function, the boundaries that enclose
 //! them (a material's `interior` and `exterior`, `null` boundaries that rays cross without a
-//! vertex) and the medium around the camera; and the rules they must satisfy (docs/media.md).
+//! vertex) and the medium around the camera; heterogeneous media, whose density a grid gives
+//! ([`super::grid`]); and the rules they must satisfy (docs/media.md).
 
+use super::grid::{DensityGrid, VolumeGrid, invert_affine};
 use super::{Material, Rgb, Scene};
 use serde::Deserialize;
+use std::sync::Arc;
 
-/// A homogeneous medium: absorption and scattering coefficients per unit length and channel
-/// (both times `scale`), and the phase function of its scattering.
+/// A medium: absorption and scattering coefficients per unit length and channel (both times
+/// `scale`), and the phase function of its scattering. With a density grid the medium is
+/// heterogeneous: the coefficients are per unit density, times the grid's density.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Medium {
@@ -22,6 +26,9 @@ pub struct Medium {
     /// How scattered light leaves a point of the medium.
     #[serde(default)]
     pub phase: Phase,
+    /// A density grid (heterogeneous medium); none: homogeneous.
+    #[serde(default)]
+    pub grid: Option<DensityGrid>,
 }
 
 impl Medium {
@@ -74,6 +81,48 @@ pub fn check_medium(m: &Medium) -> Result<(), String> {
     let g = m.phase.g();
     if g.is_nan() || g.abs() >= 1.0 {
         return Err(format!("the Henyey-Greenstein g {g} must lie in (-1, 1)"));
+    }
+    if let Some(grid) = &m.grid {
+        check_grid(m, grid)?;
+    }
+    Ok(())
+}
+
+/// Checks a medium's grid: a grey extinction (delta tracking samples one distance for all
+/// channels; the albedo may be coloured) and an invertible, finite map to the world.
+fn check_grid(m: &Medium, grid: &DensityGrid) -> Result<(), String> {
+    let t = m.sigma_t();
+    if t.iter().any(|&c| (c - t[0]).abs() > 1e-5 * t[0].abs().max(1e-30)) {
+        return Err(format!(
+            "a density grid needs a grey extinction: sigma_a + sigma_s is {t:?} (the albedo may differ per channel)"
+        ));
+    }
+    if grid.to_world.iter().flatten().any(|v| !v.is_finite()) || invert_affine(&grid.to_world).is_none() {
+        return Err(format!(
+            "the grid's to_world {:?} is not an invertible, finite map",
+            grid.to_world
+        ));
+    }
+    Ok(())
+}
+
+/// Reads the density grid of every medium that has one and has not read it, with `read`
+/// (which takes the grid's `file` as the scene writes it). An error gives the medium's name
+/// to locate and the message, naming the medium and the file.
+pub fn load_grids(scene: &mut Scene, read: impl Fn(&str) -> Result<Vec<u8>, String>) -> Result<(), (String, String)> {
+    for (name, m) in &mut scene.media {
+        let Some(grid) = m.grid.as_mut().filter(|g| g.volume.is_none()) else {
+            continue;
+        };
+        let volume = read(&grid.file)
+            .and_then(|bytes| VolumeGrid::from_vol(&bytes))
+            .map_err(|e| {
+                (
+                    format!("\"{name}\""),
+                    format!("medium '{name}': grid '{}': {e}", grid.file),
+                )
+            })?;
+        grid.volume = Some(Arc::new(volume));
     }
     Ok(())
 }

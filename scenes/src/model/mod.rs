@@ -5,6 +5,7 @@ pub mod checks;
 pub mod enclosure;
 pub mod environment;
 pub mod framing;
+pub mod grid;
 pub mod media;
 pub mod placement;
 pub mod texture;

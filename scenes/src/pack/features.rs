@@ -60,6 +60,10 @@ pub const ALL: &[(&str, &str)] = &[
         "MEDIA",
         "participating media: free-flight sampling, transmittance, phase functions, index-matched boundaries",
     ),
+    (
+        "MEDIA_GRID",
+        "heterogeneous media (with MEDIA): density grids, delta tracking of free flights, ratio tracking of transmittance",
+    ),
 ];
 
 /// The features `scene` uses, as flag names.
@@ -157,6 +161,7 @@ pub fn used(scene: &CompiledScene) -> BTreeSet<String> {
         "MEDIA",
         scene.media.info.count > 0 || scene.materials.iter().any(|m| m.flags & material_flags::NULL != 0),
     );
+    add("MEDIA_GRID", scene.media.has_grids());
     out
 }
 

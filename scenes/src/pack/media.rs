@@ -1,9 +1,11 @@
 //! Media as the GPU reads them: the media in name order, each material's interior and
-//! exterior medium, and the camera's (docs/media.md).
+//! exterior medium, the camera's, and the density grids of heterogeneous media
+//! (docs/media.md).
 
-use crate::gpu::{GpuMaterialMedia, GpuMediaInfo, GpuMedium};
+use crate::gpu::{GpuDensityGrid, GpuMaterialMedia, GpuMediaInfo, GpuMedium};
 use crate::model::Scene;
-use crate::model::media::unknown_medium;
+use crate::model::grid::{GridFilter, invert_affine};
+use crate::model::media::{Medium, unknown_medium};
 
 /// The scene's media packed for the GPU. Buffers are never empty: a scene without media has
 /// one zero medium and one vacuum pair.
@@ -15,6 +17,17 @@ pub struct PackedMedia {
     pub material_media: Vec<GpuMaterialMedia>,
     /// The camera's medium and the count.
     pub info: GpuMediaInfo,
+    /// The heterogeneous media's density grids (one zero grid when there are none).
+    pub grids: Vec<GpuDensityGrid>,
+    /// Their densities, one grid after another (one zero when there are none).
+    pub density: Vec<f32>,
+}
+
+impl PackedMedia {
+    /// Whether a medium has a density grid.
+    pub fn has_grids(&self) -> bool {
+        self.media[..self.info.count as usize].iter().any(|m| m.kind != 0)
+    }
 }
 
 /// Packs the scene's media, naming an unknown medium.
@@ -30,16 +43,24 @@ pub fn pack(scene: &Scene) -> Result<PackedMedia, String> {
                 .ok_or_else(|| unknown_medium(n, scene)),
         }
     };
-    let mut media: Vec<GpuMedium> = scene
-        .media
-        .values()
-        .map(|m| GpuMedium {
+    let mut grids = Vec::new();
+    let mut density = Vec::new();
+    let mut media = Vec::new();
+    for (name, m) in &scene.media {
+        let kind = match &m.grid {
+            None => 0,
+            Some(_) => {
+                grids.push(pack_grid(m, &mut density).map_err(|e| format!("medium '{name}': {e}"))?);
+                grids.len() as u32
+            }
+        };
+        media.push(GpuMedium {
             sigma_s: m.sigma_s_scaled(),
             g: m.phase.g(),
             sigma_t: m.sigma_t(),
-            kind: 0,
-        })
-        .collect();
+            kind,
+        });
+    }
     let mut material_media = scene
         .materials
         .iter()
@@ -61,6 +82,10 @@ pub fn pack(scene: &Scene) -> Result<PackedMedia, String> {
             exterior: -1,
         });
     }
+    if grids.is_empty() {
+        grids.push(GpuDensityGrid::default());
+        density.push(0.0);
+    }
     Ok(PackedMedia {
         media,
         material_media,
@@ -69,5 +94,35 @@ pub fn pack(scene: &Scene) -> Result<PackedMedia, String> {
             count,
             pad: [0; 2],
         },
+        grids,
+        density,
+    })
+}
+
+/// The density grid of heterogeneous medium `m`, its densities appended to `density`.
+fn pack_grid(m: &Medium, density: &mut Vec<f32>) -> Result<GpuDensityGrid, String> {
+    let grid = m.grid.as_ref().expect("a heterogeneous medium");
+    let volume = grid
+        .volume
+        .as_ref()
+        .ok_or_else(|| format!("its grid '{}' was not read", grid.file))?;
+    let to_grid = invert_affine(&grid.to_world)
+        .ok_or_else(|| format!("its grid's to_world {:?} is not invertible", grid.to_world))?;
+    let at = |density: &Vec<f32>| {
+        u32::try_from(density.len()).map_err(|_| "the density grids exceed 2^32 values".to_string())
+    };
+    let offset = at(density)?;
+    density.extend_from_slice(&volume.data);
+    let majorant_offset = at(density)?;
+    let majorants = volume.majorants();
+    density.extend_from_slice(&majorants.data);
+    Ok(GpuDensityGrid {
+        to_grid,
+        res: volume.res,
+        offset,
+        cells: majorants.res,
+        majorant_offset,
+        nearest: (grid.filter == GridFilter::Nearest) as u32,
+        pad: [0; 3],
     })
 }

@@ -79,6 +79,14 @@ impl CompiledScene {
             bytemuck::cast_slice(&self.media.material_media).to_vec(),
         );
         out.insert("media_info".to_string(), bytemuck::bytes_of(&self.media.info).to_vec());
+        out.insert(
+            "media_grids".to_string(),
+            bytemuck::cast_slice(&self.media.grids).to_vec(),
+        );
+        out.insert(
+            "media_density".to_string(),
+            bytemuck::cast_slice(&self.media.density).to_vec(),
+        );
         out.insert("textures".to_string(), bytemuck::cast_slice(&self.textures).to_vec());
         out.insert("texels".to_string(), bytemuck::cast_slice(&self.texels).to_vec());
         out

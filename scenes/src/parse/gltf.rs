@@ -743,6 +743,7 @@ impl MaterialImport<'_> {
                 sigma_s: [0.0; 3],
                 scale: 1.0,
                 phase: Default::default(),
+                grid: None,
             },
         );
         Ok(Some(name.to_string()))

@@ -4,7 +4,7 @@
 use crate::error::SceneError;
 use crate::model::checks::{check_fov, check_lights};
 use crate::model::enclosure::check_enclosures;
-use crate::model::media::check_media;
+use crate::model::media::{check_media, load_grids};
 use crate::model::{Scene, Shape, placement};
 
 fn locate(text: &str, needle: &str) -> Option<(usize, usize)> {
@@ -14,6 +14,21 @@ fn locate(text: &str, needle: &str) -> Option<(usize, usize)> {
         before.matches('\n').count() + 1,
         before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1,
     ))
+}
+
+/// Reads the density grids of the media of `scene`, parsed from `text` of `file`, with
+/// `read` (given each grid's file as the scene names it); an error is at the medium.
+pub fn read_grids(
+    scene: &mut Scene,
+    file: &str,
+    text: &str,
+    read: impl Fn(&str) -> Result<Vec<u8>, String>,
+) -> Result<(), SceneError> {
+    load_grids(scene, read).map_err(|(needle, message)| SceneError {
+        file: file.to_string(),
+        at: locate(text, &needle),
+        message,
+    })
 }
 
 /// Parses and validates the RON scene `text` of `file`.
@@ -246,6 +261,50 @@ pub(crate) mod tests {
         ));
         assert!(
             e.starts_with("s.ron:6:9: medium 'fog' is not enclosed") && e.contains("material 'box'"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_grid_medium_reads_its_vol_file_and_bad_grids_are_errors_at_the_medium() {
+        let with_grid = |medium: &str| {
+            BASE.replace(
+                "materials: {",
+                &format!("media: {{\n        \"cloud\": ({medium}),\n    }},\n    materials: {{\n        \"box\": (null: true, interior: \"cloud\"),"),
+            )
+            .replace("shapes: [", "shapes: [Sphere(center: (0.0, 0.0, 0.0), radius: 5.0, material: \"box\"), ")
+        };
+        let grid = "sigma_s: (0.5, 0.5, 0.5), sigma_a: (0.5, 0.5, 0.5), grid: (file: \"c.vol\", filter: Nearest)";
+        let bytes = crate::model::grid::tests::vol_bytes([1, 1, 2], &[0.5, 2.0]);
+        let text = with_grid(grid);
+        let mut scene = parse_scene("s.ron", &text).unwrap();
+        read_grids(&mut scene, "s.ron", &text, |name| {
+            assert_eq!(name, "c.vol");
+            Ok(bytes.clone())
+        })
+        .unwrap();
+        let read = scene.media["cloud"].grid.as_ref().unwrap();
+        assert_eq!(read.volume.as_ref().unwrap().data, [0.5, 2.0]);
+        assert_eq!(read.filter, crate::model::grid::GridFilter::Nearest);
+        // A file that cannot be read, or is no grid: the error is at the medium, naming it and the file.
+        let mut scene = parse_scene("s.ron", &text).unwrap();
+        let e = read_grids(&mut scene, "s.ron", &text, |_| Ok(b"VOL\x03".to_vec()))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("s.ron:4:9: medium 'cloud': grid 'c.vol': 4 bytes: shorter than a .vol header"),
+            "{e}"
+        );
+        let e = read_grids(&mut scene, "s.ron", &text, |_| Err("c.vol not found".into()))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("medium 'cloud': grid 'c.vol': c.vol not found"), "{e}");
+        // A coloured extinction cannot be delta-tracked by one distance.
+        let e = error(&with_grid(
+            &grid.replace("sigma_a: (0.5, 0.5, 0.5)", "sigma_a: (0.5, 0.1, 0.5)"),
+        ));
+        assert!(
+            e.starts_with("s.ron:4:9: medium 'cloud': a density grid needs a grey extinction"),
             "{e}"
         );
     }

@@ -75,6 +75,11 @@ pub fn export(scene: &Scene, size: (u32, u32)) -> Result<Exported, String> {
                 .media
                 .get(name)
                 .ok_or_else(|| format!("medium '{name}' is used but the scene does not define it"))?;
+            if medium.grid.is_some() {
+                return Err(format!(
+                    "medium '{name}' has a density grid: the export writes homogeneous media only"
+                ));
+            }
             out.medium(name, medium);
         }
     }

@@ -49,16 +49,13 @@ fn medium<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<Mediu
     let kind = ctx.plugin_type(node)?;
     match kind.as_str() {
         "homogeneous" => {}
-        "heterogeneous" => {
-            return Err(ctx.error(
-                node,
-                "heterogeneous media are not supported yet (issue 59): only homogeneous ones",
-            ));
-        }
+        "heterogeneous" => return super::grid::heterogeneous(ctx, node),
         _ => {
             return Err(ctx.error(
                 node,
-                format!("the medium type '{kind}' is not supported (issue 59): only homogeneous media"),
+                format!(
+                    "the medium type '{kind}' is not supported (issue 59): only homogeneous and heterogeneous media"
+                ),
             ));
         }
     }
@@ -100,11 +97,31 @@ fn medium<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<Mediu
             return Err(ctx.error(node, "sigma_a and sigma_s exclude sigma_t and albedo: give one pair"));
         }
     };
+    let (scale, phase) = scale_and_phase(ctx, node, &props)?;
+    let m = Medium {
+        sigma_a,
+        sigma_s,
+        scale,
+        phase,
+        grid: None,
+    };
+    check_medium(&m).map_err(|e| ctx.error(node, e))?;
+    props.finish(ctx);
+    Ok(m)
+}
+
+/// A medium's `scale` (Mitsuba 0.6: `density_multiplier`; default 1) and its nested phase
+/// function (default isotropic); the properties of how Mitsuba samples distances and lights,
+/// which leave the expected image as it is, are read.
+pub fn scale_and_phase<'a, 'i>(
+    ctx: &mut Context<'a, 'i>,
+    node: Node<'a, 'i>,
+    props: &Props<'a, 'i>,
+) -> Result<(f32, Phase)> {
     let scale = match (props.float(ctx, "scale")?, props.float(ctx, "density_multiplier")?) {
         (Some(s), _) | (None, Some(s)) => s,
         (None, None) => 1.0,
     };
-    // How Mitsuba samples distances and lights: the expected image is the same.
     for harmless in ["sample_emitters", "strategy"] {
         props.get(harmless);
     }
@@ -113,20 +130,12 @@ fn medium<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<Mediu
         [one] => phase(ctx, one)?,
         _ => return Err(ctx.error(node, "a medium has one phase function")),
     };
-    let m = Medium {
-        sigma_a,
-        sigma_s,
-        scale,
-        phase,
-    };
-    check_medium(&m).map_err(|e| ctx.error(node, e))?;
-    props.finish(ctx);
-    Ok(m)
+    Ok((scale, phase))
 }
 
 /// The constant coefficient `name` (`<rgb>`, `<spectrum>`, `<float>`, ...) and its element; a
 /// texture or a volume is an error.
-fn constant<'a, 'i>(
+pub fn constant<'a, 'i>(
     ctx: &mut Context<'a, 'i>,
     props: &Props<'a, 'i>,
     name: &str,
@@ -186,6 +195,7 @@ mod tests {
             sigma_s,
             scale,
             phase: Phase::Isotropic,
+            grid: None,
         }
     }
 
@@ -295,7 +305,7 @@ mod tests {
         let cases = [
             (
                 "<medium type=\"heterogeneous\" id=\"m\"/>",
-                "t.xml:2:1: <medium type=\"heterogeneous\" id=\"m\">: heterogeneous media are not supported yet (issue 59)",
+                "t.xml:2:1: <medium type=\"heterogeneous\" id=\"m\">: a heterogeneous medium needs a sigma_t gridvolume",
             ),
             (
                 "<medium type=\"homogeneous\" id=\"m\"><float name=\"sigma_t\" value=\"-1\"/></medium>",
