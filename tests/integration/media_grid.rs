@@ -132,7 +132,9 @@ fn transmittance_through_a_density_ramp_is_exp_of_minus_its_integral() {
     // beyond; nearest lookups the voxel's own.
     let voxels: Vec<f32> = (0..8).map(|j| (j as f32 + 0.5) / 8.0).collect();
     let grid = vol([1, 8, 1], &voxels);
-    let ramps: [(&str, fn(f64) -> f64); 2] = [
+    /// A filter's name and the density it reads at a position u in [0, 1] along the ramp.
+    type Ramp = (&'static str, fn(f64) -> f64);
+    let ramps: [Ramp; 2] = [
         ("Trilinear", |u| u.clamp(1.0 / 16.0, 15.0 / 16.0)),
         ("Nearest", |u| ((u * 8.0).floor().clamp(0.0, 7.0) + 0.5) / 8.0),
     ];

@@ -2,8 +2,11 @@
 //! and single-scattering `albedo` (default 0.75) or Mitsuba 0.6's `sigma_a` and `sigma_s`,
 //! times `scale`, and their nested phase function (`isotropic`, the default, or `hg` with
 //! `g`, default 0.8), each converted once and named by its id (`mitsuba:LINE:COLUMN` when
-//! anonymous). Other media and phase functions, textured or volume coefficients and bad
-//! values are errors at the element.
+//! anonymous); `heterogeneous` media with a `sigma_t` grid volume (the `grid` submodule). Other media and
+//! phase functions, textured or volume coefficients elsewhere and bad values are errors at the
+//! element.
+
+mod grid;
 
 use super::xml::{Color, Context, Props, Result};
 use crate::model::Rgb;
@@ -49,7 +52,7 @@ fn medium<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<Mediu
     let kind = ctx.plugin_type(node)?;
     match kind.as_str() {
         "homogeneous" => {}
-        "heterogeneous" => return super::grid::heterogeneous(ctx, node),
+        "heterogeneous" => return grid::heterogeneous(ctx, node),
         _ => {
             return Err(ctx.error(
                 node,

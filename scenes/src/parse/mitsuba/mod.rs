@@ -13,7 +13,6 @@
 pub mod camera;
 pub mod emitters;
 pub mod export;
-pub mod grid;
 pub mod materials;
 pub mod media;
 pub mod mesh;

@@ -2,9 +2,9 @@
 //! `gridvolume` (a `.vol` file of one channel, `filter_type`, `to_world`, `use_grid_bbox`),
 //! with a constant `albedo` (default 0.75), `scale` and phase function (docs/media.md).
 
-use super::media::{constant, scale_and_phase};
-use super::transform;
-use super::xml::{Context, Props, Result};
+use super::super::transform;
+use super::super::xml::{Context, Props, Result};
+use super::{constant, scale_and_phase};
 use crate::model::grid::{DensityGrid, GridFilter, VolumeGrid};
 use crate::model::media::{Medium, check_medium};
 use glam::Mat4;
@@ -96,7 +96,7 @@ fn gridvolume<'a, 'i>(ctx: &mut Context<'a, 'i>, node: Node<'a, 'i>) -> Result<D
 
 #[cfg(test)]
 mod tests {
-    use super::super::parse;
+    use super::super::super::parse;
     use crate::model::grid::tests::vol_bytes;
     use crate::model::grid::{GridFilter, identity};
     use std::path::PathBuf;
@@ -112,7 +112,7 @@ mod tests {
     }
 
     /// Imports a scene of a cube holding `medium` from `dir`: the medium, or the error.
-    fn import(dir: &PathBuf, medium: &str) -> Result<crate::model::media::Medium, String> {
+    fn import(dir: &std::path::Path, medium: &str) -> Result<crate::model::media::Medium, String> {
         let text = format!(
             "<scene version=\"3.0.0\">\n<shape type=\"cube\"><bsdf type=\"null\"/>\n{medium}</shape>\n<emitter type=\"constant\"/></scene>"
         );
