@@ -267,7 +267,11 @@ fn check_folder_writable(folder: &Path, output: &Path) -> Result<()> {
             existing.display()
         );
     }
-    let probe = existing.join(format!(".lightgraph-write-check-{}", std::process::id()));
+    // Unique in the process too: two runs of one process (threads, the Python module) may
+    // check one folder at once, and a shared probe name made one of them fail (EEXIST).
+    static PROBES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = PROBES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let probe = existing.join(format!(".lightgraph-write-check-{}-{n}", std::process::id()));
     match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
         Ok(_) => {
             let _ = std::fs::remove_file(&probe);
@@ -335,6 +339,28 @@ pub fn si(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn threads_of_one_process_check_one_folder_at_once() {
+        // Two renders of one test process checked one folder at once and one failed with
+        // "cannot write into ... (File exists)": the probe was named by the process alone.
+        let dir = std::env::temp_dir().join(format!("lightgraph-probe-race-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let failures: usize = std::thread::scope(|s| {
+            let handles: Vec<_> = (0..8)
+                .map(|_| {
+                    s.spawn(|| {
+                        (0..200)
+                            .filter(|_| check_folder_writable(&dir, &dir.join("film.exr")).is_err())
+                            .count()
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).sum()
+        });
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(failures, 0, "checks of one folder failed when run at once");
+    }
 
     #[test]
     fn a_path_is_one_shell_word() {
