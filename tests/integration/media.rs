@@ -104,14 +104,19 @@ fn furnaces_in_media_that_absorb_nothing_show_the_background() {
     }
 }
 
+/// Asserts that NaivePTsk, NaivePTmk, RegenerationPTmk2, StreamingPTmk3 and WavefrontPT render
+/// `scene` (called `what`) alike to float rounding.
+pub fn assert_path_tracing_layouts_alike(scene: &LoadedScene, what: &str) {
+    let base = render(scene, "pt", "NaivePTsk", (16, 16), 1, 2, 9, &[]);
+    for layout in ["NaivePTmk", "RegenerationPTmk2", "StreamingPTmk3", "WavefrontPT"] {
+        let other = render(scene, "pt", layout, (16, 16), 1, 2, 9, &[]);
+        assert_same_render(&base, &other, &format!("{what}: NaivePTsk and {layout}"));
+    }
+}
+
 #[test]
 fn every_path_tracing_layout_renders_a_media_scene_alike() {
-    let s = load_scene("media-sphere").unwrap();
-    let base = render(&s, "pt", "NaivePTsk", (16, 16), 1, 2, 9, &[]);
-    for layout in ["NaivePTmk", "RegenerationPTmk2", "StreamingPTmk3", "WavefrontPT"] {
-        let other = render(&s, "pt", layout, (16, 16), 1, 2, 9, &[]);
-        assert_same_render(&base, &other, &format!("media-sphere: NaivePTsk and {layout}"));
-    }
+    assert_path_tracing_layouts_alike(&load_scene("media-sphere").unwrap(), "media-sphere");
 }
 
 /// Light tracing against path tracing on `media-lights`: light sub-paths start in two media,

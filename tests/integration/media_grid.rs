@@ -5,7 +5,7 @@
 //! grid scene alike; and kernels for homogeneous media hold no grid code. The scenes and their
 //! `.vol` files are written by the tests.
 
-use crate::common::{assert_analytic, assert_same_render, kernel_sources, region, render};
+use crate::common::{assert_analytic, kernel_sources, region, render};
 use lightgraph::run::{LoadedScene, load_scene};
 use lightgraph_scenes::model::grid::VolumeGrid;
 use std::path::PathBuf;
@@ -168,11 +168,7 @@ fn every_path_tracing_layout_renders_a_grid_medium_alike() {
         &sphere_scene(&format!("{SCATTERING}, grid: (file: \"grid.vol\", {CUBE})"), 1.0, true),
         &vol([3, 3, 3], &voxels),
     );
-    let base = render(&scene, "pt", "NaivePTsk", (16, 16), 1, 2, 9, &[]);
-    for layout in ["NaivePTmk", "RegenerationPTmk2", "StreamingPTmk3", "WavefrontPT"] {
-        let other = render(&scene, "pt", layout, (16, 16), 1, 2, 9, &[]);
-        assert_same_render(&base, &other, &format!("grid medium: NaivePTsk and {layout}"));
-    }
+    crate::media::assert_path_tracing_layouts_alike(&scene, "grid medium");
 }
 
 #[test]
